@@ -1,0 +1,99 @@
+"""The Scene: one frozen description of a disk chain, its loads and the effects simulated.
+
+Units are the scene's raw units (MODEL.md): lengths in units where the disk diameter is 2R,
+masses in units of m, stiffnesses k_n [force / length^(3/2)], forces [force].
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+TANGENTIAL_LAWS = ("mindlin-smooth", "mindlin-linear", "none")
+FRICTION_KINDS = ("disk-disk", "substrate")
+MATRICES = ("J", "M^-1 J")
+
+
+@dataclass(frozen=True)
+class Effects:
+    """Which physics a scene simulates; the symbolic layer derives exactly these.
+
+    tangential      contact law for the tangential force (MODEL.md): "mindlin-smooth" (paper
+                    eq. 5), "mindlin-linear" (k_t delta^(1/2) xi, hard cap at mu F_n), "none".
+    pair_friction   tangential force at disk-disk contacts.
+    wall_friction   tangential force at disk-substrate contacts.
+    rotation        disks rotate (3N degrees of freedom) or not (2N).
+    """
+
+    tangential: str = "mindlin-smooth"
+    pair_friction: bool = True
+    wall_friction: bool = True
+    rotation: bool = True
+
+    @property
+    def pair_law(self) -> str:
+        """Tangential law at disk-disk contacts after the friction switch."""
+        return self.tangential if self.pair_friction else "none"
+
+    @property
+    def wall_law(self) -> str:
+        """Tangential law at disk-substrate contacts after the friction switch."""
+        return self.tangential if self.wall_friction else "none"
+
+    @property
+    def dof_per_disk(self) -> int:
+        return 3 if self.rotation else 2
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A chain of N disks on the substrate y = 0, periodic in x with ring length L.
+
+    Raw units throughout. ``inertia`` is c in I = c m R^2; ``F_x_range`` = (start, stop) of the
+    quasistatic load on disk 1; ``matrix`` is the stability matrix ("J" or "M^-1 J").
+    """
+
+    N: int = 10
+    R: float = 0.5
+    m: float = 1.0
+    inertia: float = 0.5
+    eps: float = 0.0
+    k_n: float = 2000.0
+    k_t: float = 2000.0 * 2.0 / 7.0
+    mu: float = 10.0
+    F_y: float = 0.1
+    F_x_range: tuple[float, float] = (0.0, 0.12)
+    matrix: str = "J"
+    effects: Effects = Effects()
+    name: str = "paper"
+    source: str = "<defaults>"
+
+    @property
+    def L(self) -> float:
+        """Ring length L = 2 N R (1 - eps)."""
+        return 2.0 * self.N * self.R * (1.0 - self.eps)
+
+    @property
+    def I(self) -> float:  # noqa: E743 - the physicist's name for the moment of inertia
+        """Moment of inertia I = c m R^2."""
+        return self.inertia * self.m * self.R**2
+
+    @property
+    def delta_w0(self) -> float:
+        """Substrate overlap of the F_x = 0 equilibrium, delta_w = (F_y / k_n)^(2/3)."""
+        return (self.F_y / self.k_n) ** (2.0 / 3.0)
+
+    @property
+    def tau(self) -> float:
+        """The paper's time unit tau = sqrt(m / (k_n (2R)^(1/2))) in raw time."""
+        return math.sqrt(self.m / (self.k_n * math.sqrt(2.0 * self.R)))
+
+    @property
+    def resolved_effects(self) -> Effects:
+        """Effects actually simulated: mu = 0 carries no tangential force, so friction is off."""
+        if self.mu == 0.0 and self.effects.tangential != "none":
+            return Effects("none", False, False, self.effects.rotation)
+        return self.effects
+
+    @property
+    def ndof(self) -> int:
+        return self.N * self.resolved_effects.dof_per_disk
