@@ -1,4 +1,15 @@
 """Scenes: the Scene dataclass, TOML loading and validation."""
+from scenes.load import SceneError, default_scene_path, format_scene, load_scene
 from scenes.scene import FRICTION_KINDS, MATRICES, TANGENTIAL_LAWS, Effects, Scene
 
-__all__ = ["Effects", "Scene", "TANGENTIAL_LAWS", "FRICTION_KINDS", "MATRICES"]
+__all__ = [
+    "Effects",
+    "Scene",
+    "TANGENTIAL_LAWS",
+    "FRICTION_KINDS",
+    "MATRICES",
+    "SceneError",
+    "load_scene",
+    "default_scene_path",
+    "format_scene",
+]
