@@ -1,0 +1,4 @@
+"""``python -m cli``: the diskfriction command line."""
+from cli.main import main
+
+raise SystemExit(main())
