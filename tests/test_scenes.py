@@ -1,0 +1,245 @@
+"""Scene files: loading, validation, the TOML round trip and the ``diskfriction scene`` command."""
+from __future__ import annotations
+
+import dataclasses
+import os
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from cli.main import main
+from scenes.load import SceneError, default_scene_path, format_scene, load_scene
+from scenes.scene import Effects, Scene
+
+REPO = Path(__file__).resolve().parents[1]
+MISSING, DIRECTORY = object(), object()  # bad-scene contents that are not file text
+
+
+def run_cli(*args: str) -> subprocess.CompletedProcess[str]:
+    """``python -m cli ARGS`` in a fresh interpreter, with the repository importable."""
+    env = os.environ | {"PYTHONPATH": str(REPO)}
+    return subprocess.run([sys.executable, "-m", "cli", *args], capture_output=True, text=True,
+                          cwd=REPO, env=env, timeout=60)
+
+
+def write_scene(tmp_path: Path, content: str | bytes | object) -> Path:
+    """A path holding ``content``: TOML text, raw bytes, nothing (MISSING) or a DIRECTORY."""
+    path = tmp_path / "scene.toml"
+    if content is DIRECTORY:
+        path.mkdir()
+    elif isinstance(content, bytes):
+        path.write_bytes(content)
+    elif isinstance(content, str):
+        path.write_text(content, encoding="utf-8")
+    return path
+
+
+def without_source(scene: Scene) -> Scene:
+    """``scene`` with the source field blanked, to compare scenes read from different files."""
+    return dataclasses.replace(scene, source="")
+
+
+# ---------------------------------------------------------------- good scenes
+
+
+def test_paper_scene_is_the_scene_defaults():
+    scene = load_scene(default_scene_path())
+    assert without_source(scene) == without_source(Scene())
+    for field in dataclasses.fields(Scene):
+        if field.name != "source":
+            assert getattr(scene, field.name) == getattr(Scene(), field.name), field.name
+    assert scene.source == str(default_scene_path())
+
+
+def test_empty_file_takes_defaults_and_name_from_stem(tmp_path):
+    path = tmp_path / "my-chain.toml"
+    path.write_text("", encoding="utf-8")
+    scene = load_scene(path)
+    assert scene == dataclasses.replace(Scene(), name="my-chain", source=str(path))
+
+
+def test_integers_are_accepted_as_floats_and_stored_as_floats(tmp_path):
+    scene = load_scene(write_scene(tmp_path, "[disks]\nR = 1\n[load]\nF_x = [-1, 2]\n"))
+    assert scene.R == 1.0 and isinstance(scene.R, float)
+    assert scene.F_x_range == (-1.0, 2.0) and all(isinstance(x, float) for x in scene.F_x_range)
+
+
+@pytest.mark.parametrize(("friction", "pair", "wall"), [
+    ('["disk-disk", "substrate"]', True, True),
+    ('["substrate"]', False, True),
+    ('["disk-disk"]', True, False),
+    ("[]", False, False),
+])
+def test_friction_list_maps_to_effect_switches(tmp_path, friction, pair, wall):
+    scene = load_scene(write_scene(tmp_path, f"[effects]\nfriction = {friction}\n"))
+    assert (scene.effects.pair_friction, scene.effects.wall_friction) == (pair, wall)
+
+
+ODD_SCENE = Scene(
+    N=7, R=0.25, m=2.0, inertia=0.4, eps=0.05, k_n=1000, k_t=1e-05, mu=0.0, F_y=3.0,
+    F_x_range=(-0.5, 1e16), matrix="M^-1 J",
+    effects=Effects("mindlin-linear", pair_friction=False, wall_friction=True, rotation=False),
+    name='odd "name" \\ with\nnewline\x7f and ü', source="<test>")
+
+
+@pytest.mark.parametrize("scene", [Scene(), ODD_SCENE], ids=["defaults", "odd"])
+def test_format_scene_round_trips(tmp_path, scene):
+    path = tmp_path / "round.toml"
+    path.write_text(format_scene(scene), encoding="utf-8")
+    assert without_source(load_scene(path)) == without_source(scene)
+
+
+def test_format_scene_writes_every_key_and_the_derived_quantities():
+    text = format_scene(Scene())
+    document = tomllib.loads(text)
+    assert set(document) == {"name", "disks", "contacts", "load", "effects", "stability"}
+    assert set(document["disks"]) == {"N", "R", "m", "inertia", "eps"}
+    assert set(document["contacts"]) == {"k_n", "k_t", "mu"}
+    assert set(document["load"]) == {"F_y", "F_x"}
+    assert set(document["effects"]) == {"tangential", "friction", "rotation"}
+    assert set(document["stability"]) == {"matrix"}
+    scene = Scene()
+    for name, value in [("L", scene.L), ("I", scene.I), ("delta_w0", scene.delta_w0),
+                        ("tau", scene.tau), ("ndof", scene.ndof)]:
+        assert f"# {name} = {value!r}" in text
+
+
+def test_format_scene_shows_that_mu_zero_turns_friction_off():
+    text = format_scene(dataclasses.replace(Scene(), mu=0.0))
+    resolved = text[text.index("# resolved effects"):]
+    assert '#   tangential = "none"' in resolved
+    assert "#   friction = []" in resolved
+    assert tomllib.loads(text)["effects"]["friction"] == ["disk-disk", "substrate"]
+
+
+# ---------------------------------------------------------------- bad scenes
+
+BAD_SCENES = [
+    # id, file content, expected key, expected fragment of the message
+    ("unknown-key", "[disks]\nradius = 0.5\n", "disks.radius", "unknown key"),
+    ("unknown-top-key", 'colour = "red"\n', "colour", "unknown key"),
+    ("unknown-table", "[disk]\nN = 10\n", "disk", "unknown table"),
+    ("unknown-subtable", "[disks.extra]\nN = 10\n", "disks.extra", "unknown table"),
+    ("quoted-dotted-key", '"disks.N" = 3\n', "disks.N", "unknown key"),
+    ("table-not-a-table", "disks = 3\n", "disks", "expected a table"),
+    ("name-not-string", "name = 3\n", "name", "expected a string"),
+    ("bool-as-number", "[disks]\nR = true\n", "disks.R", "not a boolean"),
+    ("string-as-number", '[contacts]\nk_n = "2000"\n', "contacts.k_n", "not a string"),
+    ("float-N", "[disks]\nN = 10.0\n", "disks.N", "expected an integer"),
+    ("bool-N", "[disks]\nN = true\n", "disks.N", "expected an integer"),
+    ("huge-N", "[disks]\nN = 99999999999999999999\n", "disks.N", "64-bit"),
+    ("inf", "[load]\nF_y = inf\n", "load.F_y", "finite"),
+    ("nan", "[contacts]\nmu = nan\n", "contacts.mu", "finite"),
+    ("N-below-2", "[disks]\nN = 1\n", "disks.N", ">= 2"),
+    ("R-zero", "[disks]\nR = 0\n", "disks.R", "> 0"),
+    ("R-negative", "[disks]\nR = -0.5\n", "disks.R", "> 0"),
+    ("m-zero", "[disks]\nm = 0.0\n", "disks.m", "> 0"),
+    ("inertia-zero", "[disks]\ninertia = 0\n", "disks.inertia", "> 0"),
+    ("k_n-zero", "[contacts]\nk_n = 0\n", "contacts.k_n", "> 0"),
+    ("k_t-negative", "[contacts]\nk_t = -1.0\n", "contacts.k_t", "> 0"),
+    ("mu-negative", "[contacts]\nmu = -0.1\n", "contacts.mu", ">= 0"),
+    ("F_y-zero", "[load]\nF_y = 0\n", "load.F_y", "> 0"),
+    ("eps-negative", "[disks]\neps = -0.01\n", "disks.eps", "[0, 0.1)"),
+    ("eps-too-large", "[disks]\neps = 0.1\n", "disks.eps", "[0, 0.1)"),
+    ("F_x-empty", "[load]\nF_x = [0.1, 0.1]\n", "load.F_x", "empty range"),
+    ("F_x-reversed", "[load]\nF_x = [0.12, 0.0]\n", "load.F_x", "reversed range"),
+    ("F_x-three", "[load]\nF_x = [0.0, 0.1, 0.2]\n", "load.F_x", "exactly two"),
+    ("F_x-number", "[load]\nF_x = 0.12\n", "load.F_x", "expected an array"),
+    ("F_x-string-entry", '[load]\nF_x = ["0", 0.1]\n', "load.F_x", "expected a number"),
+    ("F_x-inf-entry", "[load]\nF_x = [0.0, inf]\n", "load.F_x", "finite"),
+    ("tangential-unknown", '[effects]\ntangential = "coulomb"\n', "effects.tangential",
+     "unknown effect"),
+    ("tangential-number", "[effects]\ntangential = 1\n", "effects.tangential",
+     "expected a string"),
+    ("friction-unknown", '[effects]\nfriction = ["wall"]\n', "effects.friction",
+     "unknown effect"),
+    ("friction-duplicated", '[effects]\nfriction = ["substrate", "substrate"]\n',
+     "effects.friction", "duplicated"),
+    ("friction-not-strings", "[effects]\nfriction = [1]\n", "effects.friction",
+     "array of strings"),
+    ("friction-string", '[effects]\nfriction = "substrate"\n', "effects.friction",
+     "expected an array"),
+    ("rotation-string", '[effects]\nrotation = "yes"\n', "effects.rotation",
+     "expected a boolean"),
+    ("rotation-int", "[effects]\nrotation = 1\n", "effects.rotation", "expected a boolean"),
+    ("matrix-unknown", '[stability]\nmatrix = "M"\n', "stability.matrix", "unknown effect"),
+    ("malformed-toml", "[disks\nN = 10\n", "<file>", "line 1"),
+    ("missing-file", MISSING, "<file>", "cannot read"),
+    ("directory", DIRECTORY, "<file>", "cannot read"),
+    ("not-utf8", b'name = "caf\xe9"\n', "<file>", "UTF-8"),
+]
+
+
+@pytest.fixture(params=BAD_SCENES, ids=[case[0] for case in BAD_SCENES])
+def bad_scene(request, tmp_path):
+    """(path, key, fragment) of one bad scene written under tmp_path."""
+    _, content, key, fragment = request.param
+    return write_scene(tmp_path, content), key, fragment
+
+
+def test_bad_scene_raises_one_scene_error(bad_scene):
+    path, key, fragment = bad_scene
+    with pytest.raises(SceneError) as raised:
+        load_scene(path)
+    error = raised.value
+    assert (error.file, error.key) == (str(path), key)
+    message = str(error)
+    assert message.startswith(f"scene error: {path}: {key}: ")
+    assert fragment in message
+    assert "\n" not in message
+
+
+def test_bad_scene_on_the_command_line_is_one_line_and_exit_2(bad_scene):
+    path, key, fragment = bad_scene
+    result = run_cli("scene", str(path))
+    assert result.returncode == 2
+    assert result.stdout == ""
+    assert result.stderr.endswith("\n") and result.stderr.count("\n") == 1
+    assert result.stderr.startswith(f"scene error: {path}: {key}: ")
+    assert fragment in result.stderr
+    assert "Traceback" not in result.stdout + result.stderr
+
+
+def test_scene_error_message_format(tmp_path):
+    path = write_scene(tmp_path, '[effects]\ntangential = "coulomb"\n')
+    with pytest.raises(SceneError) as raised:
+        load_scene(path)
+    assert str(raised.value) == (
+        f"scene error: {path}: effects.tangential: unknown effect: tangential law must be one "
+        "of mindlin-smooth | mindlin-linear | none (got 'coulomb')")
+
+
+# ---------------------------------------------------------------- the command line
+
+
+def test_cli_scene_without_file_prints_the_paper_scene():
+    result = run_cli("scene")
+    assert result.returncode == 0, result.stderr
+    assert result.stderr == ""
+    assert result.stdout == format_scene(load_scene(default_scene_path()))
+
+
+def test_cli_scene_output_is_a_loadable_scene(tmp_path, capsys):
+    assert main(["scene"]) == 0
+    path = tmp_path / "printed.toml"
+    path.write_text(capsys.readouterr().out, encoding="utf-8")
+    assert without_source(load_scene(path)) == without_source(Scene())
+
+
+def test_cli_bad_scene_in_process_returns_2(tmp_path, capsys):
+    path = write_scene(tmp_path, "[disks]\nN = 1\n")
+    assert main(["scene", str(path)]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert captured.err.startswith(f"scene error: {path}: disks.N: ")
+
+
+@pytest.mark.parametrize("argv", [[], ["nonsense"], ["scene", "a.toml", "b.toml"]])
+def test_cli_usage_errors_exit_2(argv, capsys):
+    with pytest.raises(SystemExit) as raised:
+        main(argv)
+    assert raised.value.code == 2
+    assert "usage:" in capsys.readouterr().err
