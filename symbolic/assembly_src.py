@@ -1,0 +1,220 @@
+# Assembly source appended verbatim to every generated kernel module (see codegen.py).
+# Not importable on its own: math, numba, np, D, pair_contact, pair_force, pair_increment_coeffs, wall_contact,
+# wall_force, wall_increment_coeffs, PAIR_FRICTION and WALL_FRICTION are defined by the
+# generated part above it.
+#
+# Layout (MODEL.md): q = (x_1..x_N, y_1..y_N[, theta_1..theta_N]); dof (c, i) -> c * N + i.
+# History xi has 2N entries: pairs k = 0..N-1 (disk k with disk k+1, the last one with disk 0
+# across the periodic boundary), then substrate contacts k = 0..N-1. Entries of a frictionless
+# contact kind stay 0. params = (R, k_n, k_t, mu, F_y, L).
+
+
+@numba.njit(cache=True)
+def pair_dofs(k, N, idx):
+    """Local dofs of pair k: disk i = k then disk j = k + 1 (mod N). Returns j."""
+    j = k + 1 if k + 1 < N else 0
+    for c in range(D):
+        idx[c] = c * N + k
+        idx[D + c] = c * N + j
+    return j
+
+
+@numba.njit(cache=True)
+def two_diff(a, b):
+    """s = fl(a - b) and its rounding error e = (a - b) - s, exactly (Knuth's TwoSum)."""
+    s = a - b
+    bb = s - a
+    return s, (a - (s - bb)) - (b + bb)
+
+
+@numba.njit(cache=True)
+def pair_separation(q, k, N, L):
+    """r_i - r_j of pair k (the last pair sees disk 0 shifted by the ring length L) and the
+    rounding errors of its two components: (dx, dy, ex, ey) with r_i - r_j = (dx + ex, dy + ey)."""
+    j = k + 1 if k + 1 < N else 0
+    dx, ex = two_diff(q[k], q[j])
+    if j == 0:
+        dx, e = two_diff(dx, L)
+        ex += e
+    dy, ey = two_diff(q[N + k], q[N + j])
+    return dx, dy, ex, ey
+
+
+@numba.njit(cache=True)
+def pair_overlap(dx, dy, ex, ey, R):
+    """delta = 2R - |r_ij| [length] to full relative accuracy even for delta << 2R.
+
+    2R - rho cancels: a rounding of ~1e-16 in dx is a relative error 1e-16 / delta in delta
+    (1e-6 at delta = 1e-10). Instead delta = (4R^2 - |r_ij|^2) / (2R + rho) with
+    4R^2 - |r_ij|^2 = (2R - a)(2R + a) - b^2 - 2 (dx ex + dy ey), a = max(|dx|, |dy|),
+    b = min(...): 2R - a is exact for a in [R, 4R] (Sterbenz) and the TwoSum errors ex, ey of
+    the separation are restored to first order (their squares are below 1e-32)."""
+    a = max(abs(dx), abs(dy))
+    b = min(abs(dx), abs(dy))
+    two_R = 2.0 * R
+    num = (two_R - a) * (two_R + a) - b * b - 2.0 * (dx * ex + dy * ey)
+    return num / (two_R + math.hypot(dx, dy))
+
+
+@numba.njit(cache=True)
+def wall_dofs(k, N, idx):
+    for c in range(D):
+        idx[c] = c * N + k
+
+
+@numba.njit(cache=True)
+def jacobian_pattern(N):
+    """Row and column of every stored value of J (pair blocks, then substrate blocks)."""
+    nnz = N * (2 * D) ** 2 + N * D * D
+    rows = np.empty(nnz, np.int64)
+    cols = np.empty(nnz, np.int64)
+    idx = np.empty(2 * D, np.int64)
+    pos = 0
+    for k in range(N):
+        pair_dofs(k, N, idx)
+        for a in range(2 * D):
+            for b in range(2 * D):
+                rows[pos] = idx[a]
+                cols[pos] = idx[b]
+                pos += 1
+    for k in range(N):
+        wall_dofs(k, N, idx)
+        for a in range(D):
+            for b in range(D):
+                rows[pos] = idx[a]
+                cols[pos] = idx[b]
+                pos += 1
+    return rows, cols
+
+
+@numba.njit(cache=True)
+def add_loads(F, F_x, F_y, N):
+    """External dead loads: F_x on disk 1 along +x, F_y on every disk along -y."""
+    F[0] += F_x
+    for i in range(N):
+        F[N + i] -= F_y
+
+
+@numba.njit(cache=True)
+def evaluate(q, xi, F_x, params, F, Jvals):
+    """F(q, xi; F_x) [force, torque] and the values of J = -dF/dq (total, history following q)
+    in the order of jacobian_pattern [force / length]. Returns the number of active contacts."""
+    N = q.shape[0] // D
+    R, k_n, k_t, mu, F_y, L = params[0], params[1], params[2], params[3], params[4], params[5]
+    F[:] = 0.0
+    f = np.empty(2 * D)
+    Jb = np.empty((2 * D, 2 * D))
+    idx = np.empty(2 * D, np.int64)
+    pos = 0
+    active = 0
+    for k in range(N):
+        dx, dy, ex, ey = pair_separation(q, k, N, L)
+        delta = pair_overlap(dx, dy, ex, ey, R)
+        active += pair_contact(dx, dy, delta, xi[k], R, k_n, k_t, mu, f, Jb)
+        pair_dofs(k, N, idx)
+        for a in range(2 * D):
+            F[idx[a]] += f[a]
+            for b in range(2 * D):
+                Jvals[pos] = Jb[a, b]
+                pos += 1
+    for k in range(N):
+        active += wall_contact(R - q[N + k], xi[N + k], R, k_n, k_t, mu, f, Jb)
+        wall_dofs(k, N, idx)
+        for a in range(D):
+            F[idx[a]] += f[a]
+            for b in range(D):
+                Jvals[pos] = Jb[a, b]
+                pos += 1
+    add_loads(F, F_x, F_y, N)
+    return active
+
+
+@numba.njit(cache=True)
+def evaluate_dense(q, xi, F_x, params, F, J, Jvals, rows, cols):
+    """As evaluate, with J scattered into the dense matrix J (3N x 3N or 2N x 2N)."""
+    active = evaluate(q, xi, F_x, params, F, Jvals)
+    J[:, :] = 0.0
+    for p in range(Jvals.shape[0]):
+        J[rows[p], cols[p]] += Jvals[p]
+    return active
+
+
+@numba.njit(cache=True)
+def forces(q, xi, F_x, params, F):
+    """F(q, xi; F_x) only: the dynamics' hot path."""
+    N = q.shape[0] // D
+    R, k_n, k_t, mu, F_y, L = params[0], params[1], params[2], params[3], params[4], params[5]
+    F[:] = 0.0
+    f = np.empty(2 * D)
+    idx = np.empty(2 * D, np.int64)
+    for k in range(N):
+        dx, dy, ex, ey = pair_separation(q, k, N, L)
+        pair_force(dx, dy, pair_overlap(dx, dy, ex, ey, R), xi[k], R, k_n, k_t, mu, f)
+        pair_dofs(k, N, idx)
+        for a in range(2 * D):
+            F[idx[a]] += f[a]
+    for k in range(N):
+        wall_force(R - q[N + k], xi[N + k], R, k_n, k_t, mu, f)
+        wall_dofs(k, N, idx)
+        for a in range(D):
+            F[idx[a]] += f[a]
+    add_loads(F, F_x, F_y, N)
+
+
+@numba.njit(cache=True)
+def overlaps(q, params, delta):
+    """delta of every contact [length]: pairs 2R - |r_ij|, then substrate R - y_i."""
+    N = q.shape[0] // D
+    R, L = params[0], params[5]
+    for k in range(N):
+        dx, dy, ex, ey = pair_separation(q, k, N, L)
+        delta[k] = pair_overlap(dx, dy, ex, ey, R)
+        delta[N + k] = R - q[N + k]
+
+
+@numba.njit(cache=True)
+def history_increment(q0, q1, params, dxi):
+    """Delta xi along the straight step q0 -> q1, midpoint rule: w(q_mid) . (q1 - q0) [length].
+
+    Second-order accurate in the step: the exact path integral differs by O(|q1 - q0|^3)."""
+    N = q0.shape[0] // D
+    R, L = params[0], params[5]
+    w = np.empty(2 * D)
+    idx = np.empty(2 * D, np.int64)
+    qm = 0.5 * (q0 + q1)
+    dxi[:] = 0.0
+    for k in range(N):
+        if PAIR_FRICTION:
+            dx, dy, _, _ = pair_separation(qm, k, N, L)
+            pair_increment_coeffs(dx, dy, R, w)
+            pair_dofs(k, N, idx)
+            for a in range(2 * D):
+                dxi[k] += w[a] * (q1[idx[a]] - q0[idx[a]])
+        if WALL_FRICTION:
+            wall_increment_coeffs(R, w)
+            wall_dofs(k, N, idx)
+            for a in range(D):
+                dxi[N + k] += w[a] * (q1[idx[a]] - q0[idx[a]])
+
+
+@numba.njit(cache=True)
+def commit_history(xi, delta0, delta1, params, slid):
+    """MODEL.md's history rule closing a step, in place on xi = xi0 + increment.
+
+    A contact open at either end of the step (delta <= 0) has xi = 0: opening resets it, and a
+    contact that closes during the step starts from zero ("upon first contact t = 0", paper).
+    A history beyond its Coulomb limit t* = mu k_n delta1 / k_t is capped to sign(xi) t* (the
+    contact slides); slid[c] is set True where the cap acted. Returns the number capped."""
+    k_n, k_t, mu = params[1], params[2], params[3]
+    n_slid = 0
+    for c in range(xi.shape[0]):
+        slid[c] = False
+        if delta0[c] <= 0.0 or delta1[c] <= 0.0:
+            xi[c] = 0.0
+            continue
+        t_star = mu * k_n * delta1[c] / k_t
+        if abs(xi[c]) > t_star:
+            xi[c] = t_star if xi[c] > 0.0 else -t_star
+            slid[c] = True
+            n_slid += 1
+    return n_slid

@@ -1,0 +1,105 @@
+"""Print the derived contact kernels as a readable Python module of @numba.njit functions.
+
+Each kernel is printed after common-subexpression elimination (sympy.cse). The preamble that
+computes rho, sqrt(delta) and u = xi / t* is written by hand here, and delta itself is an input
+computed by the assembly (assembly_src.pair_overlap) with the care the symbols cannot express:
+- delta keeps its relative accuracy when delta << 2R (see pair_overlap);
+- one-sided contact rule: a contact is active iff delta > 0. At delta <= 0 the kernel writes
+  zero force and zero stiffness. This equals the limit delta -> 0+ for admissible histories
+  (|xi| <= t*): every force term carries delta^(3/2) and every stiffness term delta^(1/2).
+"""
+from __future__ import annotations
+
+import sympy as sp
+from sympy.printing.pycode import PythonCodePrinter
+
+from symbolic.contacts import ContactExprs
+from symbolic.laws import delta
+
+sd = sp.Symbol("sd", positive=True)  # sqrt(delta) in the printed code
+
+_ARGS = {"pair": "dx, dy, delta, xi, R, k_n, k_t, mu", "wall": "delta, xi, R, k_n, k_t, mu"}
+
+_PREAMBLE = {"pair": ["rho = math.hypot(dx, dy)"], "wall": []}
+
+
+class _KernelPrinter(PythonCodePrinter):
+    """Plain math-module Python that numba compiles: abs(), integer powers, no sympy names."""
+
+    def _print_Abs(self, expr):
+        return f"abs({self._print(expr.args[0])})"
+
+
+def _printable(expr: sp.Expr) -> sp.Expr:
+    """delta^(k/2) -> sd^k so that the printed code has only integer powers and one sqrt."""
+    return sp.sympify(expr).subs(delta, sd**2)
+
+
+def _body(exprs: dict[str, sp.Expr]) -> tuple[list[str], set[str]]:
+    """cse'd assignments for named outputs ('f[0]', 'J[1, 2]', ...) and the symbols they use."""
+    printer = _KernelPrinter()
+    names = list(exprs)
+    printable = [_printable(exprs[n]) for n in names]
+    used = {s.name for e in printable for s in e.free_symbols}
+    replacements, reduced = sp.cse(printable, symbols=sp.numbered_symbols("c"),
+                                   optimizations="basic")
+    lines = [f"{s} = {printer.doprint(e)}" for s, e in replacements]
+    lines += [f"{name} = {printer.doprint(sp.Float(e) if e.is_number else e)}"
+              for name, e in zip(names, reduced)]
+    return lines, used
+
+
+def _kernel(c: ContactExprs, with_J: bool) -> str:
+    """Source of one kernel: <kind>_contact(..., f, J) -> active, or <kind>_force(..., f)."""
+    n = len(c.dofs)
+    outputs = {f"f[{a}]": c.f[a] for a in range(n)}
+    if with_J:
+        outputs.update({f"J[{a}, {b}]": c.J[a, b] for a in range(n) for b in range(n)})
+    body, used = _body(outputs)
+    active = [line for line, sym in (("sd = math.sqrt(delta)", "sd"),
+                                      ("u = xi * k_t / (mu * k_n * delta)", "u")) if sym in used]
+    name = f"{c.kind}_{'contact' if with_J else 'force'}"
+    outs = "f, J" if with_J else "f"
+    what = "f and the total stiffness block J = -(df/dq + df/dxi w^T)" if with_J else "f"
+    zero = ["f[:] = 0.0"] + (["J[:, :] = 0.0"] if with_J else [])
+    lines = [
+        "@numba.njit(cache=True)",
+        f"def {name}({_ARGS[c.kind]}, {outs}):",
+        f'    """{c.kind} contact, law {c.law!r}: writes {what}',
+        f"    over the local dofs {', '.join(c.dofs)}. Returns 1 if active (delta > 0), else 0.\"\"\"",
+        *[f"    {line}" for line in _PREAMBLE[c.kind]],
+        "    if not delta > 0.0:",
+        *[f"        {line}" for line in zero],
+        "        return 0",
+        *[f"    {line}" for line in active + body],
+        "    return 1",
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def _increment_coeffs(c: ContactExprs) -> str:
+    """Source of <kind>_increment_coeffs: w with d xi = w . dq over the local dofs."""
+    printer = _KernelPrinter()
+    args = "dx, dy, R, w" if c.kind == "pair" else "R, w"
+    lines = ["@numba.njit(cache=True)", f"def {c.kind}_increment_coeffs({args}):",
+             f'    """d xi = w . dq over the local dofs {", ".join(c.dofs)}."""']
+    if c.kind == "pair":
+        lines.append("    rho = math.hypot(dx, dy)")
+    lines += [f"    w[{a}] = {printer.doprint(e)}" for a, e in enumerate(c.w)]
+    return "\n".join(lines) + "\n"
+
+
+def module_source(pair: ContactExprs, wall: ContactExprs, rotation: bool, header: str,
+                  assembly: str) -> str:
+    """The whole generated module: header, kernels, then the assembly source."""
+    parts = [
+        header,
+        "import math\n\nimport numba\nimport numpy as np\n",
+        f"D = {3 if rotation else 2}  # degrees of freedom per disk",
+        f"PAIR_FRICTION = {pair.law != 'none'}",
+        f"WALL_FRICTION = {wall.law != 'none'}\n\n",
+        _kernel(pair, True), _kernel(pair, False), _increment_coeffs(pair),
+        _kernel(wall, True), _kernel(wall, False), _increment_coeffs(wall),
+        assembly,
+    ]
+    return "\n\n".join(p.rstrip("\n") + "\n" for p in parts)

@@ -1,0 +1,95 @@
+"""The two contact kernels, derived once per contact law (never per system).
+
+Disk-disk pair (i, j): inputs dx, dy = r_i - r_j (image already applied) and the history xi.
+    rho = |r_ij|, n = r_ij / rho, s = (-n_y, n_x), delta = 2R - rho.
+    Force on i: F_n n + F_t s, on j the opposite; torques T_i = T_j = -R F_t.
+    History increment: d xi = s . d r_ij - R (d theta_i + d theta_j).
+Disk-substrate (i): inputs y_i and xi.  delta = R - y_i.
+    Force on i: (F_t, F_n), torque T_i = +R F_t.  History increment: d xi = dx_i + R d theta_i.
+
+For each kernel we derive, symbolically, the generalized force vector f over the contact's local
+degrees of freedom (x_i, y_i[, theta_i][, x_j, y_j, theta_j]), the increment coefficients w with
+d xi = w . dq, and the total stiffness block J = -(df/dq + df/dxi w^T) (MODEL.md: the history
+follows q). rho and delta are carried as symbols with explicit chain rules
+d rho / d dx = dx / rho, d delta / d dx = -dx / rho, so that powers of delta stay symbolic and
+combine (see laws.py).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import sympy as sp
+
+from symbolic import laws
+from symbolic.laws import R, delta, xi
+
+dx, dy, y = sp.symbols("dx dy y", real=True)
+rho = sp.Symbol("rho", positive=True)
+
+
+@dataclass(frozen=True)
+class ContactExprs:
+    """Symbolic result for one contact kernel.
+
+    kind   "pair" or "wall";  dofs  names of the local degrees of freedom;
+    f      generalized forces on the local dofs [force, torque];
+    J      total stiffness block -d f / d q (history following q) [force / length];
+    w      history increment coefficients, d xi = w . dq [1, length for angles];
+    law    tangential law this kernel was derived for.
+    """
+
+    kind: str
+    law: str
+    dofs: tuple[str, ...]
+    f: sp.Matrix
+    J: sp.Matrix
+    w: sp.Matrix
+
+
+def _stiffness(f: sp.Matrix, dfdq: sp.Matrix, w: sp.Matrix) -> sp.Matrix:
+    """J = -(df/dq + df/dxi w^T), then in Coulomb units (u = xi / t*)."""
+    J = -(dfdq + f.diff(xi) * w.T)
+    return J.applyfunc(laws.in_coulomb_units)
+
+
+def pair_contact(law: str, rotation: bool) -> ContactExprs:
+    """Disk-disk kernel for a tangential law; local dofs of disk i then disk j."""
+    n = sp.Matrix([dx / rho, dy / rho])
+    s = sp.Matrix([-n[1], n[0]])
+    F_n, F_t = laws.normal_force(), laws.tangential_force(law)
+    force_i = F_n * n + F_t * s
+    torque = -R * F_t
+
+    def total(e, var):  # d/d(var) with rho(dx, dy) and delta = 2R - rho
+        return sp.diff(e, var) + (sp.diff(e, rho) - sp.diff(e, delta)) * var / rho
+
+    if rotation:
+        dofs = ("x_i", "y_i", "theta_i", "x_j", "y_j", "theta_j")
+        f = sp.Matrix([force_i[0], force_i[1], torque, -force_i[0], -force_i[1], torque])
+        w = sp.Matrix([s[0], s[1], -R, -s[0], -s[1], -R])
+        cols = [(dx, 1), (dy, 1), None, (dx, -1), (dy, -1), None]
+    else:
+        dofs = ("x_i", "y_i", "x_j", "y_j")
+        f = sp.Matrix([force_i[0], force_i[1], -force_i[0], -force_i[1]])
+        w = sp.Matrix([s[0], s[1], -s[0], -s[1]])
+        cols = [(dx, 1), (dy, 1), (dx, -1), (dy, -1)]
+    dfdq = sp.Matrix(len(dofs), len(dofs),
+                     lambda a, b: 0 if cols[b] is None else cols[b][1] * total(f[a], cols[b][0]))
+    return ContactExprs("pair", law, dofs, f.applyfunc(laws.in_coulomb_units), _stiffness(f, dfdq, w), w)
+
+
+def wall_contact(law: str, rotation: bool) -> ContactExprs:
+    """Disk-substrate kernel for a tangential law; local dofs (x_i, y_i[, theta_i])."""
+    F_n, F_t = laws.normal_force(), laws.tangential_force(law)
+    if rotation:
+        dofs = ("x_i", "y_i", "theta_i")
+        f = sp.Matrix([F_t, F_n, R * F_t])
+        w = sp.Matrix([1, 0, R])
+    else:
+        dofs = ("x_i", "y_i")
+        f = sp.Matrix([F_t, F_n])
+        w = sp.Matrix([1, 0])
+    # f depends on y only through delta = R - y, so d/dy = -d/ddelta; x, theta enter via xi only.
+    dfdq = sp.zeros(len(dofs), len(dofs))
+    dfdq[:, 1] = -f.diff(delta)
+    return ContactExprs("wall", law, dofs, f.applyfunc(laws.in_coulomb_units), _stiffness(f, dfdq, w), w)
