@@ -48,7 +48,8 @@ class SceneError(Exception):
 
     def __init__(self, file: str, key: str, what: str, value: Any) -> None:
         self.file, self.key, self.what, self.value = file, key, what, value
-        super().__init__(f"scene error: {file}: {key}: {what} (got {_show(value)})")
+        shown = file if file.isprintable() else repr(file)[1:-1]  # one line, whatever the path
+        super().__init__(f"scene error: {shown}: {key}: {what} (got {_show(value)})")
 
 
 class _Invalid(Exception):

@@ -243,3 +243,11 @@ def test_cli_usage_errors_exit_2(argv, capsys):
         main(argv)
     assert raised.value.code == 2
     assert "usage:" in capsys.readouterr().err
+
+
+def test_scene_error_stays_one_line_for_a_path_with_a_newline(tmp_path):
+    path = tmp_path / "two\nlines.toml"
+    path.write_text("[disks]\nN = 1\n")
+    with pytest.raises(SceneError) as raised:
+        load_scene(path)
+    assert "\n" not in str(raised.value) and "two\\nlines.toml" in str(raised.value)
