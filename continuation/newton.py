@@ -1,0 +1,93 @@
+"""Bordered Newton solves on the extended state x = (u, p) in R^(n+1).
+
+Every solve of the core is one bordered system
+
+    F(x) = [ G(u, p)            ]  = 0,      dF/dx = [ G_u   G_p ]
+           [ b . (x - x_target) ]                    [ b^T       ]
+
+with a border vector b in R^(n+1): b = tangent (pseudo-arclength corrector), b = secant
+(points between two accepted points), b = e_p (fixed p). The tangent t at x solves
+dF/dx t = e_(n+1), normalised to |t| = 1; with b = the previous tangent this gives
+b . t > 0, so the orientation is kept and folds are passed.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .problem import Problem
+
+Array = np.ndarray
+
+
+@dataclass(frozen=True)
+class NewtonResult:
+    """x: last iterate; iterations: Newton updates made; residual: max|G(x)|."""
+
+    x: Array
+    iterations: int
+    residual: float
+    converged: bool
+
+
+def bordered_matrix(problem: Problem, x: Array, border: Array) -> Array:
+    """[[G_u, G_p], [b^T]] at x = (u, p), shape (n+1, n+1)."""
+    u, p = x[:-1], x[-1]
+    n = u.size
+    M = np.empty((n + 1, n + 1))
+    M[:n, :n] = problem.jacobian(u, p)
+    M[:n, n] = problem.dG_dp(u, p)
+    M[n] = border
+    return M
+
+
+def residual_norm(problem: Problem, x: Array) -> float:
+    """max_i |G_i(u, p)| at x = (u, p)."""
+    return float(np.max(np.abs(problem.residual(x[:-1], x[-1])), initial=0.0))
+
+
+def bordered_newton(problem: Problem, x_target: Array, border: Array,
+                    tol: float, max_iter: int) -> NewtonResult:
+    """Solve G(u, p) = 0, b . (x - x_target) = 0 by Newton from x_target.
+
+    Converged when max|G| <= tol (the border row is linear, so it holds to rounding after
+    the first update and exactly at the start). Fails on max_iter updates without
+    convergence, a non-finite residual or a singular bordered matrix.
+    """
+    x = np.array(x_target, dtype=float)
+    for it in range(max_iter + 1):
+        G = problem.residual(x[:-1], x[-1])
+        r = float(np.max(np.abs(G), initial=0.0))
+        if not np.isfinite(r):
+            return NewtonResult(x, it, r, False)
+        if r <= tol:
+            return NewtonResult(x, it, r, True)
+        if it == max_iter:
+            break
+        rhs = np.append(G, border @ (x - x_target))
+        try:
+            x = x - np.linalg.solve(bordered_matrix(problem, x, border), rhs)
+        except np.linalg.LinAlgError:
+            return NewtonResult(x, it, r, False)
+    return NewtonResult(x, max_iter, r, False)
+
+
+def fixed_p_newton(problem: Problem, u0: Array, p: float, tol: float, max_iter: int) -> NewtonResult:
+    """Solve G(u, p) = 0 at fixed p from u0 (the border is e_p)."""
+    x0 = np.append(np.asarray(u0, dtype=float), p)
+    e_p = np.zeros_like(x0)
+    e_p[-1] = 1.0
+    return bordered_newton(problem, x0, e_p, tol, max_iter)
+
+
+def tangent(problem: Problem, x: Array, border: Array) -> Array:
+    """Unit tangent t of the branch at x: [[G_u, G_p], [b^T]] t = e_(n+1), t / |t|.
+
+    b . t > 0, so passing the previous tangent as b keeps the orientation.
+    Raises numpy.linalg.LinAlgError if the bordered matrix is singular.
+    """
+    rhs = np.zeros(x.size)
+    rhs[-1] = 1.0
+    t = np.linalg.solve(bordered_matrix(problem, x, border), rhs)
+    return t / np.linalg.norm(t)
