@@ -1,0 +1,114 @@
+"""Spectra along a branch: classification (real | complex), counting, tracking.
+
+Classification. An eigenvalue lambda of a real matrix counts as complex iff
+    |Im lambda| > rel_tol * scale,     scale = max(max_k |lambda_k|, tiny),
+and the number of complex pairs is the number of eigenvalues with Im lambda > rel_tol * scale
+(LAPACK returns exact conjugate pairs for a real matrix). Default rel_tol = 1e-9, chosen
+between two floors:
+  * rounding: a real semisimple multiple eigenvalue (symmetry, decoupled blocks) may come
+    back as a pair with |Im| ~ n eps cond ~ 1e-14 scale; 1e-9 leaves a factor ~1e5 margin;
+  * consistency with collision location: near a collision the discriminant of the pair is
+    D = (lambda_a - lambda_b)^2 ~ c (p - p*), so the count switches where 4 (rel_tol scale)^2
+    = |c (p - p*)|, i.e. within 4e-18 scale^2 / |c| of p*, far inside the 1e-10 location
+    tolerance. (A defective double eigenvalue itself is computed with an error ~ sqrt(eps)
+    scale ~ 1.5e-8 scale, which also only matters within ~eps scale^2 / |c| of p*.)
+
+Tracking. Eigenvalues of consecutive points are matched by the assignment that minimises
+sum_i |lambda_i(prev) - lambda_perm(i)(new)| (scipy.optimize.linear_sum_assignment); when
+every eigenvalue's nearest new eigenvalue is distinct, that nearest-neighbour map is already
+optimal and the assignment solve is skipped. Column i of a branch's eigenvalue array is then
+one continuous eigenvalue (up to the arbitrary choice at a collision).
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+Array = np.ndarray
+
+DEFAULT_REL_TOL = 1e-9
+_TINY = np.finfo(float).tiny
+
+
+def spectral_scale(eigvals: Array) -> float:
+    """max(max_k |lambda_k|, tiny): the magnitude relative thresholds refer to."""
+    return max(float(np.max(np.abs(eigvals), initial=0.0)), _TINY)
+
+
+def imag_threshold(eigvals: Array, rel_tol: float = DEFAULT_REL_TOL) -> float:
+    """rel_tol * spectral_scale(eigvals): |Im| above it counts as complex."""
+    return rel_tol * spectral_scale(eigvals)
+
+
+def eigen_status(eigvals: Array, rel_tol: float = DEFAULT_REL_TOL) -> Array:
+    """Per eigenvalue: +1 if Im > thr (upper member of a pair), -1 if Im < -thr, 0 real."""
+    thr = imag_threshold(eigvals, rel_tol)
+    im = np.imag(eigvals)
+    return (im > thr).astype(np.int8) - (im < -thr).astype(np.int8)
+
+
+def count_complex_pairs(eigvals: Array, rel_tol: float = DEFAULT_REL_TOL) -> int:
+    """Number of complex-conjugate pairs: #{k: Im lambda_k > rel_tol * max(max|lambda|, tiny)}."""
+    return int(np.count_nonzero(np.imag(eigvals) > imag_threshold(eigvals, rel_tol)))
+
+
+def sort_spectrum(eigvals: Array) -> Array:
+    """Eigenvalues ordered by (Re, Im): a reproducible order for the first point of a branch."""
+    eigvals = np.asarray(eigvals, dtype=complex)
+    return eigvals[np.lexsort((eigvals.imag, eigvals.real))]
+
+
+def match_eigenvalues(reference: Array, eigvals: Array) -> Array:
+    """Permutation perm such that eigvals[perm][i] continues reference[i].
+
+    Minimises sum_i |reference_i - eigvals_perm(i)|; if the row-wise nearest neighbours
+    already form a permutation, that is the optimum (each term at its lower bound).
+    """
+    cost = np.abs(reference[:, None] - eigvals[None, :])
+    nearest = np.argmin(cost, axis=1)
+    if np.unique(nearest).size == nearest.size:
+        return nearest
+    return linear_sum_assignment(cost)[1]
+
+
+def track(reference: Array, eigvals: Array) -> Array:
+    """eigvals reordered to continue reference (see match_eigenvalues)."""
+    return eigvals[match_eigenvalues(reference, eigvals)]
+
+
+def pair_discriminant(lam_i, lam_j, status_i, status_j):
+    """Discriminant of a pair, consistent with the classification (works on arrays).
+
+    For the 2x2 invariant subspace of the pair, D = (lambda_i - lambda_j)^2 = tr^2 - 4 det is
+    real and smooth in p, positive for two real eigenvalues and negative for a conjugate pair;
+    a collision is a sign change of D. Returned:
+        both real (status 0, 0):          D = (Re lambda_i - Re lambda_j)^2 >= 0
+        conjugate (status +1, -1):        D = -(Im lambda_i - Im lambda_j)^2 < 0
+        anything else:                    nan (the two cannot collide with each other here).
+    """
+    st_i, st_j = np.asarray(status_i), np.asarray(status_j)
+    real = (st_i == 0) & (st_j == 0)
+    conj = (st_i * st_j) == -1
+    d_re = np.real(lam_i) - np.real(lam_j)
+    d_im = np.imag(lam_i) - np.imag(lam_j)
+    return np.where(real, d_re**2, np.where(conj, -d_im**2, np.nan))
+
+
+def conjugate_pairing(eigvals: Array, upper: Array, lower: Array,
+                      other: Array | None = None) -> list[tuple[int, int]]:
+    """Pair indices `upper` (Im > 0) with indices `lower` (Im < 0); returns [(u, l), ...].
+
+    Minimises sum |lambda_u - conj(lambda_l)|, plus, when the same labels' eigenvalues `other`
+    at the other end of an interval are given, |mean_other(u, l) - mean(u, l)|: the mean
+    (lambda_u + lambda_l) / 2 of a colliding pair (half the trace of its block) is continuous
+    through the collision, which resolves ties between multiple eigenvalues.
+    """
+    upper, lower = np.asarray(upper, dtype=int), np.asarray(lower, dtype=int)
+    if upper.size == 0 or lower.size == 0:
+        return []
+    lu, ll = eigvals[upper][:, None], eigvals[lower][None, :]
+    cost = np.abs(lu - np.conj(ll))
+    if other is not None:
+        cost = cost + np.abs((other[upper][:, None] + other[lower][None, :]) / 2 - (lu + ll) / 2)
+    rows, cols = linear_sum_assignment(cost)
+    return [(int(upper[r]), int(lower[c])) for r, c in zip(rows, cols)]
