@@ -1,0 +1,45 @@
+"""The result of a continuation run: one object of arrays (one row per accepted point)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .collisions import Collision
+
+Array = np.ndarray
+
+
+@dataclass(frozen=True)
+class Branch:
+    """Accepted points k = 0..m-1 of a branch G(u, p) = 0.
+
+    p (m,); u (m, n); eigenvalues (m, n) complex, tracked: column i is one eigenvalue followed
+    along the branch; n_complex (m,): number of complex pairs (spectra.count_complex_pairs);
+    ds (m,): arclength step that reached the point (0 for the first); newton_iterations (m,):
+    corrector updates; residual (m,): max|G| at the stored point; tangent (m, n+1): unit
+    tangent in x = (u, p); detection_solves (m,): corrector solves spent on collision detection
+    in the step ending at the point; collisions: located births and deaths in branch order;
+    status: why the run stopped ("p_end", "max_steps", "ds_min: ..."); warnings.
+    """
+
+    p: Array
+    u: Array
+    eigenvalues: Array
+    n_complex: Array
+    ds: Array
+    newton_iterations: Array
+    residual: Array
+    tangent: Array
+    detection_solves: Array
+    collisions: tuple[Collision, ...]
+    status: str
+    warnings: tuple[str, ...] = ()
+
+    def __len__(self) -> int:
+        return self.p.size
+
+    @property
+    def x(self) -> Array:
+        """Rows (u, p), shape (m, n+1)."""
+        return np.column_stack([self.u, self.p])
