@@ -1,0 +1,276 @@
+"""The generic continuation core on small problems with known answers.
+
+Families G(u, p) = A(p) u with the equilibrium u = 0 have the spectrum of A(p) along the whole
+branch; 2x2 blocks [[a, 1], [c(p), a]] have eigenvalues a +- sqrt(c(p)), so a pair is complex
+exactly where c(p) < 0 and every collision is a root of c.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.linalg import block_diag
+
+from continuation import (ContinuationParams, DetectionParams, FunctionProblem, continuation,
+                          count_complex_pairs)
+from continuation.bifurcations import locate_folds, locate_hopf
+from continuation.spectra import sort_spectrum
+
+TOL_P = 1e-10
+
+
+def linear_family(A, dA):
+    """G(u, p) = A(p) u: G_u = A(p), G_p = A'(p) u."""
+    return FunctionProblem(G=lambda u, p: A(p) @ u, G_u=lambda u, p: A(p), G_p=lambda u, p: dA(p) @ u)
+
+
+def pair_block(a, c):
+    """[[a, 1], [c, a]]: eigenvalues a +- sqrt(c)."""
+    return np.array([[a, 1.0], [c, a]])
+
+
+def blocks_family(blocks):
+    """Block-diagonal family from [(a, c, dc), ...], c(p) and dc(p) callables."""
+    A = lambda p: block_diag(*[pair_block(a, c(p)) for a, c, _ in blocks])
+    dA = lambda p: block_diag(*[np.array([[0.0, 0.0], [dc(p), 0.0]]) for _, _, dc in blocks])
+    return linear_family(A, dA)
+
+
+def run(problem, n, p_min=0.0, p_max=1.0, ds=0.05, ds_max=None, u0=None, p0=None):
+    par = ContinuationParams(ds=ds, ds_min=1e-9, ds_max=ds if ds_max is None else ds_max,
+                             newton_tol=1e-12, p_min=p_min, p_max=p_max)
+    return continuation(problem, np.zeros(n) if u0 is None else u0, p_min if p0 is None else p0, par)
+
+
+def located(branch, kind):
+    return sorted(c.p for c in branch.collisions if c.kind == kind)
+
+
+def assert_count_changes_only_at_collisions(problem, branch, p_lo, p_hi, n_grid=4001):
+    """On a dense grid plus points 1e-9 outside every bracket, the count of complex pairs
+    (at u = 0) changes between neighbours by exactly births - deaths located in between."""
+    extra = [q for c in branch.collisions for q in (c.bracket[0] - 1e-9, c.bracket[1] + 1e-9)]
+    grid = np.unique(np.clip(np.concatenate([np.linspace(p_lo, p_hi, n_grid), extra]), p_lo, p_hi))
+    n = branch.u.shape[1]
+    counts = np.array([count_complex_pairs(problem.spectrum(np.zeros(n), q)) for q in grid])
+    sign = {"birth": 1, "death": -1}
+    for g0, g1, c0, c1 in zip(grid[:-1], grid[1:], counts[:-1], counts[1:]):
+        inside = [c for c in branch.collisions if g0 < c.p <= g1]
+        assert c1 - c0 == sum(sign[c.kind] for c in inside), (g0, g1, c0, c1, inside)
+    for c in branch.collisions:  # the count changes across every bracket (by all it holds)
+        lo, hi = c.bracket[0] - 1e-9, c.bracket[1] + 1e-9
+        before = count_complex_pairs(problem.spectrum(np.zeros(n), lo))
+        after = count_complex_pairs(problem.spectrum(np.zeros(n), hi))
+        assert after - before == sum(sign[d.kind] for d in branch.collisions if lo < d.p < hi) != 0
+
+
+# ---- folds and Hopf -------------------------------------------------------------------------
+
+def test_fold_of_scalar_equation_is_passed_and_located():
+    """G = u^2 + p from (u, p) = (1, -1): the branch turns at the fold (0, 0) and lands on
+    p = -1 again at u = -1. Fold located to |x - x_fold| <= 1e-9, hence |p| <= 1e-15."""
+    problem = FunctionProblem(G=lambda u, p: np.array([u[0] ** 2 + p]), G_u=lambda u, p: np.array([[2 * u[0]]]),
+                              G_p=lambda u, p: np.array([1.0]))
+    br = run(problem, 1, p_min=-1.0, p_max=1.0, ds=0.1, ds_max=0.2, u0=np.array([1.0]))
+    assert br.status == "p_end" and br.p[-1] == -1.0 and br.u[-1, 0] == pytest.approx(-1.0, abs=1e-10)
+    assert np.all(np.abs(br.u[:, 0] ** 2 + br.p) <= 1e-12)
+    folds = locate_folds(problem, br)
+    assert len(folds) == 1
+    assert abs(folds[0].p) <= 1e-15 and abs(folds[0].u[0]) <= 1e-8
+    assert folds[0].bracket[0] <= folds[0].p <= folds[0].bracket[1]
+
+
+def brusselator(a):
+    """x' = a - (b + 1) x + x^2 y, y' = b x - x^2 y with p = b; steady state (a, b / a);
+    Jacobian [[b - 1, a^2], [-b, -a^2]]: Hopf at b = 1 + a^2, complex pair for
+    (a - 1)^2 < b < (a + 1)^2."""
+    def G(u, b):
+        x, y = u
+        return np.array([a - (b + 1) * x + x * x * y, b * x - x * x * y])
+
+    def J(u, b):
+        x, y = u
+        return np.array([[-(b + 1) + 2 * x * y, x * x], [b - 2 * x * y, -x * x]])
+
+    return FunctionProblem(G, J, lambda u, b: np.array([-u[0], u[0]]))
+
+
+def test_brusselator_hopf_and_collisions_match_analytic():
+    """a = sqrt(2): Hopf at b = 3 with omega = a; pair born at (a-1)^2, dies at (a+1)^2."""
+    a = np.sqrt(2.0)
+    problem = brusselator(a)
+    br = run(problem, 2, p_min=0.0, p_max=7.0, ds=0.1, ds_max=0.5, u0=np.array([a, 0.0]))
+    assert br.status == "p_end" and br.p[-1] == 7.0
+    assert np.allclose(br.u[:, 1], br.p / a, atol=1e-10)
+    hopf = locate_hopf(problem, br)
+    assert len(hopf) == 1
+    assert abs(hopf[0].p - (1 + a * a)) <= TOL_P and abs(hopf[0].value - 1j * a) <= 1e-8
+    assert located(br, "birth") == pytest.approx([(a - 1) ** 2], abs=TOL_P)
+    assert located(br, "death") == pytest.approx([(a + 1) ** 2], abs=TOL_P)
+    for c in br.collisions:  # double eigenvalue -sqrt(det) = -a at birth, +a at death
+        assert c.eigenvalue == pytest.approx(-a if c.kind == "birth" else a, abs=1e-6)
+
+
+# ---- collisions -----------------------------------------------------------------------------
+
+P0 = 1 / np.pi
+
+
+def test_2x2_collision_located_to_1e10_with_jordan_vectors():
+    """A(p) = [[a, 1], [p - p0, a]]: eigenvalues a +- sqrt(p - p0); complex below p0, so a
+    death at p0 with the Jordan block [[a, 1], [0, a]]: v = e1, w = e2."""
+    a = -0.7
+    problem = blocks_family([(a, lambda p: p - P0, lambda p: 1.0)])
+    br = run(problem, 2, ds=0.07, ds_max=0.1)
+    assert br.status == "p_end" and br.p[-1] == 1.0
+    (c,) = br.collisions
+    assert c.kind == "death" and c.resolved
+    assert abs(c.p - P0) <= TOL_P and c.bracket[0] <= c.p <= c.bracket[1]
+    assert c.bracket[1] - c.bracket[0] <= TOL_P and c.bracket[0] - TOL_P <= P0 <= c.bracket[1] + TOL_P
+    assert c.eigenvalue == pytest.approx(a, abs=1e-5)
+    assert np.allclose(np.abs(c.eigenvector), [1, 0], atol=1e-5)
+    assert np.allclose(np.abs(c.generalized_eigenvector), [0, 1], atol=1e-5)
+    assert c.left_right_overlap <= 1e-5
+    assert_count_changes_only_at_collisions(problem, br, 0.0, 1.0)
+
+
+def bubble_problem(p1, p2):
+    """[[a, 1], [c, a]] with c = (p - p1)(p - p2) e^p (complex only on (p1, p2)), plus a third
+    coordinate u3 = sin(3 p) that makes the branch curved, so arclength is not linear in p."""
+    a = -0.7
+
+    def c(p):
+        return (p - p1) * (p - p2) * np.exp(p)
+
+    def dc(p):
+        return ((2 * p - p1 - p2) + (p - p1) * (p - p2)) * np.exp(p)
+
+    def A(p):
+        return block_diag(pair_block(a, c(p)), [[1.0]])
+
+    def G(u, p):
+        return np.append(pair_block(a, c(p)) @ u[:2], u[2] - np.sin(3 * p))
+
+    def G_p(u, p):
+        return np.array([0.0, dc(p) * u[0], -3 * np.cos(3 * p)])
+
+    return FunctionProblem(G, lambda u, p: A(p), G_p)
+
+
+@pytest.mark.parametrize("ds", [1e-2, 3.7e-2])
+def test_bubble_narrower_than_the_step_is_found(ds):
+    """Birth at p1, death at p2 = p1 + 1e-3, with steps of 10x and 37x the bubble width."""
+    p1 = 0.41 + 1e-4 / np.e
+    p2 = p1 + 1e-3
+    problem = bubble_problem(p1, p2)
+    br = run(problem, 3, ds=ds, u0=np.array([0.0, 0.0, 0.0]))
+    assert br.status == "p_end" and np.max(np.diff(br.p)) >= 9 * (p2 - p1)
+    assert located(br, "birth") == pytest.approx([p1], abs=TOL_P)
+    assert located(br, "death") == pytest.approx([p2], abs=TOL_P)
+    assert all(c.resolved and c.residual <= 1e-12 for c in br.collisions)
+    assert_count_changes_only_at_collisions(problem, br, 0.0, 1.0, n_grid=20001)
+
+
+@pytest.mark.parametrize("a2, k", [(0.5, 2.0), (0.0, 1.0)], ids=["distinct", "identical-blocks"])
+def test_two_pairs_born_at_the_same_p_are_both_reported(a2, k):
+    """blockdiag([[0, 1], [p0 - p, 0]], [[a2, 1], [k (p0 - p), a2]]): two births at p0. The
+    distinct case also has real eigenvalues of the two blocks crossing before p0 (no collision);
+    the identical case has every eigenvalue double (semisimple)."""
+    problem = blocks_family([(0.0, lambda p: P0 - p, lambda p: -1.0),
+                             (a2, lambda p: k * (P0 - p), lambda p: -k)])
+    br = run(problem, 4, ds=0.1)
+    assert located(br, "birth") == pytest.approx([P0, P0], abs=TOL_P)
+    assert located(br, "death") == []
+    assert sorted(c.eigenvalue for c in br.collisions) == pytest.approx(sorted([0.0, a2]), abs=1e-5)
+    assert br.n_complex[0] == 0 and br.n_complex[-1] == 2
+    assert_count_changes_only_at_collisions(problem, br, 0.0, 1.0)
+
+
+def test_many_narrow_bubbles_all_found():
+    """c(p) = 0.999 - sin(20 p) is negative only near the peaks of the sine: a birth and a
+    death 4.5e-3 apart around every p = (pi/2 + 2 pi m) / 20 (7 in [0, 2]), steps of 0.05."""
+    problem = blocks_family([(-0.3, lambda p: 0.999 - np.sin(20 * p), lambda p: -20 * np.cos(20 * p))])
+    br = run(problem, 2, p_max=2.0, ds=0.05)
+    theta = np.arcsin(0.999)
+    births = [(theta + 2 * np.pi * m) / 20 for m in range(7)]
+    deaths = [(np.pi - theta + 2 * np.pi * m) / 20 for m in range(7)]
+    assert located(br, "death") == pytest.approx(deaths, abs=TOL_P)
+    assert located(br, "birth") == pytest.approx(births, abs=TOL_P)
+    assert_count_changes_only_at_collisions(problem, br, 0.0, 2.0, n_grid=20001)
+
+
+def test_collision_located_through_a_fold():
+    """u1^2 + p = 0 folds at p = 0; blocks with c1 = u1 - 0.3 and c2 = u1 + 0.2 give a birth at
+    u1 = 0.3 (p = -0.09, before the fold) and a birth at u1 = -0.2 (p = -0.04, after it: p is
+    decreasing there, kinds follow the branch direction)."""
+    def A(u):
+        return block_diag(pair_block(-0.5, u[0] - 0.3), pair_block(0.5, u[0] + 0.2))
+
+    def G(u, p):
+        return np.append(u[0] ** 2 + p, A(u) @ u[1:])
+
+    def G_u(u, p):
+        J = np.zeros((5, 5))
+        J[0, 0] = 2 * u[0]
+        J[1:, 1:] = A(u)
+        J[2, 0], J[4, 0] = u[1], u[3]
+        return J
+
+    problem = FunctionProblem(G, G_u, lambda u, p: np.array([1.0, 0, 0, 0, 0]), A=lambda u, p: A(u))
+    br = run(problem, 5, p_min=-1.0, p_max=1.0, ds=0.1, u0=np.array([1.0, 0, 0, 0, 0]))
+    assert br.status == "p_end" and br.u[-1, 0] == pytest.approx(-1.0)
+    assert [c.kind for c in br.collisions] == ["birth", "birth"]
+    assert [c.p for c in br.collisions] == pytest.approx([-0.09, -0.04], abs=TOL_P)
+    assert [c.u[0] for c in br.collisions] == pytest.approx([0.3, -0.2], abs=1e-9)
+
+
+# ---- invariants -----------------------------------------------------------------------------
+
+def test_stored_eigenvalues_equal_recomputed_ones_and_are_tracked():
+    a = np.sqrt(2.0)
+    problem = brusselator(a)
+    br = run(problem, 2, p_min=0.0, p_max=7.0, ds=0.1, ds_max=0.5, u0=np.array([a, 0.0]))
+    for k in range(len(br)):
+        again = problem.spectrum(br.u[k], br.p[k])
+        assert np.allclose(sort_spectrum(br.eigenvalues[k]), sort_spectrum(again), rtol=1e-12, atol=1e-12)
+        assert br.n_complex[k] == count_complex_pairs(again)
+    # tracked columns: each step moves every eigenvalue by no more than a re-sorted order would
+    steps = np.abs(np.diff(br.eigenvalues, axis=0)).sum(axis=1)
+    resorted = np.abs(np.diff(np.array([sort_spectrum(e) for e in br.eigenvalues]), axis=0)).sum(axis=1)
+    assert np.all(steps <= resorted + 1e-12)
+
+
+def test_collision_location_converges_as_the_step_shrinks():
+    """Bubble family on the curved branch: for ds from 0.2 down to 0.0125 every run finds the
+    same two collisions, all within 1e-10 of the analytic ones."""
+    p1 = 0.41 + 1e-4 / np.e
+    p2 = p1 + 1e-3
+    problem = bubble_problem(p1, p2)
+    locs = np.array([[c.p for c in run(problem, 3, ds=ds).collisions] for ds in 0.2 / 2 ** np.arange(5)])
+    assert locs.shape == (5, 2)
+    assert np.all(np.abs(locs - [p1, p2]) <= TOL_P)
+    assert np.all(np.abs(np.diff(locs, axis=0)) <= 2 * TOL_P)
+
+
+def test_commit_hook_sees_every_accepted_step_after_detection():
+    calls = []
+
+    class Recording(FunctionProblem):
+        def commit(self, u_old, p_old, u_new, p_new):
+            calls.append((p_old, p_new))
+
+    base = blocks_family([(-0.7, lambda p: p - P0, lambda p: 1.0)])
+    problem = Recording(base.G, base.G_u, base.G_p)
+    br = run(problem, 2, ds=0.07, ds_max=0.1)
+    assert calls == list(zip(br.p[:-1], br.p[1:]))
+
+
+def test_parameters_are_validated_at_the_door():
+    with pytest.raises(ValueError):
+        ContinuationParams(ds=1.0, ds_max=0.1)
+    with pytest.raises(ValueError):
+        ContinuationParams(p_min=1.0, p_max=0.0)
+    with pytest.raises(ValueError):
+        DetectionParams(rho=1.5)
+    problem = blocks_family([(-0.7, lambda p: p - P0, lambda p: 1.0)])
+    with pytest.raises(ValueError):
+        continuation(problem, np.zeros(2), 1.0, ContinuationParams(p_min=0.0, p_max=1.0))
