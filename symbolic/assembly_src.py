@@ -198,23 +198,29 @@ def history_increment(q0, q1, params, dxi):
 
 
 @numba.njit(cache=True)
-def commit_history(xi, delta0, delta1, params, slid):
-    """MODEL.md's history rule closing a step, in place on xi = xi0 + increment.
+def commit_history(xi0, dxi, delta0, delta1, params, cap, xi1, slid):
+    """MODEL.md's history rule for one step with increment dxi, into xi1 [length].
 
-    A contact open at either end of the step (delta <= 0) has xi = 0: opening resets it, and a
-    contact that closes during the step starts from zero ("upon first contact t = 0", paper).
-    A history beyond its Coulomb limit t* = mu k_n delta1 / k_t is capped to sign(xi) t* (the
-    contact slides); slid[c] is set True where the cap acted. Returns the number capped."""
+    Open at the end (delta1 <= 0): xi1 = 0. Closed during the step (delta0 <= 0 < delta1): the
+    contact starts from zero at first contact ("t = 0 upon first contact", paper) and charges the
+    part of the increment after it, delta1 / (delta1 - delta0) of dxi with delta taken linear
+    along the step (a contact touching at delta0 = 0 charges all of it). Otherwise
+    xi1 = xi0 + dxi. With `cap`, a history beyond its Coulomb limit t* = mu k_n delta1 / k_t is
+    set to sign(xi1) t* (the contact slides) and slid[c] is True. Returns the number capped."""
     k_n, k_t, mu = params[1], params[2], params[3]
     n_slid = 0
-    for c in range(xi.shape[0]):
+    for c in range(xi0.shape[0]):
         slid[c] = False
-        if delta0[c] <= 0.0 or delta1[c] <= 0.0:
-            xi[c] = 0.0
+        if delta1[c] <= 0.0:
+            xi1[c] = 0.0
             continue
+        if delta0[c] <= 0.0:
+            xi1[c] = dxi[c] * (delta1[c] / (delta1[c] - delta0[c]))
+        else:
+            xi1[c] = xi0[c] + dxi[c]
         t_star = mu * k_n * delta1[c] / k_t
-        if abs(xi[c]) > t_star:
-            xi[c] = t_star if xi[c] > 0.0 else -t_star
+        if cap and abs(xi1[c]) > t_star:
+            xi1[c] = t_star if xi1[c] > 0.0 else -t_star
             slid[c] = True
             n_slid += 1
     return n_slid

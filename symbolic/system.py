@@ -85,14 +85,16 @@ class System:
         self.kernels.overlaps(q, self.params, delta)
         return delta
 
-    def history_step(self, q0: np.ndarray, q1: np.ndarray, xi0: np.ndarray
+    def history_step(self, q0: np.ndarray, q1: np.ndarray, xi0: np.ndarray, cap: bool = True
                      ) -> tuple[np.ndarray, np.ndarray]:
-        """xi after the straight step q0 -> q1: midpoint increment, then commit_history (zero for
-        a contact open at either end, Coulomb cap |xi| <= t*). Returns (xi1, slid), slid[c] True
-        where the cap acted. Callers that need the exact closing point split the step there."""
+        """xi after the straight step q0 -> q1 (commit_history: midpoint increment, contacts
+        opening reset, contacts closing charge only after first contact, and with `cap` the
+        Coulomb cap |xi| <= t*). Returns (xi1, slid), slid[c] True where the cap acted.
+        cap=False gives the trial history of a quasistatic step before the cap (MODEL.md)."""
         dxi = np.empty_like(xi0)
         self.kernels.history_increment(q0, q1, self.params, dxi)
-        xi1 = xi0 + dxi
-        slid = np.empty(xi1.shape, dtype=np.bool_)
-        self.kernels.commit_history(xi1, self.overlaps(q0), self.overlaps(q1), self.params, slid)
+        xi1 = np.empty_like(xi0)
+        slid = np.empty(xi0.shape, dtype=np.bool_)
+        self.kernels.commit_history(xi0, dxi, self.overlaps(q0), self.overlaps(q1), self.params,
+                                    cap, xi1, slid)
         return xi1, slid
