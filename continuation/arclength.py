@@ -18,7 +18,7 @@ problem.commit is called, so intermediate points see the state committed at x_k.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Callable, Optional
 
 import numpy as np
@@ -176,7 +176,8 @@ def continuation(problem: Problem, u0: Array, p0: float,
 
 def _commit(problem: Problem, x: Array, step: _Step, end: Sample, par: ContinuationParams, rel_tol: float):
     """Call problem.commit; if it reports a change, re-solve at fixed p and refresh tangent and
-    spectrum (the jump is not scanned for collisions). Returns (step, end sample) or (None, end)."""
+    spectrum (the jump is not scanned for collisions; the stored residual is the re-solve's, the
+    iterations add up). Returns (step, end sample) or (None, end)."""
     changed = problem.commit(x[:-1], float(x[-1]), step.x[:-1].copy(), float(step.x[-1]))
     if not changed:
         return step, end
@@ -185,7 +186,8 @@ def _commit(problem: Problem, x: Array, step: _Step, end: Sample, par: Continuat
         return None, end
     t_new = tangent(problem, res.x, step.tangent)
     end = make_sample(0.0, res.x, problem.spectrum(res.x[:-1], res.x[-1]), rel_tol, reference=end)
-    return _Step(res.x, t_new, step.newton, step.last), end
+    newton = replace(res, iterations=step.newton.iterations + res.iterations)
+    return _Step(res.x, t_new, newton, step.last), end
 
 
 class _Recorder:

@@ -253,29 +253,25 @@ class StepScan:
         return left if a.s - left.s <= right.s - b.s else right
 
     def _uncertified(self, a: Sample, b: Sample, c: Sample) -> bool:
+        """Some pair that could collide bends too much over [a, b] (curvature_too_large)."""
         same = a.status == b.status
         t_c = (c.s - a.s) / (b.s - a.s)
         floor = 4.0 * max(a.thr, b.thr) ** 2
-        rho = self.params.rho
         real = np.flatnonzero(same & (a.status == 0))
-        if real.size >= 2:
-            I, J = np.triu_indices(real.size, 1)
-            I, J = real[I], real[J]
-            d = [(smp.eigvals.real[I] - smp.eigvals.real[J]) ** 2 for smp in (a, b, c)]
-            if curvature_too_large(*d, t_c, rho, floor):
-                return True
+        I, J = np.triu_indices(real.size, 1)
+        I, J = real[I], real[J]
         upper = np.flatnonzero(same & (a.status > 0))
-        if upper.size:
-            d = [smp.eigvals.imag[upper] ** 2 for smp in (a, b, c)]
-            if curvature_too_large(*d, t_c, rho, floor):
-                return True
-        return False
+        y = [np.concatenate([(smp.eigvals.real[I] - smp.eigvals.real[J]) ** 2, smp.eigvals.imag[upper] ** 2])
+             for smp in (a, b, c)]
+        return curvature_too_large(*y, t_c, self.params.rho, floor)
 
     @staticmethod
     def status_events(a: Sample, b: Sample):
         """Births (0 -> +-1, paired at b) and deaths (+-1 -> 0, paired at a) on [a, b], and
         whether the status change is fully explained by them."""
         sa, sb = a.status, b.status
+        if np.array_equal(sa, sb):
+            return [], True
         born, died = (sa == 0) & (sb != 0), (sa != 0) & (sb == 0)
         bu, bl = np.flatnonzero(born & (sb > 0)), np.flatnonzero(born & (sb < 0))
         du, dl = np.flatnonzero(died & (sa > 0)), np.flatnonzero(died & (sa < 0))

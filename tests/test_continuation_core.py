@@ -264,6 +264,25 @@ def test_commit_hook_sees_every_accepted_step_after_detection():
     assert calls == list(zip(br.p[:-1], br.p[1:]))
 
 
+def test_commit_that_changes_the_state_is_followed_by_a_fixed_p_correction():
+    """G = u - p - h with a 'history' h raised by 1e-3 at every commit (which returns True):
+    every stored point is an equilibrium of the state after its own commit."""
+    class Stateful(FunctionProblem):
+        h = 0.0
+
+        def commit(self, u_old, p_old, u_new, p_new):
+            type(self).h += 1e-3
+            return True
+
+    problem = Stateful(lambda u, p: u - p - Stateful.h, lambda u, p: np.eye(1), lambda u, p: -np.ones(1))
+    seen = []
+    par = ContinuationParams(ds=0.1, ds_max=0.1, p_min=0.0, p_max=1.0, newton_tol=1e-12)
+    br = continuation(problem, np.zeros(1), 0.0, par, callback=lambda k, p, u, ev: seen.append(k))
+    assert seen == list(range(len(br)))
+    assert np.allclose(br.u[:, 0] - br.p, 1e-3 * np.arange(len(br)), atol=1e-12)
+    assert np.all(br.residual <= 1e-12)
+
+
 def test_parameters_are_validated_at_the_door():
     with pytest.raises(ValueError):
         ContinuationParams(ds=1.0, ds_max=0.1)
