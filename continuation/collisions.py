@@ -240,7 +240,11 @@ class StepScan:
         return idx, perm
 
     def _narrow(self, a: Sample, b: Sample) -> bool:
-        return abs(b.p - a.p) <= self.params.tol_p or b.s - a.s <= 1e-14
+        """Nothing left to resolve in [a, b]: |dp| <= tol_p and max|dx| <= sqrt(tol_p) (the
+        second keeps an interval that straddles a fold, where p_a ~ p_b by symmetry, open)."""
+        tol = self.params.tol_p
+        return (abs(b.p - a.p) <= tol and float(np.max(np.abs(b.x - a.x))) <= np.sqrt(tol)) \
+            or b.s - a.s <= 1e-14
 
     # ---- verdicts ------------------------------------------------------------------------
     def _stencil(self, idx: int) -> Optional[Sample]:
@@ -302,7 +306,7 @@ class StepScan:
 
     # ---- driver --------------------------------------------------------------------------
     def _advance(self) -> bool:
-        """Do one refinement action; False when every interval is final."""
+        """Do one refinement action (at least one new sample); False when every interval is final."""
         for idx in range(self._start, len(self.samples) - 1):
             kind, events, _ = self.verdict(idx)
             a, b = self.samples[idx], self.samples[idx + 1]
@@ -313,7 +317,10 @@ class StepScan:
                 return True
             for i, j, what in events:
                 if not self._event_final(a, b, i, j, what):
+                    n = len(self.samples)
                     self._refine(idx, i, j)
+                    if len(self.samples) == n:  # no progress: fall back to bisection
+                        self.insert(0.5 * (a.s + b.s))
                     return True
         return False
 
@@ -321,20 +328,18 @@ class StepScan:
         """Illinois on s -> D_ij(x(s)) over samples[idx], samples[idx + 1]; every evaluation
         stays as a sample. Aborts when the pair loses its labels or its eligibility."""
         a, b = self.samples[idx], self.samples[idx + 1]
-        p_at = {a.s: a.p, b.s: b.p}
+        at = {a.s: a, b.s: b}
 
         def f(s: float):
             k, perm = self.insert(s)
             if perm is not None and set(perm[[i, j]].tolist()) != {i, j}:
                 return None
-            p_at[s] = self.samples[k].p
-            d = sample_discriminant(self.samples[k], i, j)
+            at[s] = self.samples[k]
+            d = sample_discriminant(at[s], i, j)
             return None if np.isnan(d) else d
 
-        def done(lo: float, hi: float) -> bool:
-            return abs(p_at[hi] - p_at[lo]) <= self.params.tol_p or hi - lo <= 1e-14
-
-        refine_sign_change(f, a.s, sample_discriminant(a, i, j), b.s, sample_discriminant(b, i, j), done)
+        refine_sign_change(f, a.s, sample_discriminant(a, i, j), b.s, sample_discriminant(b, i, j),
+                           lambda lo, hi: self._narrow(at[lo], at[hi]))
 
     def run(self) -> list:
         """Refine until every interval is final; return the collisions in branch order."""

@@ -35,10 +35,10 @@ def blocks_family(blocks):
     return linear_family(A, dA)
 
 
-def run(problem, n, p_min=0.0, p_max=1.0, ds=0.05, ds_max=None, u0=None, p0=None):
+def run(problem, n, p_min=0.0, p_max=1.0, ds=0.05, ds_max=None, u0=None, direction=1):
     par = ContinuationParams(ds=ds, ds_min=1e-9, ds_max=ds if ds_max is None else ds_max,
-                             newton_tol=1e-12, p_min=p_min, p_max=p_max)
-    return continuation(problem, np.zeros(n) if u0 is None else u0, p_min if p0 is None else p0, par)
+                             newton_tol=1e-12, p_min=p_min, p_max=p_max, direction=direction)
+    return continuation(problem, np.zeros(n) if u0 is None else u0, p_min if direction > 0 else p_max, par)
 
 
 def located(branch, kind):
@@ -47,12 +47,14 @@ def located(branch, kind):
 
 def assert_count_changes_only_at_collisions(problem, branch, p_lo, p_hi, n_grid=4001):
     """On a dense grid plus points 1e-9 outside every bracket, the count of complex pairs
-    (at u = 0) changes between neighbours by exactly births - deaths located in between."""
+    (at u = 0) changes between neighbours by exactly births - deaths located in between
+    (for a branch monotone in p; kinds follow the branch direction)."""
     extra = [q for c in branch.collisions for q in (c.bracket[0] - 1e-9, c.bracket[1] + 1e-9)]
     grid = np.unique(np.clip(np.concatenate([np.linspace(p_lo, p_hi, n_grid), extra]), p_lo, p_hi))
     n = branch.u.shape[1]
     counts = np.array([count_complex_pairs(problem.spectrum(np.zeros(n), q)) for q in grid])
-    sign = {"birth": 1, "death": -1}
+    up = 1 if branch.p[-1] > branch.p[0] else -1
+    sign = {"birth": up, "death": -up}
     for g0, g1, c0, c1 in zip(grid[:-1], grid[1:], counts[:-1], counts[1:]):
         inside = [c for c in branch.collisions if g0 < c.p <= g1]
         assert c1 - c0 == sum(sign[c.kind] for c in inside), (g0, g1, c0, c1, inside)
@@ -115,15 +117,17 @@ def test_brusselator_hopf_and_collisions_match_analytic():
 P0 = 1 / np.pi
 
 
-def test_2x2_collision_located_to_1e10_with_jordan_vectors():
+@pytest.mark.parametrize("direction, kind", [(1, "death"), (-1, "birth")])
+def test_2x2_collision_located_to_1e10_with_jordan_vectors(direction, kind):
     """A(p) = [[a, 1], [p - p0, a]]: eigenvalues a +- sqrt(p - p0); complex below p0, so a
-    death at p0 with the Jordan block [[a, 1], [0, a]]: v = e1, w = e2."""
+    death at p0 going up in p (a birth going down) with the Jordan block [[a, 1], [0, a]]:
+    v = e1, w = e2."""
     a = -0.7
     problem = blocks_family([(a, lambda p: p - P0, lambda p: 1.0)])
-    br = run(problem, 2, ds=0.07, ds_max=0.1)
-    assert br.status == "p_end" and br.p[-1] == 1.0
+    br = run(problem, 2, ds=0.07, ds_max=0.1, direction=direction)
+    assert br.status == "p_end" and br.p[-1] == (1.0 if direction > 0 else 0.0)
     (c,) = br.collisions
-    assert c.kind == "death" and c.resolved
+    assert c.kind == kind and c.resolved
     assert abs(c.p - P0) <= TOL_P and c.bracket[0] <= c.p <= c.bracket[1]
     assert c.bracket[1] - c.bracket[0] <= TOL_P and c.bracket[0] - TOL_P <= P0 <= c.bracket[1] + TOL_P
     assert c.eigenvalue == pytest.approx(a, abs=1e-5)
