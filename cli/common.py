@@ -8,6 +8,15 @@ from scenes.load import SceneError, default_scene_path, load_scene
 from scenes.scene import Scene
 
 EXIT_BAD_INPUT = 2  # as argparse exits on a usage error
+EXIT_FAILED = 1  # the computation itself failed (no equilibrium, ...)
+
+
+class CommandError(Exception):
+    """One line for stderr, ``COMMAND error: WHAT``, and the exit code it ends with."""
+
+    def __init__(self, line: str, code: int = EXIT_BAD_INPUT) -> None:
+        super().__init__(line)
+        self.code = code
 
 
 def add_scene_argument(parser: argparse.ArgumentParser) -> None:
@@ -22,9 +31,13 @@ def scene_from_args(args: argparse.Namespace) -> Scene:
 
 
 def run_command(args: argparse.Namespace) -> int:
-    """Run the chosen subcommand; a SceneError becomes its one line on stderr and exit code 2."""
+    """Run the chosen subcommand; a SceneError or CommandError becomes its one line on stderr
+    and its exit code (2 for bad input)."""
     try:
         return args.run(args)
     except SceneError as error:
         print(error, file=sys.stderr)
         return EXIT_BAD_INPUT
+    except CommandError as error:
+        print(error, file=sys.stderr)
+        return error.code

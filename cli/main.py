@@ -8,10 +8,10 @@ from __future__ import annotations
 
 import argparse
 
-from cli import scene_cmd
+from cli import bifurcate_cmd, scene_cmd
 from cli.common import run_command
 
-SUBCOMMANDS = (scene_cmd,)
+SUBCOMMANDS = (scene_cmd, bifurcate_cmd)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,100 @@
+"""``diskfriction bifurcate [SCENE] [--fx A:B] [--matrix J|M^-1J] [--out DIR] [--json]``."""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+
+from cli.common import EXIT_FAILED, CommandError, add_scene_argument, scene_from_args
+from cli.progress import ProgressBar
+
+MATRICES = {"J": "J", "M^-1J": "M^-1 J", "M^-1 J": "M^-1 J"}
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "bifurcate", help="continue the equilibria in F_x and locate every eigenvalue collision",
+        description="Follow the equilibrium branch from rest through the F_x range with the "
+                    "tangential history carried along, store all eigenvalues of the stability "
+                    "matrix, and locate every birth and death of a complex pair. Writes "
+                    "DIR/branch.npz, DIR/collisions.json and DIR/diagram.png (raw units in "
+                    "files, the paper's units in the figure).")
+    add_scene_argument(parser)
+    parser.add_argument("--fx", metavar="A:B",
+                        help="sweep F_x from A to B (raw units); A > B unloads after loading to A "
+                             "(default: the scene's F_x range)")
+    parser.add_argument("--matrix", metavar="J|M^-1J",
+                        help="stability matrix (default: the scene's)")
+    parser.add_argument("--out", metavar="DIR", help="output directory (default: out/bifurcate/SCENE)")
+    parser.add_argument("--ds-max", type=float, metavar="DS",
+                        help="largest arclength step (default: span / 60)")
+    parser.add_argument("--json", action="store_true", help="print the collision list to stdout")
+    parser.set_defaults(run=run)
+
+
+def parse_range(text: str) -> tuple[float, float]:
+    """'A:B' -> (A, B), both finite, >= 0 and different; else a one-line CommandError."""
+    parts = text.split(":")
+    try:
+        a, b = (float(p) for p in parts) if len(parts) == 2 else (None, None)
+    except ValueError:
+        a = b = None
+    if a is None or not (math.isfinite(a) and math.isfinite(b)):
+        raise CommandError(f"bifurcate error: --fx: expected A:B with two numbers (got {text!r})")
+    if a < 0 or b < 0:
+        raise CommandError(f"bifurcate error: --fx: F_x must be >= 0, the load pushes disk 1 "
+                           f"along +x (got {text!r})")
+    if a == b:
+        raise CommandError(f"bifurcate error: --fx: empty range (got {text!r})")
+    return a, b
+
+
+def run(args: argparse.Namespace) -> int:
+    scene = scene_from_args(args)
+    F_from, F_to = parse_range(args.fx) if args.fx is not None else scene.F_x_range
+    if args.matrix is not None and args.matrix not in MATRICES:
+        raise CommandError(f"bifurcate error: --matrix: must be J or M^-1J (got {args.matrix!r})")
+    if args.ds_max is not None and not (math.isfinite(args.ds_max) and args.ds_max > 0):
+        raise CommandError(f"bifurcate error: --ds-max: must be a positive number (got {args.ds_max!r})")
+    matrix = MATRICES[args.matrix] if args.matrix else scene.matrix
+    out = Path(args.out) if args.out else Path("out") / "bifurcate" / scene.name
+
+    from continuation.disks import EquilibriumError
+    from continuation.sweep import SweepParams, sweep
+    from continuation.arclength import ContinuationError
+    from reports.bifurcation import collision_records, plot_diagram, save_branch
+    from symbolic import System
+
+    bar = ProgressBar("bifurcate")
+    total = F_from + abs(F_to - F_from)  # preparation leg plus the sweep
+    done = {"F": 0.0, "last": 0.0}
+
+    def progress(F_x: float) -> None:
+        done["F"] += abs(F_x - done["last"])
+        done["last"] = F_x
+        bar(done["F"] / total, f"F_x = {F_x:.5f}")
+
+    try:
+        branch = sweep(System.from_scene(scene), F_from, F_to, matrix,
+                       SweepParams(ds_max=args.ds_max), progress)
+    except (EquilibriumError, ContinuationError) as error:
+        raise CommandError(f"bifurcate error: {scene.source}: {error}", EXIT_FAILED) from None
+    finally:
+        bar.close()
+    save_branch(out, branch, scene)
+    plot_diagram(branch, scene, out / "diagram.png")
+    records = collision_records(branch)
+    if args.json:
+        print(json.dumps([{k: r[k] for k in ("F_x", "kind", "lambda_re", "lambda_im", "matrix")}
+                          for r in records], indent=1))
+    else:
+        print(f"{len(branch)} equilibria, F_x {branch.F_x[0]:.6g} .. {branch.F_x[-1]:.6g}, "
+              f"max residual {branch.residual.max():.1e}, {branch.events} contact events "
+              f"split, status {', '.join(branch.status)}")
+        print(f"{len(records)} collisions ({matrix}):")
+        for r in records:
+            print(f"  {r['kind']:5s}  F_x = {r['F_x']:.10f}  lambda = {r['lambda_re']:.6g}  "
+                  f"(lambda/k_n = {r['lambda_re'] / scene.k_n:.5g})")
+        print(f"wrote {out}/branch.npz, collisions.json, diagram.png")
+    return 0 if branch.status[-1] == "p_end" else EXIT_FAILED
