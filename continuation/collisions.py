@@ -16,7 +16,11 @@ samples gets one verdict:
   * events: eigenvalues whose status goes 0 -> +-1 (births, paired at b) or +-1 -> 0 (deaths,
     paired at a), paired by conjugacy and continuity of the pair's mean
     (spectra.conjugate_pairing); a status +1 <-> -1 or an unpaired change -> split.
-  * certification of the unchanged eigenvalues with a quadratic model: take the nearest other
+  * certification of the unchanged eigenvalues, first by their motion: no eigenvalue real at
+    both ends may move by more than rho times its gap to the nearest other real eigenvalue
+    (outruns_gaps; label-free, it catches a fast eigenvalue passing through a cluster, where
+    D of the pair is a near-parabola touching zero that a quadratic cannot tell from a
+    bubble); then with a quadratic model: take the nearest other
     sample c whose status vector equals that of the adjacent end (no status change between c
     and [a, b]); through (a, b, c) fit q(t) = chord + kappa t (t - 1), t = (s - s_a)/(s_b - s_a), for
         every pair of eigenvalues real at a, b:   y = D_ij = (Re lambda_i - Re lambda_j)^2,
@@ -178,6 +182,30 @@ def curvature_too_large(y_a: Array, y_b: Array, y_c: Array, t_c: float, rho: flo
     return bool(np.any(0.25 * np.abs(kappa) > (1.0 - rho) * np.minimum(y_a, y_b) + floor))
 
 
+def outruns_gaps(ev_a: Array, ev_b: Array, real: Array, rho: float, floor: float) -> bool:
+    """True if some eigenvalue real at both ends moves by more than rho times its gap:
+
+        |lambda_i(b) - lambda_i(a)| > rho min(gap_i(a), gap_i(b)) + floor,
+        gap_i = min over the other real eigenvalues j of |lambda_i - lambda_j|.
+
+    Two real eigenvalues must meet to collide; if none moves by more than a fraction of the
+    distance to its nearest neighbour, none reaches another inside the interval. The test needs
+    no correct labels: a tracking that swaps two eigenvalues passing each other shows a
+    displacement of about their gap, which fails it. It samples geometrically towards every
+    close encounter, so a bubble narrower than the step is entered or narrowed to tol_p.
+    """
+    if real.size < 2:
+        return False
+    ra, rb = ev_a.real[real], ev_b.real[real]
+
+    def gaps(r):
+        d = np.abs(r[:, None] - r[None, :])
+        np.fill_diagonal(d, np.inf)
+        return d.min(axis=1)
+
+    return bool(np.any(np.abs(rb - ra) > rho * np.minimum(gaps(ra), gaps(rb)) + floor))
+
+
 def jordan_vectors(A: Array, lam: float):
     """(v, w, overlap) at a double eigenvalue lam of A.
 
@@ -267,7 +295,8 @@ class StepScan:
         upper = np.flatnonzero(same & (a.status > 0))
         y = [np.concatenate([(smp.eigvals.real[I] - smp.eigvals.real[J]) ** 2, smp.eigvals.imag[upper] ** 2])
              for smp in (a, b, c)]
-        return curvature_too_large(*y, t_c, self.params.rho, floor)
+        return (curvature_too_large(*y, t_c, self.params.rho, floor)
+                or outruns_gaps(a.eigvals, b.eigvals, real, self.params.rho, 2.0 * max(a.thr, b.thr)))
 
     @staticmethod
     def status_events(a: Sample, b: Sample):

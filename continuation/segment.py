@@ -39,7 +39,10 @@ class Segment:
 
     def __post_init__(self):
         d = self.x_b - self.x_a
-        object.__setattr__(self, "sigma", d / np.linalg.norm(d))
+        norm = np.linalg.norm(d)
+        if norm == 0.0:  # a zero-length step: any unit direction, the segment is one point
+            d, norm = np.eye(d.size)[-1], 1.0
+        object.__setattr__(self, "sigma", d / norm)
 
     def secant_point(self, s: float) -> Array:
         """(1 - s) x_a + s x_b."""

@@ -93,7 +93,8 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
     for leg, a, b in legs:
         direction = 1 if b > a else -1
         b = max(b, F_1)  # unloading ends where loading started: F_x = 0 is the singular rest state
-        core = ContinuationParams(ds=ds_max / 2, ds_min=params.ds_min, ds_max=ds_max,
+        ds = min(F_1, ds_max) if leg == legs[0][0] else ds_max / 2  # graded away from rest
+        core = ContinuationParams(ds=ds, ds_min=min(params.ds_min, ds), ds_max=ds_max,
                                   newton_tol=params.newton_tol, p_min=min(F_start, b),
                                   p_max=max(F_start, b), max_steps=params.max_steps,
                                   direction=direction)

@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from scipy.linalg import block_diag
+from scipy.optimize import brentq
 
 from continuation import (ContinuationParams, DetectionParams, FunctionProblem, continuation,
                           count_complex_pairs)
@@ -297,3 +298,38 @@ def test_parameters_are_validated_at_the_door():
     problem = blocks_family([(-0.7, lambda p: p - P0, lambda p: 1.0)])
     with pytest.raises(ValueError):
         continuation(problem, np.zeros(2), 1.0, ContinuationParams(p_min=0.0, p_max=1.0))
+
+
+def fast_eigenvalue_through_a_cluster(v=10.0, c=1e-3):
+    """A fast eigenvalue f(p) = v p sweeps past slow ones at 1, 2 and 3: an exact crossing
+    with 1 (no coupling), a narrow bubble with 2 (skew coupling c: complex while
+    |f - 2| < 2c, width ~4c / v) and an avoided crossing with 3 (symmetric coupling c).
+    The coupled 3x3 block has det(lambda - A) = (lambda - f)(lambda - 2)(lambda - 3) - c^2; the
+    collisions are the roots of that cubic's discriminant, found here by brentq."""
+    def A(p):
+        M = np.diag([v * p, 1.0, 2.0, 3.0])
+        M[0, 2], M[2, 0] = c, -c
+        M[0, 3] = M[3, 0] = c
+        return M
+
+    def discriminant(p):
+        f = v * p
+        b, k, d = -(f + 5.0), 5.0 * f + 6.0, -(6.0 * f + c * c)
+        return 18 * b * k * d - 4 * b**3 * d + b * b * k * k - 4 * k**3 - 27 * d * d
+
+    dA = lambda p: np.diag([v, 0.0, 0.0, 0.0])
+    exact = tuple(brentq(discriminant, (2 + sign * c) / v, (2 + sign * 3 * c) / v, xtol=1e-15)
+                  for sign in (-1, 1))
+    return linear_family(A, dA), exact
+
+
+@pytest.mark.parametrize("ds", [0.1, 0.13])
+def test_bubble_of_a_fast_eigenvalue_passing_a_cluster_is_found(ds):
+    """The pair's D is a near-parabola touching zero; a three-sample quadratic cannot tell it
+    from a crossing when the stencil straddles other encounters. The steps are 250x and 325x
+    the bubble's width; both collisions are found and located to 1e-10."""
+    problem, (p1, p2) = fast_eigenvalue_through_a_cluster()
+    branch = run(problem, 4, 0.0, 0.4, ds=ds)
+    assert located(branch, "birth") == pytest.approx([p1], abs=TOL_P)
+    assert located(branch, "death") == pytest.approx([p2], abs=TOL_P)
+    assert_count_changes_only_at_collisions(problem, branch, 0.0, 0.4)
