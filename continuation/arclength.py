@@ -97,7 +97,7 @@ def _attempt(problem: Problem, x: Array, t: Array, ds: float, par: ContinuationP
             return f"tangent turned by {_angle(t, t_new):.3g} rad"
         p_new = x_new[-1]
         if not par.p_min < p_new < par.p_max:  # landing exactly on an end also ends the run
-            p_end = par.p_max if p_new > par.p_max else par.p_min
+            p_end = par.p_max if p_new >= par.p_max else par.p_min
             guess = x + (p_end - x[-1]) / (p_new - x[-1]) * (x_new - x)
             res = fixed_p_newton(problem, guess[:-1], p_end, par.newton_tol, par.max_newton)
             if not res.converged:
