@@ -7,6 +7,7 @@ importing this module stays light (no numba, no sympy).
 from __future__ import annotations
 
 import argparse
+import sys
 
 from cli import bifurcate_cmd, scene_cmd
 from cli.common import run_command
@@ -14,9 +15,17 @@ from cli.common import run_command
 SUBCOMMANDS = (scene_cmd, bifurcate_cmd)
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """argparse with usage errors reported as one line on stderr (exit code 2), no usage dump."""
+
+    def error(self, message: str):
+        sys.stderr.write(f"{self.prog}: error: {message}\n")
+        sys.exit(2)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand registered."""
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="diskfriction",
         description="Bifurcation analysis of frictional disks on a substrate.")
     subparsers = parser.add_subparsers(metavar="COMMAND", required=True)

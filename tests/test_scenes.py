@@ -238,11 +238,12 @@ def test_cli_bad_scene_in_process_returns_2(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("argv", [[], ["nonsense"], ["scene", "a.toml", "b.toml"]])
-def test_cli_usage_errors_exit_2(argv, capsys):
+def test_cli_usage_errors_exit_2_with_one_line(argv, capsys):
     with pytest.raises(SystemExit) as raised:
         main(argv)
     assert raised.value.code == 2
-    assert "usage:" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and ": error: " in err
 
 
 def test_scene_error_stays_one_line_for_a_path_with_a_newline(tmp_path):
