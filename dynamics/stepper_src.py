@@ -1,0 +1,190 @@
+# Stepper source appended verbatim to a generated header (see dynamics/stepper.py).
+# Not importable on its own: numba, np, D, PAIR_FRICTION, WALL_FRICTION and the kernel module's
+# pair_separation, pair_overlap, pair_force, pair_increment_coeffs, pair_dofs, wall_force,
+# wall_increment_coeffs, wall_dofs, add_loads and commit_history are bound by the header.
+#
+# One velocity-Verlet step (dynamics/stepper.py explains the scheme), for the layout of
+# MODEL.md: q = (x, y[, theta]) blocks of N, contacts c = pairs 0..N-1 then substrate N..2N-1.
+#
+#   kick   v += dt/2 M^-1 F(q0, xi0)
+#   drift  q1 = q0 + dt v
+#   commit dxi = w(q_mid) . (q1 - q0) (midpoint rule), xi1 = commit_history(xi0, dxi, ...):
+#          reset on opening, first contact, Coulomb cap (the quasistatic rule, cap on)
+#   force  F(q1, xi1) and the scalar tangential force f_t of every contact
+#   kick   v += dt/2 M^-1 F(q1, xi1)
+#
+# The tangential work of the step is sum_c (f_t0 + f_t1)/2 dxi_c (trapezoid in time, midpoint
+# increment); the part taken away by the cap, sum_c (f_t0 + f_t1)/2 (xi0 + dxi - xi1) over
+# capped contacts, is booked as dissipated.
+#
+# scal layout (float64): 0 t, 1 tangential work W_t, 2 of which dissipated at caps W_slip.
+# ints layout (int64):   0 steps done, 1 frames written.
+
+SCAL_T, SCAL_W_T, SCAL_W_SLIP = 0, 1, 2
+INT_STEP, INT_FRAME = 0, 1
+E_KIN, E_NORMAL, E_LOAD, E_W_T, E_W_SLIP = 0, 1, 2, 3, 4
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def end_of_drift(q0, q1, params, dq, sep, dxi, delta1, w, idx):
+    """Midpoint increments dxi over q0 -> q1 and the overlaps delta1 at q1 (the arithmetic of
+    the kernel module's history_increment and overlaps). sep[0], sep[1] hold the pair
+    separations r_i - r_j at q0 on entry and at q1 on return; the separation is linear in q,
+    so its value at the midpoint is their mean (equal to the kernel's to rounding)."""
+    N = q0.shape[0] // D
+    R, L = params[0], params[5]
+    for a in range(q0.shape[0]):
+        dq[a] = q1[a] - q0[a]
+    for k in range(N):
+        dx, dy, ex, ey = pair_separation(q1, k, N, L)
+        delta1[k] = pair_overlap(dx, dy, ex, ey, R)
+        dxi[k] = 0.0
+        if PAIR_FRICTION:
+            pair_increment_coeffs(0.5 * (sep[0, k] + dx), 0.5 * (sep[1, k] + dy), R, w)
+            pair_dofs(k, N, idx)
+            for a in range(2 * D):
+                dxi[k] += w[a] * dq[idx[a]]
+        sep[0, k] = dx
+        sep[1, k] = dy
+        dxi[N + k] = 0.0
+        if WALL_FRICTION:
+            wall_increment_coeffs(R, w)
+            wall_dofs(k, N, idx)
+            for a in range(D):
+                dxi[N + k] += w[a] * dq[idx[a]]
+        delta1[N + k] = R - q1[N + k]
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def contact_forces(q, xi, delta, sep, F_x, params, F, ft, f, idx):
+    """F(q, xi; F_x) as the kernel module's `forces`, from the overlaps and pair separations
+    end_of_drift left, and the scalar tangential force f_t of every contact [force]: on the
+    first disk of a pair along s = z x n, on a disk from the substrate along +x."""
+    N = q.shape[0] // D
+    R, k_n, k_t, mu, F_y = params[0], params[1], params[2], params[3], params[4]
+    F[:] = 0.0
+    for k in range(N):
+        ft[k] = 0.0
+        if delta[k] > 0.0:
+            dx, dy = sep[0, k], sep[1, k]
+            pair_force(dx, dy, delta[k], xi[k], R, k_n, k_t, mu, f)
+            pair_dofs(k, N, idx)
+            for a in range(2 * D):
+                F[idx[a]] += f[a]
+            if PAIR_FRICTION:
+                ft[k] = (f[1] * dx - f[0] * dy) / (2.0 * R - delta[k])
+    for k in range(N):
+        ft[N + k] = 0.0
+        if delta[N + k] > 0.0:
+            wall_force(delta[N + k], xi[N + k], R, k_n, k_t, mu, f)
+            wall_dofs(k, N, idx)
+            for a in range(D):
+                F[idx[a]] += f[a]
+            if WALL_FRICTION:
+                ft[N + k] = f[0]
+    add_loads(F, F_x, F_y, N)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def prepare(q, xi, F_x, params, F, ft, delta, sep):
+    """Overlaps, separations, forces and tangential forces of a state (before the first step)."""
+    n = q.shape[0]
+    w = np.empty(2 * D)
+    idx = np.empty(2 * D, np.int64)
+    N = n // D
+    for k in range(N):
+        sep[0, k], sep[1, k], _, _ = pair_separation(q, k, N, params[5])
+    end_of_drift(q, q, params, np.empty(n), sep, np.empty(2 * N), delta, w, idx)
+    contact_forces(q, xi, delta, sep, F_x, params, F, ft, np.empty(2 * D), idx)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def record(q, v, mass, delta, F_x, params, scal, slip, frame, t, frames_q, frames_v, energy,
+           frames_slip):
+    """Frame `frame`: time, q, v, the substrate slip of every disk, and the energy budget
+    (E_kin, U_n = sum 2/5 k_n delta^(5/2), U_load = -F_x x_1 + F_y sum y_i, W_t, W_slip)."""
+    N = q.shape[0] // D
+    k_n, F_y = params[1], params[4]
+    t[frame] = scal[SCAL_T]
+    e_kin = 0.0
+    for a in range(q.shape[0]):
+        frames_q[frame, a] = q[a]
+        frames_v[frame, a] = v[a]
+        e_kin += 0.5 * mass[a] * v[a] * v[a]
+    u_n = 0.0
+    for c in range(2 * N):
+        if delta[c] > 0.0:
+            u_n += 0.4 * k_n * delta[c] * delta[c] * np.sqrt(delta[c])
+    u_load = -F_x * q[0]
+    for i in range(N):
+        u_load += F_y * q[N + i]
+        frames_slip[frame, i] = slip[i]
+    energy[frame, E_KIN] = e_kin
+    energy[frame, E_NORMAL] = u_n
+    energy[frame, E_LOAD] = u_load
+    energy[frame, E_W_T] = scal[SCAL_W_T]
+    energy[frame, E_W_SLIP] = scal[SCAL_W_SLIP]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def advance(q, v, xi, F, ft, delta, sep, mass, F_x, params, dt, n_steps, stride,
+            scal, ints, slip, breach_t, breach_x, t, frames_q, frames_v, energy, frames_slip):
+    """n_steps velocity-Verlet steps of the state (q, v, xi; F, ft, delta, sep consistent with
+    it), in place. Every `stride`-th step (counted in ints[INT_STEP]) is written to frame
+    ints[INT_FRAME]. breach_t[i] < 0 until the substrate contact of disk i is first capped;
+    then breach_t, breach_x hold that time and x_i. slip[i] accumulates xi0 + dxi - xi1 of the
+    substrate contact over its capped steps (the signed distance slid) [length].
+    Time is dt * (steps done). Returns the number of frames written in total."""
+    n = q.shape[0]
+    N = n // D
+    half = 0.5 * dt
+    w = np.empty(2 * D)
+    f = np.empty(2 * D)
+    idx = np.empty(2 * D, np.int64)
+    dq = np.empty(n)
+    q1 = np.empty(n)
+    xi1 = np.empty(2 * N)
+    delta1 = np.empty(2 * N)
+    ft1 = np.empty(2 * N)
+    dxi = np.empty(2 * N)
+    slid = np.empty(2 * N, np.bool_)
+    minv = 1.0 / mass
+    for _ in range(n_steps):
+        for a in range(n):
+            v[a] += half * F[a] * minv[a]
+            q1[a] = q[a] + dt * v[a]
+        end_of_drift(q, q1, params, dq, sep, dxi, delta1, w, idx)
+        commit_history(xi, dxi, delta, delta1, params, True, xi1, slid)
+        contact_forces(q1, xi1, delta1, sep, F_x, params, F, ft1, f, idx)
+        for a in range(n):
+            v[a] += half * F[a] * minv[a]
+        ints[INT_STEP] += 1
+        time = dt * ints[INT_STEP]
+        w_t = 0.0
+        w_slip = 0.0
+        for c in range(2 * N):
+            f_mid = 0.5 * (ft[c] + ft1[c])
+            w_t += f_mid * dxi[c]
+            if slid[c]:
+                # distance slid; a contact closing and capped in one step slid < |dxi|: not booked
+                s = xi[c] + dxi[c] - xi1[c] if delta[c] > 0.0 else 0.0
+                w_slip += f_mid * s
+                if c >= N:
+                    slip[c - N] += s
+                    if breach_t[c - N] < 0.0:
+                        breach_t[c - N] = time
+                        breach_x[c - N] = q1[c - N]
+        scal[SCAL_W_T] += w_t
+        scal[SCAL_W_SLIP] += w_slip
+        scal[SCAL_T] = time
+        for a in range(n):
+            q[a] = q1[a]
+        for c in range(2 * N):
+            xi[c] = xi1[c]
+            delta[c] = delta1[c]
+            ft[c] = ft1[c]
+        if ints[INT_STEP] % stride == 0:
+            record(q, v, mass, delta, F_x, params, scal, slip, ints[INT_FRAME], t, frames_q,
+                   frames_v, energy, frames_slip)
+            ints[INT_FRAME] += 1
+    return ints[INT_FRAME]
