@@ -14,8 +14,10 @@
 #   kick   v += dt/2 M^-1 F(q1, xi1)
 #
 # The tangential work of the step is sum_c (f_t0 + f_t1)/2 dxi_c (trapezoid in time, midpoint
-# increment); the part taken away by the cap, sum_c (f_t0 + f_t1)/2 (xi0 + dxi - xi1) over
-# capped contacts, is booked as dissipated.
+# increment). Of it, the part done on the distance a capped contact slid, xi0 + dxi - xi1, is
+# booked as dissipated, with the force at the end of the step, where the cap acts:
+# f_t1 = -mu F_n sign(xi1) there, so every booked term is <= 0. (The trapezoid force would
+# give a term of the wrong sign when the history reverses within one step near an opening.)
 #
 # scal layout (float64): 0 t, 1 tangential work W_t, 2 of which dissipated at caps W_slip.
 # ints layout (int64):   0 steps done, 1 frames written.
@@ -168,7 +170,7 @@ def advance(q, v, xi, F, ft, delta, sep, mass, F_x, params, dt, n_steps, stride,
             if slid[c]:
                 # distance slid; a contact closing and capped in one step slid < |dxi|: not booked
                 s = xi[c] + dxi[c] - xi1[c] if delta[c] > 0.0 else 0.0
-                w_slip += f_mid * s
+                w_slip += ft1[c] * s
                 if c >= N:
                     slip[c - N] += s
                     if breach_t[c - N] < 0.0:

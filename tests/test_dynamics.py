@@ -1,0 +1,209 @@
+"""Newtonian dynamics: the step is Verlet with the quasistatic history rule, the energy budget
+closes at second order, growth rates match the spectrum, sliding and staying put."""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from continuation.sweep import sweep
+from dynamics import (OnsetParams, Perturbation, Stepper, choose_dt, simulate, sliding_onset,
+                      spectrum, summarize)
+from dynamics.onset import trailing_mean
+from scenes import Scene
+from symbolic import System
+
+
+@pytest.fixture(scope="module")
+def paper():
+    return System.from_scene(Scene())
+
+
+@pytest.fixture(scope="module")
+def branch_point(paper):
+    """(q, xi) at F_x from a sweep that ends exactly there, cached per F_x."""
+    cache = {}
+
+    def at(F_x):
+        if F_x not in cache:
+            b = sweep(paper, 0.0, F_x)
+            cache[F_x] = (b.q[-1], b.xi[-1])
+        return cache[F_x]
+    return at
+
+
+def observed_order(errors: list[float]) -> np.ndarray:
+    """log2 of the ratios of errors at dt, dt/2, dt/4, ..."""
+    e = np.asarray(errors)
+    return np.log2(e[:-1] / e[1:])
+
+
+def test_one_step_is_verlet_with_the_quasistatic_history_rule(paper, branch_point):
+    q, xi = branch_point(0.083)
+    rng = np.random.default_rng(5)
+    v = rng.normal(0, 1e-3, q.size)
+    dt, F_x = 1e-2, 0.083
+    st = Stepper(paper, q, v, xi, F_x, dt, 1, 4)
+    st.advance(1)
+    minv = 1 / paper.mass_diagonal()
+    v_half = v + 0.5 * dt * minv * paper.forces(q, xi, F_x)
+    q1 = q + dt * v_half
+    xi1, _ = paper.history_step(q, q1, xi, cap=True)
+    v1 = v_half + 0.5 * dt * minv * paper.forces(q1, xi1, F_x)
+    assert np.abs(st.q - q1).max() <= 1e-15 * np.abs(q1).max()
+    assert np.abs(st.xi - xi1).max() <= 1e-12 * np.abs(xi1).max()
+    assert np.abs(st.v - v1).max() <= 1e-12 * np.abs(v1).max()
+
+
+def budget_errors(scene: Scene, fractions, t_end=50.0, amplitude=1e-3):
+    """Max |budget - budget(0)| and max |E_kin + U_n + U_load - its start| (no W_t) per dt."""
+    s = System.from_scene(scene)
+    q, xi = s.rest_state()
+    spec = spectrum(s, q, xi)
+    with_w, without_w = [], []
+    for f in fractions:
+        tr = simulate(s, q, xi, 0.0, t_end, dt=choose_dt(spec, f),
+                      perturbation=Perturbation("random-velocity", amplitude, seed=2))
+        assert np.isnan(tr.breach_t).all() and tr.W_slip[-1] == 0.0  # nothing slides
+        e = tr.E_kin + tr.U_n + tr.U_load
+        with_w.append(tr.budget_error())
+        without_w.append(np.abs(e - e[0]).max())
+    return with_w, without_w
+
+
+def test_frictionless_energy_is_conserved_and_its_error_is_second_order_in_dt():
+    """mu = 0 (no tangential force): E_kin + U_n + U_load is the energy; Verlet keeps its error
+    O(dt^2). Pre-compressed ring (eps = 1e-3) so every contact stays closed."""
+    with_w, without_w = budget_errors(Scene(N=4, eps=1e-3, mu=0.0), (0.2, 0.1, 0.05))
+    assert with_w == without_w  # W_t = 0 without friction
+    assert np.all(np.abs(observed_order(with_w) - 2) < 0.15), with_w
+    assert with_w[-1] < 1e-3 * 6e-6  # E_kin ~ 6e-6 in this run
+
+
+def test_budget_with_tangential_work_closes_at_second_order_while_sticking():
+    """With friction and nothing sliding the Mindlin force is still not conservative: only the
+    budget with the tangential work W_t closes, and it closes at O(dt^2)."""
+    with_w, without_w = budget_errors(Scene(eps=1e-3), (0.2, 0.1, 0.05))
+    assert np.all(np.abs(observed_order(with_w) - 2) < 0.15), with_w
+    # dropping W_t leaves an error that does not converge: the path's tangential work
+    assert np.all(np.abs(observed_order(without_w)) < 0.2) and without_w[-1] > 100 * with_w[-1]
+
+
+def test_budget_closes_while_the_chain_slides(paper, branch_point):
+    q, xi = branch_point(0.083)
+    tr = simulate(paper, q, xi, 0.083, 300.0, perturbation=Perturbation("eigenvector", 1e-10))
+    assert tr.W_slip[-1] < -1e-3  # sliding dissipated energy ...
+    assert np.all(np.diff(tr.W_slip) <= 1e-15)  # ... and never produced any
+    assert tr.budget_error() < 1e-3 * abs(tr.W_slip[-1])
+
+
+@pytest.mark.parametrize("F_x", [0.03, 0.083])
+def test_measured_growth_rate_matches_the_spectrum_within_5_percent(paper, branch_point, F_x):
+    """Started along the growing solution of the largest complex pair of M^-1 J, small."""
+    q, xi = branch_point(F_x)
+    tr = simulate(paper, q, xi, F_x, 150.0, perturbation=Perturbation("eigenvector", 1e-10))
+    s = summarize(tr)
+    assert s["fit"]["reason"] == "ok" and s["fit"]["blocks"] >= 20
+    assert s["sigma_predicted"] > 0.05
+    assert abs(s["sigma_measured"] / s["sigma_predicted"] - 1) < 0.05, s["fit"]
+
+
+def test_stable_point_stays_put(paper, branch_point):
+    """F_x = 0.05: all eigenvalues of M^-1 J real; a random kick neither grows nor slides."""
+    q, xi = branch_point(0.05)
+    assert spectrum(paper, q, xi).pairs.size == 0
+    tr = simulate(paper, q, xi, 0.05, 500.0, perturbation=Perturbation("random-velocity", 1e-6))
+    s = summarize(tr)
+    assert s["M_max"] < 1e-10 and not s["slid"] and s["sigma_measured"] is None
+    assert all(t is None for t in s["first_breach"]["t"])
+
+
+@pytest.mark.parametrize("F_x, slides", [(0.06, True), (0.09, True), (0.02, False)])
+def test_load_above_the_total_coulomb_limit_slides(F_x, slides):
+    """N = 3, mu = 0.1, F_y = 0.1: Coulomb limit N mu F_y = 0.03. Above it every substrate
+    contact slides at |F_t| = mu F_n and the centre of mass accelerates at
+    (F_x - N mu F_y) / (N m); below it the chain stays."""
+    s = System.from_scene(Scene(N=3, mu=0.1, eps=1e-3))
+    q, xi = s.rest_state()
+    tr = simulate(s, q, xi, F_x, 20.0)
+    summary = summarize(tr)
+    C = tr.C_x - tr.C_x[0]
+    if slides:
+        late = tr.t > 5.0
+        accel = 2 * np.polyfit(tr.t[late], C[late], 2)[0]
+        assert accel == pytest.approx((F_x - 3 * 0.1 * 0.1) / 3, rel=0.02)
+        assert summary["slid"] and np.isfinite(tr.breach_t).all()
+    else:
+        assert abs(C).max() < 1e-2 and not summary["slid"]
+
+
+def test_trajectory_converges_at_second_order_under_dt(paper, branch_point):
+    from dynamics.start import perturb
+    q, xi = branch_point(0.05)
+    q0, v0, xi0 = perturb(paper, q, xi, Perturbation("random-velocity", 1e-4, seed=4))
+    t_end, n0 = 20.0, 1000  # dt = 0.02, a fifth of the step limit 2 / omega_max
+    end = []
+    for n in (n0, 2 * n0, 4 * n0, 16 * n0):
+        st = Stepper(paper, q0, v0, xi0, 0.05, t_end / n, n, 2)
+        st.advance(n)
+        end.append(st.q.copy())
+    errors = [np.abs(e - end[-1]).max() for e in end[:-1]]
+    assert np.all(np.abs(observed_order(errors) - 2) < 0.3), errors
+
+
+def test_eigenvector_start_has_the_requested_amplitude_and_follows_the_history(paper,
+                                                                                branch_point):
+    from dynamics.start import perturb
+    q, xi = branch_point(0.083)
+    q1, v1, xi1 = perturb(paper, q, xi, Perturbation("eigenvector", 1e-7))
+    N = paper.N
+    assert np.hypot(q1[:N] - q[:N], q1[N:2 * N] - q[N:2 * N]).max() <= 1e-7 * (1 + 1e-12)
+    assert np.allclose(xi1, paper.history_step(q, q1, xi)[0], rtol=0, atol=1e-20)
+    with pytest.raises(ValueError, match="complex pair"):
+        perturb(paper, q, xi, Perturbation("eigenvector", 1e-7, pair=5))
+
+
+def test_onset_is_the_last_upward_crossing_of_a_lasting_excursion():
+    t = np.linspace(0, 10, 1001)
+    x = np.zeros((t.size, 3))
+    x[:, 0] = np.where(t > 5, 0.01 * (t - 5), 0.0)  # slides from t = 5
+    x[:, 1] = np.where((t > 2) & (t < 3), 0.05, 0.0)  # an excursion that returns
+    x[:, 2] = 0.02 * np.sin(40 * t)  # oscillates, no drift
+    onset_t, onset_x = sliding_onset(t, x, period=2 * np.pi / 40, params=OnsetParams(1e-3))
+    assert onset_t[0] == pytest.approx(5.1 + np.pi / 40, abs=0.02)  # + half the mean's window
+    assert np.isnan(onset_t[1:]).all() and np.isnan(onset_x[1:]).all()
+
+
+def test_trailing_mean_is_exact():
+    t = np.arange(10.0)
+    a = np.arange(10.0)[:, None]
+    m = trailing_mean(t, a, 3.0)[:, 0]
+    assert list(m) == [0.0, 0.5, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0]
+
+
+def test_bad_input_is_refused_at_the_door(paper, branch_point):
+    q, xi = branch_point(0.05)
+    with pytest.raises(ValueError, match="t_end"):
+        simulate(paper, q, xi, 0.05, -1.0)
+    with pytest.raises(ValueError, match="dt"):
+        Stepper(paper, q, q * 0, xi, 0.05, 0.0, 1, 2)
+    with pytest.raises(ValueError, match="kind"):
+        Perturbation("kick", 1e-3)
+
+
+def test_compiled_stepper_is_reused_from_the_cache_by_a_new_process(paper):
+    """numba's cache=True keeps the loop compiled against the generated kernel module."""
+    Stepper(paper, *paper.rest_state()[:1], np.zeros(paper.ndof), paper.rest_state()[1],
+            0.0, 1e-3, 1, 4).advance(1)  # compiled (or loaded) in this process
+    code = ("from scenes import Scene; from symbolic import System; import numpy as np\n"
+            "from dynamics import Stepper\n"
+            "s = System.from_scene(Scene()); q, xi = s.rest_state()\n"
+            "st = Stepper(s, q, np.zeros_like(q), xi, 0.0, 1e-3, 1, 4); st.advance(1)\n"
+            "print(sum(st.module.advance.stats.cache_hits.values()),"
+            " sum(st.module.advance.stats.cache_misses.values()))")
+    out = subprocess.run([sys.executable, "-c", code], env=dict(os.environ), check=True,
+                         capture_output=True, text=True).stdout.split()
+    assert out == ["1", "0"]
