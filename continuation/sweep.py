@@ -7,10 +7,12 @@ unloading back to 0, so both legs together show the hysteresis.
 
 The rest state with eps = 0 is a singular point (pairs touching at delta = 0, N free rolling
 modes: J is singular, no tangent exists). The branch therefore starts at F_1 = START_FRACTION
-times the sweep span, reached from the rest state in one quasistatic step by pseudo-transient
-relaxation (disks.relax); an unloading leg to 0 ends at F_1 too. Collisions between 0 and F_1
-are not resolved; complex pairs present at F_1 are counted in the branch's first row. On the paper's scene the collisions above
-F_x = 0.006 agree to all printed digits for F_1 = 1e-5, 1e-4 and 1e-3 (docs/continuation.md).
+times F_y (the scene's force scale; at most half the first target), reached from the rest state
+in one quasistatic step by pseudo-transient relaxation (disks.relax); an unloading leg to 0 ends
+at F_1 too. Collisions between 0 and F_1 are not resolved; complex pairs present at F_1 are
+counted in the branch's first row. On the paper's scene the collisions above F_x = 0.006 agree
+to all printed digits for F_1 = 1e-5, 1e-4 and 1e-3 (docs/continuation.md); below ~1e-7 the
+branch is still numerically singular.
 """
 from __future__ import annotations
 
@@ -85,7 +87,7 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
     legs = [(0, 0.0, F_from), (1, F_from, F_to)] if F_from != 0 else [(1, 0.0, F_to)]
     span = max(abs(F_to - F_from), F_from)
     ds_max = params.ds_max or span / 60
-    F_1 = START_FRACTION * span
+    F_1 = min(START_FRACTION * system.scene.F_y, 0.5 * legs[0][2])
     q, xi = relax(system, *system.rest_state(), F_1)
     problem = DiskEquilibria(system, q, xi, F_1, matrix, params.newton_tol)
     rows, collisions, status = [], (), []

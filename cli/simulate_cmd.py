@@ -1,0 +1,146 @@
+"""``diskfriction simulate [SCENE] --fx F --t-end T [--seed S] [--out DIR] ...``
+
+One run (one F_x, no --realizations): trajectory.npz, summary.json, run.png in DIR.
+An ensemble (--realizations K and/or several F_x, comma separated) runs on dask.distributed
+(a LocalCluster of this machine's cores, or --scheduler ADDRESS), writes every finished
+realization at once under DIR/runs/, resumes when rerun, and aggregates the front speeds and
+V_cm(F_x) into DIR/ensemble.json. Command-line values and files are raw units.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+from cli.common import EXIT_FAILED, CommandError, add_scene_argument, scene_from_args
+from cli.progress import ProgressBar
+
+KINDS = ("random-velocity", "random-position", "eigenvector", "none")
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "simulate", help="Newtonian dynamics with Coulomb sliding from a branch point",
+        description="Start at the quasistatic equilibrium at F_x (reached from rest with the "
+                    "history carried), perturb it, and integrate Newton's equations with "
+                    "Coulomb sliding. Raw units on the command line and in files; the plot "
+                    "uses the paper's units.")
+    add_scene_argument(parser)
+    parser.add_argument("--fx", required=True, metavar="F[,F...]",
+                        help="load(s) F_x, raw units; several make an ensemble")
+    parser.add_argument("--t-end", required=True, type=float, metavar="T", help="duration, raw time")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the (first) realization")
+    parser.add_argument("--perturbation", default=None, choices=KINDS,
+                        help="eigenvector (of the largest complex pair of M^-1 J; the default "
+                             "for one run when there is one) or random-velocity (the default "
+                             "otherwise and for ensembles)")
+    parser.add_argument("--amplitude", type=float, default=1e-6, metavar="A",
+                        help="perturbation amplitude, raw length (velocity for random-velocity)")
+    parser.add_argument("--dt", type=float, default=None, help="time step (default: from the highest mode)")
+    parser.add_argument("--realizations", type=int, default=None, metavar="K",
+                        help="run K seeded realizations per F_x on dask")
+    parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                        help="dask scheduler to use instead of a local cluster")
+    parser.add_argument("--out", metavar="DIR", help="output directory (default: out/simulate/SCENE)")
+    parser.set_defaults(run=run)
+
+
+def positive(name: str, value, integer: bool = False):
+    ok = value is not None and math.isfinite(value) and value > 0 and (not integer or value == int(value))
+    if not ok:
+        raise CommandError(f"simulate error: --{name}: must be a positive "
+                           f"{'integer' if integer else 'number'} (got {value!r})")
+    return value
+
+
+def parse_loads(text: str) -> list[float]:
+    try:
+        loads = [float(v) for v in text.split(",")]
+    except ValueError:
+        loads = []
+    if not loads or not all(math.isfinite(F) and F > 0 for F in loads):
+        raise CommandError(f"simulate error: --fx: expected positive numbers F[,F...] (got {text!r})")
+    return loads
+
+
+def run(args: argparse.Namespace) -> int:
+    scene = scene_from_args(args)
+    loads = parse_loads(args.fx)
+    positive("t-end", args.t_end)
+    if args.dt is not None:
+        positive("dt", args.dt)
+    if args.realizations is not None:
+        positive("realizations", args.realizations, integer=True)
+    if not (math.isfinite(args.amplitude) and args.amplitude >= 0):
+        raise CommandError(f"simulate error: --amplitude: must be a number >= 0 (got {args.amplitude!r})")
+    out = Path(args.out) if args.out else Path("out") / "simulate" / scene.name
+    if args.realizations is None and len(loads) == 1:
+        return single_run(scene, loads[0], args, out)
+    return ensemble_run(scene, loads, args, out)
+
+
+def single_run(scene, F_x: float, args, out: Path) -> int:
+    from continuation.disks import EquilibriumError
+    from continuation.arclength import ContinuationError
+    from dynamics.ensemble import equilibrium
+    from dynamics.simulate import simulate, summarize
+    from dynamics.start import Perturbation, spectrum
+    from reports.simulation import plot_run, save_run, velocity_in_paper_units
+    from symbolic import System
+
+    try:
+        q, xi = equilibrium(scene, F_x)
+    except (EquilibriumError, ContinuationError) as error:
+        raise CommandError(f"simulate error: {scene.source}: {error}", EXIT_FAILED) from None
+    system = System.from_scene(scene)
+    kind = args.perturbation or ("eigenvector" if spectrum(system, q, xi).pairs.size else "random-velocity")
+    bar = ProgressBar("simulate")
+    try:
+        traj = simulate(system, q, xi, F_x, args.t_end, dt=args.dt,
+                        perturbation=Perturbation(kind, args.amplitude, args.seed),
+                        progress=lambda t: bar(t / args.t_end, f"t = {t:.1f}"))
+    except ValueError as error:  # e.g. an eigenvector perturbation where all eigenvalues are real
+        raise CommandError(f"simulate error: {error}") from None
+    finally:
+        bar.close()
+    summary = summarize(traj)
+    save_run(out, traj, summary)
+    plot_run(traj, scene, out / "run.png")
+    sm, sp = summary["sigma_measured"], summary["sigma_predicted"]
+    print(f"F_x = {F_x:g}, t_end = {args.t_end:g}, dt = {traj.dt:.4g}, {traj.steps} steps, "
+          f"perturbation {kind} {args.amplitude:g}")
+    print(f"sigma measured {'-' if sm is None else f'{sm:.5g}'}, predicted {sp:.5g} (raw 1/time, "
+          f"M^-1 J); slid: {summary['slid']}; max M = {summary['M_max']:.3g}")
+    print(f"V_cm = {summary['V_cm']:.4g} raw = {velocity_in_paper_units(summary['V_cm'], scene):.4g} 2R/tau")
+    print(f"wrote {out}/trajectory.npz, summary.json, run.png")
+    return 0
+
+
+def ensemble_run(scene, loads, args, out: Path) -> int:
+    from dynamics.ensemble import run_ensemble
+    from reports.simulation import velocity_in_paper_units
+
+    K = int(args.realizations or 1)
+    bar = ProgressBar("ensemble")
+    try:
+        ens = run_ensemble(scene, loads, K, args.t_end, out, seed=args.seed, amplitude=args.amplitude,
+                           kind=args.perturbation or "random-velocity", scheduler=args.scheduler,
+                           progress=lambda done, total: bar(done / total, f"{done}/{total} realizations"))
+    except OSError as error:
+        raise CommandError(f"simulate error: --scheduler: {error}", EXIT_FAILED) from None
+    finally:
+        bar.close()
+    paper = lambda e: velocity_in_paper_units(e.value, scene)
+    for F in sorted(ens.summaries):
+        slid = sum(s["slid"] for s in ens.summaries[F])
+        v1 = ens.V1[F]
+        print(f"F_x = {F:g}: {len(ens.summaries[F])} realizations, {slid} slid; "
+              f"V1 = {v1.value:.4g} +- {v1.error:.2g} raw ({paper(v1):.3g} 2R/tau, n = {v1.n}); "
+              f"V_cm = {ens.V_cm[F].value:.4g} raw")
+    print(f"V2 = {ens.V2.value:.4g} +- {ens.V2.error:.2g} raw ({paper(ens.V2):.3g} 2R/tau, n = {ens.V2.n})")
+    if ens.V_cm_fit is not None:
+        a, b = ens.V_cm_fit
+        print(f"V_cm = {a.value:.3g} (+- {a.error:.2g}) + {b.value:.3g} (+- {b.error:.2g}) F_x  (raw); "
+              f"paper units: {paper(a):.3g} + {paper(b):.3g} F_x")
+    print(f"wrote {out}/ensemble.json and {out}/runs/")
+    return 0

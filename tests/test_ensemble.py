@@ -1,0 +1,93 @@
+"""Ensembles: front speeds, the V_cm fit, resuming, and the simulate / verify commands."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from dynamics.ensemble import aggregate, breach_speed, front_slope, run_ensemble, sliding_speed
+from scenes import Scene
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def synthetic(V1, V2, V_cm, N=10, slid=True):
+    """A summary whose breach front runs forward at V1 and sliding front backward at V2."""
+    x = np.arange(N) + 0.5
+    return {"first_breach": {"t": list(x / V1), "x": list(x)},
+            "onset": {"t": list((N - x) / V2), "x": list(x)}, "V_cm": V_cm, "slid": slid}
+
+
+def test_front_speeds_and_centre_of_mass_fit_are_recovered():
+    summaries = {F: [synthetic(0.1 + F, 2.0, -1e-3 + 0.03 * F + e) for e in (-1e-5, 1e-5)]
+                 for F in (0.08, 0.09, 0.10)}
+    ens = aggregate(summaries)
+    assert ens.V1[0.09].value == pytest.approx(0.19) and ens.V1[0.09].n == 2
+    assert ens.V2.value == pytest.approx(2.0) and ens.V2.n == 6
+    a, b = ens.V_cm_fit
+    assert a.value == pytest.approx(-1e-3, abs=1e-12) and b.value == pytest.approx(0.03)
+
+
+def test_fronts_need_three_disks_and_missing_values_are_skipped():
+    assert front_slope([1.0, None and 0, np.nan], [1, 2, 3]) is None
+    s = synthetic(0.5, 1.0, 0.0)
+    s["first_breach"]["t"][3] = None
+    assert breach_speed(s) == pytest.approx(0.5)
+    assert sliding_speed(s) == pytest.approx(1.0)
+
+
+def test_resumed_ensemble_equals_an_uninterrupted_one(tmp_path):
+    """Run 1 realization, then rerun asking for 3: the first is reused from disk, and the
+    result equals a run of 3 in one go (the integrator is deterministic). F_x = 0.087 on the
+    paper's scene breaches and slides within t = 150, so the fronts are real numbers."""
+    scene = Scene()
+    kw = dict(t_end=150.0, amplitude=1e-5)
+    whole = run_ensemble(scene, [0.087], 3, out=tmp_path / "whole", **kw)
+    assert whole.V1[0.087].n == 3 and whole.V2.n == 3
+    run_ensemble(scene, [0.087], 1, out=tmp_path / "resumed", **kw)
+    first = sorted((tmp_path / "resumed" / "runs").rglob("*.json"))
+    stamp = first[0].stat().st_mtime_ns
+    resumed = run_ensemble(scene, [0.087], 3, out=tmp_path / "resumed", **kw)
+    assert first[0].stat().st_mtime_ns == stamp
+    assert resumed.as_dict() == whole.as_dict()
+    assert json.loads((tmp_path / "resumed" / "ensemble.json").read_text()) == \
+        json.loads((tmp_path / "whole" / "ensemble.json").read_text())
+    key = lambda s: json.dumps(s, sort_keys=True)
+    assert sorted(map(key, resumed.summaries[0.087])) == sorted(map(key, whole.summaries[0.087]))
+
+
+def cli(*args):
+    return subprocess.run([sys.executable, "-m", "cli", *args], cwd=ROOT, capture_output=True,
+                          text=True, timeout=300)
+
+
+def test_simulate_writes_trajectory_summary_and_plot(tmp_path):
+    result = cli("simulate", "--fx", "0.087", "--t-end", "50", "--out", str(tmp_path))
+    assert result.returncode == 0, result.stderr
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert {"slid", "sigma_measured", "sigma_predicted", "V_cm", "first_breach"} <= set(summary)
+    assert set(summary["first_breach"]) == {"t", "x"} and len(summary["first_breach"]["t"]) == 10
+    data = np.load(tmp_path / "trajectory.npz")
+    assert data["q"].shape[1] == 30 and data["t"][-1] == pytest.approx(50, rel=1e-3)
+    assert (tmp_path / "run.png").read_bytes()[:4] == b"\x89PNG"
+
+
+BAD = [(["simulate", "--fx", "0.08", "--t-end", "-1"], "--t-end"),
+       (["simulate", "--fx", "x", "--t-end", "10"], "--fx"),
+       (["simulate", "--fx", "0.08,-1", "--t-end", "10"], "--fx"),
+       (["simulate", "--fx", "0.08", "--t-end", "10", "--realizations", "0"], "--realizations"),
+       (["simulate", "--fx", "0.08", "--t-end", "10", "--perturbation", "kick"], "--perturbation"),
+       (["simulate", "--t-end", "10"], "--fx"),
+       (["verify", "--t-end", "0"], "--t-end"),
+       (["verify", "--matrix", "K"], "--matrix")]
+
+
+@pytest.mark.parametrize("args, key", BAD, ids=[" ".join(a) for a, _ in BAD])
+def test_bad_input_gets_one_line_and_exit_2(args, key, tmp_path):
+    result = cli(*args, "--out", str(tmp_path))
+    assert result.returncode == 2 and result.stderr.count("\n") == 1 and key in result.stderr
+    assert "Traceback" not in result.stderr
