@@ -81,11 +81,10 @@ def _kernel_module():
 
 def _numpy_errors(dispatcher):
     """The kernel function recompiled with error_model="numpy": the same Python function,
-    without the zero-division checks of numba's default error model, which cost half the
-    step time. Every division in the kernels is by a quantity kept positive (rho, delta > 0
-    guarded, k_t), so no result changes. Compiled into the cached stepper functions, so
-    not cached separately (cache=False keeps numba's index of the kernel's own functions
-    untouched)."""
+    without the zero-division checks of numba's default error model (a fifth of the step time
+    at N = 10, measured). Every division in the kernels is by a quantity kept positive (rho,
+    delta > 0 guarded, k_t), so no result changes. Compiled into the cached stepper, so not
+    cached separately (cache=False leaves numba's index of the kernel's own functions alone)."""
     return numba.njit(error_model="numpy")(dispatcher.py_func)
 
 
@@ -144,12 +143,13 @@ class Frames:
 
 
 class Stepper:
-    """The integrator's state (q, v, xi) and everything the loop carries, advanced in place.
+    """The integrator's state (q, v, xi) and its bookkeeping, advanced in place.
 
-    Construct at t = 0 (frame 0 written), then `advance(n_steps)` any number of times (Python
-    only between chunks, never per step); `frames()` returns what was recorded every `stride`
-    steps. breach_t[i] (-1 until it happens), breach_x[i]: first Coulomb cap at the substrate
-    contact of disk i. slip[i]: signed distance the substrate contact of disk i has slid.
+    Construction writes frame 0; then `advance(n_steps)` any number of times (Python only
+    between calls, never per step; a run split into calls is bit-identical to one call);
+    `frames()` returns what was recorded every `stride` steps. breach_t[i] (-1 until it
+    happens), breach_x[i]: first Coulomb cap at the substrate contact of disk i. slip[i]:
+    signed distance the substrate contact of disk i has slid.
     """
 
     def __init__(self, system: System, q: np.ndarray, v: np.ndarray, xi: np.ndarray,
@@ -166,23 +166,12 @@ class Stepper:
         self.F_x, self.dt, self.stride = float(F_x), float(dt), int(stride)
         self.q, self.v, self.xi = (np.array(a, dtype=float) for a in (q, v, xi))
         self.mass = system.mass_diagonal()
-        self.F, self.ft, self.delta = np.empty(n), np.empty(2 * N), np.empty(2 * N)
-        self.sep = np.empty((2, N))
         self.scal = np.zeros(3)  # t, W_t, W_slip
         self.ints = np.zeros(2, np.int64)  # steps, frames
         self.slip = np.zeros(N)
         self.breach_t, self.breach_x = np.full(N, -1.0), np.full(N, np.nan)
         self._frames = Frames.empty(max_frames, n, N)
-        self.module.prepare(self.q, self.xi, self.F_x, system.params, self.F, self.ft,
-                            self.delta, self.sep)
-        self._record()
-
-    def _record(self) -> None:
-        fr = self._frames
-        self.module.record(self.q, self.v, self.mass, self.delta, self.F_x, self.system.params,
-                           self.scal, self.slip, self.ints[1], fr.t, fr.q, fr.v, fr.energy,
-                           fr.slip)
-        self.ints[1] += 1
+        self.advance(0)  # frame 0
 
     @property
     def steps(self) -> int:
@@ -195,13 +184,12 @@ class Stepper:
     def advance(self, n_steps: int) -> None:
         """n_steps steps inside numba; raises if the frame buffer would overflow."""
         needed = (self.steps + n_steps) // self.stride - self.steps // self.stride
-        if self.ints[1] + needed > self._frames.t.size:
+        if self.ints[1] + needed + (self.ints[1] == 0) > self._frames.t.size:
             raise ValueError(f"frame buffer of {self._frames.t.size} frames too small")
         fr = self._frames
-        self.module.advance(self.q, self.v, self.xi, self.F, self.ft, self.delta, self.sep,
-                            self.mass, self.F_x, self.system.params, self.dt, n_steps,
-                            self.stride, self.scal, self.ints, self.slip, self.breach_t,
-                            self.breach_x, fr.t, fr.q, fr.v, fr.energy, fr.slip)
+        self.module.advance(self.q, self.v, self.xi, self.mass, self.F_x, self.system.params,
+                            self.dt, n_steps, self.stride, self.scal, self.ints, self.slip,
+                            self.breach_t, self.breach_x, fr.t, fr.q, fr.v, fr.energy, fr.slip)
 
     def frames(self) -> Frames:
         return self._frames.head(int(self.ints[1]))

@@ -27,79 +27,6 @@ INT_STEP, INT_FRAME = 0, 1
 E_KIN, E_NORMAL, E_LOAD, E_W_T, E_W_SLIP = 0, 1, 2, 3, 4
 
 
-@numba.njit(cache=True, error_model="numpy", inline="always")
-def end_of_drift(q0, q1, params, dq, sep, dxi, delta1, w, idx):
-    """Midpoint increments dxi over q0 -> q1 and the overlaps delta1 at q1 (the arithmetic of
-    the kernel module's history_increment and overlaps). sep[0], sep[1] hold the pair
-    separations r_i - r_j at q0 on entry and at q1 on return; the separation is linear in q,
-    so its value at the midpoint is their mean (equal to the kernel's to rounding)."""
-    N = q0.shape[0] // D
-    R, L = params[0], params[5]
-    for a in range(q0.shape[0]):
-        dq[a] = q1[a] - q0[a]
-    for k in range(N):
-        dx, dy, ex, ey = pair_separation(q1, k, N, L)
-        delta1[k] = pair_overlap(dx, dy, ex, ey, R)
-        dxi[k] = 0.0
-        if PAIR_FRICTION:
-            pair_increment_coeffs(0.5 * (sep[0, k] + dx), 0.5 * (sep[1, k] + dy), R, w)
-            pair_dofs(k, N, idx)
-            for a in range(2 * D):
-                dxi[k] += w[a] * dq[idx[a]]
-        sep[0, k] = dx
-        sep[1, k] = dy
-        dxi[N + k] = 0.0
-        if WALL_FRICTION:
-            wall_increment_coeffs(R, w)
-            wall_dofs(k, N, idx)
-            for a in range(D):
-                dxi[N + k] += w[a] * dq[idx[a]]
-        delta1[N + k] = R - q1[N + k]
-
-
-@numba.njit(cache=True, error_model="numpy", inline="always")
-def contact_forces(q, xi, delta, sep, F_x, params, F, ft, f, idx):
-    """F(q, xi; F_x) as the kernel module's `forces`, from the overlaps and pair separations
-    end_of_drift left, and the scalar tangential force f_t of every contact [force]: on the
-    first disk of a pair along s = z x n, on a disk from the substrate along +x."""
-    N = q.shape[0] // D
-    R, k_n, k_t, mu, F_y = params[0], params[1], params[2], params[3], params[4]
-    F[:] = 0.0
-    for k in range(N):
-        ft[k] = 0.0
-        if delta[k] > 0.0:
-            dx, dy = sep[0, k], sep[1, k]
-            pair_force(dx, dy, delta[k], xi[k], R, k_n, k_t, mu, f)
-            pair_dofs(k, N, idx)
-            for a in range(2 * D):
-                F[idx[a]] += f[a]
-            if PAIR_FRICTION:
-                ft[k] = (f[1] * dx - f[0] * dy) / (2.0 * R - delta[k])
-    for k in range(N):
-        ft[N + k] = 0.0
-        if delta[N + k] > 0.0:
-            wall_force(delta[N + k], xi[N + k], R, k_n, k_t, mu, f)
-            wall_dofs(k, N, idx)
-            for a in range(D):
-                F[idx[a]] += f[a]
-            if WALL_FRICTION:
-                ft[N + k] = f[0]
-    add_loads(F, F_x, F_y, N)
-
-
-@numba.njit(cache=True, error_model="numpy")
-def prepare(q, xi, F_x, params, F, ft, delta, sep):
-    """Overlaps, separations, forces and tangential forces of a state (before the first step)."""
-    n = q.shape[0]
-    w = np.empty(2 * D)
-    idx = np.empty(2 * D, np.int64)
-    N = n // D
-    for k in range(N):
-        sep[0, k], sep[1, k], _, _ = pair_separation(q, k, N, params[5])
-    end_of_drift(q, q, params, np.empty(n), sep, np.empty(2 * N), delta, w, idx)
-    contact_forces(q, xi, delta, sep, F_x, params, F, ft, np.empty(2 * D), idx)
-
-
 @numba.njit(cache=True, error_model="numpy")
 def record(q, v, mass, delta, F_x, params, scal, slip, frame, t, frames_q, frames_v, energy,
            frames_slip):
@@ -129,64 +56,137 @@ def record(q, v, mass, delta, F_x, params, scal, slip, frame, t, frames_q, frame
 
 
 @numba.njit(cache=True, error_model="numpy")
-def advance(q, v, xi, F, ft, delta, sep, mass, F_x, params, dt, n_steps, stride,
-            scal, ints, slip, breach_t, breach_x, t, frames_q, frames_v, energy, frames_slip):
-    """n_steps velocity-Verlet steps of the state (q, v, xi; F, ft, delta, sep consistent with
-    it), in place. Every `stride`-th step (counted in ints[INT_STEP]) is written to frame
-    ints[INT_FRAME]. breach_t[i] < 0 until the substrate contact of disk i is first capped;
-    then breach_t, breach_x hold that time and x_i. slip[i] accumulates xi0 + dxi - xi1 of the
-    substrate contact over its capped steps (the signed distance slid) [length].
-    Time is dt * (steps done). Returns the number of frames written in total."""
+def advance(q, v, xi, mass, F_x, params, dt, n_steps, stride, scal, ints, slip, breach_t,
+            breach_x, t, frames_q, frames_v, energy, frames_slip):
+    """n_steps velocity-Verlet steps of the state (q, v, xi), in place.
+
+    Iteration 0 moves nothing: it evaluates the overlaps, separations, forces and tangential
+    forces of the current state (with the same code as every step's end), so the state carries
+    only (q, v, xi) between calls and a run split into calls is bit-identical to one call.
+    Frame 0 is written by the first call; then every `stride`-th step (counted in
+    ints[INT_STEP]) is written to frame ints[INT_FRAME]. breach_t[i] < 0 until the substrate
+    contact of disk i is first capped; then breach_t, breach_x hold that time and x_i.
+    slip[i] accumulates xi0 + dxi - xi1 of the substrate contact over its capped steps (the
+    signed distance slid) [length]. Time is dt * (steps done). Returns the frames written.
+
+    One function on purpose: helpers taking arrays, inlined or called, cost numba reference
+    counting (atomic increments) on every call, a quarter of the step at N = 10."""
     n = q.shape[0]
     N = n // D
+    R, k_n, k_t, mu, F_y, L = params[0], params[1], params[2], params[3], params[4], params[5]
     half = 0.5 * dt
     w = np.empty(2 * D)
     f = np.empty(2 * D)
     idx = np.empty(2 * D, np.int64)
-    dq = np.empty(n)
+    F = np.empty(n)
+    dq = np.zeros(n)
     q1 = np.empty(n)
+    sep = np.empty((2, N))
     xi1 = np.empty(2 * N)
+    delta = np.empty(2 * N)
     delta1 = np.empty(2 * N)
+    ft = np.empty(2 * N)
     ft1 = np.empty(2 * N)
     dxi = np.empty(2 * N)
-    slid = np.empty(2 * N, np.bool_)
+    slid = np.zeros(2 * N, np.bool_)
     minv = 1.0 / mass
-    for _ in range(n_steps):
+    countdown = stride - ints[INT_STEP] % stride
+    for it in range(n_steps + 1):
+        moving = it > 0
+        # kick, drift
         for a in range(n):
-            v[a] += half * F[a] * minv[a]
-            q1[a] = q[a] + dt * v[a]
-        end_of_drift(q, q1, params, dq, sep, dxi, delta1, w, idx)
-        commit_history(xi, dxi, delta, delta1, params, True, xi1, slid)
-        contact_forces(q1, xi1, delta1, sep, F_x, params, F, ft1, f, idx)
+            if moving:
+                v[a] += half * F[a] * minv[a]
+                q1[a] = q[a] + dt * v[a]
+                dq[a] = q1[a] - q[a]
+            else:
+                q1[a] = q[a]
+        # overlaps at q1, midpoint increments over q -> q1 (the kernel module's overlaps and
+        # history_increment; the separation is linear in q, so its midpoint value is the mean
+        # of the values at q and q1)
+        for k in range(N):
+            dx, dy, ex, ey = pair_separation(q1, k, N, L)
+            delta1[k] = pair_overlap(dx, dy, ex, ey, R)
+            dxi[k] = 0.0
+            if PAIR_FRICTION and moving:
+                pair_increment_coeffs(0.5 * (sep[0, k] + dx), 0.5 * (sep[1, k] + dy), R, w)
+                pair_dofs(k, N, idx)
+                for a in range(2 * D):
+                    dxi[k] += w[a] * dq[idx[a]]
+            sep[0, k] = dx
+            sep[1, k] = dy
+            dxi[N + k] = 0.0
+            if WALL_FRICTION and moving:
+                wall_increment_coeffs(R, w)
+                wall_dofs(k, N, idx)
+                for a in range(D):
+                    dxi[N + k] += w[a] * dq[idx[a]]
+            delta1[N + k] = R - q1[N + k]
+        # the history rule: reset on opening, first contact, Coulomb cap
+        if moving:
+            commit_history(xi, dxi, delta, delta1, params, True, xi1, slid)
+        else:
+            for c in range(2 * N):
+                xi1[c] = xi[c]
+        # forces F(q1, xi1; F_x) (the kernel module's `forces`) and the scalar tangential
+        # force of every contact: on the first disk of a pair along s = z x n, on a disk from
+        # the substrate along +x
         for a in range(n):
-            v[a] += half * F[a] * minv[a]
-        ints[INT_STEP] += 1
-        time = dt * ints[INT_STEP]
-        w_t = 0.0
-        w_slip = 0.0
-        for c in range(2 * N):
-            f_mid = 0.5 * (ft[c] + ft1[c])
-            w_t += f_mid * dxi[c]
-            if slid[c]:
-                # distance slid; a contact closing and capped in one step slid < |dxi|: not booked
-                s = xi[c] + dxi[c] - xi1[c] if delta[c] > 0.0 else 0.0
-                w_slip += ft1[c] * s
-                if c >= N:
-                    slip[c - N] += s
-                    if breach_t[c - N] < 0.0:
-                        breach_t[c - N] = time
-                        breach_x[c - N] = q1[c - N]
-        scal[SCAL_W_T] += w_t
-        scal[SCAL_W_SLIP] += w_slip
-        scal[SCAL_T] = time
+            F[a] = 0.0
+        for k in range(N):
+            ft1[k] = 0.0
+            if delta1[k] > 0.0:
+                pair_force(sep[0, k], sep[1, k], delta1[k], xi1[k], R, k_n, k_t, mu, f)
+                pair_dofs(k, N, idx)
+                for a in range(2 * D):
+                    F[idx[a]] += f[a]
+                if PAIR_FRICTION:
+                    ft1[k] = (f[1] * sep[0, k] - f[0] * sep[1, k]) / (2.0 * R - delta1[k])
+        for k in range(N):
+            ft1[N + k] = 0.0
+            if delta1[N + k] > 0.0:
+                wall_force(delta1[N + k], xi1[N + k], R, k_n, k_t, mu, f)
+                wall_dofs(k, N, idx)
+                for a in range(D):
+                    F[idx[a]] += f[a]
+                if WALL_FRICTION:
+                    ft1[N + k] = f[0]
+        add_loads(F, F_x, F_y, N)
+        if moving:
+            for a in range(n):
+                v[a] += half * F[a] * minv[a]
+            ints[INT_STEP] += 1
+            time = dt * ints[INT_STEP]
+            # tangential work (trapezoid in time over the midpoint increment); the part on
+            # the distance slid at a capped contact, with the force where the cap acts
+            w_t = 0.0
+            w_slip = 0.0
+            for c in range(2 * N):
+                w_t += 0.5 * (ft[c] + ft1[c]) * dxi[c]
+                if slid[c]:
+                    # a contact closing and capped in one step slid < |dxi|: not booked
+                    s = xi[c] + dxi[c] - xi1[c] if delta[c] > 0.0 else 0.0
+                    w_slip += ft1[c] * s
+                    if c >= N:
+                        slip[c - N] += s
+                        if breach_t[c - N] < 0.0:
+                            breach_t[c - N] = time
+                            breach_x[c - N] = q1[c - N]
+            scal[SCAL_W_T] += w_t
+            scal[SCAL_W_SLIP] += w_slip
+            scal[SCAL_T] = time
         for a in range(n):
             q[a] = q1[a]
         for c in range(2 * N):
             xi[c] = xi1[c]
             delta[c] = delta1[c]
             ft[c] = ft1[c]
-        if ints[INT_STEP] % stride == 0:
+        if moving:
+            countdown -= 1
+        if (moving and countdown == 0) or ints[INT_FRAME] == 0:
             record(q, v, mass, delta, F_x, params, scal, slip, ints[INT_FRAME], t, frames_q,
                    frames_v, energy, frames_slip)
             ints[INT_FRAME] += 1
+            if moving:
+                countdown = stride
     return ints[INT_FRAME]
