@@ -9,10 +9,10 @@ from __future__ import annotations
 import argparse
 import sys
 
-from cli import bifurcate_cmd, scene_cmd, simulate_cmd, verify_cmd
+from cli import bifurcate_cmd, report_cmd, scene_cmd, simulate_cmd, verify_cmd
 from cli.common import run_command
 
-SUBCOMMANDS = (scene_cmd, bifurcate_cmd, simulate_cmd, verify_cmd)
+SUBCOMMANDS = (scene_cmd, bifurcate_cmd, simulate_cmd, verify_cmd, report_cmd)
 
 
 class OneLineParser(argparse.ArgumentParser):

@@ -1,7 +1,7 @@
 """Bifurcation outputs: branch.npz, collisions.json and the diagram (the paper's Fig. 2).
 
-Files hold raw units (MODEL.md: m = 1, 2R = 1, k_n = 2000); the diagram shows the paper's units:
-eigenvalues divided by k_n, and F_x as the paper quotes it (its raw value).
+Files hold raw units (MODEL.md: m = 1, 2R = 1, k_n = 2000); the diagram shows the paper's units
+(reports/units.py: eigenvalues / k_n for the paper's scene) and F_x as the paper quotes it.
 """
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ import numpy as np
 
 from continuation.sweep import DiskBranch
 from reports.files import save_json, save_npz, write_atomic
+from reports.units import F_X_LABEL, PaperUnits, eig_label
 from scenes import Scene
 
 
@@ -40,32 +41,42 @@ def save_branch(out: Path, branch: DiskBranch, scene: Scene) -> None:
     save_json(Path(out) / "collisions.json", collision_records(branch))
 
 
+def draw_spectrum(top, bottom, F_x: np.ndarray, lam: np.ndarray, leg: np.ndarray,
+                  collisions: list[tuple[float, str, float]], matrix: str) -> None:
+    """Im (top) and Re (bottom, symlog) of every eigenvalue `lam` (rows: points at F_x, already
+    in the paper's unit of `matrix`) against F_x; the requested leg (1) in colour, a preparation
+    leg (0) in grey; collisions (F_x, "birth" | "death", double eigenvalue in the same unit)
+    marked ^ (birth) and v (death). Plots only: no physics."""
+    F = np.repeat(F_x[:, None], lam.shape[1], axis=1)
+    for leg_id, style in ((0, dict(color="0.75", s=2)), (1, dict(color="C0", s=3))):
+        rows = leg == leg_id
+        complex_ = rows[:, None] & (np.abs(lam.imag) > 0) & (lam.imag >= 0)
+        top.scatter(F[complex_], lam.imag[complex_], **style)
+        bottom.scatter(F[rows], lam.real[rows], **style)
+    for p, kind, value in collisions:
+        marker, color = ("^", "C3") if kind == "birth" else ("v", "C2")
+        for ax in (top, bottom):
+            ax.axvline(p, color=color, lw=0.4, alpha=0.5)
+        bottom.plot(p, value, marker, color=color, ms=5)
+        top.plot(p, 0.0, marker, color=color, ms=5)
+    top.set_ylabel(eig_label("Im", matrix))
+    bottom.set_ylabel(eig_label("Re", matrix))
+    bottom.set_yscale("symlog", linthresh=1e-4)
+    bottom.set_xlabel(F_X_LABEL)
+
+
 def plot_diagram(branch: DiskBranch, scene: Scene, path: Path) -> None:
-    """Im(lambda)/k_n (top) and Re(lambda)/k_n (bottom) of every eigenvalue against F_x, the
-    requested leg in colour, a preparation leg in grey, births (^) and deaths (v) marked."""
+    """Im(lambda) (top) and Re(lambda) (bottom) of every eigenvalue against F_x in the paper's
+    units (lambda / k_n for the paper's scene), births (^) and deaths (v) marked."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    lam = branch.eigenvalues / scene.k_n
-    F = np.repeat(branch.F_x[:, None], lam.shape[1], axis=1)
+    unit = PaperUnits.of(scene).eigenvalue(branch.matrix)
     fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(7, 6.5))
-    for leg, style in ((0, dict(color="0.75", s=2)), (1, dict(color="C0", s=3))):
-        rows = branch.leg == leg
-        complex_ = rows[:, None] & (np.abs(lam.imag) > 0) & (lam.imag >= 0)
-        top.scatter(F[complex_], lam.imag[complex_], **style)
-        bottom.scatter(F[rows], lam.real[rows], **style)
-    for c in branch.collisions:
-        marker, color = ("^", "C3") if c.kind == "birth" else ("v", "C2")
-        for ax in (top, bottom):
-            ax.axvline(c.p, color=color, lw=0.4, alpha=0.5)
-        bottom.plot(c.p, c.eigenvalue / scene.k_n, marker, color=color, ms=5)
-        top.plot(c.p, 0.0, marker, color=color, ms=5)
-    top.set_ylabel(r"Im $\lambda$ / $k_n$")
-    bottom.set_ylabel(r"Re $\lambda$ / $k_n$")
-    bottom.set_yscale("symlog", linthresh=1e-4)
-    bottom.set_xlabel(r"$F_x$ (raw units, as quoted in the paper)")
+    draw_spectrum(top, bottom, branch.F_x, branch.eigenvalues / unit, branch.leg,
+                  [(c.p, c.kind, c.eigenvalue / unit) for c in branch.collisions], branch.matrix)
     top.set_title(f"{scene.name}: spectrum of {branch.matrix}, N = {scene.N}; "
                   f"births ^ ({sum(c.kind == 'birth' for c in branch.collisions)}), "
                   f"deaths v ({sum(c.kind == 'death' for c in branch.collisions)})", fontsize=9)

@@ -1,0 +1,58 @@
+"""``diskfriction report [SCENE ...] [--out DIR] [--only FIG] [--set KEY=VALUE] [--cache DIR]``."""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from cli.common import CommandError
+from scenes.load import default_scene_path, load_scene
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "report", help="build the report: the paper's figures, paper vs ours, readings, accuracy",
+        description="Compute what each figure and table needs (cached on disk by scene, "
+                    "parameters and code version; a rebuild recomputes only what changed) and "
+                    "write DIR/report.md with PNG figures in the paper's units. One progress "
+                    "line per computation. Details: docs/report.md.")
+    parser.add_argument("scenes", nargs="*", metavar="SCENE",
+                        help="scene TOML files (default: the paper scene, scenes/paper.toml)")
+    parser.add_argument("--out", metavar="DIR", default="out/report",
+                        help="output directory (default: out/report)")
+    parser.add_argument("--only", metavar="FIG", action="append",
+                        help="build only these sections (fig2, fig3, ..., paper, readings, "
+                             "accuracy); repeat or separate by commas")
+    parser.add_argument("--set", metavar="KEY=VALUE", action="append", default=[],
+                        dest="settings", help="change a setting (reports/settings.py), e.g. "
+                                              "--set t_end=500 or --set loads=0.03,0.083")
+    parser.add_argument("--cache", metavar="DIR",
+                        help="cache directory (default: $DISKFRICTION_CACHE/report, else DIR/.cache)")
+    parser.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from reports.builder import build_report, sections_named
+    from reports.settings import SettingError, Settings, with_setting
+
+    scenes = [load_scene(p) for p in args.scenes] or [load_scene(default_scene_path())]
+    only = tuple(k.strip() for item in args.only or () for k in item.split(",") if k.strip())
+    try:
+        sections_named(only)
+    except ValueError as error:
+        raise CommandError(f"report error: --only: {error}") from None
+    settings = Settings()
+    try:
+        for assignment in args.settings:
+            settings = with_setting(settings, assignment)
+    except SettingError as error:
+        raise CommandError(f"report error: {error}") from None
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise CommandError(f"report error: --out: not a directory (got {args.out!r})")
+    log = build_report(scenes, out, only or None, settings,
+                       Path(args.cache) if args.cache else None)
+    computed = sum(e.status == "computed" for e in log)
+    failed = sum("failed" in e.status for e in log)
+    print(f"wrote {out / 'report.md'} ({len(log)} computations: {computed} computed, "
+          f"{len(log) - computed} from the cache, {failed} failed)")
+    return 0

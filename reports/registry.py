@@ -1,0 +1,82 @@
+"""What a report is made of: computations (cached physics) and sections (figures, tables).
+
+A Computation is a function (scene, **params) -> dict of numpy arrays and JSON values, with the
+modules its result depends on. A Section (one figure or table) declares the computations it
+needs for a scene as a list of Needs, and renders Markdown from their results; it never computes
+physics itself. The builder (reports/builder.py) computes each distinct Need once, from the
+cache when the key (reports/cache.py) matches.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Callable
+
+from reports.cache import code_version
+from scenes import Scene
+
+SWEEP_DEPS = ("scenes", "symbolic", "continuation")
+DYNAMICS_DEPS = SWEEP_DEPS + ("dynamics",)
+
+
+class ComputationFailed(Exception):
+    """A computation that ran but has no result for a reason the report shows (no
+    equilibrium, a module missing, ...); cached like a result when `cache` is True."""
+
+    def __init__(self, message: str, cache: bool = True) -> None:
+        super().__init__(message)
+        self.cache = cache
+
+
+@dataclass(frozen=True, eq=False)
+class Computation:
+    """name: unique, used in cache keys and paths; function(scene, **params) -> dict;
+    depends: modules (packages or single modules) whose sources enter the code version,
+    besides the function's own module."""
+
+    name: str
+    function: Callable[..., dict]
+    depends: tuple[str, ...]
+
+    @cached_property
+    def code(self) -> str:
+        return code_version((self.function.__module__, "reports.cache") + self.depends)
+
+
+COMPUTATIONS: dict[str, Computation] = {}
+
+
+def computation(name: str, depends: tuple[str, ...] = SWEEP_DEPS):
+    """Decorator registering `function` as the computation `name`."""
+
+    def register(function: Callable[..., dict]) -> Callable[..., dict]:
+        if name in COMPUTATIONS:
+            raise ValueError(f"computation {name!r} registered twice")
+        COMPUTATIONS[name] = Computation(name, function, tuple(depends))
+        return function
+
+    return register
+
+
+@dataclass(frozen=True)
+class Need:
+    """One computation a section needs: label (unique within the section, shown in progress
+    lines), the registered computation, the scene it runs on and its parameters (JSON values)."""
+
+    label: str
+    computation: str
+    scene: Scene
+    params: dict = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Section:
+    """key: what --only names (fig2, paper, ...); title: the report heading;
+    needs(scene, settings) -> [Need]; render(ctx) -> Markdown (reports/builder.SectionContext).
+    unavailable() -> None, or the line the report prints instead (a module that is missing)."""
+
+    key: str
+    title: str
+    needs: Callable
+    render: Callable
+    unavailable: Callable[[], str | None] = lambda: None

@@ -1,0 +1,59 @@
+"""Shared pieces of the sections: figures, Needs used by several sections, Markdown helpers."""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from reports.registry import Need
+from reports.settings import Settings
+from scenes import Scene
+
+MATRICES = ("J", "M^-1 J")
+
+
+def new_figure(*args, **kwargs):
+    """matplotlib.pyplot.subplots on the Agg backend."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt.subplots(*args, **kwargs)
+
+
+def branch_need(scene: Scene, settings: Settings, matrix: str, label: str | None = None) -> Need:
+    return Need(label or f"branch[{matrix}]", "branch", scene,
+                {"matrix": matrix, "ds_divisions": settings.ds_divisions})
+
+
+def spectra_need(scene: Scene, settings: Settings, matrix: str, label: str | None = None) -> Need:
+    return Need(label or f"spectra_at_loads[{matrix}]", "spectra_at", scene,
+                {"matrix": matrix, "loads": list(settings.loads)})
+
+
+def mode_needs(scene: Scene, settings: Settings) -> list[Need]:
+    """Fig. 6's two states: the scene at F_x = mode_F_x, and a uniformly compressed ring at
+    F_x = 0 (the scene itself if eps > 0, else the scene with eps = mode_eps)."""
+    uniform = scene if scene.eps > 0 else dataclasses.replace(scene, eps=settings.mode_eps)
+    return [Need(f"shear_mode[F_x={settings.mode_F_x:g}]", "shear_mode", scene,
+                 {"F_x": settings.mode_F_x}),
+            Need(f"shear_mode[F_x=0, eps={uniform.eps:g}]", "shear_mode", uniform, {"F_x": 0.0})]
+
+
+def table(header: list[str], rows: list[list]) -> str:
+    """A Markdown table."""
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    lines += ["| " + " | ".join(str(c) for c in row) + " |" for row in rows]
+    return "\n".join(lines) + "\n"
+
+
+def failures(ctx) -> str:
+    """One line per Need that failed, for the section's text."""
+    return "".join(f"\n- `{label}` failed: {message}\n" for label, message in ctx.errors.items())
+
+
+def fmt(value, digits: int = 3) -> str:
+    if value is None or (isinstance(value, float) and not np.isfinite(value)):
+        return "n/a"
+    return f"{value:.{digits}g}"
