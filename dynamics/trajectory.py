@@ -22,6 +22,11 @@ from dynamics.start import Perturbation
 Array = np.ndarray
 
 
+def _column(k: int, doc: str) -> property:
+    """Read-only view of column k of Trajectory.energy."""
+    return property(lambda self: self.energy[:, k], doc=doc)
+
+
 @dataclass(frozen=True)
 class Trajectory:
     """One run from an equilibrium at load F_x plus a perturbation (raw units).
@@ -86,29 +91,16 @@ class Trajectory:
     def C_y(self) -> Array:
         return self.y.mean(axis=1)
 
-    # -- energy budget
-    @property
-    def E_kin(self) -> Array:
-        return self.energy[:, 0]
-
-    @property
-    def U_n(self) -> Array:
-        return self.energy[:, 1]
-
-    @property
-    def U_load(self) -> Array:
-        return self.energy[:, 2]
-
-    @property
-    def W_t(self) -> Array:
-        return self.energy[:, 3]
-
-    @property
-    def W_slip(self) -> Array:
-        return self.energy[:, 4]
+    # -- energy budget: the columns of `energy` (E_KIN.. in dynamics/stepper_src.py)
+    E_kin = _column(0, "Kinetic energy 1/2 v.M.v [energy].")
+    U_n = _column(1, "Hertz energy sum 2/5 k_n delta^(5/2) over active contacts [energy].")
+    U_load = _column(2, "Load potential -F_x x_1 + F_y sum_i y_i [energy].")
+    W_t = _column(3, "Work of the tangential forces since t = 0 [energy].")
+    W_slip = _column(4, "Part of W_t done on the distance slid at capped contacts (<= 0) [energy].")
 
     @property
     def W_stick(self) -> Array:
+        """Part of W_t done while sticking [energy]."""
         return self.W_t - self.W_slip
 
     @property
