@@ -27,10 +27,11 @@ FACTOR = 2.0  # "within a factor 2" for the Im lambda claims
 
 
 def max_imag(eigenvalues: np.ndarray) -> np.ndarray:
-    """Largest Im lambda per row (0 where all real) [unit of the eigenvalues]."""
+    """Largest Im lambda per row (0 where all real) [unit of the eigenvalues]; a float for one
+    spectrum (1-D input)."""
     status = eigen_status_rows(eigenvalues)
-    im = np.where(status == 1, eigenvalues.imag, 0.0)
-    return im.max(axis=-1)
+    im = np.where(status == 1, np.atleast_2d(eigenvalues).imag, 0.0).max(axis=-1)
+    return float(im[0]) if np.ndim(eigenvalues) == 1 else im
 
 
 def eigen_status_rows(eigenvalues: np.ndarray) -> np.ndarray:

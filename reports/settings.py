@@ -47,6 +47,7 @@ class Settings:
     realizations: int = 25
     ensemble_t_end: float = 1000.0
     vcm_loads: tuple[float, ...] = (0.083, 0.087, 0.090, 0.095, 0.10, 0.11)
+    vcm_realizations: int = 5
 
 
 ZERO_ALLOWED = ("eps_values", "mode_eps", "seed", "kick", "mode_F_x")

@@ -57,3 +57,20 @@ def fmt(value, digits: int = 3) -> str:
     if value is None or (isinstance(value, float) and not np.isfinite(value)):
         return "n/a"
     return f"{value:.{digits}g}"
+
+
+def run_need(scene: Scene, settings: Settings, F_x: float) -> Need:
+    """The single run at F_x that Figs. 3, 4, 7 and the paper table share."""
+    return Need(f"trajectory[F_x={F_x:g}]", "trajectory", scene,
+                {"F_x": F_x, "t_end": settings.t_end, "kick": settings.kick,
+                 "seed": settings.seed, "disk": settings.fig4_disk})
+
+
+def ensemble_need(scene: Scene, settings: Settings, which: str) -> Need:
+    """"fronts": Fig. 5's ensemble (ensemble_loads x realizations); "vcm": Fig. 7's, over
+    vcm_loads with vcm_realizations."""
+    loads, count = ((settings.ensemble_loads, settings.realizations) if which == "fronts"
+                    else (settings.vcm_loads, settings.vcm_realizations))
+    return Need(f"ensemble[{which}]", "ensemble", scene,
+                {"loads": list(loads), "realizations": count, "t_end": settings.ensemble_t_end,
+                 "kick": settings.kick, "seed": settings.seed})

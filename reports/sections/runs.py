@@ -1,0 +1,164 @@
+"""Figs. 3, 4 and 7: single runs from branch points, and the centre-of-mass velocity."""
+from __future__ import annotations
+
+import numpy as np
+
+from reports.compute.runs import missing
+from reports.registry import Section
+from reports.sections.common import ensemble_need, failures, fmt, new_figure, run_need, table
+from reports.units import TIME_LABEL
+
+NEEDS_SIMULATE = lambda: missing("dynamics.simulate")  # noqa: E731
+NEEDS_ENSEMBLE = lambda: missing("dynamics.ensemble")  # noqa: E731
+
+
+def first_event(summary: dict, event: str) -> float | None:
+    """Earliest time any disk had `event` ("first_breach" or "onset") [raw time], or None."""
+    times = [t for t in summary[event]["t"] if t is not None]
+    return min(times) if times else None
+
+
+def protocol(ctx) -> str:
+    s = ctx.settings
+    return (f"Each run starts at the equilibrium on the branch from rest at exactly F_x, with a "
+            f"random velocity kick of amplitude {s.kick:g} (raw 2R per raw time; seed {s.seed}) "
+            f"and runs to t = {s.t_end:g} raw = {s.t_end / ctx.units.time:.4g} tau "
+            f"(dynamics.simulate, default dt). The paper's protocol is in its unavailable "
+            f"Supplemental Material.\n")
+
+
+# ---------------------------------------------------------------- Fig. 3
+
+
+def fig3_needs(scene, settings):
+    return [run_need(scene, settings, F) for F in settings.fig3_loads]
+
+
+def fig3_render(ctx):
+    u = ctx.units
+    fig, ax = new_figure(figsize=(7, 4.2))
+    rows = []
+    for need in fig3_needs(ctx.scene, ctx.settings):
+        r = ctx.get(need.label)
+        if r is None:
+            continue
+        F, sm = need.params["F_x"], r["summary"]
+        ok = r["t"] > 0
+        ax.loglog(r["t"][ok] / u.time, r["M"][ok] / u.length**2, lw=0.7, label=f"F_x = {F:g}")
+        breach = first_event(sm, "first_breach")
+        rows.append([f"{F:g}", fmt(sm["M_max"] / u.length**2), fmt(r["M"][-1] / u.length**2),
+                     "no" if breach is None else fmt(breach / u.time, 4), "yes" if sm["slid"] else "no",
+                     fmt(None if sm["sigma_measured"] is None else sm["sigma_measured"] * u.time),
+                     fmt(sm["sigma_predicted"] * u.time)])
+    ax.set_xlabel(TIME_LABEL)
+    ax.set_ylabel(r"$M(t)$ [$(2R)^2$]")
+    ax.legend(fontsize=8)
+    ax.set_title(f"Fig. 3, {ctx.scene.name}: mean-square displacement", fontsize=9)
+    fig.tight_layout()
+    text = [ctx.figure(fig, "fig3", "Fig. 3: M(t) = (1/N) sum |r_i(t) - r_i(0)|^2 at the paper's "
+                       "loads, log-log"), protocol(ctx)]
+    text.append(table(["F_x", "max M [(2R)^2]", "M at the end", "first breach [tau]", "slid",
+                       "growth rate, measured [1/tau]", "predicted (M^-1 J) [1/tau]"], rows))
+    return "\n".join(text) + failures(ctx)
+
+
+# ---------------------------------------------------------------- Fig. 4
+
+
+def fig4_needs(scene, settings):
+    return [run_need(scene, settings, settings.fig4_F_x)]
+
+
+def fig4_render(ctx):
+    u, s = ctx.units, ctx.settings
+    need = fig4_needs(ctx.scene, s)[0]
+    r = ctx.get(need.label)
+    if r is None:
+        return failures(ctx)
+    x = (r["disk_x"] - r["disk_x"][0]) / u.length
+    y = (r["disk_y"] - r["disk_y"][0]) / u.length
+    fig, ax = new_figure(figsize=(6, 5))
+    points = ax.scatter(x, y, c=r["disk_t"] / u.time, s=0.3, cmap="viridis")
+    fig.colorbar(points, ax=ax, label=TIME_LABEL)
+    breach = r["summary"]["first_breach"]["t"][s.fig4_disk - 1]
+    if breach is not None and breach <= r["disk_t"][-1]:
+        k = np.searchsorted(r["disk_t"], breach)
+        ax.plot(x[k], y[k], "r*", ms=10, label="first Coulomb breach of this disk")
+        ax.legend(fontsize=8)
+    ax.set_xlabel(r"$x - x(0)$ [$2R$]")
+    ax.set_ylabel(r"$y - y(0)$ [$2R$]")
+    ax.set_title(f"Fig. 4, {ctx.scene.name}: disk {s.fig4_disk} at F_x = {s.fig4_F_x:g}", fontsize=9)
+    fig.tight_layout()
+    return "\n".join([ctx.figure(fig, "fig4", f"Fig. 4: the x-y trajectory of disk {s.fig4_disk} "
+                                 f"until 10% past its first breach or onset of sliding, coloured by "
+                                 f"time"), protocol(ctx)]) + failures(ctx)
+
+
+# ---------------------------------------------------------------- Fig. 7
+
+
+def fig7_needs(scene, settings):
+    runs = [run_need(scene, settings, F) for F in (settings.fig7_F_x,) + tuple(settings.vcm_loads)]
+    unique = list({n.label: n for n in runs}.values())
+    return unique + ([] if NEEDS_ENSEMBLE() else [ensemble_need(scene, settings, "vcm")])
+
+
+def fig7_render(ctx):
+    u, s = ctx.units, ctx.settings
+    fig, (upper, lower) = new_figure(2, 1, figsize=(7, 7.5))
+    main = ctx.get(run_need(ctx.scene, s, s.fig7_F_x).label)
+    text = []
+    if main is not None:
+        t = main["t"] / u.time
+        upper.plot(t, (main["C_x"] - main["C_x"][0]) / u.length, lw=0.8)
+        for event, color in (("first_breach", "C3"), ("onset", "C2")):
+            when = first_event(main["summary"], event)
+            if when is not None:
+                upper.axvline(when / u.time, color=color, ls="--", lw=0.8, label=f"first {event}")
+        upper.legend(fontsize=7, loc="upper left")
+        upper.set_xlabel(TIME_LABEL)
+        upper.set_ylabel(r"$C_x - C_x(0)$ [$2R$]")
+        upper.set_title(f"F_x = {s.fig7_F_x:g}; inset: C_y", fontsize=9)
+        inset = upper.inset_axes([0.6, 0.15, 0.37, 0.3])
+        inset.plot(t, (main["C_y"] - main["C_y"][0]) / u.length, lw=0.4, color="C1")
+        inset.set_ylabel(r"$C_y - C_y(0)$ [$2R$]", fontsize=6)
+        inset.tick_params(labelsize=6)
+        text.append(f"At F_x = {s.fig7_F_x:g}: C_y ranges over "
+                    f"{main['summary']['C_y_range'] / u.length:.3g} (2R) in the whole run; "
+                    f"V_cm over the last half = {main['summary']['V_cm'] / u.velocity:.3g} 2R/tau.\n")
+    for F in s.vcm_loads:
+        r = ctx.get(run_need(ctx.scene, s, F).label)
+        if r is not None:
+            lower.plot(r["t"] / u.time, (r["C_x"] - r["C_x"][0]) / u.length, lw=0.7, label=f"{F:g}")
+    lower.set_xlabel(TIME_LABEL)
+    lower.set_ylabel(r"$C_x - C_x(0)$ [$2R$]")
+    lower.legend(fontsize=7, title="F_x", title_fontsize=7, loc="upper left")
+    ens = ctx.get("ensemble[vcm]")
+    if ens is not None:
+        inset = lower.inset_axes([0.62, 0.12, 0.35, 0.35])
+        loads = np.array(s.vcm_loads)
+        V = np.array([np.nan if ens["V_cm"][str(F)]["value"] is None else ens["V_cm"][str(F)]["value"]
+                      for F in loads]) / u.velocity
+        inset.plot(loads, V, "o", ms=3)
+        fit = ens["V_cm_fit"]
+        if fit is not None:
+            a, b = fit["intercept"]["value"] / u.velocity, fit["slope"]["value"] / u.velocity
+            inset.plot(loads, a + b * loads, "-", lw=0.8)
+            text.append(f"Fit over {fit['slope']['n']} loads: V_cm = {a:.3g} + {b:.3g} F_x (2R/tau); "
+                        f"paper: -1.3e-5 + 4.5e-4 F_x.\n")
+        inset.set_xlabel("F_x", fontsize=6)
+        inset.set_ylabel(r"$V_{cm}$ [$2R/\tau$]", fontsize=6)
+        inset.tick_params(labelsize=6)
+    else:
+        text.append(f"V_cm(F_x) inset: not built: {NEEDS_ENSEMBLE() or 'the ensemble failed'}.\n")
+    fig.tight_layout()
+    text.insert(0, ctx.figure(fig, "fig7", "Fig. 7: the centre of mass; upper: C_x(t) with the "
+                              "first breach and onset of sliding, inset C_y(t); lower: C_x(t) for "
+                              "several F_x, inset V_cm against F_x with the linear fit"))
+    text.append(protocol(ctx))
+    return "\n".join(text) + failures(ctx)
+
+
+FIG3 = Section("fig3", "Fig. 3: M(t)", fig3_needs, fig3_render, NEEDS_SIMULATE)
+FIG4 = Section("fig4", "Fig. 4: a disk spirals out", fig4_needs, fig4_render, NEEDS_SIMULATE)
+FIG7 = Section("fig7", "Fig. 7: centre of mass", fig7_needs, fig7_render, NEEDS_SIMULATE)
