@@ -19,9 +19,9 @@ def missing(module: str) -> str | None:
     """None if `module` can be imported, else the line a report prints instead."""
     try:
         found = importlib.util.find_spec(module) is not None
-    except ModuleNotFoundError:
-        found = False
-    return None if found else f"needs {module} (not importable in this checkout)"
+    except ImportError as error:  # the parent package itself does not import
+        return f"needs {module} (import failed: {error})"
+    return None if found else f"needs {module} (not in this checkout)"
 
 
 def _thin(n: int) -> slice:

@@ -111,10 +111,11 @@ def fig7_render(ctx):
     if main is not None:
         t = main["t"] / u.time
         upper.plot(t, (main["C_x"] - main["C_x"][0]) / u.length, lw=0.8)
-        for event, color in (("first_breach", "C3"), ("onset", "C2")):
+        for event, color, name in (("first_breach", "C3", "first Coulomb breach"),
+                                   ("onset", "C2", "first onset of sliding")):
             when = first_event(main["summary"], event)
             if when is not None:
-                upper.axvline(when / u.time, color=color, ls="--", lw=0.8, label=f"first {event}")
+                upper.axvline(when / u.time, color=color, ls="--", lw=0.8, label=name)
         upper.legend(fontsize=7, loc="upper left")
         upper.set_xlabel(TIME_LABEL)
         upper.set_ylabel(r"$C_x - C_x(0)$ [$2R$]")
