@@ -47,13 +47,13 @@ def render(ctx):
         dt, dx = relative(ens[f"first_breach_t@{key}"], ens[f"first_breach_x@{key}"], 0)
         upper.plot(dt / u.time, dx / u.length, "o-", ms=3, label=f"F_x = {F:g}")
         dt2, dx2 = relative(ens[f"onset_t@{key}"], ens[f"onset_x@{key}"], N - 1)
-        lower.plot(-dt2 / u.time, -dx2 / u.length, "o", ms=3, label=f"F_x = {F:g}")
+        lower.plot(dt2 / u.time, -dx2 / u.length, "o", ms=3, label=f"F_x = {F:g}")
         paper = PAPER_V1.get(round(F, 6))
         rows.append([f"{F:g}", estimate(ens["V1"][str(float(F))], u.velocity),
                      "-" if paper is None else f"{paper[0]:g} +- {paper[1]:g}"])
     upper.set_xlabel(r"$\tau_i - \tau_1$ [$\tau$] (first breach of disk i after disk 1's)")
     upper.set_ylabel(r"$x_i - x_1$ at the breach [$2R$]")
-    lower.set_xlabel(r"$\tau^*_N - \tau^*_i$ [$\tau$] (onset of sliding of disk i before disk N's)")
+    lower.set_xlabel(r"$\tau^*_i - \tau^*_N$ [$\tau$] (onset of sliding of disk i after disk N's)")
     lower.set_ylabel(r"$x_N - x_i$ at the onset [$2R$]")
     for ax in (upper, lower):
         ax.legend(fontsize=7)
