@@ -22,10 +22,6 @@ import time
 
 import numpy as np
 
-# This file is named like the package it measures: keep its own folder off the import path so
-# that `import dynamics` finds the package, not this script.
-_HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path[:] = [p for p in sys.path if os.path.abspath(p or os.curdir) != _HERE]
 
 STARTUP = """
 import time; t0 = time.perf_counter()

@@ -16,6 +16,8 @@ from cli.common import EXIT_FAILED, CommandError, add_scene_argument, scene_from
 from cli.progress import ProgressBar
 
 KINDS = ("random-velocity", "random-position", "eigenvector", "none")
+SINGLE_AMPLITUDE = 1e-10
+ENSEMBLE_AMPLITUDE = 1e-6
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -34,8 +36,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="eigenvector (of the largest complex pair of M^-1 J; the default "
                              "for one run when there is one) or random-velocity (the default "
                              "otherwise and for ensembles)")
-    parser.add_argument("--amplitude", type=float, default=1e-6, metavar="A",
-                        help="perturbation amplitude, raw length (velocity for random-velocity)")
+    parser.add_argument("--amplitude", type=float, default=None, metavar="A",
+                        help="perturbation amplitude, raw length (velocity for random-velocity); "
+                             "default 1e-10 for one run (leaves decades of linear growth before "
+                             "the contacts' nonlinearity at ~1e-6, so sigma can be measured), "
+                             "1e-6 for ensembles")
     parser.add_argument("--dt", type=float, default=None, help="time step (default: from the highest mode)")
     parser.add_argument("--realizations", type=int, default=None, metavar="K",
                         help="run K seeded realizations per F_x on dask")
@@ -71,10 +76,13 @@ def run(args: argparse.Namespace) -> int:
         positive("dt", args.dt)
     if args.realizations is not None:
         positive("realizations", args.realizations, integer=True)
+    single = args.realizations is None and len(loads) == 1
+    if args.amplitude is None:
+        args.amplitude = SINGLE_AMPLITUDE if single else ENSEMBLE_AMPLITUDE
     if not (math.isfinite(args.amplitude) and args.amplitude >= 0):
         raise CommandError(f"simulate error: --amplitude: must be a number >= 0 (got {args.amplitude!r})")
     out = Path(args.out) if args.out else Path("out") / "simulate" / scene.name
-    if args.realizations is None and len(loads) == 1:
+    if single:
         return single_run(scene, loads[0], args, out)
     return ensemble_run(scene, loads, args, out)
 

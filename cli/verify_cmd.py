@@ -15,6 +15,7 @@ from pathlib import Path
 from cli.bifurcate_cmd import MATRICES
 from cli.common import EXIT_FAILED, CommandError, add_scene_argument, scene_from_args
 from cli.progress import ProgressBar
+from cli.simulate_cmd import SINGLE_AMPLITUDE
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -24,7 +25,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_scene_argument(parser)
     parser.add_argument("--matrix", metavar="J|M^-1J", help="matrix defining the windows (default: the scene's)")
     parser.add_argument("--t-end", type=float, default=1000.0, metavar="T", help="duration of each run, raw time")
-    parser.add_argument("--amplitude", type=float, default=1e-6, metavar="A", help="perturbation amplitude, raw")
+    parser.add_argument("--amplitude", type=float, default=SINGLE_AMPLITUDE, metavar="A",
+                        help="perturbation amplitude, raw (default 1e-10: room for the growth fit)")
     parser.add_argument("--out", metavar="DIR", help="output directory (default: out/verify/SCENE)")
     parser.set_defaults(run=run)
 

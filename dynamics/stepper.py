@@ -38,9 +38,7 @@ from __future__ import annotations
 
 import hashlib
 import importlib.util
-import os
 import sys
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
@@ -48,6 +46,7 @@ from types import ModuleType
 import numpy as np
 
 from symbolic import System
+from symbolic.kernels import write_atomic
 
 _SOURCE = Path(__file__).with_name("stepper_src.py")
 
@@ -79,15 +78,6 @@ def _kernel_module():
     return sys.modules[name]
 
 
-def _numpy_errors(dispatcher):
-    """The kernel function recompiled with error_model="numpy": the same Python function,
-    without the zero-division checks of numba's default error model (a fifth of the step time
-    at N = 10, measured). Every division in the kernels is by a quantity kept positive (rho,
-    delta > 0 guarded, k_t), so no result changes. Compiled into the cached stepper, so not
-    cached separately (cache=False leaves numba's index of the kernel's own functions alone)."""
-    return numba.njit(error_model="numpy")(dispatcher.py_func)
-
-
 _k = _kernel_module()
 {bindings}
 '''
@@ -97,8 +87,7 @@ def stepper_source(kernels: ModuleType) -> tuple[str, str]:
     """(module name, source) of the stepper compiled against this kernel module."""
     src = _SOURCE.read_text()
     digest = hashlib.sha256(f"{kernels.__name__}|{src}".encode()).hexdigest()[:16]
-    bindings = "\n".join([f"{name} = _k.{name}" for name in _CONSTANTS] +
-                         [f"{name} = _numpy_errors(_k.{name})" for name in _FUNCTIONS])
+    bindings = "\n".join(f"{name} = _k.{name}" for name in _CONSTANTS + _FUNCTIONS)
     header = _HEADER.format(kernels=kernels.__name__, kernel_file=Path(kernels.__file__).name,
                             digest=digest, bindings=bindings)
     return f"diskfriction_stepper_{digest}", header + "\n\n" + src
@@ -111,10 +100,7 @@ def load_stepper(kernels: ModuleType) -> ModuleType:
         return sys.modules[name]
     path = Path(kernels.__file__).with_name(f"stepper_{name.rsplit('_', 1)[1]}.py")
     if not path.exists():
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
-        with os.fdopen(fd, "w") as fh:
-            fh.write(source)
-        os.replace(tmp, path)
+        write_atomic(path, source)
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module

@@ -3,13 +3,16 @@
 # wall_force, wall_increment_coeffs, PAIR_FRICTION and WALL_FRICTION are defined by the
 # generated part above it.
 #
+# Every function uses error_model="numpy" (no zero-division checks: a fifth of a dynamics step
+# at N = 10): each division is by a quantity kept positive (2R + rho, delta > 0, k_t).
+#
 # Layout (MODEL.md): q = (x_1..x_N, y_1..y_N[, theta_1..theta_N]); dof (c, i) -> c * N + i.
 # History xi has 2N entries: pairs k = 0..N-1 (disk k with disk k+1, the last one with disk 0
 # across the periodic boundary), then substrate contacts k = 0..N-1. Entries of a frictionless
 # contact kind stay 0. params = (R, k_n, k_t, mu, F_y, L).
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def pair_dofs(k, N, idx):
     """Local dofs of pair k: disk i = k then disk j = k + 1 (mod N). Returns j."""
     j = k + 1 if k + 1 < N else 0
@@ -19,7 +22,7 @@ def pair_dofs(k, N, idx):
     return j
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def two_diff(a, b):
     """s = fl(a - b) and its rounding error e = (a - b) - s, exactly (Knuth's TwoSum)."""
     s = a - b
@@ -27,7 +30,7 @@ def two_diff(a, b):
     return s, (a - (s - bb)) - (b + bb)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def pair_separation(q, k, N, L):
     """r_i - r_j of pair k (the last pair sees disk 0 shifted by the ring length L) and the
     rounding errors of its two components: (dx, dy, ex, ey) with r_i - r_j = (dx + ex, dy + ey)."""
@@ -40,7 +43,7 @@ def pair_separation(q, k, N, L):
     return dx, dy, ex, ey
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def pair_overlap(dx, dy, ex, ey, R):
     """delta = 2R - |r_ij| [length] to full relative accuracy even for delta << 2R.
 
@@ -53,16 +56,16 @@ def pair_overlap(dx, dy, ex, ey, R):
     b = min(abs(dx), abs(dy))
     two_R = 2.0 * R
     num = (two_R - a) * (two_R + a) - b * b - 2.0 * (dx * ex + dy * ey)
-    return num / (two_R + math.hypot(dx, dy))
+    return num / (two_R + math.sqrt(dx * dx + dy * dy))
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def wall_dofs(k, N, idx):
     for c in range(D):
         idx[c] = c * N + k
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def jacobian_pattern(N):
     """Row and column of every stored value of J (pair blocks, then substrate blocks)."""
     nnz = N * (2 * D) ** 2 + N * D * D
@@ -87,7 +90,7 @@ def jacobian_pattern(N):
     return rows, cols
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def add_loads(F, F_x, F_y, N):
     """External dead loads: F_x on disk 1 along +x, F_y on every disk along -y."""
     F[0] += F_x
@@ -95,7 +98,7 @@ def add_loads(F, F_x, F_y, N):
         F[N + i] -= F_y
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def evaluate(q, xi, F_x, params, F, Jvals):
     """F(q, xi; F_x) [force, torque] and the values of J = -dF/dq (total, history following q)
     in the order of jacobian_pattern [force / length]. Returns the number of active contacts."""
@@ -129,7 +132,7 @@ def evaluate(q, xi, F_x, params, F, Jvals):
     return active
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def evaluate_dense(q, xi, F_x, params, F, J, Jvals, rows, cols):
     """As evaluate, with J scattered into the dense matrix J (3N x 3N or 2N x 2N)."""
     active = evaluate(q, xi, F_x, params, F, Jvals)
@@ -139,7 +142,7 @@ def evaluate_dense(q, xi, F_x, params, F, J, Jvals, rows, cols):
     return active
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def forces(q, xi, F_x, params, F):
     """F(q, xi; F_x) only: the dynamics' hot path."""
     N = q.shape[0] // D
@@ -161,7 +164,7 @@ def forces(q, xi, F_x, params, F):
     add_loads(F, F_x, F_y, N)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def overlaps(q, params, delta):
     """delta of every contact [length]: pairs 2R - |r_ij|, then substrate R - y_i."""
     N = q.shape[0] // D
@@ -172,7 +175,7 @@ def overlaps(q, params, delta):
         delta[N + k] = R - q[N + k]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def history_increment(q0, q1, params, dxi):
     """Delta xi along the straight step q0 -> q1, midpoint rule: w(q_mid) . (q1 - q0) [length].
 
@@ -197,7 +200,7 @@ def history_increment(q0, q1, params, dxi):
                 dxi[N + k] += w[a] * (q1[idx[a]] - q0[idx[a]])
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def commit_history(xi0, dxi, delta0, delta1, params, cap, xi1, slid):
     """MODEL.md's history rule for one step with increment dxi, into xi1 [length].
 

@@ -18,9 +18,13 @@ from symbolic.laws import delta
 
 sd = sp.Symbol("sd", positive=True)  # sqrt(delta) in the printed code
 
+NJIT = '@numba.njit(cache=True, error_model="numpy")'
+"""Every generated function: numba's numpy error model drops the zero-division checks; each
+division in the kernels is by a quantity kept positive (rho, delta > 0 guarded, mu k_n delta)."""
+
 _ARGS = {"pair": "dx, dy, delta, xi, R, k_n, k_t, mu", "wall": "delta, xi, R, k_n, k_t, mu"}
 
-_PREAMBLE = {"pair": ["rho = math.hypot(dx, dy)"], "wall": []}
+_PREAMBLE = {"pair": ["rho = math.sqrt(dx * dx + dy * dy)"], "wall": []}
 
 
 class _KernelPrinter(PythonCodePrinter):
@@ -63,7 +67,7 @@ def _kernel(c: ContactExprs, with_J: bool) -> str:
     what = "f and the total stiffness block J = -(df/dq + df/dxi w^T)" if with_J else "f"
     zero = ["f[:] = 0.0"] + (["J[:, :] = 0.0"] if with_J else [])
     lines = [
-        "@numba.njit(cache=True)",
+        NJIT,
         f"def {name}({_ARGS[c.kind]}, {outs}):",
         f'    """{c.kind} contact, law {c.law!r}: writes {what}',
         f"    over the local dofs {', '.join(c.dofs)}. Returns 1 if active (delta > 0), else 0.\"\"\"",
@@ -81,10 +85,10 @@ def _increment_coeffs(c: ContactExprs) -> str:
     """Source of <kind>_increment_coeffs: w with d xi = w . dq over the local dofs."""
     printer = _KernelPrinter()
     args = "dx, dy, R, w" if c.kind == "pair" else "R, w"
-    lines = ["@numba.njit(cache=True)", f"def {c.kind}_increment_coeffs({args}):",
+    lines = [NJIT, f"def {c.kind}_increment_coeffs({args}):",
              f'    """d xi = w . dq over the local dofs {", ".join(c.dofs)}."""']
     if c.kind == "pair":
-        lines.append("    rho = math.hypot(dx, dy)")
+        lines.append("    rho = math.sqrt(dx * dx + dy * dy)")
     lines += [f"    w[{a}] = {printer.doprint(e)}" for a, e in enumerate(c.w)]
     return "\n".join(lines) + "\n"
 

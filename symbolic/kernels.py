@@ -60,7 +60,8 @@ def generate_source(effects: Effects, digest: str) -> str:
     return codegen.module_source(pair, wall, effects.rotation, header, assembly)
 
 
-def _write_atomic(path: Path, text: str) -> None:
+def write_atomic(path: Path, text: str) -> None:
+    """Write text to a temporary file beside path, then rename it (readers never see half)."""
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
     with os.fdopen(fd, "w") as fh:
@@ -80,7 +81,7 @@ def load_kernels(effects: Effects) -> ModuleType:
         return sys.modules[name]
     path = module_path(effects)
     if not path.exists():
-        _write_atomic(path, generate_source(effects, digest))
+        write_atomic(path, generate_source(effects, digest))
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module
