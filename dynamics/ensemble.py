@@ -184,8 +184,6 @@ def run_ensemble(scene: Scene, F_values, realizations: int, t_end: float, out: P
     """Run `realizations` seeded realizations at every F_x (seeds seed, seed + 1, ...), on the
     dask scheduler at `scheduler` or on a LocalCluster of this machine's cores, skipping those
     already on disk. progress(done, total) after every finished realization."""
-    from reports.files import save_json
-
     out, version = Path(out), code_version()
     todo, summaries = [], {float(F): [] for F in F_values}
     for F in summaries:
@@ -200,18 +198,27 @@ def run_ensemble(scene: Scene, F_values, realizations: int, t_end: float, out: P
     if progress is not None:
         progress(done, total)
     if todo:
-        _run_tasks(scene, todo, summaries, scheduler, save_json,
+        _run_tasks(scene, todo, summaries, scheduler,
                    lambda: progress(done_count(summaries), total) if progress else None)
+    for runs in summaries.values():  # completion order must not change a single bit
+        runs.sort(key=lambda summary: summary["perturbation"]["seed"])
     ensemble = aggregate(summaries)
     save_json(out / "ensemble.json", ensemble.as_dict())
     return ensemble
+
+
+def save_json(path: Path, data) -> None:
+    """JSON written atomically (symbolic.kernels.write_atomic): never half a file on disk."""
+    from symbolic.kernels import write_atomic
+
+    write_atomic(Path(path), json.dumps(data, indent=1) + "\n")
 
 
 def done_count(summaries: dict) -> int:
     return sum(map(len, summaries.values()))
 
 
-def _run_tasks(scene, todo, summaries, scheduler, save_json, tick) -> None:
+def _run_tasks(scene, todo, summaries, scheduler, tick) -> None:
     """Submit the missing realizations and write each one the moment it finishes."""
     from dask.distributed import Client, LocalCluster, as_completed
 

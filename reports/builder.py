@@ -195,7 +195,7 @@ def _title(scenes: list[Scene], sections: list[Section]) -> str:
 def _scene_header(scene: Scene, label: str, several: bool) -> str:
     e = scene.resolved_effects
     head = f"# Scene {scene.name}\n\n" if several else ""
-    return (head + f"Scene `{scene.name}` ({scene.source}): N = {scene.N}, R = {scene.R:g}, "
+    return (head + f"Scene `{scene.name}` ({Path(scene.source).name}): N = {scene.N}, R = {scene.R:g}, "
             f"m = {scene.m:g}, c = {scene.inertia:g} (I = c m R^2), eps = {scene.eps:g}, "
             f"k_n = {scene.k_n:g}, k_t = {scene.k_t:.6g}, mu = {scene.mu:g}, F_y = {scene.F_y:g}, "
             f"F_x = {scene.F_x_range[0]:g}..{scene.F_x_range[1]:g}; tangential law "
