@@ -9,6 +9,7 @@ from scenes.scene import Scene
 
 EXIT_BAD_INPUT = 2  # as argparse exits on a usage error
 EXIT_FAILED = 1  # the computation itself failed (no equilibrium, ...)
+EXIT_INTERRUPTED = 130  # as a shell reports SIGINT
 
 
 class CommandError(Exception):
@@ -41,3 +42,6 @@ def run_command(args: argparse.Namespace) -> int:
     except CommandError as error:
         print(error, file=sys.stderr)
         return error.code
+    except KeyboardInterrupt:
+        print("interrupted: results written so far are kept; rerun to resume", file=sys.stderr)
+        return EXIT_INTERRUPTED

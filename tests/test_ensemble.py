@@ -91,3 +91,16 @@ def test_bad_input_gets_one_line_and_exit_2(args, key, tmp_path):
     result = cli(*args, "--out", str(tmp_path))
     assert result.returncode == 2 and result.stderr.count("\n") == 1 and key in result.stderr
     assert "Traceback" not in result.stderr
+
+
+def test_an_interrupt_ends_with_one_line_and_keeps_what_is_done(monkeypatch, capsys):
+    import argparse
+
+    from cli.common import EXIT_INTERRUPTED, run_command
+
+    def interrupted(args):
+        raise KeyboardInterrupt
+
+    assert run_command(argparse.Namespace(run=interrupted)) == EXIT_INTERRUPTED
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "rerun to resume" in err
