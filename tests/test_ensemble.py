@@ -93,7 +93,7 @@ def test_bad_input_gets_one_line_and_exit_2(args, key, tmp_path):
     assert "Traceback" not in result.stderr
 
 
-def test_an_interrupt_ends_with_one_line_and_keeps_what_is_done(monkeypatch, capsys):
+def test_an_interrupt_ends_with_one_line_and_keeps_what_is_done(capsys):
     import argparse
 
     from cli.common import EXIT_INTERRUPTED, run_command
