@@ -13,7 +13,7 @@ import tempfile
 import time
 
 from dynamics.ensemble import run_ensemble
-from reports.simulation import velocity_in_paper_units
+from reports.units import PaperUnits
 from scenes import Scene
 
 
@@ -30,16 +30,17 @@ def main() -> None:
     n = sum(map(len, ens.summaries.values()))
     print(f"{n} realizations, t_end = {args.t_end:g} raw = {args.t_end / scene.tau:.0f} tau: "
           f"{wall:.1f} s wall on a local dask cluster (target <= 60 s)")
-    paper = lambda e: velocity_in_paper_units(e.value, scene)
+    v = PaperUnits.of(scene).velocity
+    paper = lambda e: e.value / v
     for F, e in ens.V1.items():
-        print(f"  F_x = {F}: V1 = {paper(e):.4f} +- {velocity_in_paper_units(e.error, scene):.4f} "
+        print(f"  F_x = {F}: V1 = {paper(e):.4f} +- {e.error / v:.4f} "
               f"2R/tau (n = {e.n}), slid {sum(s['slid'] for s in ens.summaries[F])}")
-    print(f"  V2 = {paper(ens.V2):.4f} +- {velocity_in_paper_units(ens.V2.error, scene):.4f} 2R/tau "
+    print(f"  V2 = {paper(ens.V2):.4f} +- {ens.V2.error / v:.4f} 2R/tau "
           f"(n = {ens.V2.n})")
     if ens.V_cm_fit:
         a, b = ens.V_cm_fit
-        print(f"  V_cm = {paper(a):.3g} (+- {velocity_in_paper_units(a.error, scene):.2g}) + "
-              f"{paper(b):.3g} (+- {velocity_in_paper_units(b.error, scene):.2g}) F_x  [2R/tau]")
+        print(f"  V_cm = {paper(a):.3g} (+- {a.error / v:.2g}) + "
+              f"{paper(b):.3g} (+- {b.error / v:.2g}) F_x  [2R/tau]")
 
 
 if __name__ == "__main__":

@@ -93,7 +93,8 @@ def single_run(scene, F_x: float, args, out: Path) -> int:
     from dynamics.ensemble import equilibrium
     from dynamics.simulate import simulate, summarize
     from dynamics.start import Perturbation, spectrum
-    from reports.simulation import plot_run, save_run, velocity_in_paper_units
+    from reports.simulation import plot_run, save_run
+    from reports.units import PaperUnits
     from symbolic import System
 
     try:
@@ -119,14 +120,14 @@ def single_run(scene, F_x: float, args, out: Path) -> int:
           f"perturbation {kind} {args.amplitude:g}")
     print(f"sigma measured {'-' if sm is None else f'{sm:.5g}'}, predicted {sp:.5g} (raw 1/time, "
           f"M^-1 J); slid: {summary['slid']}; max M = {summary['M_max']:.3g}")
-    print(f"V_cm = {summary['V_cm']:.4g} raw = {velocity_in_paper_units(summary['V_cm'], scene):.4g} 2R/tau")
+    print(f"V_cm = {summary['V_cm']:.4g} raw = {summary['V_cm'] / PaperUnits.of(scene).velocity:.4g} 2R/tau")
     print(f"wrote {out}/trajectory.npz, summary.json, run.png")
     return 0
 
 
 def ensemble_run(scene, loads, args, out: Path) -> int:
     from dynamics.ensemble import run_ensemble
-    from reports.simulation import velocity_in_paper_units
+    from reports.units import PaperUnits
 
     K = int(args.realizations or 1)
     bar = ProgressBar("ensemble")
@@ -138,7 +139,7 @@ def ensemble_run(scene, loads, args, out: Path) -> int:
         raise CommandError(f"simulate error: --scheduler: {error}", EXIT_FAILED) from None
     finally:
         bar.close()
-    paper = lambda e: velocity_in_paper_units(e.value, scene)
+    paper = lambda e: e.value / PaperUnits.of(scene).velocity
     for F in sorted(ens.summaries):
         slid = sum(s["slid"] for s in ens.summaries[F])
         v1 = ens.V1[F]

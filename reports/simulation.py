@@ -1,23 +1,17 @@
 """Outputs of a run: trajectory.npz, summary.json and a quick plot in the paper's units.
 
-Paper units (MODEL.md): time in tau = sqrt(m / (k_n (2R)^(1/2))), lengths in 2R, velocities in
-2R / tau. Files keep raw units.
+Paper units (reports/units.py): time in tau, lengths in 2R. Files keep raw units.
 """
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import numpy as np
 
 from dynamics.trajectory import Trajectory
 from reports.files import save_json, save_npz, write_atomic
+from reports.units import PaperUnits
 from scenes import Scene
-
-
-def paper_units(scene: Scene) -> tuple[float, float]:
-    """(tau, 2R): divide raw times by tau and raw lengths by 2R for the paper's units."""
-    return scene.tau, 2.0 * scene.R
 
 
 def save_run(out: Path, traj: Trajectory, summary: dict) -> None:
@@ -38,7 +32,8 @@ def plot_run(traj: Trajectory, scene: Scene, path: Path, disk: int = 4) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    tau, d = paper_units(scene)
+    units = PaperUnits.of(scene)
+    tau, d = units.time, units.length
     t = traj.t / tau
     fig, (a, b, c) = plt.subplots(1, 3, figsize=(12, 3.6))
     a.semilogy(t, np.maximum(traj.M / d**2, 1e-30))
@@ -58,9 +53,3 @@ def plot_run(traj: Trajectory, scene: Scene, path: Path, disk: int = 4) -> None:
     fig.tight_layout()
     write_atomic(Path(path), lambda tmp: fig.savefig(tmp, dpi=100, format="png"))
     plt.close(fig)
-
-
-def velocity_in_paper_units(v_raw: float, scene: Scene) -> float:
-    """A velocity [raw length / raw time] in 2R / tau."""
-    tau, d = paper_units(scene)
-    return v_raw * tau / d if v_raw is not None and math.isfinite(v_raw) else float("nan")
