@@ -1,10 +1,9 @@
 """``diskfriction verify [SCENE]``: which complex pairs make the chain slide.
 
 From the branch (0 .. the scene's F_x range end, the scene's or --matrix's stability matrix),
-take the midpoint of every complex window and every all-real interval between collisions, run
-the dynamics there (along the largest complex pair of M^-1 J when there is one, else a random
-velocity kick), and tabulate: window, F_x, sigma predicted (M^-1 J), sigma measured, max M,
-slid. Writes DIR/verify.json and DIR/verify.md.
+run the dynamics at the midpoint of every complex window and every all-real interval between
+collisions (dynamics/verify.py) and tabulate: window, F_x, sigma predicted (M^-1 J), sigma
+measured, max M, slid. Writes DIR/verify.json and DIR/verify.md.
 """
 from __future__ import annotations
 
@@ -31,17 +30,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(run=run)
 
 
-def windows(branch) -> list[tuple[float, float, int]]:
-    """(F_a, F_b, complex pairs) of the intervals between consecutive collisions."""
-    edges = [float(branch.F_x[0])] + [c.p for c in branch.collisions] + [float(branch.F_x[-1])]
-    count, out = int(branch.n_complex[0]), []
-    for k, (a, b) in enumerate(zip(edges, edges[1:])):
-        out.append((a, b, count))
-        if k < len(branch.collisions):
-            count += 1 if branch.collisions[k].kind == "birth" else -1
-    return out
-
-
 def run(args: argparse.Namespace) -> int:
     scene = scene_from_args(args)
     if args.matrix is not None and args.matrix not in MATRICES:
@@ -53,31 +41,17 @@ def run(args: argparse.Namespace) -> int:
 
     from continuation.arclength import ContinuationError
     from continuation.disks import EquilibriumError
-    from continuation.sweep import sweep
-    from dynamics.ensemble import equilibrium
-    from dynamics.simulate import simulate, summarize
-    from dynamics.start import Perturbation, spectrum
+    from dynamics.verify import verify_windows
     from reports.files import save_json, write_atomic
-    from symbolic import System
 
-    system = System.from_scene(scene)
+    bar = ProgressBar("verify")
     try:
-        branch = sweep(system, 0.0, scene.F_x_range[1], matrix)
-        rows, bar = [], ProgressBar("verify")
-        todo = windows(branch)
-        for k, (a, b, pairs) in enumerate(todo):
-            F = 0.5 * (a + b)
-            q, xi = equilibrium(scene, F)
-            kind = "eigenvector" if spectrum(system, q, xi).pairs.size else "random-velocity"
-            s = summarize(simulate(system, q, xi, F, args.t_end,
-                                   perturbation=Perturbation(kind, args.amplitude, k)))
-            rows.append({"window": [a, b], "complex_pairs": pairs, "F_x": F, "perturbation": kind,
-                         "sigma_predicted": s["sigma_predicted"], "sigma_measured": s["sigma_measured"],
-                         "M_max": s["M_max"], "slid": s["slid"], "V_cm": s["V_cm"]})
-            bar((k + 1) / len(todo), f"F_x = {F:.5f}")
-        bar.close()
+        rows = verify_windows(scene, matrix, args.t_end, args.amplitude,
+                              lambda fraction, F: bar(fraction, f"F_x = {F:.5f}"))
     except (EquilibriumError, ContinuationError) as error:
         raise CommandError(f"verify error: {scene.source}: {error}", EXIT_FAILED) from None
+    finally:
+        bar.close()
     table = format_table(rows, matrix)
     save_json(out / "verify.json", rows)
     write_atomic(out / "verify.md", lambda tmp: tmp.write_text(table))
