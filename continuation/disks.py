@@ -46,32 +46,38 @@ class DiskEquilibria(Problem):
         self.e_x1[0] = 1.0
         self.events = 0  # contact events split off so far
         self.unsplit = 0  # events that could not be located (fixed-F_x solve failed, e.g. at a fold)
-        self._last = (None, None)  # (q bytes, (xi, J)) of the last trial
+        self._last = (None, None, None)  # (q bytes, xi, J or None) of the last trial q
 
     # -- the history and its stiffness at a trial q
     def trial(self, q: np.ndarray, cap: bool = True) -> tuple[np.ndarray, np.ndarray]:
         """History at q reached by a straight step from the committed state, and slid flags."""
         return self.system.history_step(self.q_c, q, self.xi_c, cap=cap)
 
-    def _xi_and_J(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _xi(self, q: np.ndarray) -> np.ndarray:
+        """Trial history at q, kept for the last q (Newton asks residual then jacobian)."""
         key = q.tobytes()
         if self._last[0] != key:
-            xi = self.trial(q)[0]
-            self._last = (key, (xi, self.system.jacobian(q, xi)))
+            self._last = (key, self.trial(q)[0], None)
         return self._last[1]
+
+    def _J(self, q: np.ndarray) -> np.ndarray:
+        xi = self._xi(q)
+        if self._last[2] is None:
+            self._last = (self._last[0], xi, self.system.jacobian(q, xi))
+        return self._last[2]
 
     # -- Problem protocol
     def residual(self, q, F_x):
-        return self.system.forces(q, self.trial(q)[0], F_x)
+        return self.system.forces(q, self._xi(q), F_x)
 
     def jacobian(self, q, F_x):
-        return -self._xi_and_J(q)[1]
+        return -self._J(q)
 
     def dG_dp(self, q, F_x):
         return self.e_x1
 
     def stability_matrix(self, q, F_x):
-        return self.system.stability_matrix(self._xi_and_J(q)[1], self.matrix)
+        return self.system.stability_matrix(self._J(q), self.matrix)
 
     def commit(self, q_old, F_old, q_new, F_new) -> bool:
         """Commit the step, split at its first contact event. True asks the core to re-solve
@@ -91,7 +97,7 @@ class DiskEquilibria(Problem):
     def _set_committed(self, q, F_x) -> bool:
         self.xi_c, slid = self.trial(q)
         self.q_c, self.F_c = q.copy(), float(F_x)
-        self._last = (None, None)
+        self._last = (None, None, None)
         return bool(slid.any())
 
     def event_functions(self, q: np.ndarray) -> np.ndarray:

@@ -101,6 +101,6 @@ def fit_growth(traj) -> GrowthFit:
         return GrowthFit(nan, nan, nan, nan, int(window.size), period,
                          f"fewer than {MIN_BLOCKS} periods between the start of growth and the "
                          f"end of the linear regime (smaller amplitude or longer run)")
-    (slope, icpt), cov = np.polyfit(tk[window], np.log(Ek[window]), 1, cov=True)
+    (slope, _), cov = np.polyfit(tk[window], np.log(Ek[window]), 1, cov=True)
     return GrowthFit(slope / 2, float(np.sqrt(cov[0, 0])) / 2, float(tk[window[0]]),
                      float(tk[window[-1]]), int(window.size), period, "ok")

@@ -40,7 +40,6 @@ class PaperUnits:
 
 EIG_UNIT_LABEL = {"J": r"$k_n (2R)^{1/2}$", "M^-1 J": r"$\tau^{-2}$"}
 TIME_LABEL = r"$t$ [$\tau$]"
-LENGTH_UNIT = r"$2R$"
 F_X_LABEL = r"$F_x$ [raw force, as the paper quotes it]"
 
 
