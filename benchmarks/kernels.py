@@ -81,7 +81,7 @@ def main() -> None:
     cold, cached, process = start_times(max(3, args.repeat // 2))
     print(f"cold derive + codegen + compile + first J (in-process): median {statistics.median(cold):.2f} s"
           f"  (target <= 15 s)")
-    print(f"cached start to first J (in-process, after imports):    median {statistics.median(cached):.3f} s"
+    print(f"cached start to first J (in-process, incl. imports):    median {statistics.median(cached):.3f} s"
           f"  (target <= 1 s)")
     print(f"cached start, whole process incl. interpreter:          median {statistics.median(process):.3f} s")
     print(f"\n{'N':>6}  {'what':<24}{'per call':>12}{'per disk':>12}")
