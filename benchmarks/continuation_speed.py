@@ -10,10 +10,10 @@ import time
 
 import numpy as np
 
-from continuation.collisions import DetectionParams
-from continuation.sweep import SweepParams, sweep
-from scenes import Scene
-from symbolic import System
+from diskfriction.continuation.collisions import DetectionParams
+from diskfriction.continuation.sweep import SweepParams, sweep
+from diskfriction.scenes import Scene
+from diskfriction.symbolic import System
 
 
 def timed(fn, repeat: int) -> tuple[float, object]:

@@ -26,9 +26,9 @@ import numpy as np
 STARTUP = """
 import time; t0 = time.perf_counter()
 import numpy as np
-from scenes import Scene
-from symbolic import System
-from dynamics import Stepper
+from diskfriction.scenes import Scene
+from diskfriction.symbolic import System
+from diskfriction.dynamics import Stepper
 s = System.from_scene(Scene()); q, xi = s.rest_state()
 Stepper(s, q, np.zeros_like(q), xi, 0.0, 1e-3, 1, 4).advance(1)
 print(time.perf_counter() - t0)
@@ -55,10 +55,10 @@ def frames_for(N: int, repeat: int, extra_steps: int = 0) -> int:
 
 
 def ring_stepper(N: int, repeat: int):
-    from dynamics import Perturbation, Stepper
-    from dynamics.start import perturb
-    from scenes import Scene
-    from symbolic import System
+    from diskfriction.dynamics import Perturbation, Stepper
+    from diskfriction.dynamics.start import perturb
+    from diskfriction.scenes import Scene
+    from diskfriction.symbolic import System
 
     s = System.from_scene(Scene(N=N, eps=1e-3))
     q, v, xi = perturb(s, *s.rest_state(), Perturbation("random-velocity", 1e-3, seed=0))
@@ -66,11 +66,11 @@ def ring_stepper(N: int, repeat: int):
 
 
 def paper_stepper(repeat: int):
-    from continuation.sweep import sweep
-    from dynamics import Perturbation, Stepper, choose_dt, spectrum
-    from dynamics.start import perturb
-    from scenes import Scene
-    from symbolic import System
+    from diskfriction.continuation.sweep import sweep
+    from diskfriction.dynamics import Perturbation, Stepper, choose_dt, spectrum
+    from diskfriction.dynamics.start import perturb
+    from diskfriction.scenes import Scene
+    from diskfriction.symbolic import System
 
     s = System.from_scene(Scene())
     b = sweep(s, 0.0, 0.083)

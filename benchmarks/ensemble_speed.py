@@ -12,9 +12,9 @@ import argparse
 import tempfile
 import time
 
-from dynamics.ensemble import run_ensemble
-from reports.units import PaperUnits
-from scenes import Scene
+from diskfriction.dynamics.ensemble import run_ensemble
+from diskfriction.reports.units import PaperUnits
+from diskfriction.scenes import Scene
 
 
 def main() -> None:

@@ -35,8 +35,8 @@ def main() -> None:
 
 
 def _cost() -> None:
-    from scenes import Scene
-    from symbolic import System
+    from diskfriction.scenes import Scene
+    from diskfriction.symbolic import System
 
     s = System.from_scene(Scene())
     q, xi = s.rest_state()

@@ -17,8 +17,8 @@ import numpy as np
 
 STARTUP = """
 import time; t0 = time.perf_counter()
-from scenes import Scene
-from symbolic import System
+from diskfriction.scenes import Scene
+from diskfriction.symbolic import System
 s = System.from_scene(Scene())
 q, xi = s.rest_state()
 F, J = s.forces_and_jacobian(q, xi, 0.01)
@@ -53,8 +53,8 @@ def per_call(fn, calls: int, repeat: int) -> float:
 
 
 def evaluation_times(N: int, repeat: int) -> dict[str, float]:
-    from scenes import Scene
-    from symbolic import System
+    from diskfriction.scenes import Scene
+    from diskfriction.symbolic import System
 
     s = System.from_scene(Scene(N=N))
     k, p = s.kernels, s.params

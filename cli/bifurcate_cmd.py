@@ -6,8 +6,8 @@ import json
 import math
 from pathlib import Path
 
-from cli.common import EXIT_FAILED, CommandError, add_scene_argument, scene_from_args
-from cli.progress import ProgressBar
+from diskfriction.cli.common import EXIT_FAILED, CommandError, add_scene_argument, scene_from_args
+from diskfriction.cli.progress import ProgressBar
 
 MATRICES = {"J": "J", "M^-1J": "M^-1 J", "M^-1 J": "M^-1 J"}
 
@@ -60,11 +60,11 @@ def run(args: argparse.Namespace) -> int:
     matrix = MATRICES[args.matrix] if args.matrix else scene.matrix
     out = Path(args.out) if args.out else Path("out") / "bifurcate" / scene.name
 
-    from continuation.disks import EquilibriumError
-    from continuation.sweep import SweepParams, sweep
-    from continuation.arclength import ContinuationError
-    from reports.bifurcation import collision_records, plot_diagram, save_branch
-    from symbolic import System
+    from diskfriction.continuation.disks import EquilibriumError
+    from diskfriction.continuation.sweep import SweepParams, sweep
+    from diskfriction.continuation.arclength import ContinuationError
+    from diskfriction.reports.bifurcation import collision_records, plot_diagram, save_branch
+    from diskfriction.symbolic import System
 
     bar = ProgressBar("bifurcate")
     total = F_from + abs(F_to - F_from)  # preparation leg plus the sweep

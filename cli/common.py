@@ -4,8 +4,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from scenes.load import SceneError, default_scene_path, load_scene
-from scenes.scene import Scene
+from diskfriction.scenes.load import SceneError, default_scene_path, load_scene
+from diskfriction.scenes.scene import Scene
 
 EXIT_BAD_INPUT = 2  # as argparse exits on a usage error
 EXIT_FAILED = 1  # the computation itself failed (no equilibrium, ...)

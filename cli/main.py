@@ -9,8 +9,9 @@ from __future__ import annotations
 import argparse
 import sys
 
-from cli import bifurcate_cmd, report_cmd, scene_cmd, simulate_cmd, verify_cmd
-from cli.common import run_command
+from diskfriction import __version__
+from diskfriction.cli import bifurcate_cmd, report_cmd, scene_cmd, simulate_cmd, verify_cmd
+from diskfriction.cli.common import run_command
 
 SUBCOMMANDS = (scene_cmd, bifurcate_cmd, simulate_cmd, verify_cmd, report_cmd)
 
@@ -28,6 +29,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = OneLineParser(
         prog="diskfriction",
         description="Bifurcation analysis of frictional disks on a substrate.")
+    parser.add_argument("--version", action="version", version=f"diskfriction {__version__}")
     subparsers = parser.add_subparsers(metavar="COMMAND", required=True)
     for module in SUBCOMMANDS:
         module.register(subparsers)

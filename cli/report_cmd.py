@@ -4,8 +4,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from cli.common import CommandError
-from scenes.load import default_scene_path, load_scene
+from diskfriction.cli.common import CommandError
+from diskfriction.scenes.load import default_scene_path, load_scene
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -31,8 +31,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from reports.builder import build_report, sections_named
-    from reports.settings import SettingError, Settings, with_setting
+    from diskfriction.reports.builder import build_report, sections_named
+    from diskfriction.reports.settings import SettingError, Settings, with_setting
 
     scenes = [load_scene(p) for p in args.scenes] or [load_scene(default_scene_path())]
     only = tuple(k.strip() for item in args.only or () for k in item.split(",") if k.strip())

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import argparse
 
-from cli.common import add_scene_argument, scene_from_args
-from scenes.load import format_scene
+from diskfriction.cli.common import add_scene_argument, scene_from_args
+from diskfriction.scenes.load import format_scene
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:

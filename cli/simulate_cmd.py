@@ -12,8 +12,8 @@ import argparse
 import math
 from pathlib import Path
 
-from cli.common import EXIT_FAILED, CommandError, add_scene_argument, scene_from_args
-from cli.progress import ProgressBar
+from diskfriction.cli.common import EXIT_FAILED, CommandError, add_scene_argument, scene_from_args
+from diskfriction.cli.progress import ProgressBar
 
 KINDS = ("random-velocity", "random-position", "eigenvector", "none")
 SINGLE_AMPLITUDE = 1e-10
@@ -88,14 +88,14 @@ def run(args: argparse.Namespace) -> int:
 
 
 def single_run(scene, F_x: float, args, out: Path) -> int:
-    from continuation.disks import EquilibriumError
-    from continuation.arclength import ContinuationError
-    from dynamics.ensemble import equilibrium
-    from dynamics.simulate import simulate, summarize
-    from dynamics.start import Perturbation, spectrum
-    from reports.simulation import plot_run, save_run
-    from reports.units import PaperUnits
-    from symbolic import System
+    from diskfriction.continuation.disks import EquilibriumError
+    from diskfriction.continuation.arclength import ContinuationError
+    from diskfriction.dynamics.ensemble import equilibrium
+    from diskfriction.dynamics.simulate import simulate, summarize
+    from diskfriction.dynamics.start import Perturbation, spectrum
+    from diskfriction.reports.simulation import plot_run, save_run
+    from diskfriction.reports.units import PaperUnits
+    from diskfriction.symbolic import System
 
     try:
         q, xi = equilibrium(scene, F_x)
@@ -126,8 +126,8 @@ def single_run(scene, F_x: float, args, out: Path) -> int:
 
 
 def ensemble_run(scene, loads, args, out: Path) -> int:
-    from dynamics.ensemble import run_ensemble
-    from reports.units import PaperUnits
+    from diskfriction.dynamics.ensemble import run_ensemble
+    from diskfriction.reports.units import PaperUnits
 
     K = int(args.realizations or 1)
     bar = ProgressBar("ensemble")

@@ -11,10 +11,10 @@ import argparse
 import math
 from pathlib import Path
 
-from cli.bifurcate_cmd import MATRICES
-from cli.common import EXIT_FAILED, CommandError, add_scene_argument, scene_from_args
-from cli.progress import ProgressBar
-from cli.simulate_cmd import SINGLE_AMPLITUDE
+from diskfriction.cli.bifurcate_cmd import MATRICES
+from diskfriction.cli.common import EXIT_FAILED, CommandError, add_scene_argument, scene_from_args
+from diskfriction.cli.progress import ProgressBar
+from diskfriction.cli.simulate_cmd import SINGLE_AMPLITUDE
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -39,10 +39,10 @@ def run(args: argparse.Namespace) -> int:
     matrix = MATRICES[args.matrix] if args.matrix else scene.matrix
     out = Path(args.out) if args.out else Path("out") / "verify" / scene.name
 
-    from continuation.arclength import ContinuationError
-    from continuation.disks import EquilibriumError
-    from dynamics.verify import verify_windows
-    from reports.files import save_json, write_atomic
+    from diskfriction.continuation.arclength import ContinuationError
+    from diskfriction.continuation.disks import EquilibriumError
+    from diskfriction.dynamics.verify import verify_windows
+    from diskfriction.reports.files import save_json, write_atomic
 
     bar = ProgressBar("verify")
     try:

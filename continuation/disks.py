@@ -22,8 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from continuation.problem import Problem
-from symbolic import System
+from diskfriction.continuation.problem import Problem
+from diskfriction.symbolic import System
 
 EVENT_TOL = 1e-13
 """Events are located to |dF_x| <= EVENT_TOL (raw force units)."""

@@ -21,11 +21,11 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from continuation.arclength import ContinuationParams, continuation
-from continuation.collisions import Collision, DetectionParams
-from continuation.disks import DiskEquilibria, relax
-from continuation.spectra import count_complex_pairs
-from symbolic import System
+from diskfriction.continuation.arclength import ContinuationParams, continuation
+from diskfriction.continuation.collisions import Collision, DetectionParams
+from diskfriction.continuation.disks import DiskEquilibria, relax
+from diskfriction.continuation.spectra import count_complex_pairs
+from diskfriction.symbolic import System
 
 START_FRACTION = 1e-4
 

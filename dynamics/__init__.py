@@ -7,12 +7,12 @@ Coulomb cap (sliding), started from a branch point, with observables and a growt
 Data flow: symbolic (kernels, System) -> dynamics; the step loop is compiled against the
 scene's kernel module (dynamics/stepper.py).
 """
-from dynamics.growth import GrowthFit, fit_growth
-from dynamics.onset import OnsetParams, sliding_onset
-from dynamics.simulate import choose_dt, simulate, summarize
-from dynamics.start import KINDS, Perturbation, Spectrum, perturb, spectrum
-from dynamics.stepper import Stepper, load_stepper
-from dynamics.trajectory import Trajectory
+from diskfriction.dynamics.growth import GrowthFit, fit_growth
+from diskfriction.dynamics.onset import OnsetParams, sliding_onset
+from diskfriction.dynamics.simulate import choose_dt, simulate, summarize
+from diskfriction.dynamics.start import KINDS, Perturbation, Spectrum, perturb, spectrum
+from diskfriction.dynamics.stepper import Stepper, load_stepper
+from diskfriction.dynamics.trajectory import Trajectory
 
 __all__ = [
     "GrowthFit", "KINDS", "OnsetParams", "Perturbation", "Spectrum", "Stepper", "Trajectory",

@@ -27,7 +27,7 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from scenes import Scene
+from diskfriction.scenes import Scene
 
 MIN_FRONT_POINTS = 3
 
@@ -159,8 +159,8 @@ def run_path(out: Path, F_x: float, index: int, key: str) -> Path:
 
 def equilibrium(scene: Scene, F_x: float):
     """(q, xi) of the quasistatic branch from rest at exactly F_x."""
-    from continuation.sweep import sweep
-    from symbolic import System
+    from diskfriction.continuation.sweep import sweep
+    from diskfriction.symbolic import System
 
     branch = sweep(System.from_scene(scene), 0.0, F_x)
     return branch.q[-1], branch.xi[-1]
@@ -168,9 +168,9 @@ def equilibrium(scene: Scene, F_x: float):
 
 def run_realization(scene: Scene, F_x: float, q, xi, spec: RunSpec) -> dict:
     """One realization (runs in a dask worker): simulate and summarize."""
-    from dynamics.simulate import simulate, summarize
-    from dynamics.start import Perturbation
-    from symbolic import System
+    from diskfriction.dynamics.simulate import simulate, summarize
+    from diskfriction.dynamics.start import Perturbation
+    from diskfriction.symbolic import System
 
     traj = simulate(System.from_scene(scene), q, xi, F_x, spec.t_end,
                     perturbation=Perturbation(spec.kind, spec.amplitude, spec.seed))
@@ -209,7 +209,7 @@ def run_ensemble(scene: Scene, F_values, realizations: int, t_end: float, out: P
 
 def save_json(path: Path, data) -> None:
     """JSON written atomically (symbolic.kernels.write_atomic): never half a file on disk."""
-    from symbolic.kernels import write_atomic
+    from diskfriction.symbolic.kernels import write_atomic
 
     write_atomic(Path(path), json.dumps(data, indent=1) + "\n")
 

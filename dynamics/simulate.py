@@ -15,12 +15,12 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from dynamics.growth import fit_growth, oscillation_period
-from dynamics.onset import OnsetParams, sliding_onset
-from dynamics.start import Perturbation, Spectrum, perturb, spectrum
-from dynamics.stepper import Stepper
-from dynamics.trajectory import Trajectory
-from symbolic import System
+from diskfriction.dynamics.growth import fit_growth, oscillation_period
+from diskfriction.dynamics.onset import OnsetParams, sliding_onset
+from diskfriction.dynamics.start import Perturbation, Spectrum, perturb, spectrum
+from diskfriction.dynamics.stepper import Stepper
+from diskfriction.dynamics.trajectory import Trajectory
+from diskfriction.symbolic import System
 
 DT_FRACTION = 0.05
 """dt = DT_FRACTION * 2 / omega_max: velocity Verlet is stable for omega dt < 2 and its phase

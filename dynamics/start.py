@@ -23,8 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from continuation.spectra import DEFAULT_REL_TOL, eigen_status
-from symbolic import System
+from diskfriction.continuation.spectra import DEFAULT_REL_TOL, eigen_status
+from diskfriction.symbolic import System
 
 KINDS = ("none", "random-velocity", "random-position", "eigenvector")
 

@@ -45,8 +45,8 @@ from types import ModuleType
 
 import numpy as np
 
-from symbolic import System
-from symbolic.kernels import write_atomic
+from diskfriction.symbolic import System
+from diskfriction.symbolic.kernels import write_atomic
 
 _SOURCE = Path(__file__).with_name("stepper_src.py")
 

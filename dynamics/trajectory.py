@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dynamics.start import Perturbation
+from diskfriction.dynamics.start import Perturbation
 
 Array = np.ndarray
 

@@ -9,12 +9,12 @@ from __future__ import annotations
 
 from typing import Callable, Optional
 
-from continuation.sweep import DiskBranch, sweep
-from dynamics.ensemble import equilibrium
-from dynamics.simulate import simulate, summarize
-from dynamics.start import Perturbation, spectrum
-from scenes import Scene
-from symbolic import System
+from diskfriction.continuation.sweep import DiskBranch, sweep
+from diskfriction.dynamics.ensemble import equilibrium
+from diskfriction.dynamics.simulate import simulate, summarize
+from diskfriction.dynamics.start import Perturbation, spectrum
+from diskfriction.scenes import Scene
+from diskfriction.symbolic import System
 
 
 def windows(branch: DiskBranch) -> list[tuple[float, float, int]]:

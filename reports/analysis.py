@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from continuation.spectra import eigen_status
+from diskfriction.continuation.spectra import eigen_status
 
 # The paper's numbers (MODEL.md), paper units.
 PAPER_COMPLEX_LOADS = (0.03, 0.04)

@@ -9,10 +9,10 @@ from pathlib import Path
 
 import numpy as np
 
-from continuation.sweep import DiskBranch
-from reports.files import save_json, save_npz, write_atomic
-from reports.units import F_X_LABEL, PaperUnits, eig_label
-from scenes import Scene
+from diskfriction.continuation.sweep import DiskBranch
+from diskfriction.reports.files import save_json, save_npz, write_atomic
+from diskfriction.reports.units import F_X_LABEL, PaperUnits, eig_label
+from diskfriction.scenes import Scene
 
 
 def collision_records(branch: DiskBranch) -> list[dict]:

@@ -16,13 +16,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Optional
 
-from reports.cache import ResultCache, cache_key, default_cache_dir
-from reports.files import write_atomic
-from reports.registry import COMPUTATIONS, ComputationFailed, Need, Section
-from reports.sections import SECTIONS
-from reports.settings import Settings
-from reports.units import PaperUnits
-from scenes import Scene
+from diskfriction.reports.cache import ResultCache, cache_key, default_cache_dir
+from diskfriction.reports.files import write_atomic
+from diskfriction.reports.registry import COMPUTATIONS, ComputationFailed, Need, Section
+from diskfriction.reports.sections import SECTIONS
+from diskfriction.reports.settings import Settings
+from diskfriction.reports.units import PaperUnits
+from diskfriction.scenes import Scene
 
 ERROR = "__error__"
 

@@ -23,8 +23,8 @@ from typing import Iterable
 
 import numpy as np
 
-from reports.files import write_atomic
-from scenes import Scene
+from diskfriction.reports.files import write_atomic
+from diskfriction.scenes import Scene
 
 META = "__meta__"
 NOT_PHYSICS = ("name", "source")

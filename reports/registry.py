@@ -12,11 +12,11 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Callable
 
-from reports.cache import code_version
-from scenes import Scene
+from diskfriction.reports.cache import code_version
+from diskfriction.scenes import Scene
 
-SWEEP_DEPS = ("scenes", "symbolic", "continuation")
-DYNAMICS_DEPS = SWEEP_DEPS + ("dynamics",)
+SWEEP_DEPS = ("diskfriction.scenes", "diskfriction.symbolic", "diskfriction.continuation")
+DYNAMICS_DEPS = SWEEP_DEPS + ("diskfriction.dynamics",)
 
 
 class ComputationFailed(Exception):
@@ -40,7 +40,7 @@ class Computation:
 
     @cached_property
     def code(self) -> str:
-        return code_version((self.function.__module__, "reports.cache") + self.depends)
+        return code_version((self.function.__module__, "diskfriction.reports.cache") + self.depends)
 
 
 COMPUTATIONS: dict[str, Computation] = {}

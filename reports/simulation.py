@@ -8,10 +8,10 @@ from pathlib import Path
 
 import numpy as np
 
-from dynamics.trajectory import Trajectory
-from reports.files import save_json, save_npz, write_atomic
-from reports.units import PaperUnits
-from scenes import Scene
+from diskfriction.dynamics.trajectory import Trajectory
+from diskfriction.reports.files import save_json, save_npz, write_atomic
+from diskfriction.reports.units import PaperUnits
+from diskfriction.scenes import Scene
 
 
 def save_run(out: Path, traj: Trajectory, summary: dict) -> None:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from scenes import Scene
+from diskfriction.scenes import Scene
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,6 @@
 """Scenes: the Scene dataclass, TOML loading and validation."""
-from scenes.load import SceneError, default_scene_path, format_scene, load_scene
-from scenes.scene import FRICTION_KINDS, MATRICES, TANGENTIAL_LAWS, Effects, Scene
+from diskfriction.scenes.load import SceneError, default_scene_path, format_scene, load_scene
+from diskfriction.scenes.scene import FRICTION_KINDS, MATRICES, TANGENTIAL_LAWS, Effects, Scene
 
 __all__ = [
     "Effects",

@@ -15,7 +15,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Callable, Iterator
 
-from scenes.scene import FRICTION_KINDS, MATRICES, TANGENTIAL_LAWS, Effects, Scene
+from diskfriction.scenes.scene import FRICTION_KINDS, MATRICES, TANGENTIAL_LAWS, Effects, Scene
 
 FILE_KEY = "<file>"
 INT64 = (-(2**63), 2**63 - 1)
@@ -327,7 +327,7 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
 
 def default_scene_path() -> Path:
     """The packaged paper scene, scenes/paper.toml."""
-    return Path(str(resources.files("scenes") / "paper.toml"))
+    return Path(str(resources.files("diskfriction.scenes") / "paper.toml"))
 
 
 # ---------------------------------------------------------------- writing a scene

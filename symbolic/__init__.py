@@ -2,7 +2,7 @@
 
 Data flow: Scene -> load_kernels(effects) (derive, print, cache, import) -> System (any N).
 """
-from symbolic.kernels import load_kernels
-from symbolic.system import System
+from diskfriction.symbolic.kernels import load_kernels
+from diskfriction.symbolic.system import System
 
 __all__ = ["System", "load_kernels"]

@@ -13,8 +13,8 @@ from __future__ import annotations
 import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
-from symbolic.contacts import ContactExprs
-from symbolic.laws import delta
+from diskfriction.symbolic.contacts import ContactExprs
+from diskfriction.symbolic.laws import delta
 
 sd = sp.Symbol("sd", positive=True)  # sqrt(delta) in the printed code
 

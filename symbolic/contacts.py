@@ -20,8 +20,8 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from symbolic import laws
-from symbolic.laws import R, delta, xi
+from diskfriction.symbolic import laws
+from diskfriction.symbolic.laws import R, delta, xi
 
 dx, dy, y = sp.symbols("dx dy y", real=True)
 rho = sp.Symbol("rho", positive=True)

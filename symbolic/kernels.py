@@ -16,7 +16,7 @@ import tempfile
 from pathlib import Path
 from types import ModuleType
 
-from scenes import Effects
+from diskfriction.scenes import Effects
 
 GENERATOR_VERSION = 1
 _SOURCES = ("laws.py", "contacts.py", "codegen.py", "assembly_src.py", "kernels.py")
@@ -49,7 +49,7 @@ def module_hash(effects: Effects) -> str:
 
 def generate_source(effects: Effects, digest: str) -> str:
     """Derive both contact kernels for these effects and print the module's source."""
-    from symbolic import codegen, contacts
+    from diskfriction.symbolic import codegen, contacts
 
     pair = contacts.pair_contact(effects.pair_law, effects.rotation)
     wall = contacts.wall_contact(effects.wall_law, effects.rotation)

@@ -11,8 +11,8 @@ from types import ModuleType
 
 import numpy as np
 
-from scenes import Scene
-from symbolic.kernels import load_kernels
+from diskfriction.scenes import Scene
+from diskfriction.symbolic.kernels import load_kernels
 
 
 @dataclass(frozen=True)

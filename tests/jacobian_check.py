@@ -8,8 +8,8 @@ import mpmath as mp
 import numpy as np
 
 import reference_model as ref
-from scenes import Effects
-from symbolic import load_kernels
+from diskfriction.scenes import Effects
+from diskfriction.symbolic import load_kernels
 
 XI_RATIOS = (0.0, 1e-8, 0.5, 1.0 - 1e-8)
 """|xi| / t* values every test visits, besides uniformly random ones."""

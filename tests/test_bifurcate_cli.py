@@ -13,7 +13,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def bifurcate(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "cli", "bifurcate", *args], cwd=ROOT,
+    return subprocess.run([sys.executable, "-m", "diskfriction", "bifurcate", *args], cwd=ROOT,
                           capture_output=True, text=True, timeout=300)
 
 

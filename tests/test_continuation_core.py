@@ -11,10 +11,10 @@ import pytest
 from scipy.linalg import block_diag
 from scipy.optimize import brentq
 
-from continuation import (ContinuationParams, DetectionParams, FunctionProblem, continuation,
+from diskfriction.continuation import (ContinuationParams, DetectionParams, FunctionProblem, continuation,
                           count_complex_pairs)
-from continuation.bifurcations import locate_folds, locate_hopf
-from continuation.spectra import sort_spectrum
+from diskfriction.continuation.bifurcations import locate_folds, locate_hopf
+from diskfriction.continuation.spectra import sort_spectrum
 
 TOL_P = 1e-10
 

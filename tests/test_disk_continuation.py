@@ -4,10 +4,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from continuation.disks import relax
-from continuation.sweep import SweepParams, sweep
-from scenes import Scene
-from symbolic import System
+from diskfriction.continuation.disks import relax
+from diskfriction.continuation.sweep import SweepParams, sweep
+from diskfriction.scenes import Scene
+from diskfriction.symbolic import System
 
 PAPER = Scene()
 

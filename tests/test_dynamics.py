@@ -9,12 +9,12 @@ import sys
 import numpy as np
 import pytest
 
-from continuation.sweep import sweep
-from dynamics import (OnsetParams, Perturbation, Stepper, choose_dt, simulate, sliding_onset,
+from diskfriction.continuation.sweep import sweep
+from diskfriction.dynamics import (OnsetParams, Perturbation, Stepper, choose_dt, simulate, sliding_onset,
                       spectrum, summarize)
-from dynamics.onset import trailing_mean
-from scenes import Scene
-from symbolic import System
+from diskfriction.dynamics.onset import trailing_mean
+from diskfriction.scenes import Scene
+from diskfriction.symbolic import System
 
 
 @pytest.fixture(scope="module")
@@ -154,7 +154,7 @@ def test_load_above_the_total_coulomb_limit_slides(F_x, slides):
 
 
 def test_trajectory_converges_at_second_order_under_dt(paper, branch_point):
-    from dynamics.start import perturb
+    from diskfriction.dynamics.start import perturb
     q, xi = branch_point(0.05)
     q0, v0, xi0 = perturb(paper, q, xi, Perturbation("random-velocity", 1e-4, seed=4))
     t_end, n0 = 20.0, 1000  # dt = 0.02, a fifth of the step limit 2 / omega_max
@@ -169,7 +169,7 @@ def test_trajectory_converges_at_second_order_under_dt(paper, branch_point):
 
 def test_eigenvector_start_has_the_requested_amplitude_and_follows_the_history(paper,
                                                                                 branch_point):
-    from dynamics.start import perturb
+    from diskfriction.dynamics.start import perturb
     q, xi = branch_point(0.083)
     q1, v1, xi1 = perturb(paper, q, xi, Perturbation("eigenvector", 1e-7))
     N = paper.N

@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dynamics.ensemble import aggregate, breach_speed, front_slope, run_ensemble, sliding_speed
-from scenes import Scene
+from diskfriction.dynamics.ensemble import aggregate, breach_speed, front_slope, run_ensemble, sliding_speed
+from diskfriction.scenes import Scene
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -61,7 +61,7 @@ def test_resumed_ensemble_equals_an_uninterrupted_one(tmp_path):
 
 
 def cli(*args):
-    return subprocess.run([sys.executable, "-m", "cli", *args], cwd=ROOT, capture_output=True,
+    return subprocess.run([sys.executable, "-m", "diskfriction", *args], cwd=ROOT, capture_output=True,
                           text=True, timeout=300)
 
 
@@ -96,7 +96,7 @@ def test_bad_input_gets_one_line_and_exit_2(args, key, tmp_path):
 def test_an_interrupt_ends_with_one_line_and_keeps_what_is_done(capsys):
     import argparse
 
-    from cli.common import EXIT_INTERRUPTED, run_command
+    from diskfriction.cli.common import EXIT_INTERRUPTED, run_command
 
     def interrupted(args):
         raise KeyboardInterrupt
@@ -109,7 +109,7 @@ def test_an_interrupt_ends_with_one_line_and_keeps_what_is_done(capsys):
 def test_windows_are_the_intervals_between_collisions_with_their_pair_count():
     from types import SimpleNamespace
 
-    from dynamics.verify import windows
+    from diskfriction.dynamics.verify import windows
 
     c = lambda p, kind: SimpleNamespace(p=p, kind=kind)
     branch = SimpleNamespace(F_x=np.array([0.0, 0.5, 1.0]), n_complex=np.array([1, 2, 0]),

@@ -7,8 +7,8 @@ import pytest
 
 import reference_model as ref
 from jacobian_check import N, all_effects, effects_id, random_state, reference
-from scenes import Scene
-from symbolic import System, load_kernels
+from diskfriction.scenes import Scene
+from diskfriction.symbolic import System, load_kernels
 
 
 @pytest.mark.parametrize("effects", all_effects(), ids=effects_id)

@@ -7,8 +7,8 @@ import sys
 
 import pytest
 
-from scenes import Effects
-from symbolic import kernels
+from diskfriction.scenes import Effects
+from diskfriction.symbolic import kernels
 
 
 @pytest.fixture

@@ -10,11 +10,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from reports.builder import build_report
-from reports.cache import ResultCache, cache_key
-from reports.sections import SECTIONS
-from reports.settings import SettingError, Settings, with_setting
-from scenes import Scene
+from diskfriction.reports.builder import build_report
+from diskfriction.reports.cache import ResultCache, cache_key
+from diskfriction.reports.sections import SECTIONS
+from diskfriction.reports.settings import SettingError, Settings, with_setting
+from diskfriction.scenes import Scene
 
 ROOT = Path(__file__).resolve().parents[1]
 TINY = Scene(N=3, name="tiny")
@@ -123,7 +123,7 @@ def test_setting_parses_lists_and_numbers():
     (["--bogus"], "diskfriction: error: unrecognized arguments: --bogus"),
 ])
 def test_bad_input_gets_one_line_and_exit_2(tmp_path, args, says):
-    run = subprocess.run([sys.executable, "-m", "cli", "report", *args, "--out", str(tmp_path / "o")],
+    run = subprocess.run([sys.executable, "-m", "diskfriction", "report", *args, "--out", str(tmp_path / "o")],
                          capture_output=True, text=True, cwd=ROOT)
     assert run.returncode == 2
     assert run.stderr.count("\n") == 1 and run.stderr.startswith(says), run.stderr

@@ -10,9 +10,9 @@ from pathlib import Path
 
 import pytest
 
-from cli.main import main
-from scenes.load import SceneError, default_scene_path, format_scene, load_scene
-from scenes.scene import Effects, Scene
+from diskfriction.cli.main import main
+from diskfriction.scenes.load import SceneError, default_scene_path, format_scene, load_scene
+from diskfriction.scenes.scene import Effects, Scene
 
 REPO = Path(__file__).resolve().parents[1]
 MISSING, DIRECTORY = object(), object()  # bad-scene contents that are not file text
@@ -21,7 +21,7 @@ MISSING, DIRECTORY = object(), object()  # bad-scene contents that are not file 
 def run_cli(*args: str) -> subprocess.CompletedProcess[str]:
     """``python -m cli ARGS`` in a fresh interpreter, with the repository importable."""
     env = os.environ | {"PYTHONPATH": str(REPO)}
-    return subprocess.run([sys.executable, "-m", "cli", *args], capture_output=True, text=True,
+    return subprocess.run([sys.executable, "-m", "diskfriction", *args], capture_output=True, text=True,
                           cwd=REPO, env=env, timeout=60)
 
 

@@ -18,10 +18,10 @@ import numpy as np
 import pytest
 
 import reference_model as ref
-from scenes import Effects, Scene
+from diskfriction.scenes import Effects, Scene
 from jacobian_check import (N, PARAMS, all_effects, effects_id, generated, random_state, reference,
                             worst_errors)
-from symbolic import System, load_kernels
+from diskfriction.symbolic import System, load_kernels
 
 STATES = 50
 TOL = 1e-6

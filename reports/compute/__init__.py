@@ -1,2 +1,2 @@
 """Report computations: each module registers its functions (reports.registry.computation)."""
-from reports.compute import accuracy, branches, runs  # noqa: F401  (registration)
+from diskfriction.reports.compute import accuracy, branches, runs  # noqa: F401  (registration)

@@ -7,9 +7,9 @@ import time
 
 import numpy as np
 
-from reports.compute.branches import _sweep, _system, equilibrium_at, sweep_span
-from reports.registry import DYNAMICS_DEPS, computation
-from scenes import Scene
+from diskfriction.reports.compute.branches import _sweep, _system, equilibrium_at, sweep_span
+from diskfriction.reports.registry import DYNAMICS_DEPS, computation
+from diskfriction.scenes import Scene
 
 
 def collision_error(F: np.ndarray, kinds: list[str], F_ref: np.ndarray, kinds_ref: list[str]) -> float:
@@ -108,7 +108,7 @@ def dynamics_accuracy(scene: Scene, F_x: float, fractions: list[float], referenc
     (reference: the spectrum's |Im sqrt(lambda)|, and the finest dt), energy-budget drift
     max|budget - budget(0)| (reference: exact conservation), V_cm over the last half (reference:
     the finest dt)."""
-    from dynamics import Perturbation, simulate, spectrum, summarize
+    from diskfriction.dynamics import Perturbation, simulate, spectrum, summarize
 
     system = _system(scene)
     q, xi, _ = equilibrium_at(scene, F_x)

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from reports.registry import ComputationFailed, computation
-from scenes import Scene
+from diskfriction.reports.registry import ComputationFailed, computation
+from diskfriction.scenes import Scene
 
 
 def _system(scene: Scene):
-    from symbolic import System
+    from diskfriction.symbolic import System
 
     return System.from_scene(scene)
 
@@ -17,10 +17,10 @@ def _system(scene: Scene):
 def _sweep(scene: Scene, F_from: float, F_to: float, matrix: str, ds_max=None, detection=True,
            tol_p=None):
     """continuation.sweep with the report's failures turned into ComputationFailed."""
-    from continuation.arclength import ContinuationError
-    from continuation.collisions import DetectionParams
-    from continuation.disks import EquilibriumError
-    from continuation.sweep import SweepParams, sweep
+    from diskfriction.continuation.arclength import ContinuationError
+    from diskfriction.continuation.collisions import DetectionParams
+    from diskfriction.continuation.disks import EquilibriumError
+    from diskfriction.continuation.sweep import SweepParams, sweep
 
     det = DetectionParams(enabled=detection, **({"tol_p": tol_p} if tol_p else {}))
     try:
@@ -69,7 +69,7 @@ def spectra_at(scene: Scene, matrix: str, loads: list[float]) -> dict:
     """Eigenvalues of `matrix` [raw] at exactly each load (one sweep from rest per load), the
     number of complex pairs, the state (q, xi). A load whose sweep fails has nan rows and its
     message in `failed`."""
-    from continuation.spectra import count_complex_pairs
+    from diskfriction.continuation.spectra import count_complex_pairs
 
     system = _system(scene)
     n, k = system.ndof, len(loads)

@@ -6,9 +6,9 @@ import importlib.util
 
 import numpy as np
 
-from reports.compute.branches import _system, equilibrium_at
-from reports.registry import DYNAMICS_DEPS, ComputationFailed, computation
-from scenes import Scene
+from diskfriction.reports.compute.branches import _system, equilibrium_at
+from diskfriction.reports.registry import DYNAMICS_DEPS, ComputationFailed, computation
+from diskfriction.scenes import Scene
 
 MAX_FRAMES = 40_000
 """Frames kept of M, C_x, C_y (evenly thinned beyond this); the tracked disk keeps every frame
@@ -34,7 +34,7 @@ def trajectory(scene: Scene, F_x: float, t_end: float, kick: float, seed: int, d
     `kick` [length / time] (dynamics.simulate, default dt and recording), to t_end [time].
     Keeps t, M [length^2], C_x, C_y [length] (thinned to MAX_FRAMES), x, y of `disk` (1-based)
     at every frame until 10 % past its first breach or onset of sliding, and the summary."""
-    from dynamics import Perturbation, simulate, summarize
+    from diskfriction.dynamics import Perturbation, simulate, summarize
 
     if not 1 <= disk <= scene.N:
         raise ComputationFailed(f"disk {disk} is not one of 1..{scene.N}")
@@ -58,7 +58,7 @@ def ensemble(scene: Scene, loads: list[float], realizations: int, t_end: float, 
     V1 per load, V2 pooled, V_cm per load and its linear fit [raw units], and per load the
     first-breach and sliding-onset times and positions of every disk in every realization
     (arrays realizations x N, nan where it never happened)."""
-    from dynamics.ensemble import run_ensemble
+    from diskfriction.dynamics.ensemble import run_ensemble
 
     ens = run_ensemble(scene, loads, realizations, t_end, out=workdir, seed=seed, amplitude=kick)
     out = ens.as_dict()

@@ -3,9 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from reports.compute.runs import missing
-from reports.registry import Need, Section
-from reports.sections.common import failures, fmt, new_figure, table
+from diskfriction.reports.compute.runs import missing
+from diskfriction.reports.registry import Need, Section
+from diskfriction.reports.sections.common import failures, fmt, new_figure, table
 
 
 def needs(scene, settings):
@@ -15,7 +15,7 @@ def needs(scene, settings):
                  "reference_divisions": s.reference_divisions, "reference_tol_p": s.reference_tol_p}),
            Need("jacobian", "jacobian_accuracy", scene,
                 {"F_x": s.jacobian_F_x, "steps": list(s.jacobian_steps)})]
-    if not missing("dynamics.simulate"):
+    if not missing("diskfriction.dynamics.simulate"):
         out.append(Need("dynamics", "dynamics_accuracy", scene,
                         {"F_x": s.dynamics_accuracy_F_x, "fractions": list(s.dt_fractions),
                          "reference_fraction": s.reference_dt_fraction,

@@ -5,9 +5,9 @@ import dataclasses
 
 import numpy as np
 
-from reports.registry import Need
-from reports.settings import Settings
-from scenes import Scene
+from diskfriction.reports.registry import Need
+from diskfriction.reports.settings import Settings
+from diskfriction.scenes import Scene
 
 MATRICES = ("J", "M^-1 J")
 

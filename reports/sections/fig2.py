@@ -3,10 +3,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from reports.analysis import windows
-from reports.bifurcation import draw_spectrum
-from reports.registry import Section
-from reports.sections.common import MATRICES, branch_need, failures, new_figure, table
+from diskfriction.reports.analysis import windows
+from diskfriction.reports.bifurcation import draw_spectrum
+from diskfriction.reports.registry import Section
+from diskfriction.reports.sections.common import MATRICES, branch_need, failures, new_figure, table
 
 
 def needs(scene, settings):

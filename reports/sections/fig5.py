@@ -5,11 +5,11 @@ import warnings
 
 import numpy as np
 
-from reports.analysis import PAPER_V1, PAPER_V2
-from reports.registry import Section
-from reports.sections.common import ensemble_need, failures, fmt, new_figure, table
-from reports.sections.runs import NEEDS_ENSEMBLE
-from reports.units import TIME_LABEL
+from diskfriction.reports.analysis import PAPER_V1, PAPER_V2
+from diskfriction.reports.registry import Section
+from diskfriction.reports.sections.common import ensemble_need, failures, fmt, new_figure, table
+from diskfriction.reports.sections.runs import NEEDS_ENSEMBLE
+from diskfriction.reports.units import TIME_LABEL
 
 
 def needs(scene, settings):

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from reports.registry import Section
-from reports.sections.common import failures, mode_needs, new_figure, table
+from diskfriction.reports.registry import Section
+from diskfriction.reports.sections.common import failures, mode_needs, new_figure, table
 
 
 def needs(scene, settings):

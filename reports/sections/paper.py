@@ -3,12 +3,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from reports import analysis as A
-from reports.registry import Section
-from reports.sections.common import (branch_need, ensemble_need, failures, fmt, mode_needs,
+from diskfriction.reports import analysis as A
+from diskfriction.reports.registry import Section
+from diskfriction.reports.sections.common import (branch_need, ensemble_need, failures, fmt, mode_needs,
                                      run_need, spectra_need, table)
-from reports.sections.fig6 import mode_numbers
-from reports.sections.runs import NEEDS_ENSEMBLE, NEEDS_SIMULATE, first_event
+from diskfriction.reports.sections.fig6 import mode_numbers
+from diskfriction.reports.sections.runs import NEEDS_ENSEMBLE, NEEDS_SIMULATE, first_event
 
 
 def needs(scene, settings):

@@ -6,10 +6,10 @@ import dataclasses
 
 import numpy as np
 
-from reports import analysis as A
-from reports.registry import Section
-from reports.sections.common import branch_need, failures, new_figure, spectra_need, table
-from reports.units import F_X_LABEL
+from diskfriction.reports import analysis as A
+from diskfriction.reports.registry import Section
+from diskfriction.reports.sections.common import branch_need, failures, new_figure, spectra_need, table
+from diskfriction.reports.units import F_X_LABEL
 
 
 def readings(scene, settings) -> list[tuple[str, str, object]]:

@@ -3,13 +3,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from reports.compute.runs import missing
-from reports.registry import Section
-from reports.sections.common import ensemble_need, failures, fmt, new_figure, run_need, table
-from reports.units import TIME_LABEL
+from diskfriction.reports.compute.runs import missing
+from diskfriction.reports.registry import Section
+from diskfriction.reports.sections.common import ensemble_need, failures, fmt, new_figure, run_need, table
+from diskfriction.reports.units import TIME_LABEL
 
-NEEDS_SIMULATE = lambda: missing("dynamics.simulate")  # noqa: E731
-NEEDS_ENSEMBLE = lambda: missing("dynamics.ensemble")  # noqa: E731
+NEEDS_SIMULATE = lambda: missing("diskfriction.dynamics.simulate")  # noqa: E731
+NEEDS_ENSEMBLE = lambda: missing("diskfriction.dynamics.ensemble")  # noqa: E731
 
 
 def first_event(summary: dict, event: str) -> float | None:

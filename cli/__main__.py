@@ -1,4 +1,0 @@
-"""``python -m cli``: the diskfriction command line."""
-from cli.main import main
-
-raise SystemExit(main())
