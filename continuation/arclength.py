@@ -12,6 +12,10 @@ Step control (arclength ds in the Euclidean norm of x):
 End: when the corrected p leaves [p_min, p_max] the step is clipped: x is re-solved at the end
 value p_end (fixed-p Newton from the secant point at p_end), stored, and the run stops
 ("p_end"); otherwise after max_steps accepted steps ("max_steps").
+Events (problem.event_functions): if a component changes sign over the step, the step is cut at
+the first such change, located on the branch (the step's segment) by the Illinois method to
+|dp| <= event_tol max(1, |p|) (a relative tolerance: it terminates at any p), and ends on the
+far side of it; the next step starts there. No step and no collision scan straddles an event.
 Each accepted step is scanned for eigenvalue collisions (collisions.scan_step) BEFORE
 problem.commit is called, so intermediate points see the state committed at x_k.
 """
@@ -24,11 +28,13 @@ from typing import Callable, Optional
 import numpy as np
 
 from .branch import Branch
-from .collisions import DetectionParams, Sample, make_sample, scan_step
-from .newton import NewtonResult, bordered_newton, fixed_p_newton, tangent
+from .collisions import DetectionParams, scan_step
+from .linalg import SingularMatrix, blas_threads
+from .newton import NewtonResult, bordered_newton, fixed_p_newton, residual_norm, tangent
 from .problem import Problem
-from .segment import Segment, SegmentSolveError
-from .spectra import count_complex_pairs, sort_spectrum
+from .samples import Sample, matrix_derivative, sample_at
+from .segment import Segment, SegmentSolveError, refine_sign_change
+from .spectra import count_complex_pairs, eigenvalue_slopes
 
 Array = np.ndarray
 
@@ -54,6 +60,7 @@ class ContinuationParams:
     direction: int = 1
     growth: float = 1.5
     fast_newton: int = 3
+    event_tol: float = 1e-13
 
     def __post_init__(self):
         if not 0.0 < self.ds_min <= self.ds <= self.ds_max:
@@ -73,12 +80,54 @@ Callback = Callable[[int, float, Array, Array], None]
 
 @dataclass(frozen=True)
 class _Step:
-    """An accepted-to-be step: new point, its tangent, corrector work, whether it ends the run."""
+    """An accepted-to-be step: new point, its tangent, corrector work, whether it ends the run,
+    whether it ends on an event."""
 
     x: Array
     tangent: Array
     newton: NewtonResult
     last: bool
+    event: bool = False
+
+
+def crossed(g0: Array, g1: Array) -> Array:
+    """Event components that change sign from g0 to g1 (g0 = 0 never; g1 = 0 counts as leaving
+    g > 0)."""
+    return ((g0 > 0) & (g1 <= 0)) | ((g0 < 0) & (g1 > 0))
+
+
+def _cut_at_event(problem: Problem, x: Array, step: _Step, g0: Array, par: ContinuationParams):
+    """The step ended on the far side of its first event (located on the branch), or the step
+    itself if no event function changes sign over it. Raises SegmentSolveError."""
+    g1 = problem.event_functions(step.x[:-1], step.x[-1])
+    if not crossed(g0, g1).any():
+        return step
+    seg = Segment(problem, x, step.x, par.newton_tol, par.max_newton)
+    hi, x_hi = 1.0, step.x
+    while True:  # locate the first crossing in [0, hi]; one found crossed on the near side wins
+        mask = crossed(g0, g1)
+        frac = np.full(g0.shape, np.inf)
+        frac[mask] = g0[mask] / (g0[mask] - g1[mask])
+        c = int(np.argmin(frac))
+        pts = {0.0: x, hi: x_hi}
+
+        def f(s: float) -> float:
+            pts[s] = seg.point(s)
+            return float(problem.event_functions(pts[s][:-1], pts[s][-1])[c])
+
+        def done(lo: float, up: float) -> bool:
+            p = abs(pts[up][-1])
+            return abs(pts[up][-1] - pts[lo][-1]) <= par.event_tol * max(1.0, p) or up - lo <= 1e-14
+
+        lo, up = refine_sign_change(f, 0.0, g0[c], hi, g1[c], done)
+        g_lo = problem.event_functions(pts[lo][:-1], pts[lo][-1]) if lo > 0.0 else g0
+        if not crossed(g0, g_lo).any():  # nothing before lo: events within [lo, up] coincide
+            x_e = pts[up]
+            break
+        hi, x_hi, g1 = lo, pts[lo], g_lo
+    t_e = tangent(problem, x_e, step.tangent)
+    return _Step(x_e, t_e, replace(step.newton, x=x_e, residual=residual_norm(problem, x_e)),
+                 False, True)
 
 
 def _angle(t0: Array, t1: Array) -> float:
@@ -127,7 +176,12 @@ def continuation(problem: Problem, u0: Array, p0: float,
     for every accepted point k. Returns a Branch.
     """
     _validate_start(p0, params)
-    start = fixed_p_newton(problem, np.asarray(u0, dtype=float), float(p0), params.newton_tol, params.max_newton)
+    with blas_threads(np.size(u0)):
+        return _continuation(problem, np.asarray(u0, dtype=float), float(p0), params, detection, callback)
+
+
+def _continuation(problem, u0, p0, params, detection, callback) -> Branch:
+    start = fixed_p_newton(problem, u0, p0, params.newton_tol, params.max_newton)
     if not start.converged:
         raise ContinuationError(f"no equilibrium found at p0={p0} (residual {start.residual:.3g})")
     x = start.x
@@ -137,20 +191,26 @@ def continuation(problem: Problem, u0: Array, p0: float,
         t = tangent(problem, x, e_p)
     except np.linalg.LinAlgError as err:
         raise ContinuationError(f"tangent undefined at p0={p0} (fold or singular point)") from err
-    sample = make_sample(0.0, x, sort_spectrum(problem.spectrum(x[:-1], x[-1])), detection.rel_tol)
+    sample = _sorted(_sample(problem, 0.0, x, t, detection, None, side=+1))
     rec = _Recorder(detection.rel_tol, callback)
     rec.add(sample, 0.0, start, t, 0)
+    g = problem.event_functions(x[:-1], x[-1])
     previous: Optional[Sample] = None
     ds, status = params.ds, "max_steps"
     while rec.steps < params.max_steps:
         step = _attempt(problem, x, t, ds, params)
         if isinstance(step, _Step):
             try:
+                if g is not None:
+                    step = _cut_at_event(problem, x, step, g, params)
+                end = _sample(problem, 1.0, step.x, step.tangent, detection, sample, side=-1)
                 found, end, solves, warnings = scan_step(
                     problem, Segment(problem, x, step.x, params.newton_tol, params.max_newton),
-                    sample, problem.spectrum(step.x[:-1], step.x[-1]), detection, rec.steps, previous)
+                    sample, end, detection, rec.steps, previous, step.event)
             except SegmentSolveError as err:
                 step = f"collision scan: {err}"
+            except SingularMatrix as err:
+                step = f"singular matrix: {err}"
         if not isinstance(step, _Step):
             ds *= 0.5
             if ds < params.ds_min:
@@ -159,13 +219,16 @@ def continuation(problem: Problem, u0: Array, p0: float,
             continue
         rec.collisions += found
         rec.warnings += warnings
-        step, end = _commit(problem, x, step, end, params, detection.rel_tol)
+        rec.events += step.event
+        step, end = _commit(problem, x, step, end, params, detection)
         if step is None:
             status = f"commit: no equilibrium after the commit at p={end.p:.12g}"
             break
         rec.add(end, ds, step.newton, step.tangent, solves)
         previous = None if found else sample
         x, t, sample = step.x, step.tangent, end
+        if g is not None:
+            g = problem.event_functions(x[:-1], x[-1])
         if step.last:
             status = "p_end"
             break
@@ -174,20 +237,41 @@ def continuation(problem: Problem, u0: Array, p0: float,
     return rec.branch(status)
 
 
-def _commit(problem: Problem, x: Array, step: _Step, end: Sample, par: ContinuationParams, rel_tol: float):
+def _sample(problem: Problem, s: float, x: Array, t: Array, detection: DetectionParams,
+            reference: Optional[Sample], side: int) -> Sample:
+    """The sample of an accepted point: with slopes along t (one-sided towards `side`, the
+    inside of the step) when the detection needs them."""
+    return sample_at(problem, s, x, detection.rel_tol, reference,
+                     t if detection.slopes else None, side)
+
+
+def _sorted(sample: Sample) -> Sample:
+    """Labels ordered by (Re, Im): a reproducible order for the first point of a branch."""
+    return sample.relabel(np.lexsort((sample.eigvals.imag, sample.eigvals.real)))
+
+
+def _commit(problem: Problem, x: Array, step: _Step, end: Sample, par: ContinuationParams,
+            detection: DetectionParams):
     """Call problem.commit; if it reports a change, re-solve at fixed p and refresh tangent and
     spectrum (the jump is not scanned for collisions; the stored residual is the re-solve's, the
-    iterations add up). Returns (step, end sample) or (None, end)."""
+    iterations add up). After an event the slopes are refreshed on the side of the next step.
+    Returns (step, end sample) or (None, end)."""
     changed = problem.commit(x[:-1], float(x[-1]), step.x[:-1].copy(), float(step.x[-1]))
     if not changed:
+        if step.event and detection.slopes:
+            dA = matrix_derivative(problem, step.x, step.tangent, +1)
+            end = replace(end, dlam=eigenvalue_slopes(end.system, dA))
         return step, end
     res = fixed_p_newton(problem, step.x[:-1], float(step.x[-1]), par.newton_tol, par.max_newton)
     if not res.converged:
         return None, end
-    t_new = tangent(problem, res.x, step.tangent)
-    end = make_sample(0.0, res.x, problem.spectrum(res.x[:-1], res.x[-1]), rel_tol, reference=end)
+    try:
+        t_new = tangent(problem, res.x, step.tangent)
+    except SingularMatrix:
+        return None, end
+    end = _sample(problem, 0.0, res.x, t_new, detection, end, side=+1)
     newton = replace(res, iterations=step.newton.iterations + res.iterations)
-    return _Step(res.x, t_new, newton, step.last), end
+    return _Step(res.x, t_new, newton, step.last, step.event), end
 
 
 class _Recorder:
@@ -198,6 +282,7 @@ class _Recorder:
         self.rows: list[tuple] = []
         self.collisions: list = []
         self.warnings: list = []
+        self.events = 0
 
     @property
     def steps(self) -> int:
@@ -216,4 +301,5 @@ class _Recorder:
                       n_complex=np.array(cols[3]), ds=np.array(cols[4]),
                       newton_iterations=np.array(cols[5]), residual=np.array(cols[6]),
                       tangent=np.array(cols[7]), detection_solves=np.array(cols[8]),
-                      collisions=tuple(self.collisions), status=status, warnings=tuple(self.warnings))
+                      collisions=tuple(self.collisions), status=status, warnings=tuple(self.warnings),
+                      events=self.events)

@@ -20,7 +20,8 @@ class Branch:
     corrector updates; residual (m,): max|G| at the stored point; tangent (m, n+1): unit
     tangent in x = (u, p); detection_solves (m,): corrector solves spent on collision detection
     in the step ending at the point; collisions: located births and deaths in branch order;
-    status: why the run stopped ("p_end", "max_steps", "ds_min: ..."); warnings.
+    status: why the run stopped ("p_end", "max_steps", "ds_min: ..."); warnings; events: steps
+    cut at an event (problem.event_functions).
     """
 
     p: Array
@@ -35,6 +36,7 @@ class Branch:
     collisions: tuple[Collision, ...]
     status: str
     warnings: tuple[str, ...] = ()
+    events: int = 0
 
     def __len__(self) -> int:
         return self.p.size

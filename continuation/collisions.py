@@ -3,104 +3,107 @@
 A *birth* is a point where two real eigenvalues of the stability matrix A meet and leave the
 real axis as a conjugate pair (as the branch is followed in its direction); a *death* is the
 reverse. Integer test function: the status of every tracked eigenvalue (0 real, +1 / -1 upper /
-lower member of a complex pair, see spectra.eigen_status); the number of complex pairs is the
-count of +1. Smooth test function of one pair (i, j): its discriminant
-    D_ij = (lambda_i - lambda_j)^2 = tr^2 - 4 det  (of the pair's 2x2 invariant subspace),
-real, smooth in the branch parameter, > 0 for two real eigenvalues, < 0 for a conjugate pair
-(spectra.pair_discriminant). A collision is a sign change of D_ij.
+lower member of a complex pair, spectra.eigen_status); the number of complex pairs is the count
+of +1. Smooth test function of one pair (i, j): its discriminant D_ij = (lambda_i - lambda_j)^2
+(spectra.pair_discriminant), > 0 for two real eigenvalues, < 0 for a conjugate pair.
 
-Locating (per step x_a -> x_b, before the step is committed). Points between x_a and x_b are
-x(s), s in [0, 1], computed by the corrector on the secant hyperplanes (segment.py). The step is
-covered by samples (s, x(s), tracked spectrum); every interval [a, b] between neighbouring
-samples gets one verdict:
-  * events: eigenvalues whose status goes 0 -> +-1 (births, paired at b) or +-1 -> 0 (deaths,
-    paired at a), paired by conjugacy and continuity of the pair's mean
-    (spectra.conjugate_pairing); a status +1 <-> -1 or an unpaired change -> split.
-  * certification of the unchanged eigenvalues, first by their motion: no eigenvalue real at
-    both ends may move by more than rho times its gap to the nearest other real eigenvalue
-    (outruns_gaps; label-free, it catches a fast eigenvalue passing through a cluster, where
-    D of the pair is a near-parabola touching zero that a quadratic cannot tell from a
-    bubble); then with a quadratic model: take the nearest other
-    sample c whose status vector equals that of the adjacent end (no status change between c
-    and [a, b]); through (a, b, c) fit q(t) = chord + kappa t (t - 1), t = (s - s_a)/(s_b - s_a), for
-        every pair of eigenvalues real at a, b:   y = D_ij = (Re lambda_i - Re lambda_j)^2,
-        every upper eigenvalue of a kept pair:    y = (Im lambda_i)^2 = -D / 4,
-    and split if   |kappa| / 4 > (1 - rho) min(y_a, y_b) + 4 thr^2,
-    i.e. if the bending of y over the interval is not small against its smaller end value (a
-    bubble, a near miss, a crossing, an end close to a collision; thr = the status threshold,
-    below which nothing can be resolved). No stencil c -> split.
-  * clean: no events and no split.
-A split inserts the midpoint; an events interval is refined by the Illinois method on D_ij of
-its first event (each evaluation is a new sample); then all verdicts are recomputed. This ends
-when every interval is clean or is an events interval of width |dp| <= tol_p (or whose real
-side already has D <= 4 thr^2). The location is the root of D_ij interpolated linearly over that
-final bracket; the eigenvalue is the pair's mean there, the eigenvectors come from an SVD of
-A - lambda I (right and left null vectors; the generalized vector w solves (A - lambda I) w = v,
-w orthogonal to v).
+Detection on one step x_a -> x_b (before the step is committed) works on samples (samples.py):
+branch points x(s), s in [0, 1], on the step's secant segment (segment.py), with tracked spectra.
+Three parts, each a small piece of this module or its neighbours:
+  * the sampler (samples.sample_at): corrector solve at s, eigensystem, labels;
+  * the certifier (certify.py): the verdict on an interval between neighbouring samples:
+      events  eigenvalues whose status goes 0 -> +-1 (births, paired at b) or +-1 -> 0 (deaths,
+              paired at a), paired by conjugacy and continuity of the pair's mean
+              (spectra.conjugate_pairing);
+      split   a status change the events do not explain, or a pair that could collide and is
+              not certified (where to sample next);
+      clean   neither;
+  * the locator: the collision of an event pair inside its interval.
+Two detections combine them (DetectionParams.mode):
+  "fast" (default): samples carry eigenvalue slopes from left and right eigenvectors; intervals
+      are certified by cubic Hermite models of every pair's D (certify.uncertified_pairs) and
+      the labels by their slopes (certify.inconsistent_labels); an uncertified interval gets a
+      new sample where the worst pair's model is lowest; events are located by Newton's method
+      on the minimally augmented system (locate.py): linear solves, no eigensolver. One full
+      spectrum per accepted point, plus one per split.
+  "exhaustive" (version 0.1): samples without slopes; intervals certified by the three-sample
+      quadratic of every pair's D and the motion of every real eigenvalue against its gap
+      (certify.curvature_too_large, certify.outruns_gaps); splits at midpoints; events located
+      by the Illinois method on D, every evaluation a new sample with its full spectrum. Kept
+      to check the fast one (tests/test_detection.py).
+Refinement ends when every interval is clean or holds only located events (or is narrower than
+tol_p, or the step's budget of max_solves samples is spent: remaining events are reported with
+resolved=False and a warning).
 
-Guarantee (what "no misses" means here). On return, every sub-interval of the step is either
-  (1) a bracket |dp| <= tol_p of each reported collision, whose status changes across it, or
-  (2) status-unchanged and certified: for every pair that could collide (two real eigenvalues
-      or a conjugate pair), y = D (or Im^2) bends by at most (1 - rho) min(y_a, y_b) in the
-      three-sample quadratic, so the quadratic stays >= rho min(y_a, y_b) on the interval.
-A collision inside a certified interval needs y to reach 0, so the remainder of the three-point
-interpolation (cubic and higher terms) would have to exceed rho / (1 - rho) (= 1 for the default
-rho = 0.5) times the largest quadratic term: missed only if y varies on a scale shorter than the
-sample spacing. This covers a bubble (birth and death inside one step), several pairs born at
-one p, narrowly avoided and exact crossings (resolved down to tol_p), and an accepted point that
-lands next to a collision (the interval is split until the curvature is small against the
-smaller end value). Limits: (a) two collisions closer than tol_p (a bubble narrower than tol_p)
-are invisible; (b) y with structure below the sample spacing, invisible to three samples, can
-be missed: shorten the steps (ds_max) if the spectrum varies faster than the branch; (c) the
-tracking by minimal total displacement can mislabel eigenvalues that move more than their
-separation within one interval; labels only serve the certification, and a mislabeling that
-changes the status pattern forces splits; (d) eigenvalues are not smooth across a collision,
-so a stencil never reaches across one (a previous-step sample is used only if that step had
-none); the first step of a branch therefore always costs a midpoint sample; (e) each step
-spends at most max_solves corrector solves; beyond that the remaining events are reported with
-resolved=False and a warning.
+Guarantee (what "no misses" means). On return every sub-interval of the step is either a
+located event's interval or certified: for every pair that could collide (two real eigenvalues,
+or a conjugate pair), the model of y = D (or Im^2) through the sample data stays above rho times
+its smaller end value with margin (certify.py). A collision in a certified interval needs y to
+reach 0, i.e. y would have to vary on a scale shorter than the sample spacing in a way neither
+its end values nor its end slopes show. Limits: (a) two collisions closer than tol_p are
+invisible; (b) structure finer than the samples that the data do not show can be missed:
+shorten the steps (ds_max) if the spectrum varies faster than the branch; (c) eigenvalues are
+not smooth at a collision, so the exhaustive stencil never reaches across one (a
+previous-step sample is used only if that step had none).
 """
 from __future__ import annotations
 
 import bisect
-import itertools
+import math
 from dataclasses import dataclass, field, replace
 from typing import Optional
 
 import numpy as np
 
-from .newton import residual_norm
+from . import certify
+from .linalg import dense
+from .locate import LocatorFailed, locate_double_eigenvalue
+from .newton import residual_norm, tangent
 from .problem import Problem
+from .samples import Sample, continuation_perm, sample_at
 from .segment import Segment, refine_sign_change
-from .spectra import (DEFAULT_REL_TOL, conjugate_pairing, eigen_status, imag_threshold,
-                      match_eigenvalues, pair_discriminant, track)
+from .spectra import DEFAULT_REL_TOL, conjugate_pairing, pair_discriminant
 
 Array = np.ndarray
-_uid = itertools.count()
+
+MODES = ("fast", "exhaustive")
 
 
 @dataclass(frozen=True)
 class DetectionParams:
-    """rel_tol: status threshold |Im| > rel_tol * max|lambda| (spectra.py); tol_p: bracket width
-    |dp| of a located collision; rho: certification margin (0 < rho < 1, see module docstring);
-    max_solves: corrector solves allowed per step for detection; enabled: False skips detection
-    (spectra are still computed, tracked and counted)."""
+    """mode: "fast" or "exhaustive" (module docstring); rel_tol: status threshold
+    |Im| > rel_tol * max|lambda| (spectra.py); tol_p: |dp| to which a collision is located (the
+    fast locator's last Newton correction, or the exhaustive bracket); rho: certification margin
+    (0 < rho < 1, certify.py); max_solves: samples allowed per step; enabled: False skips
+    detection (spectra are still computed, tracked and counted); min_ds: intervals narrower
+    than this in s are final (the segment coordinate's resolution, 100 ulp of 1);
+    locator_iterations: Newton iterations of the fast locator before it falls back to a split."""
 
+    mode: str = "fast"
     rel_tol: float = DEFAULT_REL_TOL
     tol_p: float = 1e-10
     rho: float = 0.5
     max_solves: int = 500
     enabled: bool = True
+    min_ds: float = 1e-14
+    locator_iterations: int = 12
 
     def __post_init__(self):
+        if self.mode not in MODES:
+            raise ValueError(f"mode must be one of {MODES}, got {self.mode!r}")
         if not 0.0 < self.rel_tol < 1e-3:
             raise ValueError(f"rel_tol must be in (0, 1e-3), got {self.rel_tol}")
         if not self.tol_p > 0.0:
             raise ValueError(f"tol_p must be > 0, got {self.tol_p}")
         if not 0.0 < self.rho < 1.0:
             raise ValueError(f"rho must be in (0, 1), got {self.rho}")
-        if self.max_solves < 1:
-            raise ValueError(f"max_solves must be >= 1, got {self.max_solves}")
+        if self.max_solves < 1 or self.locator_iterations < 1:
+            raise ValueError("max_solves and locator_iterations must be >= 1")
+
+    @property
+    def slopes(self) -> bool:
+        """Whether samples carry eigenvalue slopes (the fast detection needs them)."""
+        return self.enabled and self.mode == "fast"
 
 
 @dataclass(frozen=True)
@@ -110,11 +113,12 @@ class Collision:
     p: location; kind: "birth" (real pair -> complex pair along the branch direction) or
     "death"; eigenvalue: the (real) double eigenvalue; eigenvector v (unit, right null vector
     of A - eigenvalue I), generalized_eigenvector w ((A - eigenvalue I) w = v, w orthogonal to
-    v: the Jordan chain), left_right_overlap |y . v| for the left null vector y (-> 0 at a
-    Jordan block, ~1 at a semisimple double eigenvalue); bracket (p_lo, p_hi) across which
-    the status changes; residual max|G| at the located point u; step: index of the accepted
-    point that starts the step; pair: tracked eigenvalue indices; resolved: False if the
-    step's detection budget ran out or the bracket could not be isolated.
+    v: the Jordan chain), left_right_overlap |y . v| for the unit left null vector y (-> 0 at a
+    Jordan block, ~1 at a semisimple double eigenvalue); bracket (p_lo, p_hi): p is within it
+    (fast: p +- the last Newton correction; exhaustive: the final bracket across which the
+    status changes); residual max|G| at the located point u; step: index of the accepted point
+    that starts the step; pair: tracked eigenvalue indices; resolved: False if the step's
+    detection budget ran out or the bracket could not be isolated.
     """
 
     p: float
@@ -131,83 +135,14 @@ class Collision:
     resolved: bool = True
 
 
-@dataclass(frozen=True)
-class Sample:
-    """A branch point x = (u, p) at segment coordinate s with its tracked spectrum."""
-
-    s: float
-    x: Array
-    eigvals: Array
-    status: Array
-    thr: float
-    uid: int = field(default_factory=lambda: next(_uid), init=False, repr=False, compare=False)
-
-    @property
-    def p(self) -> float:
-        return float(self.x[-1])
-
-
-def make_sample(s: float, x: Array, eigvals: Array, rel_tol: float,
-                reference: Optional[Sample] = None) -> Sample:
-    """Sample at s; eigenvalues tracked to continue reference's when given."""
-    eigvals = np.asarray(eigvals, dtype=complex)
-    if reference is not None:
-        eigvals = track(reference.eigvals, eigvals)
-    return Sample(s, x, eigvals, eigen_status(eigvals, rel_tol), imag_threshold(eigvals, rel_tol))
-
-
-def relabel(sample: Sample, perm: Array) -> Sample:
-    """The same sample with eigenvalue labels permuted: new[i] = old[perm[i]]."""
-    return Sample(sample.s, sample.x, sample.eigvals[perm], sample.status[perm], sample.thr)
-
-
 def sample_discriminant(sample: Sample, i: int, j: int) -> float:
     """D_ij at a sample (spectra.pair_discriminant); nan if i, j cannot collide there."""
     ev, st = sample.eigvals, sample.status
     return float(pair_discriminant(ev[i], ev[j], st[i], st[j]))
 
 
-def curvature_too_large(y_a: Array, y_b: Array, y_c: Array, t_c: float, rho: float, floor: float) -> bool:
-    """True if for some k the quadratic q through (0, y_a), (1, y_b), (t_c, y_c) (t_c outside
-    [0, 1]) bends by more than the certification margin:
-
-        q(t) = y_a + (y_b - y_a) t + kappa t (t - 1),
-        kappa = (y_c - y_a - (y_b - y_a) t_c) / (t_c (t_c - 1)),
-        flag  if  |kappa| / 4 > (1 - rho) min(y_a, y_b) + floor.
-
-    |kappa| / 4 is the largest deviation of q from the chord on [0, 1]; if it is within the
-    margin, q >= rho min(y_a, y_b) - floor on the whole interval.
-    """
-    kappa = (y_c - y_a - (y_b - y_a) * t_c) / (t_c * (t_c - 1.0))
-    return bool(np.any(0.25 * np.abs(kappa) > (1.0 - rho) * np.minimum(y_a, y_b) + floor))
-
-
-def outruns_gaps(ev_a: Array, ev_b: Array, real: Array, rho: float, floor: float) -> bool:
-    """True if some eigenvalue real at both ends moves by more than rho times its gap:
-
-        |lambda_i(b) - lambda_i(a)| > rho min(gap_i(a), gap_i(b)) + floor,
-        gap_i = min over the other real eigenvalues j of |lambda_i - lambda_j|.
-
-    Two real eigenvalues must meet to collide; if none moves by more than a fraction of the
-    distance to its nearest neighbour, none reaches another inside the interval. The test needs
-    no correct labels: a tracking that swaps two eigenvalues passing each other shows a
-    displacement of about their gap, which fails it. It samples geometrically towards every
-    close encounter, so a bubble narrower than the step is entered or narrowed to tol_p.
-    """
-    if real.size < 2:
-        return False
-    ra, rb = ev_a.real[real], ev_b.real[real]
-
-    def gaps(r):
-        d = np.abs(r[:, None] - r[None, :])
-        np.fill_diagonal(d, np.inf)
-        return d.min(axis=1)
-
-    return bool(np.any(np.abs(rb - ra) > rho * np.minimum(gaps(ra), gaps(rb)) + floor))
-
-
 def jordan_vectors(A: Array, lam: float):
-    """(v, w, overlap) at a double eigenvalue lam of A.
+    """(v, w, overlap) at a double eigenvalue lam of the dense A (exhaustive detection).
 
     v: unit right null vector of A - lam I (smallest singular vector), sign fixed so that its
     largest component is positive; w: least-squares solution of (A - lam I) w = v made
@@ -222,17 +157,40 @@ def jordan_vectors(A: Array, lam: float):
     return v, w, float(abs(y @ v))
 
 
+def status_events(a: Sample, b: Sample):
+    """Births (0 -> +-1, paired at b) and deaths (+-1 -> 0, paired at a) on [a, b], and
+    whether the status change is fully explained by them. Excluded modes never take part."""
+    sa, sb = a.status, b.status
+    if np.array_equal(sa, sb):
+        return [], True
+    born, died = (sa == 0) & (sb != 0), (sa != 0) & (sb == 0)
+    bu, bl = np.flatnonzero(born & (sb > 0)), np.flatnonzero(born & (sb < 0))
+    du, dl = np.flatnonzero(died & (sa > 0)), np.flatnonzero(died & (sa < 0))
+    events = [(i, j, "birth") for i, j in conjugate_pairing(b.eigvals, bu, bl, other=a.eigvals)]
+    events += [(i, j, "death") for i, j in conjugate_pairing(a.eigvals, du, dl, other=b.eigvals)]
+    consistent = bu.size == bl.size and du.size == dl.size and not np.any(sa * sb < 0)
+    return events, consistent
+
+
 class _Budget(Exception):
     pass
 
 
-_CLEAN, _SPLIT, _EVENTS = "clean", "split", "events"
+@dataclass(frozen=True)
+class Verdict:
+    """kind: "clean" | "split" | "events"; events [(i, j, "birth" | "death")]; consistent:
+    whether the events explain the status change; split_at: where to sample next (in s)."""
+
+    kind: str
+    events: list
+    consistent: bool
+    split_at: float = math.nan
 
 
 @dataclass
 class StepScan:
-    """Collision detection on one step (see the module docstring). samples: sorted by s, the
-    first with s = 0 is x_a unless a stencil sample from the previous step (s < 0) precedes it;
+    """Collision detection on one step (module docstring). samples: sorted by s; the first with
+    s = 0 is x_a unless an exhaustive stencil sample from the previous step (s < 0) precedes it;
     the last is x_b (s = 1)."""
 
     problem: Problem
@@ -240,15 +198,17 @@ class StepScan:
     samples: list
     params: DetectionParams
     step: int
+    ends_at_event: bool = False
     solves: int = 0
     warnings: list = field(default_factory=list)
+    located: dict = field(default_factory=dict)
     _cache: dict = field(default_factory=dict)
 
     @property
     def _start(self) -> int:
         return 1 if self.samples[0].s < 0.0 else 0
 
-    # ---- samples -------------------------------------------------------------------------
+    # ---- sampler ---------------------------------------------------------------------------
     def insert(self, s: float):
         """Corrector solve at s, new sample tracked to its left neighbour; the samples right of
         it are relabelled to continue it. Returns (index, perm or None)."""
@@ -257,25 +217,50 @@ class StepScan:
         x = self.segment.point(s)
         self.solves += 1
         idx = bisect.bisect([smp.s for smp in self.samples], s)
-        new = make_sample(s, x, self.problem.spectrum(x[:-1], x[-1]), self.params.rel_tol,
-                          reference=self.samples[idx - 1])
+        t = None
+        if self.params.slopes:
+            t = tangent(self.problem, x, self.segment.sigma)
+        new = sample_at(self.problem, s, x, self.params.rel_tol, self.samples[idx - 1], t)
         self.samples.insert(idx, new)
-        perm = match_eigenvalues(new.eigvals, self.samples[idx + 1].eigvals)
+        perm = continuation_perm(new, self.samples[idx + 1])
         if np.array_equal(perm, np.arange(perm.size)):
             return idx, None
         for k in range(idx + 1, len(self.samples)):
-            self.samples[k] = relabel(self.samples[k], perm)
+            self.samples[k] = self.samples[k].relabel(perm)
         return idx, perm
 
     def _narrow(self, a: Sample, b: Sample) -> bool:
         """Nothing left to resolve in [a, b]: |dp| <= tol_p and max|dx| <= sqrt(tol_p) (the
         second keeps an interval that straddles a fold, where p_a ~ p_b by symmetry, open)."""
         tol = self.params.tol_p
-        return (abs(b.p - a.p) <= tol and float(np.max(np.abs(b.x - a.x))) <= np.sqrt(tol)) \
-            or b.s - a.s <= 1e-14
+        return (abs(b.p - a.p) <= tol and float(np.max(np.abs(b.x - a.x))) <= math.sqrt(tol)) \
+            or b.s - a.s <= self.params.min_ds
 
-    # ---- verdicts ------------------------------------------------------------------------
+    # ---- certifier -------------------------------------------------------------------------
+    def verdict(self, idx: int) -> Verdict:
+        """The verdict on the interval samples[idx], samples[idx + 1] (cached by sample ids)."""
+        a, b = self.samples[idx], self.samples[idx + 1]
+        c = None if self.params.slopes else self._stencil(idx)
+        key = (a.uid, b.uid, None if c is None else c.uid)
+        if key not in self._cache:
+            self._cache[key] = self._judge(a, b, c)
+        return self._cache[key]
+
+    def _judge(self, a: Sample, b: Sample, c: Optional[Sample]) -> Verdict:
+        events, consistent = status_events(a, b)
+        mid = 0.5 * (a.s + b.s)
+        if not consistent:
+            return Verdict("split", events, False, mid)
+        if self.params.slopes:
+            t_split = self._hermite_split(a, b, events)
+            if t_split is not None:
+                return Verdict("split", events, True, a.s + t_split * (b.s - a.s))
+        elif c is None or self._uncertified(a, b, c):
+            return Verdict("split", events, True, mid)
+        return Verdict("events" if events else "clean", events, True)
+
     def _stencil(self, idx: int) -> Optional[Sample]:
+        """Exhaustive: the nearest sample beyond [a, b] with the status of the adjacent end."""
         S = self.samples
         a, b = S[idx], S[idx + 1]
         left = S[idx - 1] if idx >= 1 and np.array_equal(S[idx - 1].status, a.status) else None
@@ -284,78 +269,141 @@ class StepScan:
             return left or right
         return left if a.s - left.s <= right.s - b.s else right
 
+    def _candidates(self, a: Sample, b: Sample):
+        """Pairs that could collide over [a, b]: real-real pairs (I, J) and the upper members of
+        kept conjugate pairs, both with unchanged status and no excluded mode."""
+        keep = (a.status == b.status) & ~a.excluded & ~b.excluded
+        real = np.flatnonzero(keep & (a.status == 0))
+        I, J = np.triu_indices(real.size, 1)
+        return real[I], real[J], np.flatnonzero(keep & (a.status > 0)), real
+
     def _uncertified(self, a: Sample, b: Sample, c: Sample) -> bool:
-        """Some pair that could collide bends too much over [a, b] (curvature_too_large)."""
-        same = a.status == b.status
+        """Exhaustive: some pair bends too much over [a, b] in the quadratic through c, or some
+        real eigenvalue outruns its gap."""
+        I, J, upper, real = self._candidates(a, b)
         t_c = (c.s - a.s) / (b.s - a.s)
         floor = 4.0 * max(a.thr, b.thr) ** 2
-        real = np.flatnonzero(same & (a.status == 0))
-        I, J = np.triu_indices(real.size, 1)
-        I, J = real[I], real[J]
-        upper = np.flatnonzero(same & (a.status > 0))
         y = [np.concatenate([(smp.eigvals.real[I] - smp.eigvals.real[J]) ** 2, smp.eigvals.imag[upper] ** 2])
              for smp in (a, b, c)]
-        return (curvature_too_large(*y, t_c, self.params.rho, floor)
-                or outruns_gaps(a.eigvals, b.eigvals, real, self.params.rho, 2.0 * max(a.thr, b.thr)))
+        return (certify.curvature_too_large(*y, t_c, self.params.rho, floor)
+                or certify.outruns_gaps(a.eigvals, b.eigvals, real, self.params.rho, 2.0 * max(a.thr, b.thr)))
 
     @staticmethod
-    def status_events(a: Sample, b: Sample):
-        """Births (0 -> +-1, paired at b) and deaths (+-1 -> 0, paired at a) on [a, b], and
-        whether the status change is fully explained by them."""
-        sa, sb = a.status, b.status
-        if np.array_equal(sa, sb):
-            return [], True
-        born, died = (sa == 0) & (sb != 0), (sa != 0) & (sb == 0)
-        bu, bl = np.flatnonzero(born & (sb > 0)), np.flatnonzero(born & (sb < 0))
-        du, dl = np.flatnonzero(died & (sa > 0)), np.flatnonzero(died & (sa < 0))
-        events = [(i, j, "birth") for i, j in conjugate_pairing(b.eigvals, bu, bl, other=a.eigvals)]
-        events += [(i, j, "death") for i, j in conjugate_pairing(a.eigvals, du, dl, other=b.eigvals)]
-        consistent = bu.size == bl.size and du.size == dl.size and not np.any(sa * sb < 0)
-        return events, consistent
+    def _fast_candidates(a: Sample, b: Sample) -> tuple[Array, Array]:
+        """Fast: pairs (I, J) to certify over [a, b], among eigenvalues with unchanged status and
+        no excluded mode: two real ones, an upper complex one with a real one, and each upper
+        one with its conjugate partner (certify.py)."""
+        keep = (a.status == b.status) & ~a.excluded & ~b.excluded
+        real = np.flatnonzero(keep & (a.status == 0))
+        upper = np.flatnonzero(keep & (a.status > 0))
+        lower = np.flatnonzero(keep & (a.status < 0))
+        I, J = np.triu_indices(real.size, 1)
+        pairs_I, pairs_J = [real[I], np.repeat(upper, real.size)], [real[J], np.tile(real, upper.size)]
+        if upper.size and lower.size:
+            partner = lower[np.argmin(np.abs(a.eigvals[lower][None, :] - np.conj(a.eigvals[upper])[:, None]), axis=1)]
+            pairs_I.append(upper)
+            pairs_J.append(partner)
+        return np.concatenate(pairs_I), np.concatenate(pairs_J)
 
-    def verdict(self, idx: int):
-        """(kind, events, consistent) for the interval samples[idx], samples[idx + 1]; kind is
-        _CLEAN, _SPLIT or _EVENTS, consistent tells whether the events explain the status change."""
+    def _hermite_split(self, a: Sample, b: Sample, events: list) -> Optional[float]:
+        """Fast: None if every candidate pair and every label is certified by the cubic models,
+        else where to split (t in [0, 1]: the worst pair's model minimum, kept off the ends)."""
+        h = b.s - a.s
+        d_a, d_b = a.slopes(self.segment) * h, b.slopes(self.segment) * h
+        I, J = self._fast_candidates(a, b)
+        thr = max(a.thr, b.thr)
+        rho = self.params.rho
+        y_a, y_b, dy_a, dy_b = certify.pair_test_data(a.eigvals, b.eigvals, d_a, d_b, I, J)
+        bad, t_min = certify.uncertified_pairs(y_a, y_b, dy_a, dy_b, rho, 4.0 * thr * thr)
+        labels = ~(a.excluded | b.excluded) & (a.status == b.status)
+        wrong = labels & certify.inconsistent_labels(a.eigvals, b.eigvals, d_a, d_b, rho, 2.0 * thr)
+        if bad.any():
+            worst = np.argmin(np.where(bad, np.minimum(y_a, y_b), np.inf))
+            return float(np.clip(t_min[worst], 0.125, 0.875))
+        if wrong.any():
+            return 0.5
+        others = np.flatnonzero((a.status == b.status) & (a.status >= 0) & ~a.excluded & ~b.excluded)
+        models = [self._event_model(a, b, i, j, d_a, d_b) for i, j, _ in events]
+        for m, D in models:  # one sign change of D per event, and each pair apart from the rest
+            if len(certify.cubic_roots_in_unit(D)) != 1:
+                return 0.5
+            bad, t_min = certify.event_pair_clearance(m, D, a.eigvals[others], b.eigvals[others],
+                                                      d_a[others], d_b[others], rho, 4.0 * thr * thr)
+            if bad.any():
+                return float(np.clip(t_min[np.argmax(bad)], 0.125, 0.875))
+        if len(models) > 1:
+            apart, t_worst = certify.event_pairs_apart(models, rho, 4.0 * thr * thr)
+            if not apart:
+                return float(np.clip(t_worst, 0.125, 0.875))
+        return None
+
+    @staticmethod
+    def _event_model(a: Sample, b: Sample, i: int, j: int, d_a: Array, d_b: Array):
+        """Cubic Hermite coefficients of the event pair's mean (Re) and signed discriminant D
+        (D = (lambda_i - lambda_j)^2 real side, -(Im_i - Im_j)^2 complex side) over [a, b]."""
+        def data(smp: Sample, d: Array):
+            li, lj = smp.eigvals[i], smp.eigvals[j]
+            mean, dmean = 0.5 * (li + lj).real, 0.5 * (d[i] + d[j]).real
+            if smp.status[i] == 0:
+                g = li.real - lj.real
+                return mean, dmean, g * g, 2.0 * g * (d[i].real - d[j].real)
+            im = li.imag - lj.imag
+            return mean, dmean, -im * im, -2.0 * im * (d[i].imag - d[j].imag)
+
+        (m0, dm0, y0, s0), (m1, dm1, y1, s1) = data(a, d_a), data(b, d_b)
+        return (certify.hermite_coefficients(m0, m1, dm0, dm1),
+                certify.hermite_coefficients(y0, y1, s0, s1))
+
+    # ---- locators --------------------------------------------------------------------------
+    def _locate_fast(self, idx: int, i: int, j: int, kind: str) -> Optional[Collision]:
+        """Newton on the minimally augmented system from the cubic model's root; None if it
+        fails or lands outside the interval."""
         a, b = self.samples[idx], self.samples[idx + 1]
-        c = self._stencil(idx)
-        key = (a.uid, b.uid, None if c is None else c.uid)
-        if key not in self._cache:
-            events, consistent = self.status_events(a, b)
-            if not consistent or c is None or self._uncertified(a, b, c):
-                kind = _SPLIT
-            else:
-                kind = _EVENTS if events else _CLEAN
-            self._cache[key] = (kind, events, consistent)
-        return self._cache[key]
+        h = b.s - a.s
+        d_a, d_b = a.slopes(self.segment) * h, b.slopes(self.segment) * h
+        mean, D = self._event_model(a, b, i, j, d_a, d_b)
+        roots = certify.cubic_roots_in_unit(D)
+        t0 = roots[0] if roots else 0.5
+        real_side = a if kind == "birth" else b
+        right, left = real_side.system.right[:, i], real_side.system.left[i]
+        x0 = self.segment.secant_point(a.s + t0 * h)
+        try:
+            found = locate_double_eigenvalue(
+                self.problem, x0, float(certify.cubic_at(mean, t0)), right, left.conj(),
+                self.segment.sigma, self.params.tol_p, self.segment.tol,
+                self.params.locator_iterations)
+        except LocatorFailed as err:
+            self.warnings.append(f"step {self.step}: locator: {err}; splitting")
+            return None
+        s = float(self.segment.sigma @ (found.x - self.segment.x_a)) / self.segment.length
+        lo, hi = min(a.p, b.p), max(a.p, b.p)
+        p = float(found.x[-1])
+        if not (a.s - 1e-9 <= s <= b.s + 1e-9 and lo - self.params.tol_p <= p <= hi + self.params.tol_p):
+            return None
+        return Collision(p=p, kind=kind, eigenvalue=found.lam, eigenvector=found.v,
+                         generalized_eigenvector=found.w, left_right_overlap=found.overlap,
+                         bracket=(p - found.dp, p + found.dp), residual=found.residual,
+                         u=found.x[:-1].copy(), step=self.step, pair=(i, j))
+
+    def _fallback_split(self, a: Sample, b: Sample) -> float:
+        """Where to sample when the fast locator failed: the midpoint, except in the last
+        interval of a step ending on a contact event, where the spectrum is not smooth (a
+        Hertz stiffness ~ delta^(1/2) has an infinite slope at delta = 0), collisions crowd
+        towards the event and Newton cannot converge on one sitting at it: there a sample
+        tol_p / 2 before the end isolates it (collision at the event within tol_p)."""
+        if self.ends_at_event and b.s == 1.0 and abs(b.p - a.p) > self.params.tol_p:
+            return b.s - 0.5 * self.params.tol_p / abs(b.p - a.p) * (b.s - a.s)
+        return 0.5 * (a.s + b.s)
 
     def _event_final(self, a: Sample, b: Sample, i: int, j: int, what: str) -> bool:
-        """The event's bracket is |dp| <= tol_p, or its real side is already a double eigenvalue."""
+        """Exhaustive: the event's bracket is |dp| <= tol_p, or its real side is already a double
+        eigenvalue."""
         real_side = a if what == "birth" else b
         return self._narrow(a, b) or sample_discriminant(real_side, i, j) <= 4.0 * real_side.thr ** 2
 
-    # ---- driver --------------------------------------------------------------------------
-    def _advance(self) -> bool:
-        """Do one refinement action (at least one new sample); False when every interval is final."""
-        for idx in range(self._start, len(self.samples) - 1):
-            kind, events, _ = self.verdict(idx)
-            a, b = self.samples[idx], self.samples[idx + 1]
-            if kind == _CLEAN or self._narrow(a, b):
-                continue
-            if kind == _SPLIT:
-                self.insert(0.5 * (a.s + b.s))
-                return True
-            for i, j, what in events:
-                if not self._event_final(a, b, i, j, what):
-                    n = len(self.samples)
-                    self._refine(idx, i, j)
-                    if len(self.samples) == n:  # no progress: fall back to bisection
-                        self.insert(0.5 * (a.s + b.s))
-                    return True
-        return False
-
     def _refine(self, idx: int, i: int, j: int) -> None:
-        """Illinois on s -> D_ij(x(s)) over samples[idx], samples[idx + 1]; every evaluation
-        stays as a sample. Aborts when the pair loses its labels or its eligibility."""
+        """Exhaustive: Illinois on s -> D_ij(x(s)) over samples[idx], samples[idx + 1]; every
+        evaluation stays as a sample. Aborts when the pair loses its labels or eligibility."""
         a, b = self.samples[idx], self.samples[idx + 1]
         at = {a.s: a, b.s: b}
 
@@ -370,6 +418,37 @@ class StepScan:
         refine_sign_change(f, a.s, sample_discriminant(a, i, j), b.s, sample_discriminant(b, i, j),
                            lambda lo, hi: self._narrow(at[lo], at[hi]))
 
+    # ---- driver ----------------------------------------------------------------------------
+    def _advance(self) -> bool:
+        """Do one refinement action (at least one new sample or one located event); False when
+        every interval is final."""
+        for idx in range(self._start, len(self.samples) - 1):
+            verdict = self.verdict(idx)
+            a, b = self.samples[idx], self.samples[idx + 1]
+            if verdict.kind == "clean" or self._narrow(a, b):
+                continue
+            if verdict.kind == "split":
+                self.insert(verdict.split_at)
+                return True
+            for i, j, what in verdict.events:
+                if self.params.slopes:
+                    key = (a.uid, b.uid, i, j)
+                    if key in self.located:
+                        continue
+                    found = self._locate_fast(idx, i, j, what)
+                    if found is None:
+                        self.insert(self._fallback_split(a, b))
+                    else:
+                        self.located[key] = found
+                    return True
+                if not self._event_final(a, b, i, j, what):
+                    n = len(self.samples)
+                    self._refine(idx, i, j)
+                    if len(self.samples) == n:  # no progress: fall back to bisection
+                        self.insert(0.5 * (a.s + b.s))
+                    return True
+        return False
+
     def run(self) -> list:
         """Refine until every interval is final; return the collisions in branch order."""
         try:
@@ -380,17 +459,21 @@ class StepScan:
                                  "solves exhausted; remaining events unresolved")
         found = []
         for idx in range(self._start, len(self.samples) - 1):
-            kind, events, consistent = self.verdict(idx)
+            verdict = self.verdict(idx)
             a, b = self.samples[idx], self.samples[idx + 1]
-            if not consistent:
+            if not verdict.consistent:
                 self.warnings.append(f"step {self.step}: status change in p=[{a.p:.12g}, {b.p:.12g}] "
                                      "not explained by births and deaths")
-            for i, j, what in events:
-                final = self._event_final(a, b, i, j, what)
-                found.append(self.collision(a, b, i, j, what, resolved=consistent and final))
-        return found
+            for i, j, what in verdict.events:
+                located = self.located.get((a.uid, b.uid, i, j))
+                if located is not None:
+                    found.append(located)
+                    continue
+                final = self._narrow(a, b) if self.params.slopes else self._event_final(a, b, i, j, what)
+                found.append(self.interpolated(a, b, i, j, what, resolved=verdict.consistent and final))
+        return sorted(found, key=lambda c: float(self.segment.sigma @ (np.append(c.u, c.p) - self.segment.x_a)))
 
-    def collision(self, a: Sample, b: Sample, i: int, j: int, kind: str, resolved: bool) -> Collision:
+    def interpolated(self, a: Sample, b: Sample, i: int, j: int, kind: str, resolved: bool) -> Collision:
         """The collision of pair (i, j) bracketed by samples a, b: root of D linear in s."""
         d_a, d_b = sample_discriminant(a, i, j), sample_discriminant(b, i, j)
         t = d_a / (d_a - d_b) if np.isfinite(d_a - d_b) and d_a != d_b else 0.5
@@ -399,7 +482,7 @@ class StepScan:
         mean_a, mean_b = (a.eigvals[i] + a.eigvals[j]).real / 2, (b.eigvals[i] + b.eigvals[j]).real / 2
         lam = float(mean_a + t * (mean_b - mean_a))
         u, p = x[:-1], float(x[-1])
-        v, w, overlap = jordan_vectors(self.problem.stability_matrix(u, p), lam)
+        v, w, overlap = jordan_vectors(dense(self.problem.stability_matrix(u, p)), lam)
         # a sample on the collision itself (real side with D <= 4 thr^2) is its own bracket
         bracket = (min(a.p, b.p), max(a.p, b.p)) if self._narrow(a, b) or not resolved else (p, p)
         return Collision(p=p, kind=kind, eigenvalue=lam, eigenvector=v, generalized_eigenvector=w,
@@ -408,24 +491,25 @@ class StepScan:
                          pair=(i, j), resolved=resolved)
 
 
-def scan_step(problem: Problem, segment: Segment, start: Sample, end_eigvals: Array,
-              params: DetectionParams, step: int, previous: Optional[Sample] = None):
-    """Detect and locate the collisions between start (x_a) and x_b = segment.x_b.
+def scan_step(problem: Problem, segment: Segment, start: Sample, end: Sample,
+              params: DetectionParams, step: int, previous: Optional[Sample] = None,
+              ends_at_event: bool = False):
+    """Detect and locate the collisions between start (x_a) and end (x_b = segment.x_b).
 
-    start: the sample of x_a (its labels are kept); end_eigvals: spectrum at x_b; previous:
-    the accepted point before x_a, used as a stencil (pass None if its step had collisions).
-    Returns (collisions, end sample tracked through the inserted samples, solves, warnings).
+    start: the sample of x_a (its labels are kept); end: the sample of x_b, labels continuing
+    start; previous: the accepted point before x_a, the exhaustive detection's stencil (pass
+    None if its step had collisions); ends_at_event: x_b lies just past a contact event.
+    Returns (collisions, end sample relabelled through the
+    inserted samples, samples solved, warnings).
     """
-    a = replace(start, s=0.0)
-    b = make_sample(1.0, segment.x_b, end_eigvals, params.rel_tol, reference=a)
+    a, b = start.at(0.0), end.at(1.0)
     if not params.enabled:
         return [], b, 0, []
     samples = [a, b]
-    if previous is not None:
-        L = np.linalg.norm(segment.x_b - segment.x_a)
-        s_prev = float(segment.sigma @ (previous.x - segment.x_a)) / L
+    if previous is not None and not params.slopes:
+        s_prev = float(segment.sigma @ (previous.x - segment.x_a)) / segment.length
         if s_prev < 0.0:
-            samples.insert(0, replace(previous, s=s_prev))
-    scan = StepScan(problem, segment, samples, params, step)
+            samples.insert(0, previous.at(s_prev))
+    scan = StepScan(problem, segment, samples, params, step, ends_at_event)
     found = scan.run()
     return found, scan.samples[-1], scan.solves, scan.warnings

@@ -12,25 +12,87 @@ Capping inside the residual (return mapping) is the limit of MODEL.md's procedur
 and equal to it while nothing slides. For the smoothed law J stays exact at the cap: there
 dF_t/dxi = 0 and dF_t/ddelta is the same at fixed xi and at fixed u = xi / t*. For the linear
 law J is the sticking tangent at a sliding contact, and Newton converges only linearly there.
-On commit the step is split at the first contact event inside it (a contact opening or closing,
-or a history reaching its Coulomb limit): the event is located on the branch by secant
-iteration, the state is committed exactly there (reset, first contact, cap), and the core
-re-solves the end of the step from it. The committed history is therefore integrated piecewise
-straight between events and accepted points, with the midpoint rule's O(|dq|^3) error per piece.
+
+Contact events (event_functions): a contact opening or closing (delta changes sign), a history
+reaching its Coulomb limit (t* - |xi| changes sign), and a free disk joining (below). The core
+ends the step on the first event (arclength.py), and commit() commits the state exactly there
+(reset, first contact, cap); the committed history is integrated piecewise straight between
+events and accepted points, with the midpoint rule's O(|dq|^3) error per piece.
+
+Free disks (eps = 0). A disk held by the substrate alone is decoupled from the chain and its
+block of J is singular: the substrate contact's force depends on q only through delta_w = R - y
+and the history increment w . dq (d xi = dx + R dtheta, MODEL.md), so every direction
+orthogonal to e_y and w costs no force (rolling without slip, dx = -R dtheta: an exact zero
+mode), and the disk's generalized force lies in span(e_y, w), so its equations have the same
+exact redundancy (T_i - R F_x,i = 0). Physically the rolling position of such a disk is
+arbitrary. Its gauge is fixed at the committed value: for each null direction m, one of the
+disk's equations (the one the null direction weighs most, redundant there) is replaced by
+kappa m . (q_i - q_c,i) = 0, with kappa the scale of the disk's stiffness.
+A disk counts as free when both its pair contacts carry less than the Newton tolerance: delta
+<= delta_join = (newton_tol / k_n)^(2/3), the overlap at which a Hertz contact carries
+newton_tol. Below it a pair's force is not resolved by the solver anyway (its equation is
+dropped at a residual of at most k_n delta_join^(3/2) = newton_tol), and the disk's position
+would be set by rounding: at eps = 0 the load transmitted along the chain decays geometrically
+(about 0.37 per disk on the paper's scene), and the disks beyond the front touch at overlaps of
+a few units in the last place, which open and close under Newton's updates. The stability
+matrix keeps the physical J; its spectrum is the coupled chain's plus each free disk's block
+(eigensystem), and the free disks' modes are excluded from collision detection (decoupled, they
+cannot form a complex pair with anything; identical free disks even share their eigenvalues).
+A free disk joins the chain when one of its pairs reaches delta_join (a join event); its gauge
+row is dropped. The number of free disks falls as the load spreads (tests/test_free_disks.py).
 """
 from __future__ import annotations
 
-import numpy as np
+from dataclasses import dataclass
 
+import numpy as np
+import scipy.sparse as sp
+
+from diskfriction.continuation.linalg import SingularMatrix, solve
 from diskfriction.continuation.problem import Problem
+from diskfriction.continuation.spectra import Eigensystem, eigensystem
 from diskfriction.symbolic import System
 
-EVENT_TOL = 1e-13
-"""Events are located to |dF_x| <= EVENT_TOL (raw force units)."""
+SPARSE_FROM = 240
+"""Chains with at least this many degrees of freedom (N = 80 with rotation) use sparse J and
+SuperLU; below, dense LAPACK is faster (benchmarks/scaling.py)."""
+
+DERIVATIVE_STEP = (1e-11, 1e-7)
+"""Range of the finite-difference length along the branch (samples.matrix_derivative,
+locate.py): 0.1 of the smallest active overlap, within these bounds [length]."""
 
 
 class EquilibriumError(RuntimeError):
     """No equilibrium could be converged."""
+
+
+@dataclass(frozen=True)
+class FreeDisk:
+    """A disk held by the substrate alone: its disk index, its dofs, its null directions
+    (orthonormal columns of `modes`, in the dofs' order), the equation rows they replace
+    (`rows`), and the stiffness scale kappa of the gauge rows."""
+
+    disk: int
+    dofs: np.ndarray
+    modes: np.ndarray
+    rows: np.ndarray
+    kappa: float
+
+
+def free_modes(w: np.ndarray, friction: bool, disk: int, dofs: np.ndarray, kappa: float) -> FreeDisk:
+    """Null directions of a disk held by the substrate alone: the orthogonal complement of e_y
+    and (with substrate friction) the history increment coefficients w, in the disk's D local
+    dofs (x, y[, theta]); each replaces the equation row it weighs most."""
+    D = w.size
+    span = [np.eye(D)[1]] + ([w / np.linalg.norm(w)] if friction else [])
+    Q = np.linalg.qr(np.column_stack(span), mode="complete")[0]
+    modes = Q[:, len(span):]
+    rows = []
+    for k in range(modes.shape[1]):
+        weights = np.abs(modes[:, k])
+        weights[rows] = -1.0
+        rows.append(int(np.argmax(weights)))
+    return FreeDisk(disk, dofs, modes, np.array(rows, dtype=int), kappa)
 
 
 class DiskEquilibria(Problem):
@@ -41,12 +103,38 @@ class DiskEquilibria(Problem):
         self.system = system
         self.matrix = matrix or system.scene.matrix
         self.newton_tol = newton_tol
-        self.q_c, self.xi_c, self.F_c = q.copy(), xi.copy(), float(F_x)
+        self.sparse = system.ndof >= SPARSE_FROM
+        self._csr = _CsrPattern(system.rows, system.cols, system.ndof) if self.sparse else None
         self.e_x1 = np.zeros(system.ndof)
         self.e_x1[0] = 1.0
-        self.events = 0  # contact events split off so far
-        self.unsplit = 0  # events that could not be located (fixed-F_x solve failed, e.g. at a fold)
-        self._last = (None, None, None)  # (q bytes, xi, J or None) of the last trial q
+        self._last = (None, None, None)  # (q bytes, xi, (F, J values) or None) of the last trial q
+        s = system.scene
+        self.delta_join = (newton_tol / s.k_n) ** (2.0 / 3.0)
+        w = np.empty(2 * system.kernels.D)
+        system.kernels.wall_increment_coeffs(s.R, w)
+        self._wall_w = w[:system.kernels.D].copy()
+        self._kappa = 1.5 * s.k_n * s.delta_w0 ** 0.5  # the substrate's normal stiffness
+        self._set_committed(q, xi, F_x)
+
+    # -- the committed state
+    def _set_committed(self, q: np.ndarray, xi: np.ndarray, F_x: float) -> None:
+        self.q_c, self.xi_c, self.F_c = q.copy(), xi.copy(), float(F_x)
+        self._last = (None, None, None)
+        self.free = self._free_disks(q)
+
+    def _free_disks(self, q: np.ndarray) -> tuple[FreeDisk, ...]:
+        """Disks (other than disk 1, which carries F_x) whose pairs both have delta <= delta_join."""
+        N, D = self.system.N, self.system.kernels.D
+        loose = self.system.overlaps(q)[:N] <= self.delta_join
+        friction = bool(self.system.kernels.WALL_FRICTION)
+        out = [free_modes(self._wall_w, friction, i, np.arange(D) * N + i, self._kappa)
+               for i in range(1, N) if loose[i - 1] and loose[i]]
+        return tuple(d for d in out if d.modes.shape[1])
+
+    @property
+    def free_count(self) -> int:
+        """Free rolling (zero) modes at the committed point, excluded from detection."""
+        return sum(d.modes.shape[1] for d in self.free)
 
     # -- the history and its stiffness at a trial q
     def trial(self, q: np.ndarray, cap: bool = True) -> tuple[np.ndarray, np.ndarray]:
@@ -60,98 +148,120 @@ class DiskEquilibria(Problem):
             self._last = (key, self.trial(q)[0], None)
         return self._last[1]
 
-    def _J(self, q: np.ndarray) -> np.ndarray:
+    def _values(self, q: np.ndarray) -> np.ndarray:
+        """Values of the physical J = -dF/dq at q (pattern system.rows, system.cols)."""
         xi = self._xi(q)
         if self._last[2] is None:
-            self._last = (self._last[0], xi, self.system.jacobian(q, xi))
+            self._last = (self._last[0], xi, self.system.jacobian_values(q, xi))
         return self._last[2]
+
+    def _physical(self, q: np.ndarray, xi: np.ndarray | None = None, row_scale=None):
+        """The physical J at q (trial history unless xi is given), dense or sparse; with
+        row_scale, diag(row_scale) J."""
+        vals = self._values(q) if xi is None else self.system.jacobian_values(q, xi)
+        if self.sparse:
+            return self._csr.matrix(vals, row_scale)
+        J = self._assemble(self.system.rows, self.system.cols, vals)
+        return J if row_scale is None else J * row_scale[:, None]
+
+    def _assemble(self, rows, cols, vals):
+        n = self.system.ndof
+        if self.sparse:
+            return sp.csr_array((vals, (rows, cols)), shape=(n, n))
+        return np.bincount(rows * n + cols, weights=vals, minlength=n * n).reshape(n, n)
 
     # -- Problem protocol
     def residual(self, q, F_x):
-        return self.system.forces(q, self._xi(q), F_x)
+        G = self.system.forces(q, self._xi(q), F_x)
+        for d in self.free:
+            G[d.dofs[d.rows]] = d.kappa * (d.modes.T @ (q[d.dofs] - self.q_c[d.dofs]))
+        return G
 
     def jacobian(self, q, F_x):
-        return -self._J(q)
+        """dG/dq = -J with the free disks' gauge rows."""
+        rows, cols, vals = self.system.rows, self.system.cols, -self._values(q)
+        if self.free:
+            gauge_rows = np.concatenate([d.dofs[d.rows] for d in self.free])
+            keep = ~np.isin(rows, gauge_rows)
+            g_rows = np.concatenate([np.repeat(d.dofs[d.rows], d.dofs.size) for d in self.free])
+            g_cols = np.concatenate([np.tile(d.dofs, d.rows.size) for d in self.free])
+            g_vals = np.concatenate([(d.kappa * d.modes.T).ravel() for d in self.free])
+            rows = np.concatenate([rows[keep], g_rows])
+            cols = np.concatenate([cols[keep], g_cols])
+            vals = np.concatenate([vals[keep], g_vals])
+        return self._assemble(rows, cols, vals)
 
     def dG_dp(self, q, F_x):
         return self.e_x1
 
     def stability_matrix(self, q, F_x):
-        return self.system.stability_matrix(self._J(q), self.matrix)
+        """J or M^-1 J of the physical J (no gauge rows)."""
+        return self._physical(q, row_scale=None if self.matrix == "J" else 1.0 / self.system.mass_diagonal())
 
-    def commit(self, q_old, F_old, q_new, F_new) -> bool:
-        """Commit the step, split at its first contact event. True asks the core to re-solve
-        the step's end: after a split, or when the Coulomb cap changed a history."""
-        try:
-            F_e, q_e = self._first_event(q_new, F_new)
-        except EquilibriumError:
-            self.unsplit += 1
-            F_e = None
-        if F_e is None:
-            return self._set_committed(q_new, F_new)
-        self._set_committed(q_e, F_e)
-        self.events += 1
-        return True
+    def eigensystem(self, q, F_x, vectors: bool = False) -> Eigensystem:
+        """The coupled chain's eigensystem and each free disk's block, the latter excluded."""
+        A = self.stability_matrix(q, F_x)
+        A = A.toarray() if sp.issparse(A) else A
+        if not self.free:
+            return eigensystem(A, vectors)
+        n = A.shape[0]
+        free_dofs = np.concatenate([d.dofs for d in self.free])
+        groups = [np.setdiff1d(np.arange(n), free_dofs)] + [d.dofs for d in self.free]
+        values, excluded = np.empty(n, complex), np.zeros(n, bool)
+        right, left = (np.zeros((n, n), complex), np.zeros((n, n), complex)) if vectors else (None, None)
+        for k, idx in enumerate(groups):
+            part = eigensystem(A[np.ix_(idx, idx)], vectors, count=k == 0)
+            values[idx] = part.values
+            excluded[idx] = k > 0
+            if vectors:
+                right[np.ix_(idx, idx)] = part.right
+                left[np.ix_(idx, idx)] = part.left
+        return Eigensystem(values, right, left, excluded)
 
-    # -- events
-    def _set_committed(self, q, F_x) -> bool:
-        self.xi_c, slid = self.trial(q)
-        self.q_c, self.F_c = q.copy(), float(F_x)
-        self._last = (None, None, None)
-        return bool(slid.any())
+    def derivative_step(self, x) -> float:
+        delta = self.system.overlaps(x[:-1])
+        active = delta[delta > 0]
+        h = 0.1 * float(active.min()) if active.size else DERIVATIVE_STEP[1]
+        return min(max(h, DERIVATIVE_STEP[0]), DERIVATIVE_STEP[1])
 
-    def event_functions(self, q: np.ndarray) -> np.ndarray:
+    def event_functions(self, q, F_x):
         """Per contact: delta, then t* - |xi| of the uncapped history of active contacts (1 for
-        open ones) at q. A strict sign change of either along a step is an event."""
+        open ones), then delta - delta_join of the pairs of free disks (join events), at q. The
+        joins belong to the committed free disks, so the array keeps its length over a step."""
         delta = self.system.overlaps(q)
         xi = self.trial(q, cap=False)[0]
         s = self.system.scene
         margin = s.mu * s.k_n * delta / s.k_t - np.abs(xi)
-        return np.concatenate([delta, np.where(delta > 0, margin, 1.0)])
+        g = np.concatenate([delta, np.where(delta > 0, margin, 1.0)])
+        N = self.system.N
+        joins = [k % N for d in self.free for k in (d.disk - 1, d.disk)]
+        return np.concatenate([g, delta[joins] - self.delta_join])
 
-    def _first_event(self, q_new, F_new):
-        """(F_x, q) just past the first event between the committed point and (q_new, F_new),
-        or (None, None). Contacts at exactly zero at the committed point (touching, or at the
-        Coulomb limit) are not events: the history rule treats them exactly."""
-        g0, g1 = self.event_functions(self.q_c), self.event_functions(q_new)
-        crossing = ((g0 > 0) & (g1 <= 0)) | ((g0 < 0) & (g1 > 0))
-        if not crossing.any():
-            return None, None
-        frac = np.full(g0.shape, np.inf)
-        frac[crossing] = g0[crossing] / (g0[crossing] - g1[crossing])
-        c = int(np.argmin(frac))
-        # Illinois regula falsi in F_x on the equilibrium branch; (F_far, q_far) stays past it
-        F_near, g_near, q_near = self.F_c, g0[c], self.q_c
-        F_far, g_far, q_far = F_new, g1[c], q_new
-        side = 0
-        while abs(F_far - F_near) > EVENT_TOL:
-            F = F_far - g_far * (F_far - F_near) / (g_far - g_near)
-            if not min(F_near, F_far) < F < max(F_near, F_far):
-                F = 0.5 * (F_near + F_far)
-            q = self.solve(q_near + (q_far - q_near) * (F - F_near) / (F_far - F_near), F)
-            g = self.event_functions(q)[c]
-            if (g > 0) == (g0[c] > 0):
-                F_near, g_near, q_near = F, g, q
-                g_far *= 0.5 if side == -1 else 1.0
-                side = -1
-            else:
-                F_far, g_far, q_far = F, g, q
-                g_near *= 0.5 if side == 1 else 1.0
-                side = 1
-        return F_far, q_far
+    def commit(self, q_old, F_old, q_new, F_new) -> bool:
+        """Commit the state at (q_new, F_new). True asks the core to re-solve there: when the
+        Coulomb cap changed a history, or the set of free disks (and so the gauge) changed."""
+        xi, slid = self.trial(q_new)
+        before = {d.disk for d in self.free}
+        self._set_committed(q_new, xi, F_new)
+        return bool(slid.any()) or before != {d.disk for d in self.free}
 
-    def solve(self, q_guess: np.ndarray, F_x: float, max_iter: int = 30) -> np.ndarray:
-        """Equilibrium at fixed F_x from the committed state by Newton's method."""
-        q = q_guess.copy()
-        for _ in range(max_iter):
-            G = self.residual(q, F_x)
-            if np.abs(G).max() <= self.newton_tol:
-                return q
-            try:
-                q = q - np.linalg.solve(self.jacobian(q, F_x), G)
-            except np.linalg.LinAlgError:
-                break
-        raise EquilibriumError(f"no equilibrium at F_x = {F_x:.12g} (residual {np.abs(G).max():.3g})")
+
+class _CsrPattern:
+    """CSR assembly of a fixed triplet pattern (rows, cols, duplicates summed), computed once:
+    a new matrix is a bincount of the values into the pattern's slots."""
+
+    def __init__(self, rows: np.ndarray, cols: np.ndarray, n: int):
+        keys = rows * n + cols
+        unique, self.slot = np.unique(keys, return_inverse=True)
+        self.rows, self.indices = unique // n, unique % n
+        self.indptr = np.searchsorted(self.rows, np.arange(n + 1))
+        self.n = n
+
+    def matrix(self, vals: np.ndarray, row_scale=None) -> sp.csr_array:
+        data = np.bincount(self.slot, weights=vals, minlength=self.rows.size)
+        if row_scale is not None:
+            data *= row_scale[self.rows]
+        return sp.csr_array((data, self.indices, self.indptr), shape=(self.n, self.n))
 
 
 def relax(system: System, q: np.ndarray, xi: np.ndarray, F_x: float, tol: float = 1e-11,
@@ -161,16 +271,19 @@ def relax(system: System, q: np.ndarray, xi: np.ndarray, F_x: float, tol: float 
     relaxation). It converges where Newton cannot start: at the paper's rest state the pairs
     touch at delta = 0 and J has N zero (rolling) modes. Returns (q1, xi1) with xi1 committed."""
     problem = DiskEquilibria(system, q, xi, 0.0)
-    M = np.diag(system.mass_diagonal())
+    problem.free = ()  # relaxation needs no gauge: the mass term regularises the zero modes
+    M = system.mass_diagonal()
     q1, dt = q.copy(), 1.0
     G = problem.residual(q1, F_x)
     r0 = np.linalg.norm(G)
     for _ in range(max_iter):
         if np.abs(G).max() <= tol:
             return q1, problem.trial(q1)[0]
+        K = problem._physical(q1)
+        K = K + (sp.diags_array(M / dt**2) if sp.issparse(K) else np.diag(M / dt**2))
         try:
-            q1 = q1 + np.linalg.solve(-problem.jacobian(q1, F_x) + M / dt**2, G)
-        except np.linalg.LinAlgError:
+            q1 = q1 + solve(K, G)
+        except SingularMatrix:
             break
         G = problem.residual(q1, F_x)
         r = np.linalg.norm(G)

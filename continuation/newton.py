@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .linalg import SingularMatrix, bordered, factorize
 from .problem import Problem
 
 Array = np.ndarray
@@ -31,15 +32,10 @@ class NewtonResult:
     converged: bool
 
 
-def bordered_matrix(problem: Problem, x: Array, border: Array) -> Array:
-    """[[G_u, G_p], [b^T]] at x = (u, p), shape (n+1, n+1)."""
+def bordered_matrix(problem: Problem, x: Array, border: Array):
+    """[[G_u, G_p], [b^T]] at x = (u, p), shape (n+1, n+1); dense or sparse as G_u is."""
     u, p = x[:-1], x[-1]
-    n = u.size
-    M = np.empty((n + 1, n + 1))
-    M[:n, :n] = problem.jacobian(u, p)
-    M[:n, n] = problem.dG_dp(u, p)
-    M[n] = border
-    return M
+    return bordered(problem.jacobian(u, p), problem.dG_dp(u, p), border[:-1], border[-1])
 
 
 def residual_norm(problem: Problem, x: Array) -> float:
@@ -67,8 +63,8 @@ def bordered_newton(problem: Problem, x_target: Array, border: Array,
             break
         rhs = np.append(G, border @ (x - x_target))
         try:
-            x = x - np.linalg.solve(bordered_matrix(problem, x, border), rhs)
-        except np.linalg.LinAlgError:
+            x = x - factorize(bordered_matrix(problem, x, border)).solve(rhs)
+        except SingularMatrix:
             return NewtonResult(x, it, r, False)
     return NewtonResult(x, max_iter, r, False)
 
@@ -85,9 +81,9 @@ def tangent(problem: Problem, x: Array, border: Array) -> Array:
     """Unit tangent t of the branch at x: [[G_u, G_p], [b^T]] t = e_(n+1), t / |t|.
 
     b . t > 0, so passing the previous tangent as b keeps the orientation.
-    Raises numpy.linalg.LinAlgError if the bordered matrix is singular.
+    Raises linalg.SingularMatrix (a numpy.linalg.LinAlgError) if the bordered matrix is singular.
     """
     rhs = np.zeros(x.size)
     rhs[-1] = 1.0
-    t = np.linalg.solve(bordered_matrix(problem, x, border), rhs)
+    t = factorize(bordered_matrix(problem, x, border)).solve(rhs)
     return t / np.linalg.norm(t)

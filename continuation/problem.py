@@ -6,19 +6,28 @@ A(u, p) along it. It knows nothing else about the problem (units, meaning of u, 
 
 Required:
     residual(u, p)  -> G(u, p),        shape (n,)
-    jacobian(u, p)  -> dG/du (u, p),   dense, shape (n, n)
+    jacobian(u, p)  -> dG/du (u, p),   shape (n, n), a dense ndarray or a scipy.sparse matrix
+                                       (the core factorizes it with LAPACK or SuperLU: linalg.py)
     dG_dp(u, p)     -> dG/dp (u, p),   shape (n,)
 Optional hooks (defaults below):
     commit(u_old, p_old, u_new, p_new) -> None | bool
-        Called once when the step (u_old, p_old) -> (u_new, p_new) is accepted, after event
+        Called once when the step (u_old, p_old) -> (u_new, p_new) is accepted, after collision
         detection on that step. A problem that carries state alongside u (e.g. the tangential
         history of contacts) updates it here; until then residual/jacobian must describe a step
         taken from the last committed point. Return True if the commit changed the problem so
         that (u_new, p_new) must be corrected again (the core then re-solves at fixed p_new).
-    stability_matrix(u, p) -> A(u, p), shape (n, n); default dG/du.
-    spectrum(u, p) -> eigenvalues of A(u, p) (complex, any order); default numpy.linalg.eigvals.
-        Override only to use a faster solver for the same matrix: collision eigenvectors are
-        computed from stability_matrix.
+    event_functions(u, p) -> array g or None (default None: no events)
+        Discrete changes of the problem (a contact opening, closing, sliding). An event on a
+        step is a component with g != 0 at the committed point whose sign changes (g = 0 at the
+        end counts as a change from g > 0): the core ends the step on the first event (located
+        on the branch), scans it for collisions, and commits there, so no step and no collision
+        scan straddles a discrete change.
+    stability_matrix(u, p) -> A(u, p), shape (n, n), dense or sparse; default dG/du.
+    eigensystem(u, p, vectors) -> spectra.Eigensystem of A(u, p); default LAPACK dgeev of the
+        dense A. Override to exclude exactly decoupled modes from detection or to use a faster
+        solver for the same matrix.
+    derivative_step(x) -> h: length in x = (u, p) of the finite differences of A along a
+        direction (eigenvalue slopes, the collision locator); default 1e-6 (1 + max|x|).
 """
 from __future__ import annotations
 
@@ -27,6 +36,9 @@ from dataclasses import dataclass
 from typing import Callable, Optional
 
 import numpy as np
+
+from .linalg import dense
+from .spectra import Eigensystem, eigensystem
 
 Array = np.ndarray
 
@@ -39,8 +51,8 @@ class Problem(ABC):
         """G(u, p), shape (n,)."""
 
     @abstractmethod
-    def jacobian(self, u: Array, p: float) -> Array:
-        """dG/du at (u, p), dense (n, n)."""
+    def jacobian(self, u: Array, p: float):
+        """dG/du at (u, p), (n, n): dense ndarray or scipy.sparse."""
 
     @abstractmethod
     def dG_dp(self, u: Array, p: float) -> Array:
@@ -50,13 +62,25 @@ class Problem(ABC):
         """Accept the step (u_old, p_old) -> (u_new, p_new); stateless problems do nothing."""
         return None
 
-    def stability_matrix(self, u: Array, p: float) -> Array:
+    def event_functions(self, u: Array, p: float) -> Optional[Array]:
+        """Event functions (see the module docstring); None: the problem has no events."""
+        return None
+
+    def stability_matrix(self, u: Array, p: float):
         """The matrix A(u, p) whose eigenvalues are tracked; default dG/du."""
         return self.jacobian(u, p)
 
+    def eigensystem(self, u: Array, p: float, vectors: bool = False) -> Eigensystem:
+        """Eigenvalues (and, with `vectors`, normalised left and right vectors) of A(u, p)."""
+        return eigensystem(dense(self.stability_matrix(u, p)), vectors)
+
     def spectrum(self, u: Array, p: float) -> Array:
         """All eigenvalues of A(u, p) (complex array, any order)."""
-        return np.linalg.eigvals(self.stability_matrix(u, p))
+        return self.eigensystem(u, p).values
+
+    def derivative_step(self, x: Array) -> float:
+        """Finite-difference length along a unit direction in x = (u, p)."""
+        return 1e-6 * (1.0 + float(np.max(np.abs(x))))
 
 
 @dataclass(frozen=True)

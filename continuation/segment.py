@@ -44,6 +44,11 @@ class Segment:
             d, norm = np.eye(d.size)[-1], 1.0
         object.__setattr__(self, "sigma", d / norm)
 
+    @property
+    def length(self) -> float:
+        """|x_b - x_a|."""
+        return float(np.linalg.norm(self.x_b - self.x_a))
+
     def secant_point(self, s: float) -> Array:
         """(1 - s) x_a + s x_b."""
         return self.x_a + s * (self.x_b - self.x_a)

@@ -21,8 +21,14 @@ one continuous eigenvalue (up to the arbitrary choice at a collision).
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Optional
+
 import numpy as np
+import scipy.linalg as sla
 from scipy.optimize import linear_sum_assignment
+
+from .linalg import work
 
 Array = np.ndarray
 
@@ -112,3 +118,42 @@ def conjugate_pairing(eigvals: Array, upper: Array, lower: Array,
         cost = cost + np.abs((other[upper][:, None] + other[lower][None, :]) / 2 - (lu + ll) / 2)
     rows, cols = linear_sum_assignment(cost)
     return [(int(upper[r]), int(lower[c])) for r, c in zip(rows, cols)]
+
+
+@dataclass(frozen=True)
+class Eigensystem:
+    """Eigenvalues of a stability matrix A with, optionally, right vectors (columns of `right`,
+    A r_i = lambda_i r_i) and left vectors (rows of `left`, l_i^H A = lambda_i l_i^H) scaled so
+    that l_i^H r_i = 1; `excluded` marks modes kept out of collision detection (exactly
+    decoupled modes such as free rolling disks, whose eigenvalues are degenerate by symmetry
+    and can never become complex: see continuation/disks.py)."""
+
+    values: Array
+    right: Optional[Array] = None
+    left: Optional[Array] = None
+    excluded: Optional[Array] = None
+
+    def permuted(self, perm: Array) -> "Eigensystem":
+        """The same eigensystem with labels new[i] = old[perm[i]]."""
+        pick = lambda a, axis: None if a is None else np.take(a, perm, axis=axis)  # noqa: E731
+        return Eigensystem(self.values[perm], pick(self.right, 1), pick(self.left, 0),
+                           pick(self.excluded, 0))
+
+
+def eigensystem(A: Array, vectors: bool, count: bool = True) -> Eigensystem:
+    """All eigenvalues of the dense matrix A (LAPACK dgeev), with left and right vectors
+    normalised to l_i^H r_i = 1 if `vectors`; `count` books it as a full spectrum (linalg.work)."""
+    work.spectra += count
+    if not vectors:
+        return Eigensystem(np.linalg.eigvals(A).astype(complex))
+    lam, vl, vr = sla.eig(A, left=True, right=True, check_finite=False)
+    left = vl.conj().T
+    scale = np.einsum("ij,ji->i", left, vr)
+    return Eigensystem(lam.astype(complex), vr, left / scale[:, None])
+
+
+def eigenvalue_slopes(system: Eigensystem, dA: Array) -> Array:
+    """d lambda_i = l_i^H dA r_i for a perturbation dA of the matrix (first-order perturbation
+    of simple eigenvalues; infinite at a collision, where the pair's discriminant stays smooth).
+    dA dense or sparse."""
+    return np.einsum("ij,ji->i", system.left, dA @ system.right)

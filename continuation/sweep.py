@@ -51,9 +51,10 @@ class DiskBranch:
 
     F_x (m,); q (m, n); xi (m, 2N) committed history; eigenvalues (m, n) tracked spectrum of
     `matrix`; n_complex (m,); residual (m,) max|F|; leg (m,) 0 = preparation from rest,
-    1 = the requested sweep; collisions of the requested leg, in branch order; status per leg;
-    events: contact events (opening, closing, Coulomb cap) the steps were split at; unsplit:
-    events committed without a split because they could not be located (e.g. at a fold).
+    1 = the requested sweep; free (m,) free rolling modes (disks touching only the substrate,
+    continuation/disks.py), excluded from the collisions; collisions of the requested leg, in
+    branch order; status per leg; events: contact events (opening, closing, Coulomb cap, a
+    free disk joining) the steps were cut at.
     """
 
     F_x: np.ndarray
@@ -63,11 +64,11 @@ class DiskBranch:
     n_complex: np.ndarray
     residual: np.ndarray
     leg: np.ndarray
+    free: np.ndarray
     collisions: tuple[Collision, ...]
     matrix: str
     status: tuple[str, ...]
     events: int
-    unsplit: int
 
     def __len__(self) -> int:
         return self.F_x.size
@@ -90,7 +91,7 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
     F_1 = min(START_FRACTION * system.scene.F_y, 0.5 * legs[0][2])
     q, xi = relax(system, *system.rest_state(), F_1)
     problem = DiskEquilibria(system, q, xi, F_1, matrix, params.newton_tol)
-    rows, collisions, status = [], (), []
+    rows, collisions, status, events = [], (), [], 0
     F_start = F_1
     for leg, a, b in legs:
         direction = 1 if b > a else -1
@@ -106,17 +107,18 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
                 return  # the first point of leg 1 is the last of leg 0
             xi_k = problem.trial(q_k)[0]
             res = np.abs(system.forces(q_k, xi_k, F_x)).max()
-            rows.append((F_x, q_k.copy(), xi_k, eigvals, res, leg))
+            rows.append((F_x, q_k.copy(), xi_k, eigvals, res, leg, problem.free_count))
             if progress is not None:
                 progress(F_x)
 
         branch = continuation(problem, problem.q_c, F_start, core, params.detection, callback=record)
         status.append(branch.status)
+        events += branch.events
         if leg == 1:
             collisions = branch.collisions
         F_start = float(branch.p[-1])
-    F_x, q, xi, eig, res, leg = (np.array(c) for c in zip(*rows))
+    F_x, q, xi, eig, res, leg, free = (np.array(c) for c in zip(*rows))
     n_complex = np.array([count_complex_pairs(e, params.detection.rel_tol) for e in eig])
-    return DiskBranch(F_x, q, xi, eig, n_complex, res, leg, tuple(collisions), matrix,
-                      tuple(status), problem.events, problem.unsplit)
+    return DiskBranch(F_x, q, xi, eig, n_complex, res, leg, free, tuple(collisions), matrix,
+                      tuple(status), events)
 

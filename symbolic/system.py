@@ -63,6 +63,12 @@ class System:
         self.kernels.evaluate_dense(q, xi, F_x, self.params, F, J, Jvals, self.rows, self.cols)
         return F, J
 
+    def jacobian_values(self, q: np.ndarray, xi: np.ndarray) -> np.ndarray:
+        """Values of J = -dF/dq at (rows, cols) (duplicates add up) [force / length]."""
+        F, Jvals = np.empty(self.ndof), np.empty(self.rows.size)
+        self.kernels.evaluate(q, xi, 0.0, self.params, F, Jvals)
+        return Jvals
+
     def jacobian(self, q: np.ndarray, xi: np.ndarray) -> np.ndarray:
         """Dense J = -dF/dq; F_x is a dead load and does not enter it."""
         return self.forces_and_jacobian(q, xi, 0.0)[1]

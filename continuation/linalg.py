@@ -1,0 +1,134 @@
+"""Linear algebra of the core: dense or sparse, chosen by the matrix a problem returns.
+
+Every solve of the core is with a bordered matrix
+
+    [[K, c], [b^T, d]]      K (n x n) dense ndarray or scipy.sparse, c, b (n,), d scalar,
+
+(K = G_u with c = G_p for the corrector and the tangent, K = A - lambda I for the collision
+locator). A dense K is factorized by LAPACK (getrf, O(n^3)); a sparse K by SuperLU on the
+bordered matrix in CSC form (the border adds 2n + 1 entries; for the disk chain, a
+block-tridiagonal K with periodic corners, fill-in stays O(n)). Both factorizations solve with
+the matrix and with its transpose (left null vectors of the locator).
+
+BLAS threads. OpenBLAS starts a thread per core even for 30 x 30 matrices; on a machine where
+anything else runs this triples the wall time of small solves and eigenvalue problems.
+`blas_threads(n)` limits BLAS to one thread below `THREADED_FROM` unknowns (threadpoolctl), where
+threads do not pay: measured on the 2-core machine of docs/continuation.md, dgeev of 300 x 300
+takes 36 ms on one thread and 69 ms on two while another process runs.
+"""
+from __future__ import annotations
+
+import contextlib
+from dataclasses import dataclass
+from typing import Union
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+Array = np.ndarray
+Matrix = Union[Array, sp.spmatrix, sp.sparray]
+
+THREADED_FROM = 1500
+"""Problems with at least this many unknowns let BLAS use every core (dense spectra of
+n ~ 3000 gain from two threads; below that one thread is as fast and immune to load)."""
+
+
+@dataclass
+class Work:
+    """What the core spent since the last reset: full eigendecompositions (dense, O(n^3)),
+    LU factorizations and triangular solves. Printed by benchmarks/scaling.py."""
+
+    spectra: int = 0
+    factorizations: int = 0
+    solves: int = 0
+
+    def reset(self) -> None:
+        self.spectra = self.factorizations = self.solves = 0
+
+
+work = Work()
+
+
+class SingularMatrix(np.linalg.LinAlgError):
+    """A factorization met an exactly singular (or non-finite) matrix."""
+
+
+def is_sparse(K: Matrix) -> bool:
+    return sp.issparse(K)
+
+
+def dense(K: Matrix) -> Array:
+    """K as a dense ndarray (no copy if it is one)."""
+    return K.toarray() if sp.issparse(K) else np.asarray(K)
+
+
+def bordered(K: Matrix, c: Array, b: Array, d: float = 0.0) -> Matrix:
+    """[[K, c], [b^T, d]], dense if K is dense, CSC if K is sparse."""
+    n = K.shape[0]
+    if not sp.issparse(K):
+        M = np.empty((n + 1, n + 1))
+        M[:n, :n] = K
+        M[:n, n] = c
+        M[n, :n] = b
+        M[n, n] = d
+        return M
+    K = sp.coo_array(K)
+    col = np.arange(n)
+    rows = np.concatenate([K.row, col, np.full(n, n), [n]])
+    cols = np.concatenate([K.col, np.full(n, n), col, [n]])
+    vals = np.concatenate([K.data, c, b, [d]])
+    return sp.csc_array((vals, (rows, cols)), shape=(n + 1, n + 1))
+
+
+@dataclass
+class Factorization:
+    """An LU factorization of a square matrix; solve(r) = M^-1 r, solve(r, transpose=True) =
+    M^-T r. Counts its solves in `solves`."""
+
+    lu: object
+    sparse: bool
+    solves: int = 0
+
+    def solve(self, rhs: Array, transpose: bool = False) -> Array:
+        self.solves += 1
+        work.solves += 1
+        if self.sparse:
+            x = self.lu.solve(np.ascontiguousarray(rhs, dtype=float), trans="T" if transpose else "N")
+        else:
+            x = sla.lu_solve(self.lu, rhs, trans=1 if transpose else 0, check_finite=False)
+        if not np.all(np.isfinite(x)):
+            raise SingularMatrix("solve produced non-finite values")
+        return x
+
+
+def factorize(M: Matrix) -> Factorization:
+    """LU of M (dense getrf or sparse SuperLU); raises SingularMatrix if M is singular."""
+    work.factorizations += 1
+    if sp.issparse(M):
+        try:
+            return Factorization(spla.splu(sp.csc_array(M)), True)
+        except RuntimeError as err:  # SuperLU: "Factor is exactly singular"
+            raise SingularMatrix(str(err)) from None
+    M = np.asarray(M, dtype=float)
+    if not np.all(np.isfinite(M)):
+        raise SingularMatrix("matrix has non-finite entries")
+    lu, piv, info = sla.lapack.dgetrf(M)
+    if info > 0:
+        raise SingularMatrix(f"matrix is exactly singular (pivot {info})")
+    return Factorization((lu, piv), False)
+
+
+def solve(M: Matrix, rhs: Array) -> Array:
+    """M^-1 rhs by one factorization."""
+    return factorize(M).solve(rhs)
+
+
+def blas_threads(n: int):
+    """Context limiting BLAS to one thread for problems with fewer than THREADED_FROM unknowns."""
+    if n >= THREADED_FROM:
+        return contextlib.nullcontext()
+    from threadpoolctl import threadpool_limits
+
+    return threadpool_limits(1, user_api="blas")
