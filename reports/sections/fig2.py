@@ -31,7 +31,7 @@ def plot(ctx):
         for F in ctx.settings.loads:
             top.axvline(F, color="k", ls=":", lw=0.7)
         top.set_title(f"{matrix}; dotted: the paper's loads", fontsize=8)
-        top.legend(handles=handles, fontsize=6, loc="upper right", framealpha=0.85)
+        top.legend(handles=handles, fontsize=6, loc="best", framealpha=0.85)
     fig.suptitle(f"Fig. 2, {ctx.scene.name}: spectrum against F_x", fontsize=10)
     fig.tight_layout()
     return fig
