@@ -7,7 +7,7 @@ import math
 from pathlib import Path
 
 from diskfriction.cli.common import (EXIT_FAILED, CommandError, add_scene_argument,
-                                     check_sweep_memory, output_dir, scene_from_args)
+                                     check_sweep_memory, number, output_dir, scene_from_args)
 from diskfriction.cli.progress import Progress
 from diskfriction.scenes.scene import NEGATIVE_LOAD
 
@@ -57,8 +57,8 @@ def run(args: argparse.Namespace) -> int:
     F_from, F_to = parse_range(args.fx) if args.fx is not None else scene.F_x_range
     if args.matrix is not None and args.matrix not in MATRICES:
         raise CommandError(f"bifurcate error: --matrix: must be J or M^-1J (got {args.matrix!r})")
-    if args.ds_max is not None and not (math.isfinite(args.ds_max) and args.ds_max > 0):
-        raise CommandError(f"bifurcate error: --ds-max: must be a positive number (got {args.ds_max!r})")
+    if args.ds_max is not None:
+        number("bifurcate", "ds-max", args.ds_max)
     matrix = MATRICES[args.matrix] if args.matrix else scene.matrix
     out = output_dir("bifurcate", args.out, Path("out") / "bifurcate" / scene.name)
     check_sweep_memory("bifurcate", scene)

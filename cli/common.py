@@ -3,6 +3,7 @@ computed (the output directory, the memory a sweep needs), and bad input as one 
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 from typing import Optional
@@ -34,6 +35,17 @@ def add_scene_argument(parser: argparse.ArgumentParser) -> None:
 def scene_from_args(args: argparse.Namespace) -> Scene:
     """The scene named by the FILE argument, or the paper scene; raises SceneError."""
     return load_scene(args.scene if args.scene is not None else default_scene_path())
+
+
+def number(command: str, option: str, value, zero: bool = False, integer: bool = False):
+    """`value` if it is a finite number > 0 (>= 0 with `zero`; a whole number with `integer`),
+    else a CommandError: ``COMMAND error: --OPTION: must be ... (got VALUE)``, exit 2."""
+    ok = (value is not None and math.isfinite(value) and (value >= 0 if zero else value > 0)
+          and (not integer or value == int(value)))
+    if not ok:
+        what = f"{'an integer' if integer else 'a number'} {'>= 0' if zero else '> 0'}"
+        raise CommandError(f"{command} error: --{option}: must be {what} (got {value!r})")
+    return value
 
 
 def output_dir(command: str, given: Optional[str], default: Path) -> Path:

@@ -14,7 +14,7 @@ import re
 from pathlib import Path
 
 from diskfriction.cli.common import (CommandError, add_scene_argument, check_sweep_memory,
-                                     output_dir, scene_from_args)
+                                     number, output_dir, scene_from_args)
 from diskfriction.cli.progress import Progress
 from diskfriction.scenes.scene import NEGATIVE_LOAD
 
@@ -53,14 +53,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(run=run)
 
 
-def positive(name: str, value, integer: bool = False):
-    ok = value is not None and math.isfinite(value) and value > 0 and (not integer or value == int(value))
-    if not ok:
-        raise CommandError(f"simulate error: --{name}: must be a positive "
-                           f"{'integer' if integer else 'number'} (got {value!r})")
-    return value
-
-
 def parse_loads(text: str) -> list[float]:
     """'F[,F...]' -> distinct positive loads; else a one-line CommandError."""
     try:
@@ -85,22 +77,21 @@ SCHEDULER = re.compile(r"^((tcp|tls|ws|wss|ucx)://)?[^\s:/]+:\d+$")
 def run(args: argparse.Namespace) -> int:
     scene = scene_from_args(args)
     loads = parse_loads(args.fx)
-    positive("t-end", args.t_end)
+    number("simulate", "t-end", args.t_end)
     if args.dt is not None:
-        positive("dt", args.dt)
+        number("simulate", "dt", args.dt)
         if args.dt > args.t_end:
             raise CommandError(f"simulate error: --dt: longer than --t-end = {args.t_end:g}: the "
                                f"run would not take one step (got {args.dt!r})")
     if args.realizations is not None:
-        positive("realizations", args.realizations, integer=True)
+        number("simulate", "realizations", args.realizations, integer=True)
     if args.scheduler is not None and not SCHEDULER.match(args.scheduler):
         raise CommandError(f"simulate error: --scheduler: expected a dask scheduler address "
                            f"[tcp://]HOST:PORT (got {args.scheduler!r})")
     single = args.realizations is None and len(loads) == 1
     if args.amplitude is None:
         args.amplitude = SINGLE_AMPLITUDE if single else ENSEMBLE_AMPLITUDE
-    if not (math.isfinite(args.amplitude) and args.amplitude >= 0):
-        raise CommandError(f"simulate error: --amplitude: must be a number >= 0 (got {args.amplitude!r})")
+    number("simulate", "amplitude", args.amplitude, zero=True)
     out = output_dir("simulate", args.out, Path("out") / "simulate" / scene.name)
     check_sweep_memory("simulate", scene)
     progress = Progress("simulate")

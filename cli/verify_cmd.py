@@ -8,12 +8,11 @@ measured, max M, slid. Writes DIR/verify.json and DIR/verify.md.
 from __future__ import annotations
 
 import argparse
-import math
 from pathlib import Path
 
 from diskfriction.cli.bifurcate_cmd import MATRICES
-from diskfriction.cli.common import (EXIT_FAILED, CommandError, add_scene_argument, check_sweep_memory,
-                                     output_dir, scene_from_args)
+from diskfriction.cli.common import (EXIT_FAILED, CommandError, add_scene_argument,
+                                     check_sweep_memory, number, output_dir, scene_from_args)
 from diskfriction.cli.progress import Progress
 from diskfriction.cli.simulate_cmd import SINGLE_AMPLITUDE
 
@@ -35,10 +34,8 @@ def run(args: argparse.Namespace) -> int:
     scene = scene_from_args(args)
     if args.matrix is not None and args.matrix not in MATRICES:
         raise CommandError(f"verify error: --matrix: must be J or M^-1J (got {args.matrix!r})")
-    if not (math.isfinite(args.t_end) and args.t_end > 0):
-        raise CommandError(f"verify error: --t-end: must be a positive number (got {args.t_end!r})")
-    if not (math.isfinite(args.amplitude) and args.amplitude >= 0):
-        raise CommandError(f"verify error: --amplitude: must be a number >= 0 (got {args.amplitude!r})")
+    number("verify", "t-end", args.t_end)
+    number("verify", "amplitude", args.amplitude, zero=True)
     matrix = MATRICES[args.matrix] if args.matrix else scene.matrix
     out = output_dir("verify", args.out, Path("out") / "verify" / scene.name)
     check_sweep_memory("verify", scene)

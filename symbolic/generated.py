@@ -55,12 +55,16 @@ def damage(path: Path) -> Optional[str]:
     return None
 
 
-def _import(name: str, path: Path) -> ModuleType:
+def _import(name: str, path: Path, then: Callable[[ModuleType], object] = lambda m: None
+            ) -> ModuleType:
+    """Execute `path` as the module `name`, registered in sys.modules, then then(module); on
+    any failure nothing stays registered."""
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module
     try:
         spec.loader.exec_module(module)
+        then(module)
     except BaseException:
         del sys.modules[name]
         raise
@@ -103,12 +107,8 @@ def load_generated(path: Path, name: str, source: Callable[[], str],
     except Exception as error:  # a damaged numba cache: UnpicklingError, EOFError, ValueError...
         del sys.modules[name]
         _repair_numba_cache(module, path, error)
-        module = _import(name, path)  # a fresh module object: fresh dispatchers
-        try:
-            module.warm_up(tick)
-        except BaseException:
-            del sys.modules[name]
-            raise
+        # a fresh module object: fresh dispatchers, not the failed ones
+        module = _import(name, path, lambda fresh: fresh.warm_up(tick))
     return module
 
 
