@@ -61,8 +61,13 @@ def test_the_wheel_installs_only_the_diskfriction_package(installed):
     names = zipfile.ZipFile(wheel).namelist()
     top = {name.split("/")[0] for name in names if ".dist-info/" not in name}
     assert top == {"diskfriction"}
-    for part in ("reports/sections/fig2.py", "reports/compute/branches.py", "scenes/paper.toml",
-                 "symbolic/assembly_src.py", "dynamics/stepper_src.py", "files.py"):
+    tops = [d for d in ROOT.iterdir() if (d / "__init__.py").exists() and d.name != "diskfriction"]
+    folders = {p.parent.relative_to(ROOT).as_posix() for d in tops for p in d.rglob("__init__.py")}
+    assert {"reports/sections", "reports/compute", "cli"} <= folders
+    for folder in folders:  # found, not listed: a new folder cannot be left out
+        assert f"diskfriction/{folder}/__init__.py" in names, folder
+    for part in ("scenes/paper.toml", "symbolic/assembly_src.py", "dynamics/stepper_src.py",
+                 "files.py", "__main__.py"):
         assert f"diskfriction/{part}" in names, part
 
 
