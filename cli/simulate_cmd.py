@@ -44,7 +44,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              "default 1e-10 for one run (leaves decades of linear growth before "
                              "the contacts' nonlinearity at ~1e-6, so sigma can be measured), "
                              "1e-6 for ensembles")
-    parser.add_argument("--dt", type=float, default=None, help="time step (default: from the highest mode)")
+    parser.add_argument("--dt", type=float, default=None,
+                        help="largest time step: the run takes ceil(T / DT) equal steps ending "
+                             "exactly at T (default: 0.05 x 2 / omega_max of the start)")
     parser.add_argument("--realizations", type=int, default=None, metavar="K",
                         help="run K seeded realizations per F_x on dask")
     parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
