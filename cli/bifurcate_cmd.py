@@ -6,8 +6,10 @@ import json
 import math
 from pathlib import Path
 
-from diskfriction.cli.common import EXIT_FAILED, CommandError, add_scene_argument, scene_from_args
-from diskfriction.cli.progress import ProgressBar
+from diskfriction.cli.common import (EXIT_FAILED, CommandError, add_scene_argument,
+                                     check_sweep_memory, number, output_dir, scene_from_args)
+from diskfriction.cli.progress import Progress
+from diskfriction.scenes.scene import NEGATIVE_LOAD
 
 MATRICES = {"J": "J", "M^-1J": "M^-1 J", "M^-1 J": "M^-1 J"}
 
@@ -43,8 +45,8 @@ def parse_range(text: str) -> tuple[float, float]:
     if a is None or not (math.isfinite(a) and math.isfinite(b)):
         raise CommandError(f"bifurcate error: --fx: expected A:B with two numbers (got {text!r})")
     if a < 0 or b < 0:
-        raise CommandError(f"bifurcate error: --fx: F_x must be >= 0, the load pushes disk 1 "
-                           f"along +x (got {text!r})")
+        raise CommandError(f"bifurcate error: --fx: F_x must be >= 0: {NEGATIVE_LOAD} "
+                           f"(got {text!r})")
     if a == b:
         raise CommandError(f"bifurcate error: --fx: empty range (got {text!r})")
     return a, b
@@ -55,35 +57,41 @@ def run(args: argparse.Namespace) -> int:
     F_from, F_to = parse_range(args.fx) if args.fx is not None else scene.F_x_range
     if args.matrix is not None and args.matrix not in MATRICES:
         raise CommandError(f"bifurcate error: --matrix: must be J or M^-1J (got {args.matrix!r})")
-    if args.ds_max is not None and not (math.isfinite(args.ds_max) and args.ds_max > 0):
-        raise CommandError(f"bifurcate error: --ds-max: must be a positive number (got {args.ds_max!r})")
+    if args.ds_max is not None:
+        number("bifurcate", "ds-max", args.ds_max)
     matrix = MATRICES[args.matrix] if args.matrix else scene.matrix
-    out = Path(args.out) if args.out else Path("out") / "bifurcate" / scene.name
+    out = output_dir("bifurcate", args.out, Path("out") / "bifurcate" / scene.name)
+    check_sweep_memory("bifurcate", scene)
 
+    from diskfriction.continuation.arclength import ContinuationError
     from diskfriction.continuation.disks import EquilibriumError
     from diskfriction.continuation.sweep import SweepParams, sweep
-    from diskfriction.continuation.arclength import ContinuationError
     from diskfriction.reports.bifurcation import collision_records, plot_diagram, save_branch
     from diskfriction.symbolic import System
 
-    bar = ProgressBar("bifurcate")
+    progress = Progress("bifurcate")
     total = F_from + abs(F_to - F_from)  # preparation leg plus the sweep
     done = {"F": 0.0, "last": 0.0}
 
-    def progress(F_x: float) -> None:
+    def on_point(F_x: float) -> None:
         done["F"] += abs(F_x - done["last"])
         done["last"] = F_x
-        bar(done["F"] / total, f"F_x = {F_x:.5f}")
+        progress(done["F"] / total, f"F_x = {F_x:.5f}")
 
     try:
-        branch = sweep(System.from_scene(scene), F_from, F_to, matrix,
-                       SweepParams(ds_max=args.ds_max), progress)
-    except (EquilibriumError, ContinuationError) as error:
-        raise CommandError(f"bifurcate error: {scene.source}: {error}", EXIT_FAILED) from None
+        system = System.from_scene(scene, progress.part("kernels"))
+        progress.stage(f"sweep F_x {F_from:g} -> {F_to:g}" + (f" (from rest via {F_from:g})"
+                                                              if F_from else ""))
+        try:
+            branch = sweep(system, F_from, F_to, matrix, SweepParams(ds_max=args.ds_max), on_point)
+        except (EquilibriumError, ContinuationError) as error:
+            raise CommandError(f"bifurcate error: {scene.source}: {error}", EXIT_FAILED) from None
+        progress.stage(f"writing {out}/branch.npz, collisions.json")
+        save_branch(out, branch, scene)
+        progress.stage(f"plotting {out}/diagram.png")
+        plot_diagram(branch, scene, out / "diagram.png")
     finally:
-        bar.close()
-    save_branch(out, branch, scene)
-    plot_diagram(branch, scene, out / "diagram.png")
+        progress.close()
     records = collision_records(branch)
     if args.json:
         print(json.dumps([{k: r[k] for k in ("F_x", "kind", "lambda_re", "lambda_im", "matrix")}

@@ -1,9 +1,15 @@
-"""Helpers shared by the subcommands: the scene argument and the handling of bad input."""
+"""Helpers shared by the subcommands: the scene argument, checks made before anything is
+computed (the output directory, the memory a sweep needs), and bad input as one line."""
 from __future__ import annotations
 
 import argparse
+import math
 import sys
+from pathlib import Path
+from typing import Optional
 
+from diskfriction.errors import OneLineError
+from diskfriction.files import writable
 from diskfriction.scenes.load import SceneError, default_scene_path, load_scene
 from diskfriction.scenes.scene import Scene
 
@@ -31,9 +37,51 @@ def scene_from_args(args: argparse.Namespace) -> Scene:
     return load_scene(args.scene if args.scene is not None else default_scene_path())
 
 
+def number(command: str, option: str, value, zero: bool = False, integer: bool = False):
+    """`value` if it is a finite number > 0 (>= 0 with `zero`; a whole number with `integer`),
+    else a CommandError: ``COMMAND error: --OPTION: must be ... (got VALUE)``, exit 2."""
+    ok = (value is not None and math.isfinite(value) and (value >= 0 if zero else value > 0)
+          and (not integer or value == int(value)))
+    if not ok:
+        what = f"{'an integer' if integer else 'a number'} {'>= 0' if zero else '> 0'}"
+        raise CommandError(f"{command} error: --{option}: must be {what} (got {value!r})")
+    return value
+
+
+def output_dir(command: str, given: Optional[str], default: Path) -> Path:
+    """The output directory, --out or `default`, checked before anything is computed: not
+    empty, not an existing file, and a directory that exists or can be made and in which
+    files can be created. Else a CommandError (one line, exit 2)."""
+    if given == "":
+        raise CommandError(f"{command} error: --out: empty path (got '')")
+    path = Path(given) if given is not None else default
+    shown = repr(str(path))
+    if path.exists() and not path.is_dir():
+        raise CommandError(f"{command} error: --out: not a directory (got {shown})")
+    problem = writable(path)
+    if problem is not None:
+        raise CommandError(f"{command} error: --out: cannot write there: {problem} (got {shown})")
+    return path
+
+
+def check_sweep_memory(command: str, scene: Scene) -> None:
+    """Refuse (one line, exit 2) a scene whose sweeps need more memory than this machine has:
+    continuation is dense in n = ndof (continuation/memory.py)."""
+    from diskfriction.continuation.memory import sweep_bytes
+    from diskfriction.memory import NotEnoughMemory, require_memory
+
+    n = scene.ndof
+    try:
+        require_memory(sweep_bytes(n), f"N = {scene.N}: a sweep of {n} x {n} dense matrices")
+    except NotEnoughMemory as error:
+        raise CommandError(f"{command} error: {scene.source}: {error}") from None
+
+
 def run_command(args: argparse.Namespace) -> int:
-    """Run the chosen subcommand; a SceneError or CommandError becomes its one line on stderr
-    and its exit code (2 for bad input)."""
+    """Run the chosen subcommand. A SceneError, CommandError or OneLineError (no equilibrium,
+    not enough memory, ...) becomes one line on stderr and its exit code; Ctrl-C one line and
+    130; a MemoryError one line and exit 1."""
+    command = getattr(args, "command", "diskfriction")
     try:
         return args.run(args)
     except SceneError as error:
@@ -42,6 +90,12 @@ def run_command(args: argparse.Namespace) -> int:
     except CommandError as error:
         print(error, file=sys.stderr)
         return error.code
+    except OneLineError as error:
+        print(f"{command} error: {error}", file=sys.stderr)
+        return error.exit_code
+    except MemoryError as error:
+        print(f"{command} error: out of memory ({error})", file=sys.stderr)
+        return EXIT_FAILED
     except KeyboardInterrupt:
         print("interrupted: results written so far are kept; rerun to resume", file=sys.stderr)
         return EXIT_INTERRUPTED

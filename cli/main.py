@@ -9,11 +9,24 @@ from __future__ import annotations
 import argparse
 import sys
 
-from diskfriction import __version__
 from diskfriction.cli import bifurcate_cmd, report_cmd, scene_cmd, simulate_cmd, verify_cmd
 from diskfriction.cli.common import run_command
 
 SUBCOMMANDS = (scene_cmd, bifurcate_cmd, simulate_cmd, verify_cmd, report_cmd)
+
+
+class VersionAction(argparse.Action):
+    """--version: prints ``diskfriction VERSION`` and exits; the version is looked up only
+    then (diskfriction.__version__)."""
+
+    def __init__(self, option_strings, dest, **kwargs) -> None:
+        super().__init__(option_strings, dest, nargs=0, help="print the version and exit")
+
+    def __call__(self, parser, namespace, values, option_string=None) -> None:
+        import diskfriction
+
+        print(f"diskfriction {diskfriction.__version__}")
+        parser.exit()
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -29,8 +42,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser = OneLineParser(
         prog="diskfriction",
         description="Bifurcation analysis of frictional disks on a substrate.")
-    parser.add_argument("--version", action="version", version=f"diskfriction {__version__}")
-    subparsers = parser.add_subparsers(metavar="COMMAND", required=True)
+    parser.add_argument("--version", action=VersionAction)
+    subparsers = parser.add_subparsers(metavar="COMMAND", required=True, dest="command")
     for module in SUBCOMMANDS:
         module.register(subparsers)
     return parser

@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from diskfriction.cli.common import CommandError
+from diskfriction.cli.common import CommandError, check_sweep_memory, output_dir
 from diskfriction.scenes.load import default_scene_path, load_scene
 
 
@@ -17,7 +17,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "line per computation. Details: docs/report.md.")
     parser.add_argument("scenes", nargs="*", metavar="SCENE",
                         help="scene TOML files (default: the paper scene, scenes/paper.toml)")
-    parser.add_argument("--out", metavar="DIR", default="out/report",
+    parser.add_argument("--out", metavar="DIR",
                         help="output directory (default: out/report)")
     parser.add_argument("--only", metavar="FIG", action="append",
                         help="build only these sections (fig2, fig3, ..., paper, readings, "
@@ -36,6 +36,9 @@ def run(args: argparse.Namespace) -> int:
 
     scenes = [load_scene(p) for p in args.scenes] or [load_scene(default_scene_path())]
     only = tuple(k.strip() for item in args.only or () for k in item.split(",") if k.strip())
+    if args.only is not None and not only:
+        raise CommandError(f"report error: --only: no section named (got "
+                           f"{','.join(args.only)!r})")
     try:
         sections_named(only)
     except ValueError as error:
@@ -46,9 +49,11 @@ def run(args: argparse.Namespace) -> int:
             settings = with_setting(settings, assignment)
     except SettingError as error:
         raise CommandError(f"report error: {error}") from None
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise CommandError(f"report error: --out: not a directory (got {args.out!r})")
+    if args.cache == "":
+        raise CommandError("report error: --cache: empty path (got '')")
+    for scene in scenes:
+        check_sweep_memory("report", scene)
+    out = output_dir("report", args.out, Path("out/report"))
     log = build_report(scenes, out, only or None, settings,
                        Path(args.cache) if args.cache else None)
     computed = sum(e.status == "computed" for e in log)

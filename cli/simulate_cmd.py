@@ -10,10 +10,13 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 from pathlib import Path
 
-from diskfriction.cli.common import EXIT_FAILED, CommandError, add_scene_argument, scene_from_args
-from diskfriction.cli.progress import ProgressBar
+from diskfriction.cli.common import (CommandError, add_scene_argument, check_sweep_memory,
+                                     number, output_dir, scene_from_args)
+from diskfriction.cli.progress import Progress
+from diskfriction.scenes.scene import NEGATIVE_LOAD
 
 KINDS = ("random-velocity", "random-position", "eigenvector", "none")
 SINGLE_AMPLITUDE = 1e-10
@@ -41,7 +44,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              "default 1e-10 for one run (leaves decades of linear growth before "
                              "the contacts' nonlinearity at ~1e-6, so sigma can be measured), "
                              "1e-6 for ensembles")
-    parser.add_argument("--dt", type=float, default=None, help="time step (default: from the highest mode)")
+    parser.add_argument("--dt", type=float, default=None,
+                        help="largest time step: the run takes ceil(T / DT) equal steps ending "
+                             "exactly at T (default: 0.05 x 2 / omega_max of the start)")
     parser.add_argument("--realizations", type=int, default=None, metavar="K",
                         help="run K seeded realizations per F_x on dask")
     parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
@@ -50,71 +55,84 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(run=run)
 
 
-def positive(name: str, value, integer: bool = False):
-    ok = value is not None and math.isfinite(value) and value > 0 and (not integer or value == int(value))
-    if not ok:
-        raise CommandError(f"simulate error: --{name}: must be a positive "
-                           f"{'integer' if integer else 'number'} (got {value!r})")
-    return value
-
-
 def parse_loads(text: str) -> list[float]:
+    """'F[,F...]' -> distinct positive loads; else a one-line CommandError."""
     try:
         loads = [float(v) for v in text.split(",")]
     except ValueError:
         loads = []
+    if loads and any(F < 0 for F in loads):
+        raise CommandError(f"simulate error: --fx: F_x must be > 0: {NEGATIVE_LOAD} (got {text!r})")
     if not loads or not all(math.isfinite(F) and F > 0 for F in loads):
         raise CommandError(f"simulate error: --fx: expected positive numbers F[,F...] (got {text!r})")
+    repeated = sorted({F for F in loads if loads.count(F) > 1})
+    if repeated:
+        raise CommandError(f"simulate error: --fx: load {repeated[0]:g} given twice; use "
+                           f"--realizations for repeated runs (got {text!r})")
     return loads
+
+
+SCHEDULER = re.compile(r"^((tcp|tls|ws|wss|ucx)://)?[^\s:/]+:\d+$")
+"""A dask scheduler address: [PROTOCOL://]HOST:PORT."""
 
 
 def run(args: argparse.Namespace) -> int:
     scene = scene_from_args(args)
     loads = parse_loads(args.fx)
-    positive("t-end", args.t_end)
+    number("simulate", "t-end", args.t_end)
     if args.dt is not None:
-        positive("dt", args.dt)
+        number("simulate", "dt", args.dt)
+        if args.dt > args.t_end:
+            raise CommandError(f"simulate error: --dt: longer than --t-end = {args.t_end:g}: the "
+                               f"run would not take one step (got {args.dt!r})")
     if args.realizations is not None:
-        positive("realizations", args.realizations, integer=True)
+        number("simulate", "realizations", args.realizations, integer=True)
+    if args.scheduler is not None and not SCHEDULER.match(args.scheduler):
+        raise CommandError(f"simulate error: --scheduler: expected a dask scheduler address "
+                           f"[tcp://]HOST:PORT (got {args.scheduler!r})")
     single = args.realizations is None and len(loads) == 1
     if args.amplitude is None:
         args.amplitude = SINGLE_AMPLITUDE if single else ENSEMBLE_AMPLITUDE
-    if not (math.isfinite(args.amplitude) and args.amplitude >= 0):
-        raise CommandError(f"simulate error: --amplitude: must be a number >= 0 (got {args.amplitude!r})")
-    out = Path(args.out) if args.out else Path("out") / "simulate" / scene.name
-    if single:
-        return single_run(scene, loads[0], args, out)
-    return ensemble_run(scene, loads, args, out)
+    number("simulate", "amplitude", args.amplitude, zero=True)
+    out = output_dir("simulate", args.out, Path("out") / "simulate" / scene.name)
+    check_sweep_memory("simulate", scene)
+    progress = Progress("simulate")
+    try:
+        if single:
+            return single_run(scene, loads[0], args, out, progress)
+        return ensemble_run(scene, loads, args, out, progress)
+    finally:
+        progress.close()
 
 
-def single_run(scene, F_x: float, args, out: Path) -> int:
-    from diskfriction.continuation.disks import EquilibriumError
-    from diskfriction.continuation.arclength import ContinuationError
-    from diskfriction.dynamics.ensemble import equilibrium
+def single_run(scene, F_x: float, args, out: Path, progress: Progress) -> int:
+    from diskfriction.continuation.equilibrium import equilibrium_at
     from diskfriction.dynamics.simulate import simulate, summarize
     from diskfriction.dynamics.start import Perturbation, spectrum
+    from diskfriction.dynamics.stepper import load_stepper
     from diskfriction.reports.simulation import plot_run, save_run
     from diskfriction.reports.units import PaperUnits
     from diskfriction.symbolic import System
 
+    system = System.from_scene(scene, progress.part("kernels"))
+    progress.stage(f"sweep from rest to F_x = {F_x:g}")
+    eq = equilibrium_at(system, F_x)
+    load_stepper(system.kernels, progress.part("stepper"))
+    kind = args.perturbation or ("eigenvector" if spectrum(system, eq.q, eq.xi).pairs.size
+                                 else "random-velocity")
+    progress.stage(f"run to t = {args.t_end:g}")
     try:
-        q, xi = equilibrium(scene, F_x)
-    except (EquilibriumError, ContinuationError) as error:
-        raise CommandError(f"simulate error: {scene.source}: {error}", EXIT_FAILED) from None
-    system = System.from_scene(scene)
-    kind = args.perturbation or ("eigenvector" if spectrum(system, q, xi).pairs.size else "random-velocity")
-    bar = ProgressBar("simulate")
-    try:
-        traj = simulate(system, q, xi, F_x, args.t_end, dt=args.dt,
+        traj = simulate(system, eq.q, eq.xi, F_x, args.t_end, dt=args.dt,
                         perturbation=Perturbation(kind, args.amplitude, args.seed),
-                        progress=lambda t: bar(t / args.t_end, f"t = {t:.1f}"))
+                        progress=lambda t: progress(t / args.t_end, f"t = {t:.1f}"))
     except ValueError as error:  # e.g. an eigenvector perturbation where all eigenvalues are real
         raise CommandError(f"simulate error: {error}") from None
-    finally:
-        bar.close()
     summary = summarize(traj)
+    progress.stage(f"writing {out}/trajectory.npz, summary.json")
     save_run(out, traj, summary)
+    progress.stage(f"plotting {out}/run.png")
     plot_run(traj, scene, out / "run.png")
+    progress.close()
     sm, sp = summary["sigma_measured"], summary["sigma_predicted"]
     print(f"F_x = {F_x:g}, t_end = {args.t_end:g}, dt = {traj.dt:.4g}, {traj.steps} steps, "
           f"perturbation {kind} {args.amplitude:g}")
@@ -125,20 +143,20 @@ def single_run(scene, F_x: float, args, out: Path) -> int:
     return 0
 
 
-def ensemble_run(scene, loads, args, out: Path) -> int:
+def ensemble_run(scene, loads, args, out: Path, progress: Progress) -> int:
     from diskfriction.dynamics.ensemble import run_ensemble
+    from diskfriction.dynamics.stepper import load_stepper
     from diskfriction.reports.units import PaperUnits
+    from diskfriction.symbolic import System
 
+    # compiled here once, so that the workers load it from the cache instead of compiling it
+    load_stepper(System.from_scene(scene, progress.part("kernels")).kernels, progress.part("stepper"))
     K = int(args.realizations or 1)
-    bar = ProgressBar("ensemble")
-    try:
-        ens = run_ensemble(scene, loads, K, args.t_end, out, seed=args.seed, amplitude=args.amplitude,
-                           kind=args.perturbation or "random-velocity", scheduler=args.scheduler,
-                           progress=lambda done, total: bar(done / total, f"{done}/{total} realizations"))
-    except OSError as error:
-        raise CommandError(f"simulate error: --scheduler: {error}", EXIT_FAILED) from None
-    finally:
-        bar.close()
+    progress.stage(f"ensemble: {K} realization(s) x {len(loads)} load(s) to t = {args.t_end:g}")
+    ens = run_ensemble(scene, loads, K, args.t_end, out, seed=args.seed, amplitude=args.amplitude,
+                       kind=args.perturbation or "random-velocity", scheduler=args.scheduler,
+                       progress=lambda done, total: progress(done / total, f"{done}/{total} realizations"))
+    progress.close()
     paper = lambda e: e.value / PaperUnits.of(scene).velocity
     for F in sorted(ens.summaries):
         slid = sum(s["slid"] for s in ens.summaries[F])

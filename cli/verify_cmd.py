@@ -8,12 +8,12 @@ measured, max M, slid. Writes DIR/verify.json and DIR/verify.md.
 from __future__ import annotations
 
 import argparse
-import math
 from pathlib import Path
 
 from diskfriction.cli.bifurcate_cmd import MATRICES
-from diskfriction.cli.common import EXIT_FAILED, CommandError, add_scene_argument, scene_from_args
-from diskfriction.cli.progress import ProgressBar
+from diskfriction.cli.common import (EXIT_FAILED, CommandError, add_scene_argument,
+                                     check_sweep_memory, number, output_dir, scene_from_args)
+from diskfriction.cli.progress import Progress
 from diskfriction.cli.simulate_cmd import SINGLE_AMPLITUDE
 
 
@@ -34,27 +34,33 @@ def run(args: argparse.Namespace) -> int:
     scene = scene_from_args(args)
     if args.matrix is not None and args.matrix not in MATRICES:
         raise CommandError(f"verify error: --matrix: must be J or M^-1J (got {args.matrix!r})")
-    if not (math.isfinite(args.t_end) and args.t_end > 0):
-        raise CommandError(f"verify error: --t-end: must be a positive number (got {args.t_end!r})")
+    number("verify", "t-end", args.t_end)
+    number("verify", "amplitude", args.amplitude, zero=True)
     matrix = MATRICES[args.matrix] if args.matrix else scene.matrix
-    out = Path(args.out) if args.out else Path("out") / "verify" / scene.name
+    out = output_dir("verify", args.out, Path("out") / "verify" / scene.name)
+    check_sweep_memory("verify", scene)
 
     from diskfriction.continuation.arclength import ContinuationError
     from diskfriction.continuation.disks import EquilibriumError
+    from diskfriction.dynamics.stepper import load_stepper
     from diskfriction.dynamics.verify import verify_windows
-    from diskfriction.reports.files import save_json, write_atomic
+    from diskfriction.files import save_json, save_text
+    from diskfriction.symbolic import System
 
-    bar = ProgressBar("verify")
+    progress = Progress("verify")
     try:
-        rows = verify_windows(scene, matrix, args.t_end, args.amplitude,
-                              lambda fraction, F: bar(fraction, f"F_x = {F:.5f}"))
-    except (EquilibriumError, ContinuationError) as error:
-        raise CommandError(f"verify error: {scene.source}: {error}", EXIT_FAILED) from None
+        load_stepper(System.from_scene(scene, progress.part("kernels")).kernels,
+                     progress.part("stepper"))
+        try:
+            rows = verify_windows(scene, matrix, args.t_end, args.amplitude, progress.part("windows"))
+        except (EquilibriumError, ContinuationError) as error:  # the branch cannot start
+            raise CommandError(f"verify error: {scene.source}: {error}", EXIT_FAILED) from None
+        table = format_table(rows, matrix)
+        progress.stage(f"writing {out}/verify.json, verify.md")
+        save_json(out / "verify.json", rows)
+        save_text(out / "verify.md", table)
     finally:
-        bar.close()
-    table = format_table(rows, matrix)
-    save_json(out / "verify.json", rows)
-    write_atomic(out / "verify.md", lambda tmp: tmp.write_text(table))
+        progress.close()
     print(table, end="")
     print(f"wrote {out}/verify.json, verify.md")
     return 0

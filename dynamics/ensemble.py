@@ -3,10 +3,14 @@
 Layout of an ensemble directory (raw units everywhere):
     runs/F_x=<F>/r<k>-<key>.json   one summary per finished realization (dynamics.simulate's
                                    summarize), written atomically the moment it arrives;
-    ensemble.json                  the aggregates below.
+    ensemble.json                  its parameters (scene, t_end, amplitude, perturbation kind,
+                                   loads, seeds, code version) and the aggregates below.
 A realization's key hashes everything it depends on (scene, F_x, seed, t_end, perturbation,
 code version), so a rerun of the same command skips what is on disk, and an interrupt loses
-nothing already finished; a changed parameter writes new files beside the old ones.
+nothing already finished. More realizations, other loads or seeds extend a directory (the
+aggregates then cover what the last run asked for). Another scene, t_end, amplitude,
+perturbation kind or code version is refused (EnsembleMismatch): the runs on disk would not be
+comparable, and ensemble.json would silently describe other runs.
 
 Realizations differ in the seed of a random-velocity perturbation of the same equilibrium
 (the branch point at F_x, reached from rest). Front speeds (paper eq. 9 and Fig. 5):
@@ -19,17 +23,38 @@ slid, fitted by V = a + b F_x (least squares, standard errors from the fit covar
 """
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
+import logging
+import signal
+import threading
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Callable, Optional
 
 import numpy as np
 
+from diskfriction.errors import OneLineError
+from diskfriction.files import save_json, source_digest
 from diskfriction.scenes import Scene
 
 MIN_FRONT_POINTS = 3
+RUN_SOURCES = ("diskfriction.scenes", "diskfriction.symbolic", "diskfriction.continuation",
+               "diskfriction.dynamics")
+"""The packages a realization's result depends on: its code version digests their sources."""
+MUST_MATCH = ("scene", "t_end", "amplitude", "kind", "code")
+"""Parameters an ensemble directory is bound to (module docstring)."""
+
+
+class EnsembleMismatch(OneLineError):
+    """The output directory holds an ensemble with other run parameters; str() is one line."""
+
+    exit_code = 2
+
+
+class SchedulerUnreachable(OneLineError):
+    """The dask scheduler given cannot be reached (or its address is malformed)."""
 
 
 @dataclass(frozen=True)
@@ -138,13 +163,8 @@ def aggregate(summaries: dict) -> Ensemble:
 # ---- running -------------------------------------------------------------------------------
 
 def code_version() -> str:
-    """Digest of the sources a realization's result depends on."""
-    root = Path(__file__).resolve().parents[1]
-    digest = hashlib.sha256()
-    for folder in ("symbolic", "dynamics", "continuation"):
-        for path in sorted((root / folder).glob("*.py")):
-            digest.update(path.read_bytes())
-    return digest.hexdigest()[:12]
+    """Digest of the sources a realization's result depends on (RUN_SOURCES)."""
+    return source_digest(RUN_SOURCES)[:12]
 
 
 def realization_key(scene: Scene, F_x: float, spec: RunSpec, version: str) -> str:
@@ -157,13 +177,32 @@ def run_path(out: Path, F_x: float, index: int, key: str) -> Path:
     return Path(out) / "runs" / f"F_x={F_x!r}" / f"r{index:03d}-{key}.json"
 
 
-def equilibrium(scene: Scene, F_x: float):
-    """(q, xi) of the quasistatic branch from rest at exactly F_x."""
-    from diskfriction.continuation.sweep import sweep
-    from diskfriction.symbolic import System
+def parameters(scene: Scene, loads: list[float], realizations: int, spec: RunSpec,
+               version: str) -> dict:
+    """What ensemble.json records about the runs it aggregates (JSON values, raw units)."""
+    return {"scene": scene.physics_fields(), "t_end": spec.t_end, "amplitude": spec.amplitude,
+            "kind": spec.kind, "loads": [float(F) for F in loads], "realizations": realizations,
+            "seeds": [spec.seed, spec.seed + realizations - 1], "code": version}
 
-    branch = sweep(System.from_scene(scene), 0.0, F_x)
-    return branch.q[-1], branch.xi[-1]
+
+def check_directory(out: Path, wanted: dict) -> None:
+    """Raise EnsembleMismatch if OUT/ensemble.json records other MUST_MATCH parameters."""
+    path = Path(out) / "ensemble.json"
+    if not path.exists():
+        return
+    try:
+        recorded = json.loads(path.read_text()).get("parameters")
+    except (OSError, ValueError, AttributeError):
+        recorded = None
+    if not isinstance(recorded, dict):
+        raise EnsembleMismatch(f"{path} records no run parameters (not an ensemble of this "
+                               f"version); choose another output directory or remove it")
+    for key in MUST_MATCH:
+        if recorded.get(key) != wanted[key]:
+            shown = lambda v: json.dumps(v) if key != "scene" else "another scene"
+            raise EnsembleMismatch(f"{path} holds an ensemble with {key} = {shown(recorded.get(key))}"
+                                   f" (this run: {shown(wanted[key])}); choose another output "
+                                   f"directory or remove it")
 
 
 def run_realization(scene: Scene, F_x: float, q, xi, spec: RunSpec) -> dict:
@@ -185,7 +224,12 @@ def run_ensemble(scene: Scene, F_values, realizations: int, t_end: float, out: P
     dask scheduler at `scheduler` or on a LocalCluster of this machine's cores, skipping those
     already on disk. progress(done, total) after every finished realization."""
     out, version = Path(out), code_version()
-    todo, summaries = [], {float(F): [] for F in F_values}
+    loads = [float(F) for F in F_values]
+    if len(set(loads)) != len(loads):
+        raise ValueError(f"duplicate loads in {loads}")
+    record = parameters(scene, loads, realizations, RunSpec(t_end, amplitude, kind, seed), version)
+    check_directory(out, json.loads(json.dumps(record)))
+    todo, summaries = [], {F: [] for F in loads}
     for F in summaries:
         for k in range(realizations):
             spec = RunSpec(t_end, amplitude, kind, seed + k)
@@ -203,33 +247,57 @@ def run_ensemble(scene: Scene, F_values, realizations: int, t_end: float, out: P
     for runs in summaries.values():  # completion order must not change a single bit
         runs.sort(key=lambda summary: summary["perturbation"]["seed"])
     ensemble = aggregate(summaries)
-    save_json(out / "ensemble.json", ensemble.as_dict())
+    save_json(out / "ensemble.json", {"parameters": record, **ensemble.as_dict()})
     return ensemble
-
-
-def save_json(path: Path, data) -> None:
-    """JSON written atomically (symbolic.kernels.write_atomic): never half a file on disk."""
-    from diskfriction.symbolic.kernels import write_atomic
-
-    write_atomic(Path(path), json.dumps(data, indent=1) + "\n")
 
 
 def done_count(summaries: dict) -> int:
     return sum(map(len, summaries.values()))
 
 
+@contextlib.contextmanager
+def workers_ignore_interrupts():
+    """Ignore SIGINT while worker processes are started, so that they inherit SIG_IGN.
+
+    A terminal sends Ctrl-C to the whole process group: without this every dask worker would
+    die with a KeyboardInterrupt traceback while this process shuts them down in order. The
+    disposition is process-wide, so a Ctrl-C during the start itself (about a second) is
+    ignored too; afterwards this process handles it as before. Only the main thread may set
+    handlers: elsewhere this does nothing."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
 def _run_tasks(scene, todo, summaries, scheduler, tick) -> None:
-    """Submit the missing realizations and write each one the moment it finishes."""
+    """Connect (a scheduler that cannot be reached fails before any sweep), get the equilibrium
+    at every load of `todo`, submit the missing realizations, and write each one the moment it
+    finishes."""
     from dask.distributed import Client, LocalCluster, as_completed
+
+    from diskfriction.continuation.equilibrium import equilibrium_at
+    from diskfriction.symbolic import System
 
     cluster = None
     if scheduler is None:
-        cluster = LocalCluster(n_workers=None, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=40)
-    client = Client(scheduler or cluster)
+        with workers_ignore_interrupts():
+            cluster = LocalCluster(n_workers=None, threads_per_worker=1, processes=True,
+                                   dashboard_address=None, silence_logs=logging.CRITICAL)
     try:
-        states = {F: equilibrium(scene, F) for F in {F for F, _, _ in todo}}
-        futures = {client.submit(run_realization, scene, F, *states[F], spec, pure=False): (F, path)
+        client = Client(scheduler or cluster)
+    except (OSError, ValueError) as error:
+        raise SchedulerUnreachable(f"cannot use the dask scheduler at {scheduler!r}: "
+                                   f"{(str(error).splitlines() or [''])[0]}") from None
+    try:
+        system = System.from_scene(scene)
+        states = {F: equilibrium_at(system, F) for F in dict.fromkeys(F for F, _, _ in todo)}
+        futures = {client.submit(run_realization, scene, F, states[F].q, states[F].xi, spec,
+                                 pure=False): (F, path)
                    for F, spec, path in todo}
         for future in as_completed(futures):
             F, path = futures[future]

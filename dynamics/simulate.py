@@ -1,8 +1,8 @@
 """Runs from a branch point: simulate(...) -> Trajectory, summarize(...) -> dict.
 
     system = System.from_scene(scene)
-    branch = sweep(system, 0.0, F_x)                # ends exactly at F_x
-    traj = simulate(system, branch.q[-1], branch.xi[-1], F_x, t_end=2000.0,
+    eq = equilibrium_at(system, F_x)                # continuation.equilibrium: exactly at F_x
+    traj = simulate(system, eq.q, eq.xi, F_x, t_end=2000.0,
                     perturbation=Perturbation("eigenvector", 1e-6))
     summary = summarize(traj)
 
@@ -11,6 +11,7 @@ Raw units throughout (MODEL.md): time in sqrt(m / k_n ...) units of the scene, n
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Callable, Optional
 
 import numpy as np
@@ -20,6 +21,7 @@ from diskfriction.dynamics.onset import OnsetParams, sliding_onset
 from diskfriction.dynamics.start import Perturbation, Spectrum, perturb, spectrum
 from diskfriction.dynamics.stepper import Stepper
 from diskfriction.dynamics.trajectory import Trajectory
+from diskfriction.memory import require_memory
 from diskfriction.symbolic import System
 
 DT_FRACTION = 0.05
@@ -44,6 +46,41 @@ def choose_dt(spec: Spectrum, fraction: float = DT_FRACTION) -> float:
     return fraction * 2.0 / spec.omega_max
 
 
+@dataclass(frozen=True)
+class RunPlan:
+    """Steps and recording of a run to t_end: n_steps steps of dt [time] end exactly at t_end;
+    a frame every `stride` steps; period [time] of the growing pair (or the median mode)."""
+
+    dt: float
+    n_steps: int
+    stride: int
+    period: float
+
+    @property
+    def frames(self) -> int:
+        return self.n_steps // self.stride + 1
+
+    def frame_bytes(self, ndof: int, N: int) -> float:
+        """Memory of the recorded frames: t, q, v, 5 energy columns, N slips [bytes]."""
+        return 8.0 * self.frames * (1 + 2 * ndof + 5 + N)
+
+
+def plan_run(spec: Spectrum, t_end: float, dt: Optional[float] = None,
+             stride: Optional[int] = None, dt_fraction: float = DT_FRACTION) -> RunPlan:
+    """The steps of a run to t_end. dt is an upper bound (None: choose_dt(spec, dt_fraction)):
+    the run takes n_steps = ceil(t_end / dt) steps of t_end / n_steps, so that no step passes
+    t_end and the last one ends on it. stride None: FRAMES_PER_PERIOD frames per period."""
+    if not (np.isfinite(t_end) and t_end > 0):
+        raise ValueError(f"t_end must be a positive number (got {t_end})")
+    dt_max = choose_dt(spec, dt_fraction) if dt is None else float(dt)
+    if not (np.isfinite(dt_max) and dt_max > 0):
+        raise ValueError(f"dt must be a positive number (got {dt_max})")
+    n_steps = max(1, math.ceil(t_end / dt_max - 1e-9))
+    dt = t_end / n_steps
+    period = oscillation_period(spec.eigenvalues, spec.leading_root.real)
+    return RunPlan(dt, n_steps, stride or max(1, int(period / (FRAMES_PER_PERIOD * dt))), period)
+
+
 def simulate(system: System, q: np.ndarray, xi: np.ndarray, F_x: float, t_end: float,
              dt: Optional[float] = None, stride: Optional[int] = None,
              perturbation: Perturbation = Perturbation(), dt_fraction: float = DT_FRACTION,
@@ -51,32 +88,31 @@ def simulate(system: System, q: np.ndarray, xi: np.ndarray, F_x: float, t_end: f
              ) -> Trajectory:
     """Newton's equations from the equilibrium (q, xi) at load F_x, perturbed, to t_end.
 
-    dt: step [time]; None takes choose_dt(spectrum of M^-1 J at (q, xi), dt_fraction).
-    stride: steps between recorded frames; None records FRAMES_PER_PERIOD per oscillation period.
+    dt: largest step [time] (plan_run: the steps end exactly at t_end); None takes
+    choose_dt(spectrum of M^-1 J at (q, xi), dt_fraction). stride: steps between recorded
+    frames; None records FRAMES_PER_PERIOD per oscillation period. Raises NotEnoughMemory
+    (diskfriction.memory) before anything is allocated when the frames would not fit.
     progress(t) is called between chunks of CHUNK_STEPS steps (never inside the step loop).
     """
-    if not (np.isfinite(t_end) and t_end > 0):
-        raise ValueError(f"t_end must be a positive number (got {t_end})")
     spec = spectrum(system, q, xi)
-    dt = choose_dt(spec, dt_fraction) if dt is None else float(dt)
-    n_steps = max(1, math.ceil(t_end / dt - 1e-9))
-    root = spec.root(0) if spec.pairs.size else 0j
-    period = oscillation_period(spec.eigenvalues, root.real)
-    stride = stride or max(1, int(period / (FRAMES_PER_PERIOD * dt)))
+    plan = plan_run(spec, t_end, dt, stride, dt_fraction)
+    require_memory(plan.frame_bytes(system.ndof, system.N),
+                   f"recording {plan.frames} frames of a run to t_end = {t_end:g}")
     q0, v0, xi0 = perturb(system, q, xi, perturbation, spec)
-    stepper = Stepper(system, q0, v0, xi0, F_x, dt, stride, n_steps // stride + 1)
+    stepper = Stepper(system, q0, v0, xi0, F_x, plan.dt, plan.stride, plan.frames)
     done = 0
-    while done < n_steps:
-        chunk = min(CHUNK_STEPS, n_steps - done)
+    while done < plan.n_steps:
+        chunk = min(CHUNK_STEPS, plan.n_steps - done)
         stepper.advance(chunk)
         done += chunk
         if progress is not None:
             progress(stepper.t)
     fr = stepper.frames()
     breach_t = np.where(stepper.breach_t < 0, np.nan, stepper.breach_t)
-    onset_t, onset_x = sliding_onset(fr.t, fr.q[:, :system.N], period, onset)
+    onset_t, onset_x = sliding_onset(fr.t, fr.q[:, :system.N], plan.period, onset)
+    root = spec.leading_root
     return Trajectory(fr.t, fr.q, fr.v, fr.energy, fr.slip, breach_t, stepper.breach_x.copy(),
-                      onset_t, onset_x, float(F_x), dt, stride, n_steps, system.N,
+                      onset_t, onset_x, float(F_x), plan.dt, plan.stride, plan.n_steps, system.N,
                       spec.eigenvalues, abs(root.imag), root.real, system.overlaps(q),
                       perturbation)
 

@@ -68,9 +68,14 @@ class Spectrum:
         return complex(np.sqrt(complex(self.eigenvalues[self.pairs[k]])))
 
     @property
+    def leading_root(self) -> complex:
+        """sqrt(lambda) of the pair with the largest sigma, 0 if M^-1 J is all real."""
+        return self.root(0) if self.pairs.size else 0j
+
+    @property
     def sigma(self) -> float:
         """Largest growth rate sigma = |Im sqrt(lambda)| over the complex pairs, 0 if none."""
-        return abs(self.root(0).imag) if self.pairs.size else 0.0
+        return abs(self.leading_root.imag)
 
 
 def spectrum(system: System, q: np.ndarray, xi: np.ndarray) -> Spectrum:

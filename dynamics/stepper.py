@@ -37,23 +37,24 @@ cache miss in every new process: a dispatcher's type is its identity.)
 from __future__ import annotations
 
 import hashlib
-import importlib.util
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
+from typing import Optional
 
 import numpy as np
 
+from diskfriction.files import source_digest
 from diskfriction.symbolic import System
-from diskfriction.symbolic.kernels import write_atomic
+from diskfriction.symbolic.generated import Progress, load_generated
 
 _SOURCE = Path(__file__).with_name("stepper_src.py")
+_GENERATOR = ("diskfriction.dynamics.stepper", "diskfriction.dynamics.stepper_src")
 
 _CONSTANTS = ("D", "PAIR_FRICTION", "WALL_FRICTION")
 _FUNCTIONS = ("pair_separation", "pair_overlap", "pair_force", "pair_increment_coeffs",
               "pair_dofs", "wall_force", "wall_increment_coeffs", "wall_dofs", "add_loads",
-              "commit_history")
+              "commit_history", "ring_of_two")
 
 _HEADER = '''"""diskfriction dynamics stepper over {kernels}. Do not edit: regenerated from dynamics/.
 
@@ -83,29 +84,29 @@ _k = _kernel_module()
 '''
 
 
-def stepper_source(kernels: ModuleType) -> tuple[str, str]:
-    """(module name, source) of the stepper compiled against this kernel module."""
-    src = _SOURCE.read_text()
-    digest = hashlib.sha256(f"{kernels.__name__}|{src}".encode()).hexdigest()[:16]
+def stepper_digest(kernels: ModuleType) -> str:
+    """Names the stepper of this kernel module: sha256 of the kernel module's name and the
+    sources of this generator (stepper.py's header, stepper_src.py)."""
+    text = f"{kernels.__name__}|{source_digest(_GENERATOR)}"
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def stepper_source(kernels: ModuleType, digest: str) -> str:
+    """The source of the stepper compiled against this kernel module."""
     bindings = "\n".join(f"{name} = _k.{name}" for name in _CONSTANTS + _FUNCTIONS)
     header = _HEADER.format(kernels=kernels.__name__, kernel_file=Path(kernels.__file__).name,
                             digest=digest, bindings=bindings)
-    return f"diskfriction_stepper_{digest}", header + "\n\n" + src
+    return header + "\n\n" + _SOURCE.read_text()
 
 
-def load_stepper(kernels: ModuleType) -> ModuleType:
-    """The stepper module for this kernel module: written beside it once, then imported."""
-    name, source = stepper_source(kernels)
-    if name in sys.modules:
-        return sys.modules[name]
-    path = Path(kernels.__file__).with_name(f"stepper_{name.rsplit('_', 1)[1]}.py")
-    if not path.exists():
-        write_atomic(path, source)
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-    return module
+def load_stepper(kernels: ModuleType, progress: Optional[Progress] = None) -> ModuleType:
+    """The stepper module for this kernel module: written beside it once, checked on every
+    load and repaired when damaged (symbolic/generated.py), compiled or loaded from numba's
+    cache. progress(stage, fraction) as in generated.load_generated."""
+    digest = stepper_digest(kernels)
+    return load_generated(Path(kernels.__file__).with_name(f"stepper_{digest}.py"),
+                          f"diskfriction_stepper_{digest}",
+                          lambda: stepper_source(kernels, digest), progress)
 
 
 @dataclass

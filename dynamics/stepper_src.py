@@ -1,7 +1,8 @@
 # Stepper source appended verbatim to a generated header (see dynamics/stepper.py).
 # Not importable on its own: numba, np, D, PAIR_FRICTION, WALL_FRICTION and the kernel module's
 # pair_separation, pair_overlap, pair_force, pair_increment_coeffs, pair_dofs, wall_force,
-# wall_increment_coeffs, wall_dofs, add_loads and commit_history are bound by the header.
+# wall_increment_coeffs, wall_dofs, add_loads, commit_history and ring_of_two are bound by the
+# header.
 #
 # One velocity-Verlet step (dynamics/stepper.py explains the scheme), for the layout of
 # MODEL.md: q = (x, y[, theta]) blocks of N, contacts c = pairs 0..N-1 then substrate N..2N-1.
@@ -190,3 +191,16 @@ def advance(q, v, xi, mass, F_x, params, dt, n_steps, stride, scal, ints, slip, 
             if moving:
                 countdown = stride
     return ints[INT_FRAME]
+
+
+def warm_up(progress=None):
+    """Call advance once (no step: frame 0 only) on a 2-disk ring with the argument types
+    Stepper passes, so that numba compiles it now or loads it from its cache
+    (symbolic/generated.py checks that this succeeds). progress(1.0) when done."""
+    N, n = 2, 2 * D
+    params, q = ring_of_two()
+    advance(q, np.zeros(n), np.zeros(2 * N), np.ones(n), 0.0, params, 1e-3, 0, 1, np.zeros(3),
+            np.zeros(2, np.int64), np.zeros(N), np.full(N, -1.0), np.full(N, np.nan),
+            np.empty(1), np.empty((1, n)), np.empty((1, n)), np.empty((1, 5)), np.empty((1, N)))
+    if progress is not None:
+        progress(1.0)

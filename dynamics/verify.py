@@ -9,40 +9,40 @@ from __future__ import annotations
 
 from typing import Callable, Optional
 
+from diskfriction.continuation.equilibrium import equilibrium_at
 from diskfriction.continuation.sweep import DiskBranch, sweep
-from diskfriction.dynamics.ensemble import equilibrium
+from diskfriction.continuation.windows import Window, complex_windows
 from diskfriction.dynamics.simulate import simulate, summarize
 from diskfriction.dynamics.start import Perturbation, spectrum
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
 
 
-def windows(branch: DiskBranch) -> list[tuple[float, float, int]]:
-    """(F_a, F_b, complex pairs) of the intervals between consecutive collisions."""
-    edges = [float(branch.F_x[0])] + [c.p for c in branch.collisions] + [float(branch.F_x[-1])]
-    count, out = int(branch.n_complex[0]), []
-    for k, (a, b) in enumerate(zip(edges, edges[1:])):
-        out.append((a, b, count))
-        if k < len(branch.collisions):
-            count += 1 if branch.collisions[k].kind == "birth" else -1
-    return out
+def windows(branch: DiskBranch) -> list[Window]:
+    """The complex windows of a branch from rest (continuation/windows.py)."""
+    return complex_windows(branch.F_x[0], branch.F_x[-1], branch.n_complex[0],
+                           [(c.p, c.kind) for c in branch.collisions])
 
 
 def verify_windows(scene: Scene, matrix: str, t_end: float, amplitude: float,
-                   progress: Optional[Callable[[float, float], None]] = None) -> list[dict]:
+                   progress: Optional[Callable[[str, Optional[float]], None]] = None) -> list[dict]:
     """One row per window (raw units): window, complex_pairs, F_x, perturbation,
-    sigma_predicted, sigma_measured, M_max, slid, V_cm. progress(fraction, F_x) per run."""
+    sigma_predicted, sigma_measured, M_max, slid, V_cm. progress(stage, fraction or None):
+    the stage "sweep ...", then "runs" with the fraction of windows done."""
+    report = progress or (lambda stage, fraction=None: None)
     system = System.from_scene(scene)
+    report(f"sweep F_x 0 -> {scene.F_x_range[1]:g} ({matrix})", None)
     todo = windows(sweep(system, 0.0, scene.F_x_range[1], matrix))
+    report(f"one run to t = {t_end:g} in each of {len(todo)} windows", 0.0)
     rows = []
     for k, (a, b, pairs) in enumerate(todo):
         F = 0.5 * (a + b)
-        q, xi = equilibrium(scene, F)
-        kind = "eigenvector" if spectrum(system, q, xi).pairs.size else "random-velocity"
-        s = summarize(simulate(system, q, xi, F, t_end, perturbation=Perturbation(kind, amplitude, k)))
+        eq = equilibrium_at(system, F)
+        kind = "eigenvector" if spectrum(system, eq.q, eq.xi).pairs.size else "random-velocity"
+        s = summarize(simulate(system, eq.q, eq.xi, F, t_end,
+                               perturbation=Perturbation(kind, amplitude, k)))
         rows.append({"window": [a, b], "complex_pairs": pairs, "F_x": F, "perturbation": kind,
                      "sigma_predicted": s["sigma_predicted"], "sigma_measured": s["sigma_measured"],
                      "M_max": s["M_max"], "slid": s["slid"], "V_cm": s["V_cm"]})
-        if progress is not None:
-            progress((k + 1) / len(todo), F)
+        report(f"one run to t = {t_end:g} in each of {len(todo)} windows", (k + 1) / len(todo))
     return rows

@@ -40,21 +40,6 @@ def eigen_status_rows(eigenvalues: np.ndarray) -> np.ndarray:
     return np.array([eigen_status(row) for row in eigenvalues])
 
 
-def windows(F_x: np.ndarray, n_complex: np.ndarray) -> list[tuple[float, float]]:
-    """The F_x intervals of the sampled branch where some pair is complex (sample resolution;
-    the located collisions give the exact ends)."""
-    out, start = [], None
-    for F, n in zip(F_x, n_complex):
-        if n > 0 and start is None:
-            start = F
-        elif n == 0 and start is not None:
-            out.append((start, F))
-            start = None
-    if start is not None:
-        out.append((start, F_x[-1]))
-    return out
-
-
 def births_of_pairs_at(branch: dict, F: float) -> list[float]:
     """For each complex pair present at the last branch point <= F (requested leg), the F_x
     at which it was born: following its tracked eigenvalue column back to where it was last

@@ -10,9 +10,11 @@ from pathlib import Path
 import numpy as np
 
 from diskfriction.continuation.sweep import DiskBranch
-from diskfriction.reports.files import save_json, save_npz, write_atomic
+from diskfriction.files import save_json, save_npz, write_atomic
 from diskfriction.reports.units import F_X_LABEL, PaperUnits, eig_label
 from diskfriction.scenes import Scene
+
+DPI = 110
 
 
 def collision_records(branch: DiskBranch) -> list[dict]:
@@ -41,45 +43,147 @@ def save_branch(out: Path, branch: DiskBranch, scene: Scene) -> None:
     save_json(Path(out) / "collisions.json", collision_records(branch))
 
 
+LEG_LINES = {True: "-", False: "--"}
+"""Line style of a leg: loading (F_x rising) solid, unloading dashed."""
+BIRTH, DEATH, BUBBLE = ("^", "C3"), ("v", "C2"), ("D", "C4")
+"""Marker and colour of a located birth, death, and of a bubble narrower than a pixel."""
+
+
+def column_color(k: int):
+    """The colour of tracked eigenvalue column k (the same in both panels)."""
+    import matplotlib
+
+    return matplotlib.colormaps["tab20"](k % 20)
+
+
+def narrow_bubbles(collisions: list[tuple[float, str, float]], pixel: float) -> list[int]:
+    """Indices i where collision i is a birth and i + 1 the death of the same bubble, closer
+    than `pixel` in F_x: drawn as one marker, since neither a line nor shading can show it."""
+    return [i for i in range(len(collisions) - 1)
+            if collisions[i][1] == "birth" and collisions[i + 1][1] == "death"
+            and abs(collisions[i + 1][0] - collisions[i][0]) < pixel]
+
+
+def pair_line(F: np.ndarray, im: np.ndarray, collisions: list[tuple[float, str, float]]
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """(F, Im) of one tracked eigenvalue's line on the Im panel: its samples while it is the
+    upper member of a complex pair (im finite, nan elsewhere), each run of them closed at
+    Im = 0 by the located birth just before it and the death just after it (the collision
+    nearest to the run within the interval between samples), runs separated by nan."""
+    xs, ys = [], []
+    inside = np.isfinite(im)
+    starts = np.flatnonzero(inside & ~np.r_[False, inside[:-1]])
+    stops = np.flatnonzero(inside & ~np.r_[inside[1:], False])
+
+    def nearest(kind, lo, hi, to):
+        found = [p for p, k, _ in collisions if k == kind and min(lo, hi) <= p <= max(lo, hi)]
+        return min(found, key=lambda p: abs(p - to)) if found else None
+
+    for a, b in zip(starts, stops):
+        birth = nearest("birth", F[a - 1], F[a], F[a]) if a > 0 else None
+        death = nearest("death", F[b], F[b + 1], F[b]) if b + 1 < F.size else None
+        xs += ([birth] if birth is not None else []) + list(F[a:b + 1]) + \
+            ([death] if death is not None else []) + [np.nan]
+        ys += ([0.0] if birth is not None else []) + list(im[a:b + 1]) + \
+            ([0.0] if death is not None else []) + [np.nan]
+    return np.array(xs, dtype=float), np.array(ys, dtype=float)
+
+
+def leg_label(leg_id: int, F: np.ndarray) -> str:
+    """"loading 0 -> 0.12", "unloading 0.12 -> 0"; leg 0 is the preparation from rest."""
+    what = "loading" if F[-1] >= F[0] else "unloading"
+    return f"{'preparation: ' if leg_id == 0 else ''}{what} {F[0]:.3g} -> {F[-1]:.3g}"
+
+
 def draw_spectrum(top, bottom, F_x: np.ndarray, lam: np.ndarray, leg: np.ndarray,
-                  collisions: list[tuple[float, str, float]], matrix: str) -> None:
+                  n_complex: np.ndarray, collisions: list[tuple[float, str, float]],
+                  matrix: str) -> list:
     """Im (top) and Re (bottom, symlog) of every eigenvalue `lam` (rows: points at F_x, already
-    in the paper's unit of `matrix`) against F_x; the requested leg (1) in colour, a preparation
-    leg (0) in grey; collisions (F_x, "birth" | "death", double eigenvalue in the same unit)
-    marked ^ (birth) and v (death). Plots only: no physics."""
-    F = np.repeat(F_x[:, None], lam.shape[1], axis=1)
-    for leg_id, style in ((0, dict(color="0.75", s=2)), (1, dict(color="C0", s=3))):
-        rows = leg == leg_id
-        complex_ = rows[:, None] & (np.abs(lam.imag) > 0) & (lam.imag >= 0)
-        top.scatter(F[complex_], lam.imag[complex_], **style)
-        bottom.scatter(F[rows], lam.real[rows], **style)
-    for p, kind, value in collisions:
-        marker, color = ("^", "C3") if kind == "birth" else ("v", "C2")
-        for ax in (top, bottom):
-            ax.axvline(p, color=color, lw=0.4, alpha=0.5)
-        bottom.plot(p, value, marker, color=color, ms=5)
-        top.plot(p, 0.0, marker, color=color, ms=5)
+    in the paper's unit of `matrix`; columns tracked along the branch) against F_x.
+
+    Each tracked eigenvalue is a line in its own colour, on the top panel while it is the upper
+    member of a complex pair; the requested leg (1) in colour, a preparation leg (0) in grey;
+    loading legs solid, unloading dashed. Complex windows of the requested leg are shaded,
+    from its located collisions (F_x, "birth" | "death", double eigenvalue in the same unit):
+    births ^, deaths v, and a bubble narrower than a pixel as one diamond. Returns the legend
+    handles that key all of it (the caller places the legend). Plots only: no physics."""
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    from diskfriction.continuation.windows import complex_spans, complex_windows
+    from diskfriction.reports.analysis import eigen_status_rows
+
+    upper = eigen_status_rows(lam) == 1
+    pixel = np.ptp(F_x) / max(top.get_window_extent().width, 1.0)
+    handles = []
+    for leg_id in (0, 1):
+        rows = np.flatnonzero(leg == leg_id)
+        if not rows.size:
+            continue
+        if leg_id == 1 and rows[0] > 0:  # the requested leg starts where the preparation ended
+            rows = np.r_[rows[0] - 1, rows]
+        F = F_x[rows]
+        style = LEG_LINES[bool(F[-1] >= F[0])]
+        for k in range(lam.shape[1]):
+            color = "0.7" if leg_id == 0 else column_color(k)
+            im = np.where(upper[rows, k], lam.imag[rows, k], np.nan)
+            if np.isfinite(im).any():
+                top.plot(*pair_line(F, im, collisions if leg_id == 1 else []), style,
+                         color=color, lw=1.0, marker=".", ms=2.5)
+            bottom.plot(F, lam.real[rows, k], style, color=color, lw=0.7)
+        handles.append(Line2D([], [], color="0.7" if leg_id == 0 else "k", ls=style,
+                              label=leg_label(leg_id, F)))
+    rows = np.flatnonzero(leg == 1)
+    windows = complex_windows(F_x[rows[0]], F_x[rows[-1]], n_complex[rows[0]],
+                              [(p, kind) for p, kind, _ in collisions])
+    for a, b in complex_spans(windows):
+        top.axvspan(min(a, b), max(a, b), color="C1", alpha=0.12, lw=0)
+    handles.append(Patch(color="C1", alpha=0.25, label="a complex pair (located windows)"))
+    bubbles = narrow_bubbles(collisions, pixel)
+    in_bubble = {i for b in bubbles for i in (b, b + 1)}
+    for i, (p, kind, value) in enumerate(collisions):
+        if i not in in_bubble:
+            marker, color = BIRTH if kind == "birth" else DEATH
+            top.plot(p, 0.0, marker, color=color, ms=5)
+            bottom.plot(p, value, marker, color=color, ms=5)
+    for i in bubbles:
+        (a, _, value), (b, _, _) = collisions[i], collisions[i + 1]
+        inside = (F_x >= min(a, b)) & (F_x <= max(a, b)) & (leg == 1)
+        height = float(np.max(np.where(upper[inside], lam.imag[inside], 0.0), initial=0.0))
+        top.plot(0.5 * (a + b), height, BUBBLE[0], color=BUBBLE[1], ms=5)
+        bottom.plot(0.5 * (a + b), value, BUBBLE[0], color=BUBBLE[1], ms=5)
+    counts = {kind: sum(c[1] == kind for c in collisions) for kind in ("birth", "death")}
+    handles += [Line2D([], [], ls="", marker=BIRTH[0], color=BIRTH[1],
+                       label=f"birth of a pair ({counts['birth']})"),
+                Line2D([], [], ls="", marker=DEATH[0], color=DEATH[1],
+                       label=f"death of a pair ({counts['death']})")]
+    if bubbles:
+        handles.append(Line2D([], [], ls="", marker=BUBBLE[0], color=BUBBLE[1],
+                              label=f"bubble narrower than a pixel ({len(bubbles)})"))
     top.set_ylabel(eig_label("Im", matrix))
     bottom.set_ylabel(eig_label("Re", matrix))
     bottom.set_yscale("symlog", linthresh=1e-4)
     bottom.set_xlabel(F_X_LABEL)
+    return handles
 
 
 def plot_diagram(branch: DiskBranch, scene: Scene, path: Path) -> None:
     """Im(lambda) (top) and Re(lambda) (bottom) of every eigenvalue against F_x in the paper's
-    units (lambda / k_n for the paper's scene), births (^) and deaths (v) marked."""
+    units (lambda / k_n for the paper's scene): draw_spectrum."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     unit = PaperUnits.of(scene).eigenvalue(branch.matrix)
-    fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(7, 6.5))
-    draw_spectrum(top, bottom, branch.F_x, branch.eigenvalues / unit, branch.leg,
-                  [(c.p, c.kind, c.eigenvalue / unit) for c in branch.collisions], branch.matrix)
-    top.set_title(f"{scene.name}: spectrum of {branch.matrix}, N = {scene.N}; "
-                  f"births ^ ({sum(c.kind == 'birth' for c in branch.collisions)}), "
-                  f"deaths v ({sum(c.kind == 'death' for c in branch.collisions)})", fontsize=9)
-    fig.tight_layout()
-    write_atomic(Path(path), lambda tmp: fig.savefig(tmp, dpi=110, format="png"))
+    fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(10, 7), dpi=DPI)
+    handles = draw_spectrum(top, bottom, branch.F_x, branch.eigenvalues / unit, branch.leg,
+                            branch.n_complex,
+                            [(c.p, c.kind, c.eigenvalue / unit) for c in branch.collisions],
+                            branch.matrix)
+    top.set_title(f"{scene.name}: spectrum of {branch.matrix}, N = {scene.N}", fontsize=9)
+    top.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    fig.subplots_adjust(left=0.095, right=0.76, bottom=0.08, top=0.95, hspace=0.06)  # fixed:
+    # tight_layout would measure every label first, a third of the plot's time
+    write_atomic(Path(path), lambda tmp: fig.savefig(tmp, dpi=DPI, format="png"))
     plt.close(fig)

@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Callable, Optional
 
 from diskfriction.reports.cache import ResultCache, cache_key, default_cache_dir
-from diskfriction.reports.files import write_atomic
+from diskfriction.files import save_text, write_atomic
 from diskfriction.reports.registry import COMPUTATIONS, ComputationFailed, Need, Section
 from diskfriction.reports.sections import SECTIONS
 from diskfriction.reports.settings import Settings
@@ -133,7 +133,10 @@ class _Runner:
 
     def _compute(self, comp, need: Need, key: str) -> tuple[dict, bool]:
         """Run it; a function with a `workdir` parameter gets a directory of its own beside
-        the cache (not part of the key: it is derived from it)."""
+        the cache (not part of the key: it is derived from it). ComputationFailed and
+        NoEquilibrium (a load beyond the branch from rest) are physics failures, cached."""
+        from diskfriction.continuation.equilibrium import NoEquilibrium
+
         params = dict(need.params)
         if "workdir" in inspect.signature(comp.function).parameters:
             params["workdir"] = str(self.cache.directory / "work" / comp.name / key[:16])
@@ -141,6 +144,8 @@ class _Runner:
             return comp.function(need.scene, **params), True
         except ComputationFailed as error:
             return {ERROR: str(error)}, error.cache
+        except NoEquilibrium as error:
+            return {ERROR: str(error)}, True
         except Exception as error:  # a bug: shown in the report, never cached
             last = traceback.extract_tb(error.__traceback__)[-1]
             return {ERROR: f"{type(error).__name__}: {error} ({Path(last.filename).name}:{last.lineno})"}, False
@@ -176,7 +181,7 @@ def build_report(scenes: list[Scene], out: Path, only: Optional[tuple[str, ...]]
             body.append(section.render(ctx))
         parts.append("\n".join(body))
     text = _title(scenes, sections) + "\n".join(parts) + _appendix(runner.log)
-    write_atomic(out / "report.md", lambda tmp: tmp.write_text(text))
+    save_text(out / "report.md", text)
     return runner.log
 
 

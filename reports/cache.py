@@ -2,7 +2,7 @@
 
 key = sha256 of the canonical JSON of
   computation   its registered name;
-  scene         every field of the Scene dataclass that enters physics (all but `name` and
+  scene         Scene.physics_fields(): every field that enters physics (all but `name` and
                 `source`, so renaming or moving a scene file reuses its results);
   params        the computation's parameters (JSON values);
   code          a digest of the source files the computation depends on (its own module and
@@ -13,60 +13,27 @@ allow_pickle=False: nothing in the cache is ever evaluated as code.
 """
 from __future__ import annotations
 
-import dataclasses
 import hashlib
-import importlib.util
 import json
 import os
 from pathlib import Path
-from typing import Iterable
 
 import numpy as np
 
-from diskfriction.reports.files import write_atomic
+from diskfriction.files import CACHE_VARIABLE, cache_root, write_atomic
 from diskfriction.scenes import Scene
 
 META = "__meta__"
-NOT_PHYSICS = ("name", "source")
 
 
 def default_cache_dir(out: Path) -> Path:
-    """$DISKFRICTION_CACHE/report if that variable is set, else OUT/.cache."""
-    root = os.environ.get("DISKFRICTION_CACHE")
-    return Path(root) / "report" if root else Path(out) / ".cache"
-
-
-def scene_fields(scene: Scene) -> dict:
-    """The scene's dataclass fields that enter physics, as JSON values."""
-    fields = dataclasses.asdict(scene)
-    for key in NOT_PHYSICS:
-        fields.pop(key)
-    return fields
-
-
-def _module_files(module: str) -> list[Path]:
-    """The .py files of a module, or of every module of a package (recursively)."""
-    spec = importlib.util.find_spec(module)
-    if spec is None or spec.origin is None:
-        raise ValueError(f"cannot find the sources of {module!r}")
-    origin = Path(spec.origin)
-    if spec.submodule_search_locations:  # a package: all its sources
-        return sorted(p for p in origin.parent.rglob("*.py") if "__pycache__" not in p.parts)
-    return [origin]
-
-
-def code_version(modules: Iterable[str]) -> str:
-    """sha256 over the names and contents of the source files of `modules`."""
-    digest = hashlib.sha256()
-    for module in sorted(set(modules)):
-        for path in _module_files(module):
-            digest.update(f"{module}:{path.name}\0".encode())
-            digest.update(path.read_bytes())
-    return digest.hexdigest()
+    """report/ in the cache directory (files.cache_root) if $DISKFRICTION_CACHE is set, else
+    OUT/.cache."""
+    return cache_root() / "report" if os.environ.get(CACHE_VARIABLE) else Path(out) / ".cache"
 
 
 def cache_key(computation: str, scene: Scene, params: dict, code: str) -> str:
-    text = json.dumps({"computation": computation, "scene": scene_fields(scene),
+    text = json.dumps({"computation": computation, "scene": scene.physics_fields(),
                        "params": params, "code": code}, sort_keys=True, allow_nan=True)
     return hashlib.sha256(text.encode()).hexdigest()
 

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Callable
 
-from diskfriction.reports.cache import code_version
+from diskfriction.files import source_digest
 from diskfriction.scenes import Scene
 
 SWEEP_DEPS = ("diskfriction.scenes", "diskfriction.symbolic", "diskfriction.continuation")
@@ -40,7 +40,7 @@ class Computation:
 
     @cached_property
     def code(self) -> str:
-        return code_version((self.function.__module__, "diskfriction.reports.cache") + self.depends)
+        return source_digest((self.function.__module__, "diskfriction.reports.cache") + self.depends)
 
 
 COMPUTATIONS: dict[str, Computation] = {}

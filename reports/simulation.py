@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from diskfriction.dynamics.trajectory import Trajectory
-from diskfriction.reports.files import save_json, save_npz, write_atomic
+from diskfriction.files import save_json, save_npz, write_atomic
 from diskfriction.reports.units import PaperUnits
 from diskfriction.scenes import Scene
 

@@ -15,7 +15,8 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Callable, Iterator
 
-from diskfriction.scenes.scene import FRICTION_KINDS, MATRICES, TANGENTIAL_LAWS, Effects, Scene
+from diskfriction.scenes.scene import (FRICTION_KINDS, MATRICES, NEGATIVE_LOAD, TANGENTIAL_LAWS,
+                                       Effects, Scene)
 
 FILE_KEY = "<file>"
 INT64 = (-(2**63), 2**63 - 1)
@@ -149,10 +150,13 @@ def _disk_count(value: Any) -> int:
 
 
 def _load_range(value: Any) -> tuple[float, float]:
-    """F_x: an array [start, stop] of two finite numbers with start < stop."""
+    """F_x: an array [start, stop] of two finite numbers with 0 <= start < stop (NEGATIVE_LOAD
+    says why not below 0)."""
     if len(_expect(value, (list,), "an array [start, stop]")) != 2:
         raise _Invalid(f"expected exactly two numbers [start, stop], not {len(value)}")
     start, stop = map(_number, value)
+    if start < 0:
+        raise _Invalid(f"must be >= 0: {NEGATIVE_LOAD}")
     if start == stop:
         raise _Invalid("empty range: start == stop")
     if start > stop:
@@ -215,7 +219,8 @@ SCHEMA: dict[str, _Key] = {
     "contacts.k_t": _Key(_positive, "Mindlin tangential stiffness [force / length^(3/2)]"),
     "contacts.mu": _Key(_non_negative, "friction coefficient (0 turns friction off)"),
     "load.F_y": _Key(_positive, "downward force on every disk [force]"),
-    "load.F_x": _Key(_load_range, "quasistatic range [start, stop] of the force on disk 1"),
+    "load.F_x": _Key(_load_range, "quasistatic range [start, stop], 0 <= start < stop, of the "
+                                  "force on disk 1"),
     "effects.tangential": _Key(_effect_choice(TANGENTIAL_LAWS, "tangential law"),
                                " | ".join(TANGENTIAL_LAWS)),
     "effects.friction": _Key(_friction_kinds,

@@ -5,10 +5,14 @@ masses in units of m, stiffnesses k_n [force / length^(3/2)], forces [force].
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
 TANGENTIAL_LAWS = ("mindlin-smooth", "mindlin-linear", "none")
+NEGATIVE_LOAD = ("a negative load is the mirror image of a positive one (x -> -x, theta -> "
+                 "-theta, disk i -> disk 2 - i mod N), so use |F_x| (docs/physics.md)")
+"""Why F_x < 0 is refused, by the scene loader and by every command."""
 FRICTION_KINDS = ("disk-disk", "substrate")
 MATRICES = ("J", "M^-1 J")
 
@@ -97,3 +101,11 @@ class Scene:
     @property
     def ndof(self) -> int:
         return self.N * self.resolved_effects.dof_per_disk
+
+    def physics_fields(self) -> dict:
+        """Every field that enters physics (all but ``name`` and ``source``, so renaming or
+        moving a scene file changes nothing), as JSON values: what cache keys record."""
+        fields = dataclasses.asdict(self)
+        del fields["name"], fields["source"]
+        fields["F_x_range"] = list(fields["F_x_range"])
+        return fields

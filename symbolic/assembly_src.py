@@ -227,3 +227,37 @@ def commit_history(xi0, dxi, delta0, delta1, params, cap, xi1, slid):
             slid[c] = True
             n_slid += 1
     return n_slid
+
+
+def ring_of_two():
+    """(params, q) of a 2-disk ring slightly pressed into the substrate: a state to warm up on."""
+    params = np.array([0.5, 2000.0, 4000.0 / 7.0, 10.0, 0.1, 2.0])  # (R, k_n, k_t, mu, F_y, L)
+    q = np.zeros(2 * D)
+    q[:2] = (0.5, 1.5)
+    q[2:4] = 0.499
+    return params, q
+
+
+def warm_up(progress=None):
+    """Call each compiled entry point of System once, on a 2-disk ring, with the argument types
+    System passes (C-contiguous float64 arrays, a float load, the int64 pattern, a bool cap):
+    numba compiles each now, or loads it from its cache (symbolic/generated.py checks that this
+    succeeds). progress(fraction) after each call."""
+    N, n = 2, 2 * D
+    params, q0 = ring_of_two()
+    q1 = q0 + 1e-4
+    F, J, xi, slid = np.empty(n), np.empty((n, n)), np.zeros(2 * N), np.empty(2 * N, np.bool_)
+    delta0, delta1, dxi, xi1 = np.empty(2 * N), np.empty(2 * N), np.empty(2 * N), np.empty(2 * N)
+    rows, cols = jacobian_pattern(N)
+    Jvals = np.empty(rows.size)
+    calls = [lambda: forces(q0, xi, 0.0, params, F),
+             lambda: evaluate(q0, xi, 0.0, params, F, Jvals),
+             lambda: evaluate_dense(q0, xi, 0.0, params, F, J, Jvals, rows, cols),
+             lambda: overlaps(q0, params, delta0),
+             lambda: overlaps(q1, params, delta1),
+             lambda: history_increment(q0, q1, params, dxi),
+             lambda: commit_history(xi, dxi, delta0, delta1, params, True, xi1, slid)]
+    for k, call in enumerate(calls):
+        call()
+        if progress is not None:
+            progress((k + 1) / len(calls))

@@ -8,10 +8,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from types import ModuleType
+from typing import Optional
 
 import numpy as np
 
 from diskfriction.scenes import Scene
+from diskfriction.symbolic.generated import Progress
 from diskfriction.symbolic.kernels import load_kernels
 
 
@@ -26,8 +28,10 @@ class System:
     cols: np.ndarray
 
     @classmethod
-    def from_scene(cls, scene: Scene) -> System:
-        kernels = load_kernels(scene.resolved_effects)
+    def from_scene(cls, scene: Scene, progress: Optional[Progress] = None) -> System:
+        """Bind `scene` to its kernels (generated and compiled on a cold cache, with
+        progress(stage, fraction) as in symbolic.generated.load_generated)."""
+        kernels = load_kernels(scene.resolved_effects, progress)
         params = np.array([scene.R, scene.k_n, scene.k_t, scene.mu, scene.F_y, scene.L])
         rows, cols = kernels.jacobian_pattern(scene.N)
         return cls(scene, kernels, params, rows, cols)

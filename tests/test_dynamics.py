@@ -207,12 +207,24 @@ def test_bad_input_is_refused_at_the_door(paper, branch_point):
         Perturbation("kick", 1e-3)
 
 
+def test_steps_end_exactly_at_t_end_and_never_pass_it():
+    """--dt is an upper bound: ceil(t_end / dt) steps of t_end / n_steps (issue 9)."""
+    from diskfriction.dynamics.simulate import plan_run
+    from diskfriction.dynamics.start import Spectrum
+
+    spec = Spectrum(np.array([4.0, 1.0]), np.eye(2), np.array([], dtype=int))  # omega_max = 2
+    for t_end, dt, steps in [(10.0, 3.0, 4), (10.0, 2.5, 4), (1.0, 5.0, 1), (7.0, None, 140)]:
+        plan = plan_run(spec, t_end, dt)
+        assert plan.n_steps == steps and plan.dt * plan.n_steps == pytest.approx(t_end, rel=1e-15)
+        assert plan.dt <= (dt or 0.05)
+
+
 def test_compiled_stepper_is_reused_from_the_cache_by_a_new_process(paper):
     """numba's cache=True keeps the loop compiled against the generated kernel module."""
     Stepper(paper, *paper.rest_state()[:1], np.zeros(paper.ndof), paper.rest_state()[1],
             0.0, 1e-3, 1, 4).advance(1)  # compiled (or loaded) in this process
-    code = ("from scenes import Scene; from symbolic import System; import numpy as np\n"
-            "from dynamics import Stepper\n"
+    code = ("from diskfriction.scenes import Scene; from diskfriction.symbolic import System\n"
+            "import numpy as np\nfrom diskfriction.dynamics import Stepper\n"
             "s = System.from_scene(Scene()); q, xi = s.rest_state()\n"
             "st = Stepper(s, q, np.zeros_like(q), xi, 0.0, 1e-3, 1, 4); st.advance(1)\n"
             "print(sum(st.module.advance.stats.cache_hits.values()),"

@@ -9,7 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from diskfriction.dynamics.ensemble import aggregate, breach_speed, front_slope, run_ensemble, sliding_speed
+from diskfriction.dynamics.ensemble import (EnsembleMismatch, RunSpec, aggregate, breach_speed,
+                                           check_directory, code_version, front_slope,
+                                           parameters, run_ensemble, sliding_speed)
 from diskfriction.scenes import Scene
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -54,10 +56,34 @@ def test_resumed_ensemble_equals_an_uninterrupted_one(tmp_path):
     resumed = run_ensemble(scene, [0.087], 3, out=tmp_path / "resumed", **kw)
     assert first[0].stat().st_mtime_ns == stamp
     assert resumed.as_dict() == whole.as_dict()
-    assert json.loads((tmp_path / "resumed" / "ensemble.json").read_text()) == \
-        json.loads((tmp_path / "whole" / "ensemble.json").read_text())
+    record = json.loads((tmp_path / "resumed" / "ensemble.json").read_text())
+    assert record == json.loads((tmp_path / "whole" / "ensemble.json").read_text())
+    assert {k: record["parameters"][k] for k in ("t_end", "amplitude", "kind", "loads", "seeds")} \
+        == {"t_end": 150.0, "amplitude": 1e-5, "kind": "random-velocity", "loads": [0.087],
+            "seeds": [0, 2]}
+    assert record["parameters"]["code"] == code_version()
     key = lambda s: json.dumps(s, sort_keys=True)
     assert sorted(map(key, resumed.summaries[0.087])) == sorted(map(key, whole.summaries[0.087]))
+
+
+def test_an_ensemble_folder_refuses_runs_with_other_parameters(tmp_path):
+    """More realizations (or other loads and seeds) extend a folder; another t_end, amplitude,
+    perturbation or scene would mix incomparable runs, and is refused with one line."""
+    scene = Scene(N=3)
+    record = lambda spec, K=2, loads=(0.05,): json.loads(json.dumps(
+        parameters(scene, list(loads), K, spec, code_version())))
+    check_directory(tmp_path, record(RunSpec(150.0)))  # an empty folder takes anything
+    (tmp_path / "ensemble.json").write_text(json.dumps({"parameters": record(RunSpec(150.0))}))
+    check_directory(tmp_path, record(RunSpec(150.0), K=5, loads=(0.05, 0.06)))
+    for other, says in [(record(RunSpec(200.0)), "t_end = 150.0 (this run: 200.0)"),
+                        (record(RunSpec(150.0, amplitude=1e-3)), "amplitude"),
+                        (record(RunSpec(150.0, kind="random-position")), "kind")]:
+        with pytest.raises(EnsembleMismatch, match=r"choose another output directory") as raised:
+            check_directory(tmp_path, other)
+        assert says in str(raised.value) and "\n" not in str(raised.value)
+    (tmp_path / "ensemble.json").write_text(json.dumps({"V1": {}}))  # written before parameters
+    with pytest.raises(EnsembleMismatch, match="records no run parameters"):
+        check_directory(tmp_path, record(RunSpec(150.0)))
 
 
 def cli(*args):

@@ -62,9 +62,9 @@ def test_empty_file_takes_defaults_and_name_from_stem(tmp_path):
 
 
 def test_integers_are_accepted_as_floats_and_stored_as_floats(tmp_path):
-    scene = load_scene(write_scene(tmp_path, "[disks]\nR = 1\n[load]\nF_x = [-1, 2]\n"))
+    scene = load_scene(write_scene(tmp_path, "[disks]\nR = 1\n[load]\nF_x = [1, 2]\n"))
     assert scene.R == 1.0 and isinstance(scene.R, float)
-    assert scene.F_x_range == (-1.0, 2.0) and all(isinstance(x, float) for x in scene.F_x_range)
+    assert scene.F_x_range == (1.0, 2.0) and all(isinstance(x, float) for x in scene.F_x_range)
 
 
 @pytest.mark.parametrize(("friction", "pair", "wall"), [
@@ -80,7 +80,7 @@ def test_friction_list_maps_to_effect_switches(tmp_path, friction, pair, wall):
 
 ODD_SCENE = Scene(
     N=7, R=0.25, m=2.0, inertia=0.4, eps=0.05, k_n=1000, k_t=1e-05, mu=0.0, F_y=3.0,
-    F_x_range=(-0.5, 1e16), matrix="M^-1 J",
+    F_x_range=(0.5, 1e16), matrix="M^-1 J",
     effects=Effects("mindlin-linear", pair_friction=False, wall_friction=True, rotation=False),
     name='odd "name" \\ with\nnewline\x7f and ü', source="<test>")
 
@@ -145,6 +145,7 @@ BAD_SCENES = [
     ("eps-negative", "[disks]\neps = -0.01\n", "disks.eps", "[0, 0.1)"),
     ("eps-too-large", "[disks]\neps = 0.1\n", "disks.eps", "[0, 0.1)"),
     ("F_x-empty", "[load]\nF_x = [0.1, 0.1]\n", "load.F_x", "empty range"),
+    ("F_x-negative", "[load]\nF_x = [-0.1, 0.1]\n", "load.F_x", "mirror image"),
     ("F_x-reversed", "[load]\nF_x = [0.12, 0.0]\n", "load.F_x", "reversed range"),
     ("F_x-three", "[load]\nF_x = [0.0, 0.1, 0.2]\n", "load.F_x", "exactly two"),
     ("F_x-number", "[load]\nF_x = 0.12\n", "load.F_x", "expected an array"),

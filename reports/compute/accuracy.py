@@ -7,7 +7,7 @@ import time
 
 import numpy as np
 
-from diskfriction.reports.compute.branches import _sweep, _system, equilibrium_at, sweep_span
+from diskfriction.reports.compute.branches import _sweep, _system, sweep_span
 from diskfriction.reports.registry import DYNAMICS_DEPS, computation
 from diskfriction.scenes import Scene
 
@@ -79,8 +79,11 @@ def row_relative_error(J: np.ndarray, J_ref: np.ndarray) -> float:
 def jacobian_accuracy(scene: Scene, F_x: float, steps: list[float]) -> dict:
     """Finite-difference Jacobians (central, 2nd and 4th order, step h) of the generated F at
     the branch point at F_x, against the generated exact J; wall time of one Jacobian each."""
+    from diskfriction.continuation.equilibrium import equilibrium_at
+
     system = _system(scene)
-    q, xi, _ = equilibrium_at(scene, F_x)
+    eq = equilibrium_at(system, F_x)
+    q, xi = eq.q, eq.xi
     J = system.jacobian(q, xi)
     reps = 200
     t0 = time.perf_counter()
@@ -108,10 +111,12 @@ def dynamics_accuracy(scene: Scene, F_x: float, fractions: list[float], referenc
     (reference: the spectrum's |Im sqrt(lambda)|, and the finest dt), energy-budget drift
     max|budget - budget(0)| (reference: exact conservation), V_cm over the last half (reference:
     the finest dt)."""
+    from diskfriction.continuation.equilibrium import equilibrium_at
     from diskfriction.dynamics import Perturbation, simulate, spectrum, summarize
 
     system = _system(scene)
-    q, xi, _ = equilibrium_at(scene, F_x)
+    eq = equilibrium_at(system, F_x)
+    q, xi = eq.q, eq.xi
     has_pair = spectrum(system, q, xi).pairs.size > 0
     start = Perturbation("eigenvector", 1e-10) if has_pair else Perturbation("random-velocity", 1e-6)
     simulate(system, q, xi, F_x, 1e-3, perturbation=start)  # load the compiled stepper

@@ -54,21 +54,12 @@ def branch(scene: Scene, matrix: str, ds_divisions: int, tol_p: float | None = N
             "status": list(b.status), "points": len(b), "seconds": seconds}
 
 
-def equilibrium_at(scene: Scene, F_x: float):
-    """(q, xi, residual) of the branch from rest exactly at F_x (a sweep 0 -> F_x ends on it;
-    the spectra do not need located collisions, so detection is off). F_x = 0: the rest state."""
-    if F_x == 0:
-        q, xi = _system(scene).rest_state()
-        return q, xi, 0.0
-    b = _sweep(scene, 0.0, F_x, scene.matrix, detection=False)
-    return b.q[-1], b.xi[-1], float(b.residual[-1])
-
-
 @computation("spectra_at")
 def spectra_at(scene: Scene, matrix: str, loads: list[float]) -> dict:
     """Eigenvalues of `matrix` [raw] at exactly each load (one sweep from rest per load), the
-    number of complex pairs, the state (q, xi). A load whose sweep fails has nan rows and its
-    message in `failed`."""
+    number of complex pairs, the state (q, xi). A load the branch from rest does not reach has
+    nan rows and its message in `failed`."""
+    from diskfriction.continuation.equilibrium import NoEquilibrium, equilibrium_at
     from diskfriction.continuation.spectra import count_complex_pairs
 
     system = _system(scene)
@@ -78,12 +69,13 @@ def spectra_at(scene: Scene, matrix: str, loads: list[float]) -> dict:
            "xi": np.full((k, 2 * scene.N), np.nan), "residual": np.full(k, np.nan), "failed": {}}
     for i, F in enumerate(loads):
         try:
-            q, xi, res = equilibrium_at(scene, F)
-        except ComputationFailed as error:
+            eq = equilibrium_at(system, F)
+        except NoEquilibrium as error:
             out["failed"][repr(F)] = str(error)
             continue
-        lam = np.linalg.eigvals(system.stability_matrix(system.jacobian(q, xi), matrix))
-        out["eigenvalues"][i], out["q"][i], out["xi"][i], out["residual"][i] = lam, q, xi, res
+        lam = np.linalg.eigvals(system.stability_matrix(system.jacobian(eq.q, eq.xi), matrix))
+        out["eigenvalues"][i], out["q"][i], out["xi"][i] = lam, eq.q, eq.xi
+        out["residual"][i] = eq.residual
         out["n_complex"][i] = count_complex_pairs(lam)
     return out
 
@@ -109,11 +101,14 @@ def shear_mode(scene: Scene, F_x: float) -> dict:
     the shear wave: wavelength L / n [length], k = 2 pi n / L, omega = sqrt(eigenvalue of
     M^-1 J whose eigenvector overlaps it most) [1 / time], V2 = omega / k [length / time].
     """
+    from diskfriction.continuation.equilibrium import equilibrium_at
+
     system = _system(scene)
     N = scene.N
     if not scene.resolved_effects.rotation:
         raise ComputationFailed("the shear mode is defined for rotating disks (3N dofs)")
-    q, xi, _ = equilibrium_at(scene, F_x)
+    eq = equilibrium_at(system, F_x)
+    q, xi = eq.q, eq.xi
     J = system.jacobian(q, xi)
     lam, V = np.linalg.eig(J)
     scale = np.r_[np.ones(2 * N), np.full(N, scene.R)]

@@ -6,7 +6,7 @@ import importlib.util
 
 import numpy as np
 
-from diskfriction.reports.compute.branches import _system, equilibrium_at
+from diskfriction.reports.compute.branches import _system
 from diskfriction.reports.registry import DYNAMICS_DEPS, ComputationFailed, computation
 from diskfriction.scenes import Scene
 
@@ -34,12 +34,14 @@ def trajectory(scene: Scene, F_x: float, t_end: float, kick: float, seed: int, d
     `kick` [length / time] (dynamics.simulate, default dt and recording), to t_end [time].
     Keeps t, M [length^2], C_x, C_y [length] (thinned to MAX_FRAMES), x, y of `disk` (1-based)
     at every frame until 10 % past its first breach or onset of sliding, and the summary."""
+    from diskfriction.continuation.equilibrium import equilibrium_at
     from diskfriction.dynamics import Perturbation, simulate, summarize
 
     if not 1 <= disk <= scene.N:
         raise ComputationFailed(f"disk {disk} is not one of 1..{scene.N}")
-    q, xi, _ = equilibrium_at(scene, F_x)
-    traj = simulate(_system(scene), q, xi, F_x, t_end,
+    system = _system(scene)
+    eq = equilibrium_at(system, F_x)
+    traj = simulate(system, eq.q, eq.xi, F_x, t_end,
                     perturbation=Perturbation("random-velocity", kick, seed))
     events = np.r_[traj.breach_t[disk - 1], traj.onset_t[disk - 1]]
     events = events[np.isfinite(events)]

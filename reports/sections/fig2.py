@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from diskfriction.reports.analysis import windows
+from diskfriction.continuation.windows import complex_spans, complex_windows
 from diskfriction.reports.bifurcation import draw_spectrum
 from diskfriction.reports.registry import Section
 from diskfriction.reports.sections.common import MATRICES, branch_need, failures, new_figure, table
@@ -14,9 +14,9 @@ def needs(scene, settings):
 
 
 def plot(ctx):
-    """Two columns (J, M^-1 J), rows Im and Re; windows with a complex pair shaded, the
-    paper's loads dashed."""
-    fig, axes = new_figure(2, 2, sharex=True, figsize=(11, 6.5))
+    """Two columns (J, M^-1 J), rows Im and Re (reports.bifurcation.draw_spectrum), the
+    paper's loads dotted."""
+    fig, axes = new_figure(2, 2, sharex=True, figsize=(11, 7.5))
     for col, matrix in enumerate(MATRICES):
         b = ctx.get(f"branch[{matrix}]")
         top, bottom = axes[:, col]
@@ -26,15 +26,12 @@ def plot(ctx):
         unit = ctx.units.eigenvalue(matrix)
         collisions = list(zip(b["collision_F_x"], b["collision_kind"],
                               b["collision_eigenvalue"] / unit))
-        draw_spectrum(top, bottom, b["F_x"], b["eigenvalues"] / unit, b["leg"], collisions, matrix)
-        leg = b["leg"] == 1
-        for lo, hi in windows(b["F_x"][leg], b["n_complex"][leg]):
-            top.axvspan(lo, hi, color="C1", alpha=0.12, lw=0)
+        handles = draw_spectrum(top, bottom, b["F_x"], b["eigenvalues"] / unit, b["leg"],
+                                b["n_complex"], collisions, matrix)
         for F in ctx.settings.loads:
             top.axvline(F, color="k", ls=":", lw=0.7)
-        top.set_title(f"{matrix}: {int(np.sum(np.array(b['collision_kind']) == 'birth'))} births ^, "
-                      f"{int(np.sum(np.array(b['collision_kind']) == 'death'))} deaths v; "
-                      f"shaded: a complex pair; dotted: the paper's loads", fontsize=8)
+        top.set_title(f"{matrix}; dotted: the paper's loads", fontsize=8)
+        top.legend(handles=handles, fontsize=6, loc="best", framealpha=0.85)
     fig.suptitle(f"Fig. 2, {ctx.scene.name}: spectrum against F_x", fontsize=10)
     fig.tight_layout()
     return fig
@@ -49,10 +46,13 @@ def render(ctx):
         if b is None:
             continue
         unit = ctx.units.eigenvalue(matrix)
-        leg = b["leg"] == 1
-        win = ", ".join(f"{lo:.4f}-{hi:.4f}" for lo, hi in windows(b["F_x"][leg], b["n_complex"][leg]))
+        leg = np.flatnonzero(b["leg"] == 1)
+        spans = complex_spans(complex_windows(b["F_x"][leg[0]], b["F_x"][leg[-1]],
+                                              b["n_complex"][leg[0]],
+                                              zip(b["collision_F_x"], b["collision_kind"])))
+        win = ", ".join(f"{lo:.4f}-{hi:.4f}" for lo, hi in spans)
         text.append(f"{matrix}: {b['points']} points, status {', '.join(b['status'])}, "
-                    f"{len(b['collision_kind'])} collisions; complex windows (sampled): {win or 'none'}.\n")
+                    f"{len(b['collision_kind'])} collisions; complex windows: {win or 'none'}.\n")
         rows += [[matrix, f"{p:.6f}", kind, f"{lam / unit:.5g}", "" if ok else "unresolved"]
                  for p, kind, lam, ok in zip(b["collision_F_x"], b["collision_kind"],
                                               b["collision_eigenvalue"], b["collision_resolved"])]

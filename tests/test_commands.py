@@ -1,0 +1,266 @@
+"""The commands at the door (issue 9): --out checked before computing, memory estimates,
+negative loads, bad options as one line, a load beyond the branch, Ctrl-C during an ensemble,
+progress on a pipe and on a terminal, and a light start."""
+from __future__ import annotations
+
+import io
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from commandline import ROOT, error_line, run_cli
+
+FOUR = "[disks]\nN = 4\n[load]\nF_x = [0.0, 0.05]\n"
+"""A small scene: every command on it takes a second or two."""
+
+COMMANDS = {
+    "bifurcate": [],
+    "simulate": ["--fx", "0.01", "--t-end", "1"],
+    "verify": ["--t-end", "1"],
+    "report": ["--only", "fig6"],
+}
+
+
+def scene_file(tmp_path: Path, text: str = FOUR, name: str = "four.toml") -> str:
+    path = tmp_path / name
+    path.write_text(text)
+    return str(path)
+
+
+def one_line(result: subprocess.CompletedProcess, command: str, code: int = 2) -> str:
+    """The refusal of bad input: exit `code`, exactly one line on stderr (so nothing was
+    computed: no progress stage started), no traceback."""
+    assert result.returncode == code, result.stderr
+    assert result.stderr.count("\n") == 1, result.stderr
+    return error_line(result, command)
+
+
+# ---- --out, checked before anything is computed -------------------------------------------
+
+def bad_outs(tmp_path: Path) -> dict[str, str]:
+    (tmp_path / "a-file").write_text("")
+    return {"existing file": str(tmp_path / "a-file"),
+            "under a file": str(tmp_path / "a-file" / "out"),
+            "in /proc": "/proc/diskfriction-out",
+            "empty": ""}
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+@pytest.mark.parametrize("case", ["existing file", "under a file", "in /proc", "empty"])
+def test_an_unusable_out_is_one_line_and_exit_2_before_computing(tmp_path, command, case):
+    out = bad_outs(tmp_path)[case]
+    result = run_cli(command, scene_file(tmp_path), *COMMANDS[command], "--out", out)
+    assert "--out" in one_line(result, command)
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes into a read-only directory anyway")
+def test_a_read_only_out_is_one_line_and_exit_2(tmp_path):
+    locked = tmp_path / "locked"
+    locked.mkdir(mode=0o555)
+    result = run_cli("bifurcate", scene_file(tmp_path), "--out", str(locked / "out"))
+    assert "cannot write there" in one_line(result, "bifurcate")
+
+
+# ---- memory ---------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("N", [100_000, 10**12])
+@pytest.mark.parametrize("command", COMMANDS)
+def test_a_scene_too_large_for_this_machine_is_refused_with_one_line(tmp_path, command, N):
+    scene = scene_file(tmp_path, f"[disks]\nN = {N}\n")
+    result = run_cli(command, scene, *COMMANDS[command], "--out", str(tmp_path / "out"))
+    line = one_line(result, command)
+    assert f"N = {N}" in line and "more than this machine's" in line
+
+
+def test_the_scene_command_shows_a_large_scene(tmp_path):
+    """A scene is a description: `scene` prints it whatever its size; commands refuse it."""
+    result = run_cli("scene", scene_file(tmp_path, "[disks]\nN = 1000000000000\n"))
+    assert result.returncode == 0 and "N = 1000000000000" in result.stdout
+
+
+def test_a_run_whose_frames_exceed_the_memory_is_refused(tmp_path):
+    result = run_cli("simulate", scene_file(tmp_path), "--fx", "0.01", "--t-end", "1e15",
+                     "--out", str(tmp_path / "out"))
+    assert result.returncode == 2
+    assert "frames" in error_line(result, "simulate")
+    assert not list((tmp_path / "out").iterdir())
+
+
+# ---- bad options ------------------------------------------------------------------------------
+
+BAD = [
+    (["verify", "--amplitude", "-1"], "--amplitude"),
+    (["simulate", "--fx", "0.01,0.02", "--t-end", "1", "--scheduler", "garbage"], "--scheduler"),
+    (["report", "--only", ""], "--only"),
+    (["report", "--only", ","], "--only"),
+    (["simulate", "--fx", "0.01", "--t-end", "1", "--dt", "2"], "--dt"),
+    (["simulate", "--fx", "0.083,0.083", "--t-end", "1"], "given twice"),
+    (["simulate", "--fx", "-0.083", "--t-end", "1"], "mirror image"),
+    (["bifurcate", "--fx=-0.1:0"], "mirror image"),
+]
+
+
+@pytest.mark.parametrize("args, says", BAD, ids=[" ".join(a) for a, _ in BAD])
+def test_bad_option_is_one_line_and_exit_2(tmp_path, args, says):
+    result = run_cli(*args, "--out", str(tmp_path / "out"))
+    assert says in one_line(result, args[0])
+
+
+def test_a_negative_load_in_a_scene_is_refused_for_the_same_reason(tmp_path):
+    scene = scene_file(tmp_path, "[load]\nF_x = [-0.12, 0.0]\n")
+    for command in ("scene", "bifurcate"):
+        result = run_cli(command, scene)
+        assert result.returncode == 2 and "mirror image" in result.stderr
+        assert result.stderr.count("\n") == 1
+
+
+# ---- a load beyond the branch from rest -------------------------------------------------------
+
+SHORT = "[disks]\nN = 4\n[contacts]\nmu = 1.0\n"
+"""A scene whose branch from rest ends early (at F_x ~ 3e-5: the continuation turns back), far
+below the substrate's limit N mu F_y = 0.4: a quick case of a load beyond the branch."""
+
+
+def test_simulate_beyond_the_end_of_the_branch_says_where_and_why(tmp_path):
+    """Nothing may be written or reported for the load asked for."""
+    out = tmp_path / "out"
+    result = run_cli("simulate", scene_file(tmp_path, SHORT), "--fx", "0.2", "--t-end", "10",
+                     "--out", str(out))
+    assert result.returncode == 1
+    line = error_line(result, "simulate")
+    assert "no equilibrium beyond F_x = " in line and "(asked for 0.2)" in line
+    assert 0 < float(line.split("beyond F_x = ")[1].split()[0]) < 0.2
+    assert "; there " in line  # the contacts of the last point
+    assert result.stdout == "" and not list(out.iterdir())
+
+
+def test_equilibrium_at_ends_exactly_on_the_load_or_raises():
+    from diskfriction.continuation.equilibrium import NoEquilibrium, equilibrium_at
+    from diskfriction.scenes import Scene
+    from diskfriction.symbolic import System
+
+    system = System.from_scene(Scene(N=3))
+    eq = equilibrium_at(system, 0.0123456789)
+    assert eq.F_x == 0.0123456789 and eq.residual <= 1e-10
+    assert abs(system.forces(eq.q, eq.xi, eq.F_x)).max() <= 1e-10
+    rest = equilibrium_at(system, 0.0)
+    assert rest.F_x == 0.0 and (rest.q == system.rest_state()[0]).all()
+    short = System.from_scene(Scene(N=4, mu=1.0))
+    with pytest.raises(NoEquilibrium) as raised:
+        equilibrium_at(short, 0.2)
+    assert raised.value.F_x == 0.2 and 0 < raised.value.F_end < 0.2
+    assert "\n" not in str(raised.value)
+    with pytest.raises(ValueError):
+        equilibrium_at(system, -0.01)
+
+
+def test_the_last_point_names_contacts_at_the_coulomb_limit_and_open_ones():
+    """At rest every pair touches at delta = 0 (open: inactive); put the substrate histories
+    of disks 1 and 2 exactly at their Coulomb limit t* = mu k_n delta_w / k_t."""
+    from diskfriction.continuation.equilibrium import contact_states
+    from diskfriction.scenes import Scene
+    from diskfriction.symbolic import System
+
+    scene = Scene(N=3)
+    system = System.from_scene(scene)
+    q, xi = system.rest_state()
+    xi[3:5] = [scene.mu * scene.k_n * scene.delta_w0 / scene.k_t, -scene.mu * scene.k_n
+               * scene.delta_w0 / scene.k_t]
+    assert contact_states(system, q, xi) == ("the substrate contacts of disks 1, 2 are at the "
+                                             "Coulomb limit (mu = 10), pairs 1-2, 2-3, 3-1 "
+                                             "are open")
+    xi[4] *= 0.5
+    assert contact_states(system, q, xi).startswith("the substrate contact of disk 1 is at")
+
+
+def test_disk_lists_shorten_runs():
+    from diskfriction.continuation.equilibrium import disk_list
+
+    assert disk_list([1, 2, 3, 4, 5, 6, 7, 9]) == "1..7, 9"
+    assert disk_list([2, 3, 7]) == "2, 3, 7"
+
+
+# ---- Ctrl-C during an ensemble ------------------------------------------------------------------
+
+def ignores_sigint(pid: int) -> bool:
+    """Whether process `pid` ignores SIGINT (its SigIgn mask in /proc, Linux)."""
+    status = Path(f"/proc/{pid}/status").read_text()
+    mask = int(next(line.split()[1] for line in status.splitlines() if line.startswith("SigIgn:")), 16)
+    return bool(mask & (1 << (signal.SIGINT - 1)))
+
+
+def test_interrupting_an_ensemble_prints_one_line_and_exits_130(tmp_path):
+    """As a terminal does: SIGINT to the whole process group, once the dask workers run. The
+    workers ignore it (else each may print a KeyboardInterrupt traceback while the parent
+    shuts them down, depending on what it is doing at that moment)."""
+    import psutil
+
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "diskfriction", "simulate", "--fx", "0.083", "--realizations",
+         "2", "--t-end", "1e6", "--out", str(tmp_path / "out")],
+        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        start_new_session=True)
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and proc.poll() is None:
+            workers = [c for c in psutil.Process(proc.pid).children(recursive=True)
+                       if "spawn_main" in " ".join(c.cmdline())]
+            if workers:
+                break
+            time.sleep(0.2)
+        assert workers and all(ignores_sigint(w.pid) for w in workers)
+        time.sleep(1.5)  # the workers start and take their realizations
+        os.killpg(proc.pid, signal.SIGINT)
+        out, err = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 130, err
+    lines = err.splitlines()
+    assert lines[-1] == "interrupted: results written so far are kept; rerun to resume"
+    assert all(line.startswith("simulate: ") for line in lines[:-1]), err
+    assert "Traceback" not in err
+
+
+# ---- progress -----------------------------------------------------------------------------------
+
+class Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_progress_is_a_line_per_stage_off_a_terminal_and_a_bar_on_one():
+    from diskfriction.cli.progress import Progress
+
+    piped = io.StringIO()
+    p = Progress("bifurcate", stream=piped)
+    report = p.part("kernels")
+    report("generating", 0.0)
+    report("generating", 0.5)
+    report("compiling", None)
+    p.stage("sweep")
+    p(0.5, "F_x = 0.06")
+    p.close()
+    assert piped.getvalue().splitlines() == ["bifurcate: kernels: generating",
+                                             "bifurcate: kernels: compiling", "bifurcate: sweep"]
+    tty = Terminal()
+    p = Progress("bifurcate", stream=tty)
+    p.stage("sweep")
+    p(0.5, "F_x = 0.06")
+    p.close()
+    text = tty.getvalue()
+    assert "\n" not in text and "[###############...............]  50.0% F_x = 0.06" in text
+    assert text.endswith("\r\x1b[K")  # the status line is cleared at the end
+
+
+def test_the_scene_command_imports_no_numerical_library():
+    code = ("import sys, io, contextlib\nfrom diskfriction.cli.main import main\n"
+            "with contextlib.redirect_stdout(io.StringIO()): main(['scene'])\n"
+            "print(sorted(m for m in ('numpy', 'scipy', 'numba', 'matplotlib', 'dask', 'sympy')"
+            " if m in sys.modules))")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert run.stdout.strip() == "[]", run.stderr
