@@ -15,8 +15,8 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Callable, Iterator
 
-from diskfriction.scenes.scene import (FRICTION_KINDS, MATRICES, NEGATIVE_LOAD, TANGENTIAL_LAWS,
-                                       Effects, Scene)
+from diskfriction.scenes.scene import (CONVENTIONS, FRICTION_KINDS, MATRICES, NEGATIVE_LOAD,
+                                       TANGENTIAL_LAWS, Effects, Scene)
 
 FILE_KEY = "<file>"
 INT64 = (-(2**63), 2**63 - 1)
@@ -226,6 +226,9 @@ SCHEMA: dict[str, _Key] = {
     "effects.friction": _Key(_friction_kinds,
                              "where the tangential law acts (subset, may be empty)"),
     "effects.rotation": _Key(_flag, "disks rotate (3 dof per disk) or not (2)"),
+    "effects.conventions": _Key(_effect_choice(CONVENTIONS, "conventions"),
+                                " | ".join(CONVENTIONS) + " (disk-disk lever arm and history "
+                                "increment, docs/physics.md)"),
     "stability.matrix": _Key(_effect_choice(MATRICES, "stability matrix"), " | ".join(MATRICES)),
 }
 TABLES = tuple(dict.fromkeys(key.partition(".")[0] for key in SCHEMA if "." in key))
@@ -241,6 +244,7 @@ def _effect_values(effects: Effects) -> dict[str, Any]:
         "effects.friction": [kind for kind, switch in _FRICTION_SWITCHES.items()
                              if getattr(effects, switch)],
         "effects.rotation": effects.rotation,
+        "effects.conventions": effects.conventions,
     }
 
 
@@ -257,6 +261,7 @@ def _scene(values: dict[str, Any], source: str) -> Scene:
     effects = Effects(
         tangential=values["effects.tangential"],
         rotation=values["effects.rotation"],
+        conventions=values["effects.conventions"],
         **{switch: kind in friction for kind, switch in _FRICTION_SWITCHES.items()},
     )
     plain = {field: values[key] for field, key in _FIELDS.items()}

@@ -14,6 +14,7 @@ NEGATIVE_LOAD = ("a negative load is the mirror image of a positive one (x -> -x
                  "-theta, disk i -> disk 2 - i mod N), so use |F_x| (docs/physics.md)")
 """Why F_x < 0 is refused, by the scene loader and by every command."""
 FRICTION_KINDS = ("disk-disk", "substrate")
+CONVENTIONS = ("model", "lammps")
 MATRICES = ("J", "M^-1 J")
 
 
@@ -26,12 +27,19 @@ class Effects:
     pair_friction   tangential force at disk-disk contacts.
     wall_friction   tangential force at disk-substrate contacts.
     rotation        disks rotate (3N degrees of freedom) or not (2N).
+    conventions     how a disk-disk contact's torque and history increment are discretised
+                    (docs/physics.md, "Conventions"): "model" (MODEL.md: lever arm R, history
+                    increment along the tangent at the middle of a step, a contact closing
+                    during a step charges only the part after first contact) or "lammps"
+                    (LAMMPS's granular package: lever arm R - delta/2, increment along the
+                    tangent at the end of the step, all of it charged on closing).
     """
 
     tangential: str = "mindlin-smooth"
     pair_friction: bool = True
     wall_friction: bool = True
     rotation: bool = True
+    conventions: str = "model"
 
     @property
     def pair_law(self) -> str:
@@ -42,6 +50,13 @@ class Effects:
     def wall_law(self) -> str:
         """Tangential law at disk-substrate contacts after the friction switch."""
         return self.tangential if self.wall_friction else "none"
+
+    @property
+    def contact_conventions(self) -> str:
+        """The conventions that change anything: "model" when no contact has friction (the
+        lever arm then multiplies a zero tangential force and no history is charged)."""
+        frictionless = self.pair_law == "none" and self.wall_law == "none"
+        return "model" if frictionless else self.conventions
 
     @property
     def dof_per_disk(self) -> int:
@@ -95,7 +110,7 @@ class Scene:
     def resolved_effects(self) -> Effects:
         """Effects actually simulated: mu = 0 carries no tangential force, so friction is off."""
         if self.mu == 0.0 and self.effects.tangential != "none":
-            return Effects("none", False, False, self.effects.rotation)
+            return Effects("none", False, False, self.effects.rotation, self.effects.conventions)
         return self.effects
 
     @property

@@ -67,6 +67,13 @@ def test_integers_are_accepted_as_floats_and_stored_as_floats(tmp_path):
     assert scene.F_x_range == (1.0, 2.0) and all(isinstance(x, float) for x in scene.F_x_range)
 
 
+@pytest.mark.parametrize("conventions", ["model", "lammps"])
+def test_conventions_are_read_and_model_is_the_default(tmp_path, conventions):
+    scene = load_scene(write_scene(tmp_path, f'[effects]\nconventions = "{conventions}"\n'))
+    assert scene.effects.conventions == conventions
+    assert Scene().effects.conventions == "model"
+
+
 @pytest.mark.parametrize(("friction", "pair", "wall"), [
     ('["disk-disk", "substrate"]', True, True),
     ('["substrate"]', False, True),
@@ -81,7 +88,8 @@ def test_friction_list_maps_to_effect_switches(tmp_path, friction, pair, wall):
 ODD_SCENE = Scene(
     N=7, R=0.25, m=2.0, inertia=0.4, eps=0.05, k_n=1000, k_t=1e-05, mu=0.0, F_y=3.0,
     F_x_range=(0.5, 1e16), matrix="M^-1 J",
-    effects=Effects("mindlin-linear", pair_friction=False, wall_friction=True, rotation=False),
+    effects=Effects("mindlin-linear", pair_friction=False, wall_friction=True, rotation=False,
+                    conventions="lammps"),
     name='odd "name" \\ with\nnewline\x7f and ü', source="<test>")
 
 
@@ -99,7 +107,7 @@ def test_format_scene_writes_every_key_and_the_derived_quantities():
     assert set(document["disks"]) == {"N", "R", "m", "inertia", "eps"}
     assert set(document["contacts"]) == {"k_n", "k_t", "mu"}
     assert set(document["load"]) == {"F_y", "F_x"}
-    assert set(document["effects"]) == {"tangential", "friction", "rotation"}
+    assert set(document["effects"]) == {"tangential", "friction", "rotation", "conventions"}
     assert set(document["stability"]) == {"matrix"}
     scene = Scene()
     for name, value in [("L", scene.L), ("I", scene.I), ("delta_w0", scene.delta_w0),
@@ -167,6 +175,10 @@ BAD_SCENES = [
      "expected a boolean"),
     ("rotation-int", "[effects]\nrotation = 1\n", "effects.rotation", "expected a boolean"),
     ("matrix-unknown", '[stability]\nmatrix = "M"\n', "stability.matrix", "unknown effect"),
+    ("conventions-unknown", '[effects]\nconventions = "LAMMPS"\n', "effects.conventions",
+     "conventions must be one of model | lammps"),
+    ("conventions-bool", "[effects]\nconventions = true\n", "effects.conventions",
+     "expected a string"),
     ("malformed-toml", "[disks\nN = 10\n", "<file>", "line 1"),
     ("missing-file", MISSING, "<file>", "cannot read"),
     ("directory", DIRECTORY, "<file>", "cannot read"),
