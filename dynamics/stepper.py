@@ -1,7 +1,8 @@
 """Newton's equations M q'' = F(q, xi; F_x) with the history carried, stepped inside numba.
 
 Scheme: velocity Verlet (kick-drift-kick), with the history advanced over the drift by the same
-rule as a quasistatic step (midpoint increment, reset on opening, first contact, Coulomb cap).
+rule as a quasistatic step (midpoint increment, reset on opening, first contact, Coulomb cap;
+conventions "lammps": end-of-step increment, docs/physics.md).
 M = diag(m, m, I) (diag(m, m) without rotation); no damping anywhere.
 
 Why this scheme. The state is (q, v, xi), and the equations are
@@ -30,7 +31,9 @@ contact time, and the error of this is O(dt) per event, not per step).
 The kernel module is generated per effect set, so the step loop is compiled against it: a small
 module is written beside the kernel module in the cache directory (its name carries the kernel
 hash and a digest of stepper_src.py), importing the kernel module by path and appending
-stepper_src.py. numba's cache=True then keeps the compiled loop beside it: a second process
+stepper_src.py rendered for the kernel module's conventions: its per-contact code (increments,
+forces, first contact, tangential work) is the fragments of symbolic/template.py, the text the
+kernel module's forces, history_increment and commit_history are rendered from too. numba's cache=True then keeps the compiled loop beside it: a second process
 starts without compiling. (Passing the kernel functions as arguments instead makes numba's
 cache miss in every new process: a dispatcher's type is its identity.)
 """
@@ -47,9 +50,11 @@ import numpy as np
 from diskfriction.files import source_digest
 from diskfriction.symbolic import System
 from diskfriction.symbolic.generated import Progress, load_generated
+from diskfriction.symbolic.template import Dialect, render
 
 _SOURCE = Path(__file__).with_name("stepper_src.py")
-_GENERATOR = ("diskfriction.dynamics.stepper", "diskfriction.dynamics.stepper_src")
+_GENERATOR = ("diskfriction.dynamics.stepper", "diskfriction.dynamics.stepper_src",
+              "diskfriction.symbolic.template")
 
 _CONSTANTS = ("D", "PAIR_FRICTION", "WALL_FRICTION")
 _FUNCTIONS = ("pair_separation", "pair_overlap", "pair_force", "pair_increment_coeffs",
@@ -92,11 +97,13 @@ def stepper_digest(kernels: ModuleType) -> str:
 
 
 def stepper_source(kernels: ModuleType, digest: str) -> str:
-    """The source of the stepper compiled against this kernel module."""
+    """The source of the stepper compiled against this kernel module: stepper_src.py rendered
+    with the kernel module's conventions (symbolic/template.py)."""
     bindings = "\n".join(f"{name} = _k.{name}" for name in _CONSTANTS + _FUNCTIONS)
     header = _HEADER.format(kernels=kernels.__name__, kernel_file=Path(kernels.__file__).name,
                             digest=digest, bindings=bindings)
-    return header + "\n\n" + _SOURCE.read_text()
+    dialect = Dialect(kernels.CONVENTIONS, kernels.D == 3)
+    return header + "\n\n" + render(_SOURCE.read_text(), dialect)
 
 
 def load_stepper(kernels: ModuleType, progress: Optional[Progress] = None) -> ModuleType:

@@ -1,5 +1,7 @@
-# Stepper source appended verbatim to a generated header (see dynamics/stepper.py).
-# Not importable on its own: numba, np, D, PAIR_FRICTION, WALL_FRICTION and the kernel module's
+# Stepper source appended to a generated header (see dynamics/stepper.py), rendered by
+# symbolic/template.py: each "# @fragment NAME" line becomes the per-contact code the kernel
+# module's forces, history_increment and commit_history are made of, for the scene's
+# conventions. Not importable on its own: numba, np, D, PAIR_FRICTION, WALL_FRICTION and the kernel module's
 # pair_separation, pair_overlap, pair_force, pair_increment_coeffs, pair_dofs, wall_force,
 # wall_increment_coeffs, wall_dofs, add_loads, commit_history and ring_of_two are bound by the
 # header.
@@ -9,13 +11,15 @@
 #
 #   kick   v += dt/2 M^-1 F(q0, xi0)
 #   drift  q1 = q0 + dt v
-#   commit dxi = w(q_mid) . (q1 - q0) (midpoint rule), xi1 = commit_history(xi0, dxi, ...):
-#          reset on opening, first contact, Coulomb cap (the quasistatic rule, cap on)
+#   commit dxi = w . (q1 - q0) (midpoint tangent; end-of-step with conventions "lammps"),
+#          xi1 = commit_history(xi0, dxi, ...): reset on opening, first contact, Coulomb cap
+#          (the quasistatic rule, cap on)
 #   force  F(q1, xi1) and the scalar tangential force f_t of every contact
 #   kick   v += dt/2 M^-1 F(q1, xi1)
 #
 # The tangential work of the step is sum_c (f_t0 + f_t1)/2 dxi_c (trapezoid in time, midpoint
-# increment). Of it, the part done on the distance a capped contact slid, xi0 + dxi - xi1, is
+# increment; with the "lammps" lever arm the torques' extra path (delta/2)(dtheta_i + dtheta_j)
+# is added to dxi_c, symbolic/template.py). Of it, the part done on the distance a capped contact slid, xi0 + dxi - xi1, is
 # booked as dissipated, with the force at the end of the step, where the cap acts:
 # f_t1 = -mu F_n sign(xi1) there, so every booked term is <= 0. (The trapezoid force would
 # give a term of the wrong sign when the history reverses within one step near an opening.)
@@ -90,6 +94,7 @@ def advance(q, v, xi, mass, F_x, params, dt, n_steps, stride, scal, ints, slip, 
     ft1 = np.empty(2 * N)
     dxi = np.empty(2 * N)
     slid = np.zeros(2 * N, np.bool_)
+    # @fragment arm_path_array
     minv = 1.0 / mass
     countdown = stride - ints[INT_STEP] % stride
     for it in range(n_steps + 1):
@@ -102,26 +107,22 @@ def advance(q, v, xi, mass, F_x, params, dt, n_steps, stride, scal, ints, slip, 
                 dq[a] = q1[a] - q[a]
             else:
                 q1[a] = q[a]
-        # overlaps at q1, midpoint increments over q -> q1 (the kernel module's overlaps and
-        # history_increment; the separation is linear in q, so its midpoint value is the mean
-        # of the values at q and q1)
+        # overlaps at q1, increments over q -> q1 (the kernel module's overlaps and
+        # history_increment: the same fragments)
         for k in range(N):
             dx, dy, ex, ey = pair_separation(q1, k, N, L)
             delta1[k] = pair_overlap(dx, dy, ex, ey, R)
             dxi[k] = 0.0
             if PAIR_FRICTION and moving:
-                pair_increment_coeffs(0.5 * (sep[0, k] + dx), 0.5 * (sep[1, k] + dy), R, w)
-                pair_dofs(k, N, idx)
-                for a in range(2 * D):
-                    dxi[k] += w[a] * dq[idx[a]]
+                dx0 = sep[0, k]
+                dy0 = sep[1, k]
+                # @fragment pair_increment
+                # @fragment pair_arm_path
             sep[0, k] = dx
             sep[1, k] = dy
             dxi[N + k] = 0.0
             if WALL_FRICTION and moving:
-                wall_increment_coeffs(R, w)
-                wall_dofs(k, N, idx)
-                for a in range(D):
-                    dxi[N + k] += w[a] * dq[idx[a]]
+                # @fragment wall_increment
             delta1[N + k] = R - q1[N + k]
         # the history rule: reset on opening, first contact, Coulomb cap
         if moving:
@@ -136,20 +137,20 @@ def advance(q, v, xi, mass, F_x, params, dt, n_steps, stride, scal, ints, slip, 
             F[a] = 0.0
         for k in range(N):
             ft1[k] = 0.0
-            if delta1[k] > 0.0:
-                pair_force(sep[0, k], sep[1, k], delta1[k], xi1[k], R, k_n, k_t, mu, f)
-                pair_dofs(k, N, idx)
-                for a in range(2 * D):
-                    F[idx[a]] += f[a]
+            delta_k = delta1[k]
+            if delta_k > 0.0:
+                dx = sep[0, k]
+                dy = sep[1, k]
+                xi_k = xi1[k]
+                # @fragment pair_force
                 if PAIR_FRICTION:
-                    ft1[k] = (f[1] * sep[0, k] - f[0] * sep[1, k]) / (2.0 * R - delta1[k])
+                    ft1[k] = (f[1] * dx - f[0] * dy) / (2.0 * R - delta_k)
         for k in range(N):
             ft1[N + k] = 0.0
-            if delta1[N + k] > 0.0:
-                wall_force(delta1[N + k], xi1[N + k], R, k_n, k_t, mu, f)
-                wall_dofs(k, N, idx)
-                for a in range(D):
-                    F[idx[a]] += f[a]
+            delta_k = delta1[N + k]
+            if delta_k > 0.0:
+                xi_k = xi1[N + k]
+                # @fragment wall_force
                 if WALL_FRICTION:
                     ft1[N + k] = f[0]
         add_loads(F, F_x, F_y, N)
@@ -163,7 +164,7 @@ def advance(q, v, xi, mass, F_x, params, dt, n_steps, stride, scal, ints, slip, 
             w_t = 0.0
             w_slip = 0.0
             for c in range(2 * N):
-                w_t += 0.5 * (ft[c] + ft1[c]) * dxi[c]
+                # @fragment tangential_work
                 if slid[c]:
                     # a contact closing and capped in one step slid < |dxi|: not booked
                     s = xi[c] + dxi[c] - xi1[c] if delta[c] > 0.0 else 0.0

@@ -1,7 +1,9 @@
-# Assembly source appended verbatim to every generated kernel module (see codegen.py).
+# Assembly source of every generated kernel module (see codegen.py), rendered by
+# symbolic/template.py: each "# @fragment NAME" line becomes the per-contact code the dynamics
+# stepper pastes too, for the scene's conventions.
 # Not importable on its own: math, numba, np, D, pair_contact, pair_force, pair_increment_coeffs, wall_contact,
-# wall_force, wall_increment_coeffs, PAIR_FRICTION and WALL_FRICTION are defined by the
-# generated part above it.
+# wall_force, wall_increment_coeffs, PAIR_FRICTION, WALL_FRICTION and CONVENTIONS are defined
+# by the generated part above it.
 #
 # Every function uses error_model="numpy" (no zero-division checks: a fifth of a dynamics step
 # at N = 10): each division is by a quantity kept positive (2R + rho, delta > 0, k_t).
@@ -152,15 +154,15 @@ def forces(q, xi, F_x, params, F):
     idx = np.empty(2 * D, np.int64)
     for k in range(N):
         dx, dy, ex, ey = pair_separation(q, k, N, L)
-        pair_force(dx, dy, pair_overlap(dx, dy, ex, ey, R), xi[k], R, k_n, k_t, mu, f)
-        pair_dofs(k, N, idx)
-        for a in range(2 * D):
-            F[idx[a]] += f[a]
+        delta_k = pair_overlap(dx, dy, ex, ey, R)
+        xi_k = xi[k]
+        if delta_k > 0.0:
+            # @fragment pair_force
     for k in range(N):
-        wall_force(R - q[N + k], xi[N + k], R, k_n, k_t, mu, f)
-        wall_dofs(k, N, idx)
-        for a in range(D):
-            F[idx[a]] += f[a]
+        delta_k = R - q[N + k]
+        xi_k = xi[N + k]
+        if delta_k > 0.0:
+            # @fragment wall_force
     add_loads(F, F_x, F_y, N)
 
 
@@ -177,27 +179,22 @@ def overlaps(q, params, delta):
 
 @numba.njit(cache=True, error_model="numpy")
 def history_increment(q0, q1, params, dxi):
-    """Delta xi along the straight step q0 -> q1, midpoint rule: w(q_mid) . (q1 - q0) [length].
-
-    Second-order accurate in the step: the exact path integral differs by O(|q1 - q0|^3)."""
+    """Delta xi along the straight step q0 -> q1: w . (q1 - q0) [length], the pair tangent
+    taken at the middle of the step (conventions "model": the exact path integral differs by
+    O(|q1 - q0|^3)) or at its end ("lammps", first order); symbolic/template.py."""
     N = q0.shape[0] // D
     R, L = params[0], params[5]
     w = np.empty(2 * D)
     idx = np.empty(2 * D, np.int64)
-    qm = 0.5 * (q0 + q1)
+    dq = q1 - q0
     dxi[:] = 0.0
     for k in range(N):
         if PAIR_FRICTION:
-            dx, dy, _, _ = pair_separation(qm, k, N, L)
-            pair_increment_coeffs(dx, dy, R, w)
-            pair_dofs(k, N, idx)
-            for a in range(2 * D):
-                dxi[k] += w[a] * (q1[idx[a]] - q0[idx[a]])
+            dx0, dy0, _, _ = pair_separation(q0, k, N, L)
+            dx, dy, _, _ = pair_separation(q1, k, N, L)
+            # @fragment pair_increment
         if WALL_FRICTION:
-            wall_increment_coeffs(R, w)
-            wall_dofs(k, N, idx)
-            for a in range(D):
-                dxi[N + k] += w[a] * (q1[idx[a]] - q0[idx[a]])
+            # @fragment wall_increment
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -207,7 +204,8 @@ def commit_history(xi0, dxi, delta0, delta1, params, cap, xi1, slid):
     Open at the end (delta1 <= 0): xi1 = 0. Closed during the step (delta0 <= 0 < delta1): the
     contact starts from zero at first contact ("t = 0 upon first contact", paper) and charges the
     part of the increment after it, delta1 / (delta1 - delta0) of dxi with delta taken linear
-    along the step (a contact touching at delta0 = 0 charges all of it). Otherwise
+    along the step (a contact touching at delta0 = 0 charges all of it); conventions "lammps"
+    charge all of dxi (symbolic/template.py, first_contact). Otherwise
     xi1 = xi0 + dxi. With `cap`, a history beyond its Coulomb limit t* = mu k_n delta1 / k_t is
     set to sign(xi1) t* (the contact slides) and slid[c] is True. Returns the number capped."""
     k_n, k_t, mu = params[1], params[2], params[3]
@@ -218,7 +216,7 @@ def commit_history(xi0, dxi, delta0, delta1, params, cap, xi1, slid):
             xi1[c] = 0.0
             continue
         if delta0[c] <= 0.0:
-            xi1[c] = dxi[c] * (delta1[c] / (delta1[c] - delta0[c]))
+            # @fragment first_contact
         else:
             xi1[c] = xi0[c] + dxi[c]
         t_star = mu * k_n * delta1[c] / k_t

@@ -15,6 +15,7 @@ from sympy.printing.pycode import PythonCodePrinter
 
 from diskfriction.symbolic.contacts import ContactExprs
 from diskfriction.symbolic.laws import delta
+from diskfriction.symbolic.template import Dialect, render
 
 sd = sp.Symbol("sd", positive=True)  # sqrt(delta) in the printed code
 
@@ -93,17 +94,19 @@ def _increment_coeffs(c: ContactExprs) -> str:
     return "\n".join(lines) + "\n"
 
 
-def module_source(pair: ContactExprs, wall: ContactExprs, rotation: bool, header: str,
+def module_source(pair: ContactExprs, wall: ContactExprs, dialect: Dialect, header: str,
                   assembly: str) -> str:
-    """The whole generated module: header, kernels, then the assembly source."""
+    """The whole generated module: header, kernels, then the assembly source rendered for
+    the dialect (symbolic/template.py)."""
     parts = [
         header,
         "import math\n\nimport numba\nimport numpy as np\n",
-        f"D = {3 if rotation else 2}  # degrees of freedom per disk",
+        f"D = {3 if dialect.rotation else 2}  # degrees of freedom per disk",
         f"PAIR_FRICTION = {pair.law != 'none'}",
-        f"WALL_FRICTION = {wall.law != 'none'}\n\n",
+        f"WALL_FRICTION = {wall.law != 'none'}",
+        f"CONVENTIONS = {dialect.conventions!r}  # docs/physics.md, Conventions\n\n",
         _kernel(pair, True), _kernel(pair, False), _increment_coeffs(pair),
         _kernel(wall, True), _kernel(wall, False), _increment_coeffs(wall),
-        assembly,
+        render(assembly, dialect),
     ]
     return "\n\n".join(p.rstrip("\n") + "\n" for p in parts)

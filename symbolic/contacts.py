@@ -2,7 +2,9 @@
 
 Disk-disk pair (i, j): inputs dx, dy = r_i - r_j (image already applied) and the history xi.
     rho = |r_ij|, n = r_ij / rho, s = (-n_y, n_x), delta = 2R - rho.
-    Force on i: F_n n + F_t s, on j the opposite; torques T_i = T_j = -R F_t.
+    Force on i: F_n n + F_t s, on j the opposite; torques T_i = T_j = -a F_t with the lever arm
+    a = R (conventions "model", MODEL.md) or a = R - delta/2, the distance from each centre to
+    the middle of the overlap (conventions "lammps", LAMMPS's granular package).
     History increment: d xi = s . d r_ij - R (d theta_i + d theta_j).
 Disk-substrate (i): inputs y_i and xi.  delta = R - y_i.
     Force on i: (F_t, F_n), torque T_i = +R F_t.  History increment: d xi = dx_i + R d theta_i.
@@ -52,13 +54,20 @@ def _stiffness(f: sp.Matrix, dfdq: sp.Matrix, w: sp.Matrix) -> sp.Matrix:
     return J.applyfunc(laws.in_coulomb_units)
 
 
-def pair_contact(law: str, rotation: bool) -> ContactExprs:
-    """Disk-disk kernel for a tangential law; local dofs of disk i then disk j."""
+LEVER_ARMS = {"model": R, "lammps": R - delta / 2}
+"""Disk-disk torque lever arm per conventions [length]. The history increment keeps the arm R
+(d xi = s . dr_ij - R (dtheta_i + dtheta_j)) in both: LAMMPS charges the history with the
+relative velocity of the surface points at distance R from each centre."""
+
+
+def pair_contact(law: str, rotation: bool, conventions: str = "model") -> ContactExprs:
+    """Disk-disk kernel for a tangential law; local dofs of disk i then disk j; torque lever
+    arm LEVER_ARMS[conventions]."""
     n = sp.Matrix([dx / rho, dy / rho])
     s = sp.Matrix([-n[1], n[0]])
     F_n, F_t = laws.normal_force(), laws.tangential_force(law)
     force_i = F_n * n + F_t * s
-    torque = -R * F_t
+    torque = -LEVER_ARMS[conventions] * F_t
 
     def total(e, var):  # d/d(var) with rho(dx, dy) and delta = 2R - rho
         return sp.diff(e, var) + (sp.diff(e, rho) - sp.diff(e, delta)) * var / rho

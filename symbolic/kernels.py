@@ -18,10 +18,12 @@ from typing import Optional
 from diskfriction.files import cache_root, source_digest
 from diskfriction.scenes import Effects
 from diskfriction.symbolic.generated import Progress, load_generated
+from diskfriction.symbolic.template import Dialect
 
 GENERATOR_VERSION = 1
 _SOURCES = tuple(f"diskfriction.symbolic.{name}" for name in
-                 ("laws", "contacts", "codegen", "assembly_src", "kernels", "generated"))
+                 ("laws", "contacts", "codegen", "assembly_src", "template", "kernels",
+                  "generated"))
 
 
 def cache_dir() -> Path:
@@ -35,8 +37,16 @@ def generator_version() -> str:
 
 
 def effects_key(effects: Effects) -> str:
-    """Only what changes the derivation: the law at each contact kind and rotation."""
-    return f"pair={effects.pair_law};wall={effects.wall_law};rotation={effects.rotation}"
+    """Only what changes the derivation: the law at each contact kind, rotation, and the
+    conventions where they change anything (Effects.contact_conventions)."""
+    key = f"pair={effects.pair_law};wall={effects.wall_law};rotation={effects.rotation}"
+    conventions = effects.contact_conventions
+    return key if conventions == "model" else f"{key};conventions={conventions}"
+
+
+def dialect(effects: Effects) -> Dialect:
+    """The template dialect (symbolic/template.py) of the module for these effects."""
+    return Dialect(effects.contact_conventions, effects.rotation)
 
 
 def module_hash(effects: Effects) -> str:
@@ -51,7 +61,7 @@ def generate_source(effects: Effects, digest: str, progress: Optional[Progress] 
 
     tick = (lambda fraction: progress("generating", fraction)) if progress else (lambda f: None)
     tick(0.0)
-    pair = contacts.pair_contact(effects.pair_law, effects.rotation)
+    pair = contacts.pair_contact(effects.pair_law, effects.rotation, effects.contact_conventions)
     tick(0.4)
     wall = contacts.wall_contact(effects.wall_law, effects.rotation)
     tick(0.45)
@@ -59,7 +69,7 @@ def generate_source(effects: Effects, digest: str, progress: Optional[Progress] 
               f"hash: {digest}\neffects: {effects_key(effects)}\n"
               f'generator: {generator_version()}\n"""')
     assembly = (Path(__file__).parent / "assembly_src.py").read_text()
-    source = codegen.module_source(pair, wall, effects.rotation, header, assembly)
+    source = codegen.module_source(pair, wall, dialect(effects), header, assembly)
     tick(1.0)
     return source
 

@@ -22,20 +22,26 @@ N = 3
 
 
 def all_effects() -> list[Effects]:
-    """Every distinct effect combination (with tangential "none" the friction switches are moot)."""
+    """Every distinct effect combination (with tangential "none" the friction switches are moot),
+    and the "lammps" conventions with pair friction (where they act: the lever arm with
+    rotation, the increment's tangent with or without)."""
     combos = [Effects(law, pf, wf, rot) for law in ("mindlin-smooth", "mindlin-linear")
               for pf, wf, rot in itertools.product((True, False), repeat=3)]
-    return combos + [Effects("none", False, False, rot) for rot in (True, False)]
+    lammps = [Effects(law, True, True, rot, "lammps")
+              for law, rot in (("mindlin-smooth", True), ("mindlin-linear", True),
+                               ("mindlin-linear", False))]
+    return combos + lammps + [Effects("none", False, False, rot) for rot in (True, False)]
 
 
 def effects_id(e: Effects) -> str:
     fr = "+".join(n for n, on in (("pair", e.pair_friction), ("wall", e.wall_friction)) if on)
-    return f"{e.tangential}[{fr or 'nofric'}]{'-rot' if e.rotation else '-norot'}"
+    conventions = "" if e.conventions == "model" else f"-{e.conventions}"
+    return f"{e.tangential}[{fr or 'nofric'}]{'-rot' if e.rotation else '-norot'}{conventions}"
 
 
 def reference(effects: Effects, N: int, L: float) -> ref.Ref:
     return ref.Ref(N=N, L=L, pair_law=effects.pair_law, wall_law=effects.wall_law,
-                   rotation=effects.rotation, **PARAMS)
+                   rotation=effects.rotation, conventions=effects.contact_conventions, **PARAMS)
 
 
 def random_state(rng: np.random.Generator, N: int, rotation: bool, case: int):

@@ -3,6 +3,9 @@
 Nothing here shares code with symbolic/: forces are written straight from the equations, and
 the total stiffness is obtained by central finite differences in 50-digit arithmetic with the
 history following q along each step (midpoint rule, MODEL.md's increments).
+
+conventions "lammps" (docs/physics.md): the disk-disk torque lever arm is R - delta/2 and a
+step's pair increment takes the tangent at the end of the step.
 """
 from __future__ import annotations
 
@@ -25,6 +28,7 @@ class Ref:
     pair_law: str
     wall_law: str
     rotation: bool
+    conventions: str = "model"
 
     @property
     def D(self) -> int:
@@ -69,8 +73,9 @@ def pair_force(m: Ref, q, xi, k, F):
     Fn = m.k_n * delta ** mp.mpf(1.5)
     Ft = tangential(m.pair_law, m.k_n, m.k_t, m.mu, delta, xi[k])
     fx, fy = Fn * nx + Ft * sx, Fn * ny + Ft * sy
-    add(F, m, i, fx, fy, -m.R * Ft)
-    add(F, m, j, -fx, -fy, -m.R * Ft)
+    arm = m.R - delta / 2 if m.conventions == "lammps" else m.R
+    add(F, m, i, fx, fy, -arm * Ft)
+    add(F, m, j, -fx, -fy, -arm * Ft)
 
 
 def wall_force(m: Ref, q, xi, k, F):
@@ -97,9 +102,10 @@ def forces(m: Ref, q, xi, F_x, contacts=None):
 
 
 def increment(m: Ref, q0, q1):
-    """Delta xi along q0 -> q1 by the midpoint rule of MODEL.md's increments."""
+    """Delta xi along q0 -> q1 by the midpoint rule of MODEL.md's increments (the pair tangent
+    at q1 with conventions "lammps")."""
     N = m.N
-    qm = [(a + b) / 2 for a, b in zip(q0, q1)]
+    qm = list(q1) if m.conventions == "lammps" else [(a + b) / 2 for a, b in zip(q0, q1)]
     dq = [b - a for a, b in zip(q0, q1)]
     dth = (lambda i: dq[2 * N + i]) if m.rotation else (lambda i: 0)
     dxi = [mp.mpf(0)] * (2 * N)

@@ -13,7 +13,7 @@ from diskfriction.continuation.sweep import sweep
 from diskfriction.dynamics import (OnsetParams, Perturbation, Stepper, choose_dt, simulate, sliding_onset,
                       spectrum, summarize)
 from diskfriction.dynamics.onset import trailing_mean
-from diskfriction.scenes import Scene
+from diskfriction.scenes import Effects, Scene
 from diskfriction.symbolic import System
 
 
@@ -41,18 +41,29 @@ def observed_order(errors: list[float]) -> np.ndarray:
     return np.log2(e[:-1] / e[1:])
 
 
-def test_one_step_is_verlet_with_the_quasistatic_history_rule(paper, branch_point):
+@pytest.mark.parametrize("conventions", ["model", "lammps"])
+def test_one_step_is_verlet_with_the_quasistatic_history_rule(branch_point, conventions):
+    """The guard of symbolic/template.py: the stepper's pasted assembly and increments equal
+    the kernel module's forces and history_step (continuation's), in both conventions. Disk 10
+    moves 5e-3 towards disk 1 (closing pair 10-1, 2.5e-3 open, and opening pair 9-10, 8e-6
+    closed) and disk 5 turns by 0.2 (its contacts slide)."""
     q, xi = branch_point(0.083)
+    system = System.from_scene(Scene(effects=Effects(conventions=conventions)))
+    N = system.N
     rng = np.random.default_rng(5)
     v = rng.normal(0, 1e-3, q.size)
+    v[N - 1], v[2 * N + 4] = 0.5, 20.0
     dt, F_x = 1e-2, 0.083
-    st = Stepper(paper, q, v, xi, F_x, dt, 1, 4)
+    st = Stepper(system, q, v, xi, F_x, dt, 1, 4)
     st.advance(1)
-    minv = 1 / paper.mass_diagonal()
-    v_half = v + 0.5 * dt * minv * paper.forces(q, xi, F_x)
+    minv = 1 / system.mass_diagonal()
+    v_half = v + 0.5 * dt * minv * system.forces(q, xi, F_x)
     q1 = q + dt * v_half
-    xi1, _ = paper.history_step(q, q1, xi, cap=True)
-    v1 = v_half + 0.5 * dt * minv * paper.forces(q1, xi1, F_x)
+    xi1, slid = system.history_step(q, q1, xi, cap=True)
+    v1 = v_half + 0.5 * dt * minv * system.forces(q1, xi1, F_x)
+    delta0, delta1 = system.overlaps(q), system.overlaps(q1)
+    assert ((delta0 <= 0) & (delta1 > 0)).any() and ((delta0 > 0) & (delta1 <= 0)).any()
+    assert slid.any()
     assert np.abs(st.q - q1).max() <= 1e-15 * np.abs(q1).max()
     assert np.abs(st.xi - xi1).max() <= 1e-12 * np.abs(xi1).max()
     assert np.abs(st.v - v1).max() <= 1e-12 * np.abs(v1).max()

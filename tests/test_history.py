@@ -7,7 +7,7 @@ import pytest
 
 import reference_model as ref
 from jacobian_check import N, all_effects, effects_id, random_state, reference
-from diskfriction.scenes import Scene
+from diskfriction.scenes import Effects, Scene
 from diskfriction.symbolic import System, load_kernels
 
 
@@ -47,8 +47,8 @@ def test_sliding_without_rolling_charges_the_substrate_by_the_displacement():
     assert np.abs(xi1[s.N:] - 1e-6).max() <= rounding and not slid.any()
 
 
-def step_one_contact(xi0, dxi, delta0, delta1, cap=True):
-    s = System.from_scene(Scene(N=2))
+def step_one_contact(xi0, dxi, delta0, delta1, cap=True, conventions="model"):
+    s = System.from_scene(Scene(N=2, effects=Effects(conventions=conventions)))
     xi1, slid = np.empty(1), np.empty(1, dtype=np.bool_)
     n = s.kernels.commit_history(np.array([xi0]), np.array([dxi]), np.array([delta0]),
                                  np.array([delta1]), s.params, cap, xi1, slid)
@@ -60,6 +60,13 @@ def test_opening_resets_and_first_contact_charges_only_after_closing():
     assert step_one_contact(0.0, 1e-7, -3e-6, 1e-6)[0] == pytest.approx(0.25e-7, rel=1e-15)
     assert step_one_contact(0.0, 1e-7, 0.0, 1e-6)[0] == 1e-7  # touching at the start: all of it
     assert step_one_contact(2e-7, 1e-7, 1e-4, 1e-4)[0] == pytest.approx(3e-7, rel=1e-15)
+
+
+def test_lammps_conventions_charge_a_closing_contact_with_the_whole_step():
+    """LAMMPS finds a contact closed at the end of a step and charges it with v_t dt."""
+    assert step_one_contact(0.0, 1e-7, -3e-6, 1e-6, conventions="lammps")[0] == 1e-7
+    assert step_one_contact(1e-6, 1e-7, 1e-4, -1e-6, conventions="lammps")[0] == 0.0
+    assert step_one_contact(2e-7, 1e-7, 1e-4, 1e-4, conventions="lammps")[0] == pytest.approx(3e-7, rel=1e-15)
 
 
 def test_coulomb_cap_sets_the_history_to_its_limit_and_reports_sliding():

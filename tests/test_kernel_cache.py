@@ -65,6 +65,17 @@ def test_friction_switches_that_do_not_change_the_derivation_share_a_module():
     assert kernels.module_hash(a) == kernels.module_hash(b)
 
 
+def test_conventions_regenerate_only_where_they_change_something():
+    """The conventions act on contacts with friction: without any, one module; with friction,
+    "lammps" is a module of its own and the default "model" keeps the plain key."""
+    for law, pair, wall in (("mindlin-smooth", True, True), ("mindlin-linear", False, True)):
+        model, lammps = (Effects(law, pair, wall, True, c) for c in ("model", "lammps"))
+        assert kernels.module_hash(model) != kernels.module_hash(lammps)
+        assert "conventions" not in kernels.effects_key(model)
+    frictionless = [Effects("none", False, False, True, c) for c in ("model", "lammps")]
+    assert kernels.module_hash(frictionless[0]) == kernels.module_hash(frictionless[1])
+
+
 def test_compiled_code_is_cached_for_the_next_process(fresh_cache):
     """numba cache=True: after one process ran the kernels, their index files exist."""
     code = ("from diskfriction.scenes import Scene; from diskfriction.symbolic import System;"
