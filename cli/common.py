@@ -11,7 +11,7 @@ from typing import Optional
 from diskfriction.errors import OneLineError
 from diskfriction.files import writable
 from diskfriction.scenes.load import SceneError, default_scene_path, load_scene
-from diskfriction.scenes.scene import Scene
+from diskfriction.scenes.scene import NEGATIVE_LOAD, Scene
 
 EXIT_BAD_INPUT = 2  # as argparse exits on a usage error
 EXIT_FAILED = 1  # the computation itself failed (no equilibrium, ...)
@@ -46,6 +46,14 @@ def number(command: str, option: str, value, zero: bool = False, integer: bool =
         what = f"{'an integer' if integer else 'a number'} {'>= 0' if zero else '> 0'}"
         raise CommandError(f"{command} error: --{option}: must be {what} (got {value!r})")
     return value
+
+
+def load(command: str, value: float) -> float:
+    """A load F_x given with --fx: a finite number >= 0 (NEGATIVE_LOAD says why not below 0),
+    else a CommandError, exit 2."""
+    if value is not None and value < 0:
+        raise CommandError(f"{command} error: --fx: F_x must be >= 0: {NEGATIVE_LOAD} (got {value!r})")
+    return number(command, "fx", value, zero=True)
 
 
 def output_dir(command: str, given: Optional[str], default: Path) -> Path:

@@ -1,0 +1,111 @@
+"""``diskfriction crosscheck lammps [SCENE] --fx F --t-end T [--start rest|branch] [--dt DT]
+[--every K] [--out DIR]``
+
+Runs our dynamics and LAMMPS from the same state (peers/crosscheck.py) and prints the largest
+deviation of x, y and theta over the disks against time; writes DIR/crosscheck.json,
+DIR/deviation.npz, DIR/deviation.png and LAMMPS's files in DIR/lammps/. One line if LAMMPS is
+not installed (diskfriction[lammps]).
+"""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from diskfriction.cli.common import (CommandError, add_scene_argument, check_sweep_memory, load,
+                                     number, output_dir, scene_from_args)
+from diskfriction.cli.export_cmd import add_start_argument
+from diskfriction.cli.progress import Progress
+
+TABLE_ROWS = 10
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser("crosscheck", help="run another code beside ours and compare",
+                                   description="Run another code beside ours and compare.")
+    targets = parser.add_subparsers(metavar="CODE", required=True, dest="target")
+    lammps = targets.add_parser(
+        "lammps", help="our dynamics against LAMMPS from the same state",
+        description="Export the scene to LAMMPS (as `export lammps`), run LAMMPS and our "
+                    "dynamics from the same state with the same steps, and print the largest "
+                    "deviation of x, y and theta over the disks against time. They agree to "
+                    "rounding for the linear Mindlin law with [effects] conventions = "
+                    "\"lammps\" (docs/lammps.md). Raw units.")
+    add_scene_argument(lammps)
+    lammps.add_argument("--fx", type=float, required=True, metavar="F", help="load on disk 1, raw force")
+    lammps.add_argument("--t-end", type=float, required=True, metavar="T", help="duration, raw time")
+    add_start_argument(lammps, "rest")
+    lammps.add_argument("--dt", type=float, default=None,
+                        help="largest time step: T is split into equal steps of at most DT "
+                             "(default: 0.05 x 2 / omega_max at the start, as simulate)")
+    lammps.add_argument("--every", type=int, default=None, metavar="K",
+                        help="steps between compared frames (default: about 1000 frames)")
+    lammps.add_argument("--out", metavar="DIR",
+                        help="output directory (default: out/crosscheck/SCENE)")
+    lammps.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from diskfriction.peers.lammps_deck import check_representable
+    from diskfriction.peers.lammps_run import find_lammps
+
+    scene = scene_from_args(args)
+    F_x = load("crosscheck", args.fx)
+    number("crosscheck", "t-end", args.t_end)
+    if args.dt is not None:
+        number("crosscheck", "dt", args.dt)
+        if args.dt > args.t_end:
+            raise CommandError(f"crosscheck error: --dt: longer than --t-end = {args.t_end:g} "
+                               f"(got {args.dt!r})")
+    if args.every is not None:
+        number("crosscheck", "every", args.every, integer=True)
+    check_representable(scene)
+    out = output_dir("crosscheck", args.out, Path("out") / "crosscheck" / scene.name)
+    check_sweep_memory("crosscheck", scene)  # the default dt comes from the dense spectrum at the start
+    lammps = find_lammps()
+
+    from diskfriction.files import save_json, save_npz
+    from diskfriction.peers.crosscheck import Steps, crosscheck, default_dt, lever_arm_band
+    from diskfriction.peers.lammps_deck import start_state
+    from diskfriction.reports.crosscheck import plot_deviation
+    from diskfriction.symbolic import System
+
+    progress = Progress("crosscheck")
+    try:
+        system = System.from_scene(scene, progress.part("kernels"))
+        progress.stage(f"{args.start} state at F_x = {F_x:g}")
+        start = start_state(system, F_x, args.start)
+        steps = Steps.plan(args.t_end, args.dt or default_dt(system, start), args.every)
+        progress.stage(f"both codes to t = {args.t_end:g} ({steps.steps} steps of {steps.dt:.4g})")
+        result = crosscheck(system, start, steps, lammps, out / "lammps")
+        summary = result.summary()
+        band = None
+        if scene.effects.conventions == "model" and scene.resolved_effects.rotation:
+            band = lever_arm_band(system, result.ours, float(result.t[-1]))
+            summary["lever_arm_band"] = list(band)
+        progress.stage(f"writing {out}/crosscheck.json, deviation.npz, deviation.png")
+        save_json(out / "crosscheck.json", summary)
+        save_npz(out / "deviation.npz", t=result.t, **result.deviations())
+        plot_deviation(result, scene, out / "deviation.png")
+    finally:
+        progress.close()
+    print(f"start: {start.note}")
+    print(f"LAMMPS {result.lammps_version}, conventions {scene.effects.conventions!r}, "
+          f"{steps.steps} steps of dt = {steps.dt:.17g}, compared every {steps.every} steps")
+    print(table(result))
+    if band is not None:
+        print(f'conventions "model": the lever arm alone accounts for a theta deviation between '
+              f'{band[0]:.2g} and {band[1]:.2g} at t = {result.t[-1]:g} (docs/physics.md)')
+    print(f"wrote {out}/crosscheck.json, deviation.npz, deviation.png, lammps/")
+    return 0
+
+
+def table(result) -> str:
+    """Deviations at TABLE_ROWS evenly spaced frames, and the largest over the run."""
+    names = list(result.deviations())
+    rows = [f"{'t':>10}" + "".join(f"{'max |d' + n + '|':>14}" for n in names)]
+    for k in np.unique(np.linspace(0, result.t.size - 1, TABLE_ROWS + 1).round().astype(int)):
+        rows.append(f"{result.t[k]:>10.4g}" + "".join(f"{d[k]:>14.3e}" for d in result.deviations().values()))
+    rows.append(f"{'whole run':>10}" + "".join(f"{d.max():>14.3e}" for d in result.deviations().values()))
+    return "\n".join(rows)

@@ -1,0 +1,77 @@
+"""``diskfriction export lammps [SCENE] [--fx F] [--start rest|branch] [--out DIR]``
+
+Writes DIR/scene.data and DIR/in.scene: the scene as LAMMPS input (peers/lammps_deck.py), from
+the branch point at F_x with zero histories (or the rest state with F_x switched on), saying
+which on stdout and in the deck. What LAMMPS cannot represent is refused with one line, exit 2.
+"""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from diskfriction.cli.common import (add_scene_argument, check_sweep_memory, load, output_dir,
+                                     scene_from_args)
+from diskfriction.cli.progress import Progress
+
+STARTS = ("branch", "rest")
+DEFAULT_STEPS, DEFAULT_EVERY = 1000, 10
+"""The deck's default run (lmp -var steps N -var every K change it)."""
+
+
+def add_start_argument(parser: argparse.ArgumentParser, default: str) -> None:
+    parser.add_argument("--start", choices=STARTS, default=default,
+                        help="branch: the equilibrium on the branch from rest at F_x, with zero "
+                             "tangential histories (LAMMPS cannot be given any); rest: the F_x = 0 "
+                             f"equilibrium with F_x switched on at t = 0 (default: {default})")
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser("export", help="write a scene as input for another code",
+                                   description="Write a scene as input for another code.")
+    targets = parser.add_subparsers(metavar="CODE", required=True, dest="target")
+    lammps = targets.add_parser(
+        "lammps", help="a LAMMPS data file and input deck",
+        description="Write DIR/scene.data and DIR/in.scene, a LAMMPS data file and input deck "
+                    "reproducing the scene (docs/lammps.md): Hertz and linear Mindlin contacts "
+                    "mapped with R_eff, no damping, nve/sphere disc, enforce2d, addforce; every "
+                    "number to 17 digits. Refuses (one line, exit 2) what LAMMPS cannot "
+                    "represent: the smoothed Mindlin law, c other than 1/2 or 2/5, N = 2.")
+    add_scene_argument(lammps)
+    lammps.add_argument("--fx", type=float, default=0.0, metavar="F",
+                        help="load on disk 1, raw force (default 0: the rest state)")
+    add_start_argument(lammps, "branch")
+    lammps.add_argument("--out", metavar="DIR", help="output directory (default: out/export/SCENE)")
+    lammps.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from diskfriction.peers.lammps_deck import check_representable
+
+    scene = scene_from_args(args)
+    F_x = load("export", args.fx)
+    check_representable(scene)
+    out = output_dir("export", args.out, Path("out") / "export" / scene.name)
+    check_sweep_memory("export", scene)  # the default dt comes from the dense spectrum at the start
+
+    from diskfriction.peers.crosscheck import default_dt
+    from diskfriction.peers.lammps_deck import DUMP_FILE, deck, start_state
+    from diskfriction.symbolic import System
+
+    progress = Progress("export")
+    try:
+        system = System.from_scene(scene, progress.part("kernels"))
+        progress.stage(f"{args.start} state at F_x = {F_x:g}")
+        start = start_state(system, F_x, args.start)
+        written = deck(scene, start, default_dt(system, start), DEFAULT_STEPS, DEFAULT_EVERY)
+        paths = written.save(out)
+    finally:
+        progress.close()
+    print(f"start: {start.note}")
+    print(f"deck defaults: dt = {written.dt:.17g}, steps = {written.steps}, a dump every "
+          f"{written.every} steps to {DUMP_FILE} (lmp -var dt|steps|every VALUE)")
+    if scene.effects.conventions == "model":
+        print('conventions: the scene uses "model"; LAMMPS integrates with its own (lever arm '
+              'R - delta/2, end-of-step increment, whole increment on first contact): expect '
+              'O(delta) differences (docs/physics.md)')
+    print(f"wrote {', '.join(str(p) for p in paths)}; run: cd {out} && lmp -in {paths[1].name}")
+    return 0
