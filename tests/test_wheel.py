@@ -24,6 +24,8 @@ NOT_SOURCES = shutil.ignore_patterns(".git", ".venv", "venv", "build", "dist", "
                                      "__pycache__", ".pytest_cache", "out", ".cache",
                                      ".diskfriction-cache")
 TINY = "[disks]\nN = 3\n[load]\nF_x = [0.0, 0.02]\n"
+LINEAR = TINY + '[effects]\ntangential = "mindlin-linear"\nconventions = "lammps"\n'
+"""A tiny scene LAMMPS can represent (export, crosscheck)."""
 
 
 def run(*args, cwd: Path, env: dict | None = None) -> subprocess.CompletedProcess:
@@ -52,6 +54,7 @@ def installed(tmp_path_factory):
     elsewhere = root / "elsewhere"
     elsewhere.mkdir()
     (elsewhere / "tiny.toml").write_text(TINY)
+    (elsewhere / "linear.toml").write_text(LINEAR)
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
     return wheel, python, root / "venv" / "bin" / "diskfriction", elsewhere, env
 
@@ -85,11 +88,21 @@ def test_the_installed_package_is_the_wheel_not_the_checkout(installed):
     (["simulate", "tiny.toml", "--fx", "0.01", "--t-end", "2", "--out", "s"], "wrote s/"),
     (["verify", "tiny.toml", "--t-end", "2", "--out", "v"], "wrote v/verify.json"),
     (["report", "tiny.toml", "--only", "fig6", "--out", "r", "--cache", "r/cache"], "wrote r/report.md"),
+    (["export", "lammps", "linear.toml", "--fx", "0.01", "--out", "e"], "wrote e/scene.data, e/in.scene"),
+    (["crosscheck", "lammps", "linear.toml", "--fx", "0.01", "--t-end", "1", "--out", "c"],
+     "wrote c/crosscheck.json"),
 ], ids=lambda a: a[0] if isinstance(a, list) else None)
 def test_every_subcommand_runs_from_the_wheel(installed, args, says):
     _, _, command, elsewhere, env = installed
     result = run(command, *args, cwd=elsewhere, env=env)
     assert says in result.stdout and "Traceback" not in result.stderr
+
+
+def test_ci_runs_the_readme_test_command():
+    """A clean clone's CI (.ci/run) runs exactly the README's test command, extras included."""
+    readme = (ROOT / "README.md").read_text().splitlines()
+    command = next(line for line in readme if "pytest" in line and line.startswith("python3 -m venv"))
+    assert (ROOT / ".ci" / "run").read_text().rstrip().splitlines()[-1] == command
 
 
 def test_python_dash_m_runs_the_installed_command(installed):
