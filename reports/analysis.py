@@ -119,3 +119,16 @@ def fig2_claims(branch: dict | None, spectra: dict | None, eig_unit: float) -> l
 
 def mark(holds: bool | None) -> str:
     return {True: "yes", False: "**no**", None: "n/a"}[holds]
+
+
+def movement(paper: float, base: dict | None, variant: dict | None) -> str:
+    """Whether `variant` lies closer to `paper` than `base` does: "toward", "away", "no change"
+    when the two differ by no more than their combined standard errors, "n/a" when either is
+    missing. base, variant: Estimate dicts (value, error, n) in the paper's units."""
+    if not base or not variant or base["value"] is None or variant["value"] is None:
+        return "n/a"
+    noise = np.hypot(*(e["error"] if e["error"] is not None else 0.0 for e in (base, variant)))
+    if abs(variant["value"] - base["value"]) <= noise:
+        return "no change"
+    closer = abs(variant["value"] - paper) < abs(base["value"] - paper)
+    return "toward" if closer else "away"

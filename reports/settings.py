@@ -48,6 +48,9 @@ class Settings:
     ensemble_t_end: float = 1000.0
     vcm_loads: tuple[float, ...] = (0.083, 0.087, 0.090, 0.095, 0.10, 0.11)
     vcm_realizations: int = 5
+    # LAMMPS conventions: Figs. 5 and 7 rerun with conventions "lammps" and these c (LAMMPS's
+    # nve/sphere disc and nve/sphere)
+    lammps_inertias: tuple[float, ...] = (0.5, 0.4)
 
 
 ZERO_ALLOWED = ("eps_values", "mode_eps", "seed", "kick", "mode_F_x")

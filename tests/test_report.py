@@ -23,7 +23,8 @@ QUICK = Settings(inertias=(0.5,), eps_values=(0.0, 1e-4), accuracy_divisions=(30
                  accuracy_tol_p=(1e-8,), reference_divisions=120, jacobian_steps=(1e-4, 1e-6),
                  dt_fractions=(0.2, 0.1), reference_dt_fraction=0.05, dynamics_accuracy_t_end=20.0,
                  t_end=20.0, fig3_loads=(0.03, 0.083), fig4_disk=2, ensemble_loads=(0.087, 0.09),
-                 realizations=2, ensemble_t_end=20.0, vcm_loads=(0.087, 0.09), vcm_realizations=1)
+                 realizations=2, ensemble_t_end=20.0, vcm_loads=(0.087, 0.09), vcm_realizations=1,
+                 lammps_inertias=(0.4,))
 
 
 def build(out: Path, cache: Path, settings: Settings = QUICK, only=None):
@@ -44,7 +45,7 @@ def test_builder_writes_every_figure_and_the_table(first):
     report = (root / "out" / "report.md").read_text()
     for section in SECTIONS:
         assert f"## {section.title}" in report
-    for name in ("fig2", "fig3", "fig4", "fig5", "fig6", "fig7", "readings", "accuracy"):
+    for name in ("fig2", "fig3", "fig4", "fig5", "fig6", "fig7", "readings", "lammps", "accuracy"):
         png = root / "out" / "tiny" / f"{name}.png"
         assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", name
         assert f"(tiny/{name}.png)" in report
@@ -128,3 +129,14 @@ def test_bad_input_gets_one_line_and_exit_2(tmp_path, args, says):
     assert run.returncode == 2
     assert run.stderr.count("\n") == 1 and run.stderr.startswith(says), run.stderr
     assert not (tmp_path / "o").exists()
+
+
+def test_a_reading_moves_toward_the_paper_only_beyond_the_errors():
+    from diskfriction.reports.analysis import movement
+
+    est = lambda value, error=0.1: {"value": value, "error": error, "n": 5}  # noqa: E731
+    assert movement(1.0, est(2.0), est(1.5)) == "toward"
+    assert movement(1.0, est(2.0), est(2.5)) == "away"
+    assert movement(1.0, est(2.0), est(2.1)) == "no change"  # within sqrt(0.1^2 + 0.1^2)
+    assert movement(1.0, est(2.0, None), est(1.9, None)) == "toward"
+    assert movement(1.0, None, est(1.5)) == movement(1.0, est(None), est(1.5)) == "n/a"
