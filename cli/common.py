@@ -56,6 +56,25 @@ def load(command: str, value: float) -> float:
     return number(command, "fx", value, zero=True)
 
 
+def run_length(command: str, t_end: float, dt: Optional[float]) -> None:
+    """--t-end a number > 0 and --dt, if given, a number > 0 no longer than it; else a
+    CommandError, exit 2."""
+    number(command, "t-end", t_end)
+    if dt is not None:
+        number(command, "dt", dt)
+        if dt > t_end:
+            raise CommandError(f"{command} error: --dt: longer than --t-end = {t_end:g}: the run "
+                               f"would not take one step (got {dt!r})")
+
+
+def code_targets(subparsers: argparse._SubParsersAction, command: str, help: str
+                 ) -> argparse._SubParsersAction:
+    """Add `command`, whose first argument names the other code it works with (CODE); the
+    subparsers to add each code to."""
+    parser = subparsers.add_parser(command, help=help, description=help[0].upper() + help[1:] + ".")
+    return parser.add_subparsers(metavar="CODE", required=True, dest="target")
+
+
 def output_dir(command: str, given: Optional[str], default: Path) -> Path:
     """The output directory, --out or `default`, checked before anything is computed: not
     empty, not an existing file, and a directory that exists or can be made and in which

@@ -13,8 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from diskfriction.cli.common import (CommandError, add_scene_argument, check_sweep_memory, load,
-                                     number, output_dir, scene_from_args)
+from diskfriction.cli.common import (add_scene_argument, check_sweep_memory, code_targets, load,
+                                     number, output_dir, run_length, scene_from_args)
 from diskfriction.cli.export_cmd import add_start_argument
 from diskfriction.cli.progress import Progress
 
@@ -22,10 +22,7 @@ TABLE_ROWS = 10
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser("crosscheck", help="run another code beside ours and compare",
-                                   description="Run another code beside ours and compare.")
-    targets = parser.add_subparsers(metavar="CODE", required=True, dest="target")
-    lammps = targets.add_parser(
+    lammps = code_targets(subparsers, "crosscheck", "run another code beside ours and compare").add_parser(
         "lammps", help="our dynamics against LAMMPS from the same state",
         description="Export the scene to LAMMPS (as `export lammps`), run LAMMPS and our "
                     "dynamics from the same state with the same steps, and print the largest "
@@ -52,12 +49,7 @@ def run(args: argparse.Namespace) -> int:
 
     scene = scene_from_args(args)
     F_x = load("crosscheck", args.fx)
-    number("crosscheck", "t-end", args.t_end)
-    if args.dt is not None:
-        number("crosscheck", "dt", args.dt)
-        if args.dt > args.t_end:
-            raise CommandError(f"crosscheck error: --dt: longer than --t-end = {args.t_end:g} "
-                               f"(got {args.dt!r})")
+    run_length("crosscheck", args.t_end, args.dt)
     if args.every is not None:
         number("crosscheck", "every", args.every, integer=True)
     check_representable(scene)

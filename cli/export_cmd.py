@@ -9,8 +9,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from diskfriction.cli.common import (add_scene_argument, check_sweep_memory, load, output_dir,
-                                     scene_from_args)
+from diskfriction.cli.common import (add_scene_argument, check_sweep_memory, code_targets, load,
+                                     output_dir, scene_from_args)
 from diskfriction.cli.progress import Progress
 
 STARTS = ("branch", "rest")
@@ -26,10 +26,7 @@ def add_start_argument(parser: argparse.ArgumentParser, default: str) -> None:
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser("export", help="write a scene as input for another code",
-                                   description="Write a scene as input for another code.")
-    targets = parser.add_subparsers(metavar="CODE", required=True, dest="target")
-    lammps = targets.add_parser(
+    lammps = code_targets(subparsers, "export", "write a scene as input for another code").add_parser(
         "lammps", help="a LAMMPS data file and input deck",
         description="Write DIR/scene.data and DIR/in.scene, a LAMMPS data file and input deck "
                     "reproducing the scene (docs/lammps.md): Hertz and linear Mindlin contacts "

@@ -14,7 +14,7 @@ import re
 from pathlib import Path
 
 from diskfriction.cli.common import (CommandError, add_scene_argument, check_sweep_memory,
-                                     number, output_dir, scene_from_args)
+                                     number, output_dir, run_length, scene_from_args)
 from diskfriction.cli.progress import Progress
 from diskfriction.scenes.scene import NEGATIVE_LOAD
 
@@ -79,12 +79,7 @@ SCHEDULER = re.compile(r"^((tcp|tls|ws|wss|ucx)://)?[^\s:/]+:\d+$")
 def run(args: argparse.Namespace) -> int:
     scene = scene_from_args(args)
     loads = parse_loads(args.fx)
-    number("simulate", "t-end", args.t_end)
-    if args.dt is not None:
-        number("simulate", "dt", args.dt)
-        if args.dt > args.t_end:
-            raise CommandError(f"simulate error: --dt: longer than --t-end = {args.t_end:g}: the "
-                               f"run would not take one step (got {args.dt!r})")
+    run_length("simulate", args.t_end, args.dt)
     if args.realizations is not None:
         number("simulate", "realizations", args.realizations, integer=True)
     if args.scheduler is not None and not SCHEDULER.match(args.scheduler):

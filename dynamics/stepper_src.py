@@ -1,5 +1,5 @@
 # Stepper source appended to a generated header (see dynamics/stepper.py), rendered by
-# symbolic/template.py: each "# @fragment NAME" line becomes the per-contact code the kernel
+# symbolic/template.py: each "...  # @fragment NAME" line becomes the per-contact code the kernel
 # module's forces, history_increment and commit_history are made of, for the scene's
 # conventions. Not importable on its own: numba, np, D, PAIR_FRICTION, WALL_FRICTION and the kernel module's
 # pair_separation, pair_overlap, pair_force, pair_increment_coeffs, pair_dofs, wall_force,
@@ -94,7 +94,7 @@ def advance(q, v, xi, mass, F_x, params, dt, n_steps, stride, scal, ints, slip, 
     ft1 = np.empty(2 * N)
     dxi = np.empty(2 * N)
     slid = np.zeros(2 * N, np.bool_)
-    # @fragment arm_path_array
+    ...  # @fragment arm_path_array
     minv = 1.0 / mass
     countdown = stride - ints[INT_STEP] % stride
     for it in range(n_steps + 1):
@@ -116,13 +116,13 @@ def advance(q, v, xi, mass, F_x, params, dt, n_steps, stride, scal, ints, slip, 
             if PAIR_FRICTION and moving:
                 dx0 = sep[0, k]
                 dy0 = sep[1, k]
-                # @fragment pair_increment
-                # @fragment pair_arm_path
+                ...  # @fragment pair_increment
+                ...  # @fragment pair_arm_path
             sep[0, k] = dx
             sep[1, k] = dy
             dxi[N + k] = 0.0
             if WALL_FRICTION and moving:
-                # @fragment wall_increment
+                ...  # @fragment wall_increment
             delta1[N + k] = R - q1[N + k]
         # the history rule: reset on opening, first contact, Coulomb cap
         if moving:
@@ -142,7 +142,7 @@ def advance(q, v, xi, mass, F_x, params, dt, n_steps, stride, scal, ints, slip, 
                 dx = sep[0, k]
                 dy = sep[1, k]
                 xi_k = xi1[k]
-                # @fragment pair_force
+                ...  # @fragment pair_force
                 if PAIR_FRICTION:
                     ft1[k] = (f[1] * dx - f[0] * dy) / (2.0 * R - delta_k)
         for k in range(N):
@@ -150,7 +150,7 @@ def advance(q, v, xi, mass, F_x, params, dt, n_steps, stride, scal, ints, slip, 
             delta_k = delta1[N + k]
             if delta_k > 0.0:
                 xi_k = xi1[N + k]
-                # @fragment wall_force
+                ...  # @fragment wall_force
                 if WALL_FRICTION:
                     ft1[N + k] = f[0]
         add_loads(F, F_x, F_y, N)
@@ -164,7 +164,7 @@ def advance(q, v, xi, mass, F_x, params, dt, n_steps, stride, scal, ints, slip, 
             w_t = 0.0
             w_slip = 0.0
             for c in range(2 * N):
-                # @fragment tangential_work
+                ...  # @fragment tangential_work
                 if slid[c]:
                     # a contact closing and capped in one step slid < |dxi|: not booked
                     s = xi[c] + dxi[c] - xi1[c] if delta[c] > 0.0 else 0.0

