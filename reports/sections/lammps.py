@@ -203,6 +203,12 @@ def render(ctx):
             f"{A.PAPER_REAL_LOAD:g}, when more (fewer) of the paper's two claims hold (J all real, "
             f"the chain stays).\n"]
     text += [verdict(name, moves(base, readings[name], s.ensemble_loads)) for name in names[1:]]
+    if ctx.scene.effects.conventions != "lammps" and len(names) > 2:
+        text.append(f"\nThe effect of c alone, each against {names[1]} (both with LAMMPS's "
+                    f"conventions):\n")
+        text += [verdict(f"{name} against {names[1]}", moves(readings[names[1]], readings[name],
+                                                             s.ensemble_loads))
+                 for name in names[2:]]
     return "\n".join(text) + "\n" + failures(ctx)
 
 
