@@ -11,8 +11,6 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-import numpy as np
-
 from diskfriction.cli.common import (add_scene_argument, check_sweep_memory, code_targets, load,
                                      number, output_dir, run_length, scene_from_args)
 from diskfriction.cli.export_cmd import add_start_argument
@@ -95,6 +93,8 @@ def run(args: argparse.Namespace) -> int:
 
 def table(result) -> str:
     """Deviations at TABLE_ROWS evenly spaced frames, and the largest over the run."""
+    import numpy as np
+
     names = list(result.deviations())
     rows = [f"{'t':>10}" + "".join(f"{'max |d' + n + '|':>14}" for n in names)]
     for k in np.unique(np.linspace(0, result.t.size - 1, TABLE_ROWS + 1).round().astype(int)):

@@ -205,7 +205,8 @@ def _scene_header(scene: Scene, label: str, several: bool) -> str:
             f"k_n = {scene.k_n:g}, k_t = {scene.k_t:.6g}, mu = {scene.mu:g}, F_y = {scene.F_y:g}, "
             f"F_x = {scene.F_x_range[0]:g}..{scene.F_x_range[1]:g}; tangential law "
             f"{e.tangential}, pair friction {e.pair_friction}, substrate friction "
-            f"{e.wall_friction}, rotation {e.rotation}. tau = {scene.tau:.5g} raw time units.\n")
+            f"{e.wall_friction}, rotation {e.rotation}, conventions {e.conventions}. "
+            f"tau = {scene.tau:.5g} raw time units.\n")
 
 
 def _appendix(log: list[LogEntry]) -> str:

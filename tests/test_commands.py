@@ -196,7 +196,9 @@ def ignores_sigint(pid: int) -> bool:
 def test_interrupting_an_ensemble_prints_one_line_and_exits_130(tmp_path):
     """As a terminal does: SIGINT to the whole process group, once the dask workers run. The
     workers ignore it (else each may print a KeyboardInterrupt traceback while the parent
-    shuts them down, depending on what it is doing at that moment)."""
+    shuts them down, depending on what it is doing at that moment). The parent itself ignores
+    SIGINT while it starts them (dynamics/ensemble.py: workers_ignore_interrupts), which on a
+    busy machine lasts seconds after the workers appear: the signal is sent once it listens."""
     import psutil
 
     proc = subprocess.Popen(
@@ -213,7 +215,9 @@ def test_interrupting_an_ensemble_prints_one_line_and_exits_130(tmp_path):
                 break
             time.sleep(0.2)
         assert workers and all(ignores_sigint(w.pid) for w in workers)
-        time.sleep(1.5)  # the workers start and take their realizations
+        while time.monotonic() < deadline and ignores_sigint(proc.pid):
+            time.sleep(0.05)  # the parent is still starting the workers
+        time.sleep(1.5)  # the workers take their realizations
         os.killpg(proc.pid, signal.SIGINT)
         out, err = proc.communicate(timeout=120)
     finally:
