@@ -228,8 +228,8 @@ def input_deck(scene: Scene, start: Start, dt: float, steps: int, every: int, ve
         f"# LAMMPS input deck of the diskfriction scene {scene.name!r} ({scene.source}), "
         f"diskfriction {version}.",
         f"# Start: {start.note}.",
-        "# Raw units of the scene throughout (MODEL.md: m, 2R and k_n as given; time in "
-        "sqrt(m / k_n ...)).",
+        "# Units: the scene's raw units (MODEL.md: lengths, masses, stiffnesses and forces as "
+        "the scene gives them), in LAMMPS's units lj.",
         _conventions_note(scene),
         "# Run: lmp -in in.scene [-var steps N] [-var dt DT]" + (" [-var every K]" if record else ""),
         "",
