@@ -87,6 +87,7 @@ class DetectionParams:
     enabled: bool = True
     min_ds: float = 1e-14
     locator_iterations: int = 12
+    doubt: float = 0.25
 
     def __post_init__(self):
         if self.mode not in MODES:
@@ -314,7 +315,8 @@ class StepScan:
         thr = max(a.thr, b.thr)
         rho = self.params.rho
         y_a, y_b, dy_a, dy_b = certify.pair_test_data(a.eigvals, b.eigvals, d_a, d_b, I, J)
-        bad, t_min = certify.uncertified_pairs(y_a, y_b, dy_a, dy_b, rho, 4.0 * thr * thr)
+        bad, t_min = certify.uncertified_pairs(y_a, y_b, dy_a, dy_b, rho, 4.0 * thr * thr,
+                                               self.params.doubt)
         labels = ~(a.excluded | b.excluded) & (a.status == b.status)
         wrong = labels & certify.inconsistent_labels(a.eigvals, b.eigvals, d_a, d_b, rho, 2.0 * thr)
         if bad.any():
