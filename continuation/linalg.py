@@ -20,6 +20,7 @@ worker, a second sweep).
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Union
 
@@ -121,8 +122,14 @@ def solve(M: Matrix, rhs: Array) -> Array:
     return factorize(M).solve(rhs)
 
 
+@functools.lru_cache(maxsize=1)
+def _controller():
+    """threadpoolctl's view of the loaded BLAS libraries, made once (about 1 ms each time)."""
+    from threadpoolctl import ThreadpoolController
+
+    return ThreadpoolController()
+
+
 def blas_threads():
     """Context running BLAS on one thread (module docstring)."""
-    from threadpoolctl import threadpool_limits
-
-    return threadpool_limits(1, user_api="blas")
+    return _controller().limit(limits=1, user_api="blas")
