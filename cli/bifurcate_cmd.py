@@ -37,6 +37,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="collision detection: fast (eigenvalue slopes, Hermite "
                              "certification, Newton locator; the default) or exhaustive "
                              "(bisection with full spectra, version 0.1; slow, for checking)")
+    parser.add_argument("--window", metavar="LO:HI",
+                        help="track only the eigenvalues with LO <= Re lambda <= HI (the "
+                             "diagram's units: lambda / k_n for J) by sparse shift-invert, for "
+                             "chains too long for full spectra (N ~ 1000); collisions are "
+                             "certified and listed in the window only (fast detection)")
     parser.add_argument("--json", action="store_true", help="print the collision list to stdout")
     parser.set_defaults(run=run)
 
@@ -58,9 +63,26 @@ def parse_range(text: str) -> tuple[float, float]:
     return a, b
 
 
+def parse_window(text: str) -> tuple[float, float]:
+    """'LO:HI' -> (LO, HI), finite with LO < HI; else a one-line CommandError."""
+    parts = text.split(":")
+    try:
+        lo, hi = (float(p) for p in parts) if len(parts) == 2 else (None, None)
+    except ValueError:
+        lo = hi = None
+    if lo is None or not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+        raise CommandError(f"bifurcate error: --window: expected LO:HI with two numbers, LO < HI "
+                           f"(got {text!r})")
+    return lo, hi
+
+
 def run(args: argparse.Namespace) -> int:
     scene = scene_from_args(args)
     F_from, F_to = parse_range(args.fx) if args.fx is not None else scene.F_x_range
+    window = parse_window(args.window) if args.window is not None else None
+    if window is not None and args.detection != "fast":
+        raise CommandError("bifurcate error: --window: needs the fast detection (eigenvalue "
+                           f"slopes), not --detection {args.detection}")
     if args.matrix is not None and args.matrix not in MATRICES:
         raise CommandError(f"bifurcate error: --matrix: must be J or M^-1J (got {args.matrix!r})")
     if args.ds_max is not None:
@@ -75,6 +97,7 @@ def run(args: argparse.Namespace) -> int:
     from diskfriction.continuation.arclength import ContinuationError
     from diskfriction.continuation.collisions import DetectionParams
     from diskfriction.continuation.disks import EquilibriumError
+    from diskfriction.continuation.spectral_window import WindowCrowded
     from diskfriction.continuation.sweep import SweepParams, sweep
     from diskfriction.reports.bifurcation import collision_records, plot_diagram, save_branch
     from diskfriction.symbolic import System
@@ -93,9 +116,15 @@ def run(args: argparse.Namespace) -> int:
         progress.stage(f"sweep F_x {F_from:g} -> {F_to:g}" + (f" (from rest via {F_from:g})"
                                                               if F_from else ""))
         try:
-            params = SweepParams(ds_max=args.ds_max, detection=DetectionParams(mode=args.detection))
+            if window is not None:
+                from diskfriction.reports.units import PaperUnits
+
+                unit = PaperUnits.of(scene).eigenvalue(matrix)
+                window = (window[0] * unit, window[1] * unit)
+            params = SweepParams(ds_max=args.ds_max, detection=DetectionParams(mode=args.detection),
+                                 window=window)
             branch = sweep(system, F_from, F_to, matrix, params, on_point)
-        except (EquilibriumError, ContinuationError) as error:
+        except (EquilibriumError, ContinuationError, WindowCrowded) as error:
             raise CommandError(f"bifurcate error: {scene.source}: {error}", EXIT_FAILED) from None
         progress.stage(f"writing {out}/branch.npz, collisions.json")
         save_branch(out, branch, scene)
@@ -115,7 +144,10 @@ def run(args: argparse.Namespace) -> int:
             print(f"free rolling modes (disks held by the substrate alone, excluded from the "
                   f"collisions): {branch.free[0]} at F_x = {branch.F_x[0]:.3g}, "
                   f"{branch.free[-1]} at F_x = {branch.F_x[-1]:.3g}")
-        print(f"{len(records)} collisions ({matrix}):")
+        print(f"{len(records)} collisions ({matrix})" + (
+            "" if branch.window is None else f" with Re lambda in [{branch.window[0]:.6g}, "
+            f"{branch.window[1]:.6g}] (raw; the window tracked: "
+            f"{branch.eigenvalues.shape[1]} eigenvalues at each point)") + ":")
         for r in records:
             print(f"  {r['kind']:5s}  F_x = {r['F_x']:.10f}  lambda = {r['lambda_re']:.6g}  "
                   f"(lambda/k_n = {r['lambda_re'] / scene.k_n:.5g})")

@@ -160,8 +160,10 @@ def jordan_vectors(A: Array, lam: float):
 
 def status_events(a: Sample, b: Sample):
     """Births (0 -> +-1, paired at b) and deaths (+-1 -> 0, paired at a) on [a, b], and
-    whether the status change is fully explained by them. Excluded modes never take part."""
-    sa, sb = a.status, b.status
+    whether the status change is fully explained by them. Modes excluded at either end never
+    take part."""
+    tracked = ~(a.excluded | b.excluded)
+    sa, sb = np.where(tracked, a.status, 0), np.where(tracked, b.status, 0)
     if np.array_equal(sa, sb):
         return [], True
     born, died = (sa == 0) & (sb != 0), (sa != 0) & (sb == 0)
@@ -319,6 +321,8 @@ class StepScan:
                                                self.params.doubt)
         labels = ~(a.excluded | b.excluded) & (a.status == b.status)
         wrong = labels & certify.inconsistent_labels(a.eigvals, b.eigvals, d_a, d_b, rho, 2.0 * thr)
+        if _enters_past_guard(a, b).any():
+            return 0.5
         if bad.any():
             worst = np.argmin(np.where(bad, np.minimum(y_a, y_b), np.inf))
             return float(np.clip(t_min[worst], 0.125, 0.875))
@@ -491,6 +495,15 @@ class StepScan:
                          left_right_overlap=overlap, bracket=bracket,
                          residual=residual_norm(self.problem, x), u=u.copy(), step=self.step,
                          pair=(i, j), resolved=resolved)
+
+
+def _enters_past_guard(a: Sample, b: Sample) -> Array:
+    """Labels that join or leave the tracked set over [a, b] (excluded at one end only) without
+    being in the guard band at the other end: an eigenvalue must cross the guard band to reach
+    the window, so one found inside the window already entered within the interval unseen."""
+    guard_a = np.zeros(a.excluded.size, bool) if a.guard is None else a.guard
+    guard_b = np.zeros(b.excluded.size, bool) if b.guard is None else b.guard
+    return (a.excluded & ~b.excluded & ~guard_b) | (b.excluded & ~a.excluded & ~guard_a)
 
 
 def scan_step(problem: Problem, segment: Segment, start: Sample, end: Sample,

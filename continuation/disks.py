@@ -44,7 +44,7 @@ row is dropped. The number of free disks falls as the load spreads (tests/test_f
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.sparse as sp
@@ -52,6 +52,7 @@ import scipy.sparse as sp
 from diskfriction.continuation.linalg import SingularMatrix, solve
 from diskfriction.continuation.problem import Problem
 from diskfriction.continuation.spectra import Eigensystem, eigensystem
+from diskfriction.continuation.spectral_window import Window, sized, window_eigensystem
 from diskfriction.symbolic import System
 
 SPARSE_FROM = 240
@@ -104,11 +105,13 @@ class DiskEquilibria(Problem):
     """The continuation problem of one System (see the module docstring)."""
 
     def __init__(self, system: System, q: np.ndarray, xi: np.ndarray, F_x: float,
-                 matrix: str | None = None, newton_tol: float = 1e-11, sparse: bool | None = None):
+                 matrix: str | None = None, newton_tol: float = 1e-11, sparse: bool | None = None,
+                 window: Window | None = None):
         self.system = system
         self.matrix = matrix or system.scene.matrix
         self.newton_tol = newton_tol
-        self.sparse = system.ndof >= SPARSE_FROM if sparse is None else sparse
+        self.window = window
+        self.sparse = (system.ndof >= SPARSE_FROM or window is not None) if sparse is None else sparse
         self._csr = _CsrPattern(system.rows, system.cols, system.ndof) if self.sparse else None
         self.e_x1 = np.zeros(system.ndof)
         self.e_x1[0] = 1.0
@@ -204,7 +207,10 @@ class DiskEquilibria(Problem):
         return self._physical(q, row_scale=None if self.matrix == "J" else 1.0 / self.system.mass_diagonal())
 
     def eigensystem(self, q, F_x, vectors: bool = False) -> Eigensystem:
-        """The coupled chain's eigensystem and each free disk's block, the latter excluded."""
+        """The coupled chain's eigensystem and each free disk's block, the latter excluded; or,
+        with a spectral window, the window's eigenvalues (_window_eigensystem)."""
+        if self.window is not None:
+            return self._window_eigensystem(q, F_x, vectors)
         A = self.stability_matrix(q, F_x)
         A = A.toarray() if sp.issparse(A) else A
         if not self.free:
@@ -222,6 +228,19 @@ class DiskEquilibria(Problem):
                 right[np.ix_(idx, idx)] = part.right
                 left[np.ix_(idx, idx)] = part.left
         return Eigensystem(values, right, left, excluded)
+
+    def _window_eigensystem(self, q, F_x, vectors: bool) -> Eigensystem:
+        """The spectral window's eigenvalues (spectral_window.py), k fixed at the first call; the
+        modes of free disks (right vectors on their dofs alone) also excluded."""
+        A = self.stability_matrix(q, F_x)
+        if self.window.k == 0:
+            self.window = sized(self.window, A)
+        found = window_eigensystem(A, self.window, vectors)
+        if not self.free or found.right is None:
+            return found
+        free_dofs = np.concatenate([d.dofs for d in self.free])
+        on_free = np.sum(np.abs(found.right[free_dofs]) ** 2, axis=0) / np.sum(np.abs(found.right) ** 2, axis=0)
+        return replace(found, excluded=found.excluded | (on_free > 0.999))
 
     def derivative_step(self, x) -> float:
         delta = self.system.overlaps(x[:-1])

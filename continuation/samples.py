@@ -16,7 +16,7 @@ the predicted values), which follows a fast eigenvalue through a cluster.
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Optional
 
 import numpy as np
@@ -45,6 +45,7 @@ class Sample:
     tangent: Optional[Array] = None
     dlam: Optional[Array] = None
     system: Optional[Eigensystem] = None
+    guard: Optional[Array] = None
     uid: int = field(default_factory=lambda: next(_uid), init=False, repr=False, compare=False)
 
     @property
@@ -53,15 +54,14 @@ class Sample:
 
     def at(self, s: float) -> "Sample":
         """The same point at another segment coordinate (a new step starts at its old end)."""
-        return Sample(s, self.x, self.eigvals, self.status, self.thr, self.excluded,
-                      self.tangent, self.dlam, self.system)
+        return replace(self, s=s)
 
     def relabel(self, perm: Array) -> "Sample":
         """Labels permuted: new[i] = old[perm[i]]."""
         take = lambda a: None if a is None else a[perm]  # noqa: E731
-        return Sample(self.s, self.x, self.eigvals[perm], self.status[perm], self.thr,
-                      self.excluded[perm], self.tangent, take(self.dlam),
-                      None if self.system is None else self.system.permuted(perm))
+        return replace(self, eigvals=self.eigvals[perm], status=self.status[perm],
+                       excluded=self.excluded[perm], dlam=take(self.dlam), guard=take(self.guard),
+                       system=None if self.system is None else self.system.permuted(perm))
 
     def slopes(self, segment) -> Array:
         """d lambda / ds on `segment` (s in [0, 1] from x_a to x_b): dlam L / (sigma . t)."""
@@ -110,9 +110,10 @@ def make_sample(s: float, x: Array, system: Eigensystem, rel_tol: float,
     slopes, else by nearest eigenvalue: spectra.match_eigenvalues)."""
     values = np.asarray(system.values, dtype=complex)
     excluded = system.excluded if system.excluded is not None else np.zeros(values.size, bool)
-    system = Eigensystem(values, system.right, system.left, excluded)
+    system = Eigensystem(values, system.right, system.left, excluded, system.guard)
     sample = Sample(s, x, values, eigen_status(values, rel_tol), imag_threshold(values, rel_tol),
-                    excluded, tangent, dlam, system if system.right is not None else None)
+                    excluded, tangent, dlam, system if system.right is not None else None,
+                    system.guard)
     return sample if reference is None else sample.relabel(continuation_perm(reference, sample))
 
 

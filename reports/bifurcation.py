@@ -23,10 +23,13 @@ def collision_records(branch: DiskBranch) -> list[dict]:
     At a collision the two eigenvalues coincide on the real axis: lambda_im is 0 by definition
     and lambda_re is the double eigenvalue. `bracket` is the F_x interval (width <= 1e-10)
     across which the count of complex pairs changes; `eigenvector` and `jordan_vector` form the
-    Jordan chain (A - lambda) v = 0, (A - lambda) w = v of the stability matrix.
+    Jordan chain (A - lambda) v = 0, (A - lambda) w = v of the stability matrix. `window`: the
+    band [lo, hi] of Re lambda the sweep tracked and certified (only collisions there are
+    listed), or null when it covered the whole spectrum.
     """
+    window = None if branch.window is None else [float(w) for w in branch.window]
     return [{"F_x": float(c.p), "kind": c.kind, "lambda_re": float(c.eigenvalue), "lambda_im": 0.0,
-             "matrix": branch.matrix, "bracket": [float(b) for b in c.bracket],
+             "matrix": branch.matrix, "window": window, "bracket": [float(b) for b in c.bracket],
              "resolved": bool(c.resolved), "residual": float(c.residual),
              "eigenvector": np.asarray(c.eigenvector, dtype=float).tolist(),
              "jordan_vector": np.asarray(c.generalized_eigenvector, dtype=float).tolist()}
@@ -35,10 +38,12 @@ def collision_records(branch: DiskBranch) -> list[dict]:
 
 def save_branch(out: Path, branch: DiskBranch, scene: Scene) -> None:
     """DIR/branch.npz (every accepted point: F_x, q, xi, eigenvalues, n_complex, residual,
-    leg, free rolling modes) and DIR/collisions.json, each written atomically."""
+    leg, free rolling modes; window: the band of Re lambda tracked, nan nan for the whole
+    spectrum) and DIR/collisions.json, each written atomically."""
     save_npz(Path(out) / "branch.npz", F_x=branch.F_x, q=branch.q, xi=branch.xi,
              eigenvalues=branch.eigenvalues, n_complex=branch.n_complex,
              residual=branch.residual, leg=branch.leg, free=branch.free,
+             window=np.array(branch.window if branch.window is not None else (np.nan, np.nan)),
              matrix=np.array(branch.matrix),
              k_n=np.array(scene.k_n), N=np.array(scene.N))
     save_json(Path(out) / "collisions.json", collision_records(branch))
@@ -178,11 +183,18 @@ def plot_diagram(branch: DiskBranch, scene: Scene, path: Path) -> None:
 
     unit = PaperUnits.of(scene).eigenvalue(branch.matrix)
     fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(10, 7), dpi=DPI)
-    handles = draw_spectrum(top, bottom, branch.F_x, branch.eigenvalues / unit, branch.leg,
-                            branch.n_complex,
+    lam, title = branch.eigenvalues / unit, f"{scene.name}: spectrum of {branch.matrix}, N = {scene.N}"
+    if branch.window is not None:  # only the window is certified: the rest is not drawn
+        lo, hi = (w / unit for w in branch.window)
+        lam = np.where((lam.real >= lo) & (lam.real <= hi), lam, np.nan)
+        title += f", window {lo:.5g} <= Re <= {hi:.5g} (the rest of the spectrum not tracked)"
+    handles = draw_spectrum(top, bottom, branch.F_x, lam, branch.leg, branch.n_complex,
                             [(c.p, c.kind, c.eigenvalue / unit) for c in branch.collisions],
                             branch.matrix)
-    top.set_title(f"{scene.name}: spectrum of {branch.matrix}, N = {scene.N}", fontsize=9)
+    top.set_title(title, fontsize=9)
+    if branch.window is not None:
+        bottom.set_yscale("linear")
+        bottom.set_ylim(lo, hi)
     top.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     fig.subplots_adjust(left=0.095, right=0.76, bottom=0.08, top=0.95, hspace=0.06)  # fixed:
     # tight_layout would measure every label first, a third of the plot's time
