@@ -25,6 +25,8 @@ from diskfriction.cli.progress import Progress
 from diskfriction.files import warn
 
 DEFAULT_NAME = "problem"
+SHOWN_WARNINGS = 5
+"""Warnings of the run printed at most (the detector may warn once per retried location)."""
 
 
 def split_target(text: str) -> tuple[Path, str]:
@@ -186,6 +188,8 @@ def _print_summary(result, spec, out: Path) -> None:
     for s in result.folds + result.hopf:
         value = "" if s.kind == "fold" else f"  lambda = {complex(s.value):.6g}"
         print(f"  {s.kind:5s}  {spec.parameter} = {s.p:.12g}{units}{value}")
-    for line in result.warnings:
+    for line in result.warnings[:SHOWN_WARNINGS]:
         print(f"  warning: {line}")
+    if len(result.warnings) > SHOWN_WARNINGS:
+        print(f"  ... and {len(result.warnings) - SHOWN_WARNINGS} more warnings")
     print(f"wrote {out}/branch.npz, collisions.json, special_points.json, diagram.png")

@@ -19,7 +19,7 @@ The reference with a worked example is docs/api.md.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Callable, Mapping, Optional, Sequence, Union
 
 import numpy as np
@@ -143,7 +143,7 @@ class BranchResult:
     branch: Branch
     folds: tuple[SpecialPoint, ...] = ()
     hopf: tuple[SpecialPoint, ...] = ()
-    warnings: tuple[str, ...] = field(default=())
+    warnings: tuple[str, ...] = ()
 
     @property
     def p(self) -> Array:
@@ -181,10 +181,10 @@ def _span(p_span) -> tuple[float, float]:
     return a, b
 
 
-def _evaluated(what: str, f: Callable, u: Array, p: float):
-    """f(u, p), or a ProblemError naming `what` and the exception it raised."""
+def _evaluated(what: str, call: Callable[[], object], p: float):
+    """call(), or a ProblemError naming `what` and the exception it raised."""
     try:
-        return f(u, p)
+        return call()
     except Exception as error:  # noqa: BLE001 - the user's code may raise anything
         line = (str(error).splitlines() or [""])[0]
         raise ProblemError(f"{what} raised {type(error).__name__} at p = {p:g}: {line}") from None
@@ -212,15 +212,17 @@ def check_problem(problem: Problem, u0, p: float) -> Array:
         raise ProblemError(f"u0 must be a non-empty 1-D array of finite numbers (got shape {u0.shape})")
     n = u0.size
     for what, f, shape in (("G(u, p)", problem.residual, (n,)), ("dG/dp", problem.dG_dp, (n,))):
-        value = np.asarray(_evaluated(what, f, u0, p))
+        value = np.asarray(_evaluated(what, lambda: f(u0, p), p))
         if value.shape != shape:
             raise ProblemError(f"{what} returned shape {value.shape}, expected {shape} (u0 has {n} entries)")
         if not np.all(np.isfinite(value)):
             raise ProblemError(f"{what} returned non-finite values at p = {p:g}")
-    _check_matrix("dG/du", _evaluated("dG/du", problem.jacobian, u0, p), n)
-    _check_matrix("the tracked matrix A", _evaluated("the tracked matrix A", problem.stability_matrix, u0, p), -1)
-    if any(getattr(f, "method", None) == "complex-step"
-           for f in (getattr(problem, "G_u", None), getattr(problem, "G_p", None))):
+    _check_matrix("dG/du", _evaluated("dG/du", lambda: problem.jacobian(u0, p), p), n)
+    A = _evaluated("the tracked matrix A", lambda: problem.stability_matrix(u0, p), p)
+    _check_matrix("the tracked matrix A", A, -1)
+    differenced = (getattr(problem, "G_u", None), getattr(problem, "G_p", None))
+    if any(isinstance(f, (StateDerivative, ParameterDerivative)) and f.method == "complex-step"
+           for f in differenced):
         try:
             check_complex_step(problem.G, u0, p)
         except ValueError as error:
@@ -307,12 +309,7 @@ class BifurcationProblem:
 
     def start(self, p: float):
         """The guess of the state at p (checked by solve_branch); a ProblemError if u0(p) fails."""
-        if not callable(self.u0):
-            return self.u0
-        try:
-            return self.u0(p)
-        except Exception as error:  # noqa: BLE001 - the user's code may raise anything
-            raise ProblemError(f"u0(p) raised {type(error).__name__} at p = {p:g}: {error}") from None
+        return _evaluated("u0(p)", lambda: self.u0(p), p) if callable(self.u0) else self.u0
 
     def solve(self, p_span=None, options: Optional[Options] = None, *,
               callback: Optional[Callback] = None) -> BranchResult:

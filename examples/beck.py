@@ -13,7 +13,12 @@ K_g = 1/(30h) [[36, 3h, -36, 3h], [3h, 4h^2, -3h, -h^2], ...] from the integral 
 M = mu h/420 [[156, 22h, 54, -13h], [22h, 4h^2, 13h, -3h^2], ...] the consistent mass, and
 e_w e_theta^T the follower load's term, row w and column theta of the tip node. The tracked
 matrix M^-1 K(P) has the squared frequencies as eigenvalues; the first two collide (flutter)
-at P L^2 / EI = 20.05 (Beck 1952). Units: L = EI = mu = 1, so P is in EI/L^2.
+at P L^2 / EI = 20.05 (Beck 1952). The example tracks the inverse, K(P)^-1 M, whose eigenvalues
+1/omega^2 collide at the same P: there the lowest modes are the largest eigenvalues, while in
+M^-1 K they would be ~5e-7 of the mesh's highest frequency (16 elements), near the threshold
+that tells a complex pair from a real one (docs/api.md, "Choosing the tracked matrix"). K(P)
+stays regular over the span (the follower load has no divergence). Units: L = EI = mu = 1, so
+P is in EI/L^2.
 
     diskfriction bifurcate --problem examples/beck.py
 """
@@ -51,7 +56,7 @@ def beck(n: int = 16) -> BifurcationProblem:
         lambda u, P: K(P) @ u, dG_du=lambda u, P: K(P), dG_dp=lambda u, P: (F - K_g) @ u,
         A=lambda u, P: np.linalg.solve(K(P), M))
     return BifurcationProblem(equations, u0=np.zeros(2 * n), p_span=(0.0, 25.0), parameter="P",
-                              units="EI/L^2", matrix="M^-1 K", eigenvalue_units="EI/(mu L^4)",
+                              units="EI/L^2", matrix="K^-1 M", eigenvalue_units="mu L^4/EI",
                               options=Options(ds_max=0.5, special_points=("fold",)))
 
 

@@ -37,10 +37,10 @@ def current(v):
 
 
 def fitzhugh_nagumo(derivatives: bool = True) -> BifurcationProblem:
-    """The problem in I from v = -2 to 2; without `derivatives` dG/du and dG/dI are computed
+    """The problem in I from v = -1.6 to 1.6; without `derivatives` dG/du and dG/dI are computed
     by central differences (and the tracked Jacobian with them)."""
     given = {"dG_du": dG_du, "dG_dp": dG_dI} if derivatives else {}
-    v0 = -2.0
+    v0 = -1.6
     return BifurcationProblem(problem_from_functions(G, **given), u0=np.array([v0, (v0 + a) / b]),
                               p_span=(current(v0), current(-v0)), parameter="I", matrix="dG/du")
 
