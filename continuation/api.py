@@ -284,7 +284,8 @@ class BifurcationProblem:
     problem: the equations (problem_from_functions, problem_from_sympy or a Problem subclass);
     u0: a guess of the state at the start of the span, an array or a function of p;
     p_span: the span the command runs without --p (None: --p is required);
-    parameter: the name of p (axis labels, collisions.json); units: its units ("" for none);
+    parameter: the name of p, a Python identifier (axis labels, the keys of branch.npz and
+    collisions.json); units: its units ("" for none);
     matrix: the name of the tracked matrix, e.g. "M^-1 K"; eigenvalue_units: its eigenvalues'
     units; options: the Options the command uses for this problem (its --ds-max overrides
     ds_max)."""
@@ -302,8 +303,9 @@ class BifurcationProblem:
         if not isinstance(self.problem, Problem):
             raise TypeError(f"problem must be a continuation Problem (problem_from_functions, "
                             f"problem_from_sympy or a subclass), got {type(self.problem).__name__}")
-        if not self.parameter.strip():
-            raise ValueError("parameter must be a non-empty name")
+        if not self.parameter.isidentifier():
+            raise ValueError(f"parameter must be a name such as P, F_x or I (it keys the output "
+                             f"files), got {self.parameter!r}")
         if self.p_span is not None:
             _span(self.p_span)
 

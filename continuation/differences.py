@@ -40,6 +40,9 @@ CENTRAL_STEP = EPS ** (1.0 / 5.0)
 """Relative step of central differences: balances truncation (h^4) against rounding (eps / h)."""
 COMPLEX_STEP = 1e-30
 """Relative step of the complex step: any tiny value works, there is no cancellation."""
+AGREEMENT = 1e-6
+"""check_complex_step: the complex step and central differences must agree to this, relative
+(both are good to ~1e-12 where the complex step is valid; where it is not, it is off by O(1))."""
 ACCURACY = {"central": "to about 1e-12 relative if u and p are of order 1 and G is smooth on "
                        "the scale 1e-3 (fourth-order stencil, step eps^(1/5) max(1, |x|))",
             "complex-step": "to rounding (~1e-16 relative)"}
@@ -103,7 +106,7 @@ def warn_differences(names: list[str], method: str) -> None:
 def check_complex_step(G: Callable[[Array, float], Array], u: Array, p: float) -> None:
     """Raise ValueError if the complex step is not valid for G at (u, p): G fails on complex
     input or drops its imaginary part, or the complex-step dG/du and dG/dp disagree with
-    central differences by more than 1e-6 relative (their combined error is ~1e-12)."""
+    central differences by more than AGREEMENT relative."""
     u = np.asarray(u, dtype=float)
     try:
         with warnings.catch_warnings():
@@ -115,7 +118,7 @@ def check_complex_step(G: Callable[[Array, float], Array], u: Array, p: float) -
     (J_c, p_c), (J_z, p_z) = pairs
     scale = max(float(np.max(np.abs(J_c), initial=0.0)), float(np.max(np.abs(p_c), initial=0.0)), 1e-300)
     worst = max(float(np.max(np.abs(J_z - J_c), initial=0.0)), float(np.max(np.abs(p_z - p_c), initial=0.0)))
-    if not worst <= 1e-6 * scale:
+    if not worst <= AGREEMENT * scale:
         raise ValueError(f"the complex step disagrees with central differences by {worst / scale:.2g} "
                          "relative: G is not complex-analytic as written (abs, min, max, comparisons, "
                          "np.real or conj on u or p?)")

@@ -79,6 +79,8 @@ BAD_FILES = {
                       "problem: G(u, p) raised IndexError at p = 0: index 7 is out of bounds"),
     "reserved": (HEADER + LINEAR + "problem = make(p_span=(0, 1), parameter='kind')\n",
                  "problem: parameter name 'kind' clashes with the outputs' keys"),
+    "not_a_name": (HEADER + LINEAR + "problem = make(p_span=(0, 1), parameter='P [N]')\n",
+                   "failed to import: ValueError: parameter must be a name such as P, F_x or I"),
 }
 
 
@@ -127,3 +129,22 @@ def test_name_selects_the_problem_and_p_its_span(tmp_path, capsys):
     branch = np.load(tmp_path / "o" / "branch.npz", allow_pickle=False)
     assert branch["T"][[0, -1]].tolist() == [-1.0, 2.0]
     assert np.allclose(branch["u"], branch["T"][:, None], atol=1e-10)
+
+
+def test_a_problem_that_fails_inside_the_run_ends_it_with_one_line_and_exit_1(tmp_path, capsys):
+    """G raises only beyond p = 0.5: the start is fine, the run stops there with one line
+    saying where, and nothing is written."""
+    path = tmp_path / "late.py"
+    path.write_text(HEADER + LINEAR + textwrap.dedent("""
+        def G(u, p):
+            if p > 0.5:
+                raise FloatingPointError("the model is not defined beyond 0.5")
+            return u - p
+
+        problem = make(G=G, p_span=(0, 1))
+    """))
+    code, line = run_in_process(capsys, "--problem", str(path), "--out", str(tmp_path / "out"))
+    assert code == 1
+    assert line.startswith(f"bifurcate error: {path}:problem: the run stopped at p = 0.")
+    assert line.endswith("FloatingPointError: the model is not defined beyond 0.5")
+    assert not (tmp_path / "out" / "branch.npz").exists()
