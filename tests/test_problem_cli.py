@@ -148,3 +148,15 @@ def test_a_problem_that_fails_inside_the_run_ends_it_with_one_line_and_exit_1(tm
     assert line.startswith(f"bifurcate error: {path}:problem: the run stopped at p = 0.")
     assert line.endswith("FloatingPointError: the model is not defined beyond 0.5")
     assert not (tmp_path / "out" / "branch.npz").exists()
+
+
+def test_detection_applies_to_a_problem_file(tmp_path, capsys):
+    """--detection exhaustive (bisection with full spectra) on Ziegler's file: the same two
+    collisions to 1e-10; an unknown detection is refused before the file is imported."""
+    target = str(EXAMPLES / "ziegler.py")
+    assert main(["bifurcate", "--problem", target, "--detection", "exhaustive", "--json",
+                 "--out", str(tmp_path / "z")]) == 0
+    records = json.loads(capsys.readouterr().out)
+    assert [r["P"] for r in records] == pytest.approx([3.5 - np.sqrt(2), 3.5 + np.sqrt(2)], abs=1e-10)
+    code, line = run_in_process(capsys, "--problem", str(tmp_path / "missing.py"), "--detection", "slow")
+    assert code == 2 and line == "bifurcate error: --detection: must be fast or exhaustive (got 'slow')"
