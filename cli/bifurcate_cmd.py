@@ -1,5 +1,6 @@
 """``diskfriction bifurcate [SCENE] [--fx A:B] [--matrix J|M^-1J] [--detection fast|exhaustive]
-[--out DIR] [--json]``."""
+[--out DIR] [--json]``, or ``diskfriction bifurcate --problem FILE.py[:NAME] [--p A:B] ...``
+for any problem (cli/problem_cmd.py)."""
 from __future__ import annotations
 
 import argparse
@@ -43,23 +44,30 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              "chains too long for full spectra (N ~ 1000); collisions are "
                              "certified and listed in the window only (fast detection)")
     parser.add_argument("--json", action="store_true", help="print the collision list to stdout")
+    parser.add_argument("--problem", metavar="FILE.py[:NAME]",
+                        help="continue the BifurcationProblem NAME (default: problem) defined in "
+                             "the Python file FILE.py instead of a scene (docs/api.md)")
+    parser.add_argument("--p", metavar="A:B",
+                        help="with --problem: continue the problem's parameter from A to B "
+                             "(default: the problem's p_span)")
     parser.set_defaults(run=run)
 
 
-def parse_range(text: str) -> tuple[float, float]:
-    """'A:B' -> (A, B), both finite, >= 0 and different; else a one-line CommandError."""
+def parse_range(text: str, option: str = "fx", nonnegative: bool = True) -> tuple[float, float]:
+    """'A:B' -> (A, B), both finite and different (and >= 0 for F_x); else a one-line
+    CommandError naming --OPTION."""
     parts = text.split(":")
     try:
         a, b = (float(p) for p in parts) if len(parts) == 2 else (None, None)
     except ValueError:
         a = b = None
     if a is None or not (math.isfinite(a) and math.isfinite(b)):
-        raise CommandError(f"bifurcate error: --fx: expected A:B with two numbers (got {text!r})")
-    if a < 0 or b < 0:
-        raise CommandError(f"bifurcate error: --fx: F_x must be >= 0: {NEGATIVE_LOAD} "
+        raise CommandError(f"bifurcate error: --{option}: expected A:B with two numbers (got {text!r})")
+    if nonnegative and (a < 0 or b < 0):
+        raise CommandError(f"bifurcate error: --{option}: F_x must be >= 0: {NEGATIVE_LOAD} "
                            f"(got {text!r})")
     if a == b:
-        raise CommandError(f"bifurcate error: --fx: empty range (got {text!r})")
+        raise CommandError(f"bifurcate error: --{option}: empty range (got {text!r})")
     return a, b
 
 
@@ -77,6 +85,15 @@ def parse_window(text: str) -> tuple[float, float]:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.detection not in DETECTIONS:
+        raise CommandError(f"bifurcate error: --detection: must be fast or exhaustive "
+                           f"(got {args.detection!r})")
+    if args.problem is not None:
+        from diskfriction.cli.problem_cmd import run_problem
+
+        return run_problem(args)
+    if args.p is not None:
+        raise CommandError("bifurcate error: --p: only with --problem FILE.py (a scene's load is --fx)")
     scene = scene_from_args(args)
     F_from, F_to = parse_range(args.fx) if args.fx is not None else scene.F_x_range
     window = parse_window(args.window) if args.window is not None else None
@@ -87,9 +104,6 @@ def run(args: argparse.Namespace) -> int:
         raise CommandError(f"bifurcate error: --matrix: must be J or M^-1J (got {args.matrix!r})")
     if args.ds_max is not None:
         number("bifurcate", "ds-max", args.ds_max)
-    if args.detection not in DETECTIONS:
-        raise CommandError(f"bifurcate error: --detection: must be fast or exhaustive "
-                           f"(got {args.detection!r})")
     matrix = MATRICES[args.matrix] if args.matrix else scene.matrix
     out = output_dir("bifurcate", args.out, Path("out") / "bifurcate" / scene.name)
     check_sweep_memory("bifurcate", scene)
