@@ -75,7 +75,9 @@ class DetectionParams:
     |Im| > rel_tol * max|lambda| (spectra.py); tol_p: |dp| to which a collision is located (the
     fast locator's last Newton correction, or the exhaustive bracket); rho: certification margin
     (0 < rho < 1, certify.py); max_solves: samples allowed per step; enabled: False skips
-    detection (spectra are still computed, tracked and counted); min_ds: intervals narrower
+    detection (spectra are still computed, tracked and counted, unless spectra is False: then
+    no eigenvalue is computed at all, for a caller that needs only the equilibria, e.g.
+    continuation.equilibrium); min_ds: intervals narrower
     than this in s are final (the segment coordinate's resolution, 100 ulp of 1);
     locator_iterations: Newton iterations of the fast locator before it falls back to a split."""
 
@@ -85,6 +87,7 @@ class DetectionParams:
     rho: float = 0.5
     max_solves: int = 500
     enabled: bool = True
+    spectra: bool = True
     min_ds: float = 1e-14
     locator_iterations: int = 12
     doubt: float = 0.25
@@ -92,6 +95,8 @@ class DetectionParams:
     def __post_init__(self):
         if self.mode not in MODES:
             raise ValueError(f"mode must be one of {MODES}, got {self.mode!r}")
+        if self.enabled and not self.spectra:
+            raise ValueError("collision detection needs the spectra (spectra=False needs enabled=False)")
         if not 0.0 < self.rel_tol < 1e-3:
             raise ValueError(f"rel_tol must be in (0, 1e-3), got {self.rel_tol}")
         if not self.tol_p > 0.0:

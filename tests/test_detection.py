@@ -140,3 +140,17 @@ def test_sparse_and_dense_solves_agree_at_N40():
     assert np.max(np.abs(t[0] - t[1])) <= 1e-10
     ev = [np.sort_complex(pr.spectrum(steps[0].x[:-1], 0.0101)) for pr in (dense, sparse)]
     assert np.max(np.abs(ev[0] - ev[1])) <= 1e-9 * np.abs(ev[0]).max()
+
+
+def test_a_spectral_window_lists_the_full_detection_s_collisions_in_it():
+    """N = 40, eps = 1e-4: tracking only 0.0553 <= Re lambda / k_n <= 0.0562 by shift-invert
+    gives the collisions of the full detection whose eigenvalue lies in the window, within
+    1e-9, and counts the complex pairs there."""
+    system = System.from_scene(Scene(N=40, eps=1e-4))
+    lo, hi = 0.0553 * system.scene.k_n, 0.0562 * system.scene.k_n
+    full = sweep(system, 0.0, 0.12, "J")
+    window = sweep(system, 0.0, 0.12, "J", SweepParams(window=(lo, hi)))
+    expected = [(c.kind, c.p) for c in full.collisions if lo <= c.eigenvalue <= hi]
+    assert len(expected) >= 2 and window.window == (lo, hi)
+    assert window.eigenvalues.shape[1] < system.ndof
+    assert_same_collisions(locations(window), expected)
