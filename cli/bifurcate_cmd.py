@@ -1,4 +1,6 @@
-"""``diskfriction bifurcate [SCENE] [--fx A:B] [--matrix J|M^-1J] [--out DIR] [--json]``."""
+"""``diskfriction bifurcate [SCENE] [--fx A:B] [--matrix J|M^-1J] [--detection fast|exhaustive]
+[--out DIR] [--json]``, or ``diskfriction bifurcate --problem FILE.py[:NAME] [--p A:B] ...``
+for any problem (cli/problem_cmd.py)."""
 from __future__ import annotations
 
 import argparse
@@ -12,6 +14,7 @@ from diskfriction.cli.progress import Progress
 from diskfriction.scenes.scene import NEGATIVE_LOAD
 
 MATRICES = {"J": "J", "M^-1J": "M^-1 J", "M^-1 J": "M^-1 J"}
+DETECTIONS = ("fast", "exhaustive")  # continuation.collisions.MODES, without importing scipy
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -31,30 +34,72 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--out", metavar="DIR", help="output directory (default: out/bifurcate/SCENE)")
     parser.add_argument("--ds-max", type=float, metavar="DS",
                         help="largest arclength step (default: span / 60)")
+    parser.add_argument("--detection", default="fast", metavar="fast|exhaustive",
+                        help="collision detection: fast (eigenvalue slopes, Hermite "
+                             "certification, Newton locator; the default) or exhaustive "
+                             "(bisection with full spectra, version 0.1; slow, for checking)")
+    parser.add_argument("--window", metavar="LO:HI",
+                        help="track only the eigenvalues with LO <= Re lambda <= HI (the "
+                             "diagram's units: lambda / k_n for J) by sparse shift-invert, for "
+                             "chains too long for full spectra (N ~ 1000); collisions are "
+                             "certified and listed in the window only (fast detection)")
     parser.add_argument("--json", action="store_true", help="print the collision list to stdout")
+    parser.add_argument("--problem", metavar="FILE.py[:NAME]",
+                        help="continue the BifurcationProblem NAME (default: problem) defined in "
+                             "the Python file FILE.py instead of a scene (docs/api.md)")
+    parser.add_argument("--p", metavar="A:B",
+                        help="with --problem: continue the problem's parameter from A to B "
+                             "(default: the problem's p_span)")
     parser.set_defaults(run=run)
 
 
-def parse_range(text: str) -> tuple[float, float]:
-    """'A:B' -> (A, B), both finite, >= 0 and different; else a one-line CommandError."""
+def parse_range(text: str, option: str = "fx", nonnegative: bool = True) -> tuple[float, float]:
+    """'A:B' -> (A, B), both finite and different (and >= 0 for F_x); else a one-line
+    CommandError naming --OPTION."""
     parts = text.split(":")
     try:
         a, b = (float(p) for p in parts) if len(parts) == 2 else (None, None)
     except ValueError:
         a = b = None
     if a is None or not (math.isfinite(a) and math.isfinite(b)):
-        raise CommandError(f"bifurcate error: --fx: expected A:B with two numbers (got {text!r})")
-    if a < 0 or b < 0:
-        raise CommandError(f"bifurcate error: --fx: F_x must be >= 0: {NEGATIVE_LOAD} "
+        raise CommandError(f"bifurcate error: --{option}: expected A:B with two numbers (got {text!r})")
+    if nonnegative and (a < 0 or b < 0):
+        raise CommandError(f"bifurcate error: --{option}: F_x must be >= 0: {NEGATIVE_LOAD} "
                            f"(got {text!r})")
     if a == b:
-        raise CommandError(f"bifurcate error: --fx: empty range (got {text!r})")
+        raise CommandError(f"bifurcate error: --{option}: empty range (got {text!r})")
     return a, b
 
 
+def parse_window(text: str) -> tuple[float, float]:
+    """'LO:HI' -> (LO, HI), finite with LO < HI; else a one-line CommandError."""
+    parts = text.split(":")
+    try:
+        lo, hi = (float(p) for p in parts) if len(parts) == 2 else (None, None)
+    except ValueError:
+        lo = hi = None
+    if lo is None or not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+        raise CommandError(f"bifurcate error: --window: expected LO:HI with two numbers, LO < HI "
+                           f"(got {text!r})")
+    return lo, hi
+
+
 def run(args: argparse.Namespace) -> int:
+    if args.detection not in DETECTIONS:
+        raise CommandError(f"bifurcate error: --detection: must be fast or exhaustive "
+                           f"(got {args.detection!r})")
+    if args.problem is not None:
+        from diskfriction.cli.problem_cmd import run_problem
+
+        return run_problem(args)
+    if args.p is not None:
+        raise CommandError("bifurcate error: --p: only with --problem FILE.py (a scene's load is --fx)")
     scene = scene_from_args(args)
     F_from, F_to = parse_range(args.fx) if args.fx is not None else scene.F_x_range
+    window = parse_window(args.window) if args.window is not None else None
+    if window is not None and args.detection != "fast":
+        raise CommandError("bifurcate error: --window: needs the fast detection (eigenvalue "
+                           f"slopes), not --detection {args.detection}")
     if args.matrix is not None and args.matrix not in MATRICES:
         raise CommandError(f"bifurcate error: --matrix: must be J or M^-1J (got {args.matrix!r})")
     if args.ds_max is not None:
@@ -64,7 +109,9 @@ def run(args: argparse.Namespace) -> int:
     check_sweep_memory("bifurcate", scene)
 
     from diskfriction.continuation.arclength import ContinuationError
+    from diskfriction.continuation.collisions import DetectionParams
     from diskfriction.continuation.disks import EquilibriumError
+    from diskfriction.continuation.spectral_window import WindowCrowded
     from diskfriction.continuation.sweep import SweepParams, sweep
     from diskfriction.reports.bifurcation import collision_records, plot_diagram, save_branch
     from diskfriction.symbolic import System
@@ -83,8 +130,15 @@ def run(args: argparse.Namespace) -> int:
         progress.stage(f"sweep F_x {F_from:g} -> {F_to:g}" + (f" (from rest via {F_from:g})"
                                                               if F_from else ""))
         try:
-            branch = sweep(system, F_from, F_to, matrix, SweepParams(ds_max=args.ds_max), on_point)
-        except (EquilibriumError, ContinuationError) as error:
+            if window is not None:
+                from diskfriction.reports.units import PaperUnits
+
+                unit = PaperUnits.of(scene).eigenvalue(matrix)
+                window = (window[0] * unit, window[1] * unit)
+            params = SweepParams(ds_max=args.ds_max, detection=DetectionParams(mode=args.detection),
+                                 window=window)
+            branch = sweep(system, F_from, F_to, matrix, params, on_point)
+        except (EquilibriumError, ContinuationError, WindowCrowded) as error:
             raise CommandError(f"bifurcate error: {scene.source}: {error}", EXIT_FAILED) from None
         progress.stage(f"writing {out}/branch.npz, collisions.json")
         save_branch(out, branch, scene)
@@ -100,7 +154,14 @@ def run(args: argparse.Namespace) -> int:
         print(f"{len(branch)} equilibria, F_x {branch.F_x[0]:.6g} .. {branch.F_x[-1]:.6g}, "
               f"max residual {branch.residual.max():.1e}, {branch.events} contact events "
               f"split, status {', '.join(branch.status)}")
-        print(f"{len(records)} collisions ({matrix}):")
+        if branch.free.any():
+            print(f"free rolling modes (disks held by the substrate alone, excluded from the "
+                  f"collisions): {branch.free[0]} at F_x = {branch.F_x[0]:.3g}, "
+                  f"{branch.free[-1]} at F_x = {branch.F_x[-1]:.3g}")
+        print(f"{len(records)} collisions ({matrix})" + (
+            "" if branch.window is None else f" with Re lambda in [{branch.window[0]:.6g}, "
+            f"{branch.window[1]:.6g}] (raw; the window tracked: "
+            f"{branch.eigenvalues.shape[1]} eigenvalues at each point)") + ":")
         for r in records:
             print(f"  {r['kind']:5s}  F_x = {r['F_x']:.10f}  lambda = {r['lambda_re']:.6g}  "
                   f"(lambda/k_n = {r['lambda_re'] / scene.k_n:.5g})")

@@ -1,16 +1,29 @@
 """Generic continuation core: pseudo-arclength branches of G(u, p) = 0, tracked spectra and
 located eigenvalue collisions (births/deaths of complex pairs). Knows nothing of disks.
 
+The public front end (api.py, docs/api.md):
+
+    problem = problem_from_functions(G, A=A)          # or problem_from_sympy, or a Problem
+    result = solve_branch(problem, u0, (p_start, p_stop), Options(...))
+
+The core underneath:
+
     branch = continuation(problem, u0, p0, ContinuationParams(...), DetectionParams(...))
 """
+from .api import (BifurcationProblem, BranchResult, Options, ProblemError, check_problem,
+                  problem_from_functions, problem_from_sympy, solve_branch)
 from .arclength import ContinuationError, ContinuationParams, continuation
+from .bifurcations import SpecialPoint
 from .branch import Branch
 from .collisions import Collision, DetectionParams
+from .differences import DerivativeWarning
 from .problem import FunctionProblem, Problem
 from .spectra import count_complex_pairs, eigen_status, match_eigenvalues, track
 
 __all__ = [
-    "Branch", "Collision", "ContinuationError", "ContinuationParams", "DetectionParams",
-    "FunctionProblem", "Problem", "continuation", "count_complex_pairs", "eigen_status",
-    "match_eigenvalues", "track",
+    "BifurcationProblem", "Branch", "BranchResult", "Collision", "ContinuationError",
+    "ContinuationParams", "DerivativeWarning", "DetectionParams", "FunctionProblem", "Options",
+    "Problem", "ProblemError", "SpecialPoint", "check_problem", "continuation",
+    "count_complex_pairs", "eigen_status", "match_eigenvalues", "problem_from_functions",
+    "problem_from_sympy", "solve_branch", "track",
 ]

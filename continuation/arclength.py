@@ -32,9 +32,9 @@ from .collisions import DetectionParams, scan_step
 from .linalg import SingularMatrix, blas_threads
 from .newton import NewtonResult, bordered_newton, fixed_p_newton, residual_norm, tangent
 from .problem import Problem
-from .samples import Sample, matrix_derivative, sample_at
+from .samples import Sample, make_sample, matrix_derivative, sample_at
 from .segment import Segment, SegmentSolveError, refine_sign_change
-from .spectra import count_complex_pairs, eigenvalue_slopes
+from .spectra import Eigensystem, count_complex_pairs, eigenvalue_slopes
 
 Array = np.ndarray
 
@@ -176,7 +176,7 @@ def continuation(problem: Problem, u0: Array, p0: float,
     for every accepted point k. Returns a Branch.
     """
     _validate_start(p0, params)
-    with blas_threads(np.size(u0)):
+    with blas_threads():
         return _continuation(problem, np.asarray(u0, dtype=float), float(p0), params, detection, callback)
 
 
@@ -240,7 +240,9 @@ def _continuation(problem, u0, p0, params, detection, callback) -> Branch:
 def _sample(problem: Problem, s: float, x: Array, t: Array, detection: DetectionParams,
             reference: Optional[Sample], side: int) -> Sample:
     """The sample of an accepted point: with slopes along t (one-sided towards `side`, the
-    inside of the step) when the detection needs them."""
+    inside of the step) when the detection needs them; no eigenvalue at all without spectra."""
+    if not detection.spectra:
+        return make_sample(s, x, Eigensystem(np.zeros(0, complex)), detection.rel_tol)
     return sample_at(problem, s, x, detection.rel_tol, reference,
                      t if detection.slopes else None, side)
 

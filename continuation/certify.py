@@ -95,11 +95,12 @@ def pair_test_data(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, I: Array,
 
 
 def uncertified_pairs(y_a: Array, y_b: Array, dy_a: Array, dy_b: Array, rho: float,
-                      floor: float) -> tuple[Array, Array]:
-    """(mask of pairs the cubic model does not certify, t of each pair's model minimum)."""
+                      floor: float, doubt: float = 0.25) -> tuple[Array, Array]:
+    """(mask of pairs the cubic model does not certify, t of each pair's model minimum);
+    doubt: the fraction of the cubic term taken as the model's uncertainty."""
     c = hermite_coefficients(y_a, y_b, dy_a, dy_b)
     low, t_min = cubic_min(c)
-    bad = low - 0.25 * np.abs(c[3]) < rho * np.minimum(y_a, y_b) - floor
+    bad = low - doubt * np.abs(c[3]) < rho * np.minimum(y_a, y_b) - floor
     return bad, t_min
 
 

@@ -60,11 +60,9 @@ from .linalg import dense
 from .locate import LocatorFailed, locate_double_eigenvalue
 from .newton import residual_norm, tangent
 from .problem import Problem
-from .cluster import cluster_eigensystem
-from .samples import Sample, continuation_perm, matrix_derivative, sample_at
+from .samples import Sample, continuation_perm, sample_at
 from .segment import Segment, refine_sign_change
-from .spectra import (DEFAULT_REL_TOL, Eigensystem, conjugate_pairing, eigen_status, eigenvalue_slopes,
-                      pair_discriminant)
+from .spectra import DEFAULT_REL_TOL, conjugate_pairing, pair_discriminant
 
 Array = np.ndarray
 
@@ -77,13 +75,11 @@ class DetectionParams:
     |Im| > rel_tol * max|lambda| (spectra.py); tol_p: |dp| to which a collision is located (the
     fast locator's last Newton correction, or the exhaustive bracket); rho: certification margin
     (0 < rho < 1, certify.py); max_solves: samples allowed per step; enabled: False skips
-    detection (spectra are still computed, tracked and counted); min_ds: intervals narrower
+    detection (spectra are still computed, tracked and counted, unless spectra is False: then
+    no eigenvalue is computed at all, for a caller that needs only the equilibria, e.g.
+    continuation.equilibrium); min_ds: intervals narrower
     than this in s are final (the segment coordinate's resolution, 100 ulp of 1);
-    locator_iterations: Newton iterations of the fast locator before it falls back to a split;
-    cluster_from, cluster_max: the fast detection refines an interval with a sample of only the
-    uncertified labels (cluster.py) for problems of at least cluster_from unknowns and clusters
-    of at most cluster_max labels; a full spectrum otherwise (at 300 unknowns a cluster sample
-    costs a few ms, a full one 60 ms)."""
+    locator_iterations: Newton iterations of the fast locator before it falls back to a split."""
 
     mode: str = "fast"
     rel_tol: float = DEFAULT_REL_TOL
@@ -91,14 +87,16 @@ class DetectionParams:
     rho: float = 0.5
     max_solves: int = 500
     enabled: bool = True
+    spectra: bool = True
     min_ds: float = 1e-14
     locator_iterations: int = 12
-    cluster_from: int = 10**9
-    cluster_max: int = 16
+    doubt: float = 0.25
 
     def __post_init__(self):
         if self.mode not in MODES:
             raise ValueError(f"mode must be one of {MODES}, got {self.mode!r}")
+        if self.enabled and not self.spectra:
+            raise ValueError("collision detection needs the spectra (spectra=False needs enabled=False)")
         if not 0.0 < self.rel_tol < 1e-3:
             raise ValueError(f"rel_tol must be in (0, 1e-3), got {self.rel_tol}")
         if not self.tol_p > 0.0:
@@ -167,8 +165,10 @@ def jordan_vectors(A: Array, lam: float):
 
 def status_events(a: Sample, b: Sample):
     """Births (0 -> +-1, paired at b) and deaths (+-1 -> 0, paired at a) on [a, b], and
-    whether the status change is fully explained by them. Excluded modes never take part."""
-    sa, sb = a.status, b.status
+    whether the status change is fully explained by them. Modes excluded at either end never
+    take part."""
+    tracked = ~(a.excluded | b.excluded)
+    sa, sb = np.where(tracked, a.status, 0), np.where(tracked, b.status, 0)
     if np.array_equal(sa, sb):
         return [], True
     born, died = (sa == 0) & (sb != 0), (sa != 0) & (sb == 0)
@@ -187,14 +187,12 @@ class _Budget(Exception):
 @dataclass(frozen=True)
 class Verdict:
     """kind: "clean" | "split" | "events"; events [(i, j, "birth" | "death")]; consistent:
-    whether the events explain the status change; split_at: where to sample next (in s);
-    cluster: the labels the new sample must resolve (None: all of them)."""
+    whether the events explain the status change; split_at: where to sample next (in s)."""
 
     kind: str
     events: list
     consistent: bool
     split_at: float = math.nan
-    cluster: Optional[Array] = None
 
 
 @dataclass
@@ -219,68 +217,25 @@ class StepScan:
         return 1 if self.samples[0].s < 0.0 else 0
 
     # ---- sampler ---------------------------------------------------------------------------
-    def insert(self, s: float, cluster: Optional[tuple] = None):
-        """Corrector solve at s and a new sample there, tracked to its left neighbour; the
-        samples right of it are relabelled to continue it. With a cluster (fast detection, a
-        large problem, a small cluster) the sample knows only the cluster's labels
-        (_cluster_sample), else the whole spectrum. Returns (index, perm or None)."""
+    def insert(self, s: float):
+        """Corrector solve at s, new sample tracked to its left neighbour; the samples right of
+        it are relabelled to continue it. Returns (index, perm or None)."""
         if self.solves >= self.params.max_solves:
             raise _Budget
         x = self.segment.point(s)
         self.solves += 1
         idx = bisect.bisect([smp.s for smp in self.samples], s)
-        left, right = self.samples[idx - 1], self.samples[idx]
-        t = tangent(self.problem, x, self.segment.sigma) if self.params.slopes else None
-        new = None
-        if cluster is not None and self._local(cluster, x):
-            new = self._cluster_sample(s, x, t, left, right, cluster)
-        if new is None:
-            new = sample_at(self.problem, s, x, self.params.rel_tol, left, t)
+        t = None
+        if self.params.slopes:
+            t = tangent(self.problem, x, self.segment.sigma)
+        new = sample_at(self.problem, s, x, self.params.rel_tol, self.samples[idx - 1], t)
         self.samples.insert(idx, new)
-        perm = continuation_perm(new, right)
+        perm = continuation_perm(new, self.samples[idx + 1])
         if np.array_equal(perm, np.arange(perm.size)):
             return idx, None
         for k in range(idx + 1, len(self.samples)):
             self.samples[k] = self.samples[k].relabel(perm)
         return idx, perm
-
-    def _local(self, cluster: tuple, x: Array) -> bool:
-        """Whether a cluster sample pays: the problem is large and each group small."""
-        return x.size - 1 >= self.params.cluster_from and max(g.size for g in cluster) <= self.params.cluster_max
-
-    def _cluster_sample(self, s: float, x: Array, t: Array, left: Sample, right: Sample,
-                        groups: tuple) -> Optional[Sample]:
-        """A sample knowing only the labels of `groups` (one shift-invert solve per group:
-        cluster.py), its other entries the cubic predictions from the neighbours; None if a
-        group's solve does not converge."""
-        h = right.s - left.s
-        d_l, d_r = left.slopes(self.segment) * h, right.slopes(self.segment) * h
-        tau = (s - left.s) / h
-        re = certify.cubic_at(certify.hermite_coefficients(left.eigvals.real, right.eigvals.real,
-                                                           d_l.real, d_r.real), tau)
-        im = certify.cubic_at(certify.hermite_coefficients(left.eigvals.imag, right.eigvals.imag,
-                                                           d_l.imag, d_r.imag), tau)
-        predicted = re + 1j * im
-        seed = left if tau <= 0.5 else right
-        A = self.problem.stability_matrix(x[:-1], x[-1])
-        dA = matrix_derivative(self.problem, x, t)
-        n = predicted.size
-        eigvals, dlam = predicted.copy(), 0.5 * (left.dlam + right.dlam)
-        right_v, left_v = np.zeros((n, n), complex), np.zeros((n, n), complex)
-        known = np.zeros(n, bool)
-        for K in groups:
-            found = cluster_eigensystem(A, predicted[K], seed.system.right[:, K], seed.system.left[K])
-            if found is None:
-                self.warnings.append(f"step {self.step}: cluster solve did not converge; full spectrum")
-                return None
-            eigvals[K], dlam[K] = found.values, eigenvalue_slopes(found, dA)
-            right_v[:, K], left_v[K] = found.right, found.left
-            known[K] = True
-        cluster = np.flatnonzero(known)
-        status = left.status.copy()
-        status[cluster] = eigen_status(eigvals, self.params.rel_tol)[cluster]
-        return Sample(s, x, eigvals, status, left.thr, left.excluded, t, dlam,
-                      Eigensystem(eigvals, right_v, left_v, left.excluded), known)
 
     def _narrow(self, a: Sample, b: Sample) -> bool:
         """Nothing left to resolve in [a, b]: |dp| <= tol_p and max|dx| <= sqrt(tol_p) (the
@@ -305,9 +260,9 @@ class StepScan:
         if not consistent:
             return Verdict("split", events, False, mid)
         if self.params.slopes:
-            split = self._hermite_split(a, b, events)
-            if split is not None:
-                return Verdict("split", events, True, a.s + split[0] * (b.s - a.s), split[1])
+            t_split = self._hermite_split(a, b, events)
+            if t_split is not None:
+                return Verdict("split", events, True, a.s + t_split * (b.s - a.s))
         elif c is None or self._uncertified(a, b, c):
             return Verdict("split", events, True, mid)
         return Verdict("events" if events else "clean", events, True)
@@ -343,61 +298,55 @@ class StepScan:
 
     @staticmethod
     def _fast_candidates(a: Sample, b: Sample) -> tuple[Array, Array]:
-        """Fast: pairs (I, J) to certify over [a, b], among eigenvalues known at both ends with
-        unchanged status and no excluded mode: two real ones, an upper complex one with a real
-        one, and each upper one with its conjugate partner (certify.py)."""
-        keep = _comparable(a, b)
+        """Fast: pairs (I, J) to certify over [a, b], among eigenvalues with unchanged status and
+        no excluded mode: two real ones, an upper complex one with a real one, and each upper
+        one with its conjugate partner (certify.py)."""
+        keep = (a.status == b.status) & ~a.excluded & ~b.excluded
         real = np.flatnonzero(keep & (a.status == 0))
         upper = np.flatnonzero(keep & (a.status > 0))
         lower = np.flatnonzero(keep & (a.status < 0))
         I, J = np.triu_indices(real.size, 1)
         pairs_I, pairs_J = [real[I], np.repeat(upper, real.size)], [real[J], np.tile(real, upper.size)]
         if upper.size and lower.size:
+            partner = lower[np.argmin(np.abs(a.eigvals[lower][None, :] - np.conj(a.eigvals[upper])[:, None]), axis=1)]
             pairs_I.append(upper)
-            pairs_J.append(_partners(a.eigvals, upper, lower))
+            pairs_J.append(partner)
         return np.concatenate(pairs_I), np.concatenate(pairs_J)
 
-    def _hermite_split(self, a: Sample, b: Sample, events: list) -> Optional[tuple[float, Array]]:
+    def _hermite_split(self, a: Sample, b: Sample, events: list) -> Optional[float]:
         """Fast: None if every candidate pair and every label is certified by the cubic models,
-        else (where to split, t in [0, 1], kept off the ends; the cluster of labels the split
-        must resolve, in groups of neighbouring eigenvalues: each uncertified pair and each event
-        pair with what it was not certified against, closed under conjugation (_groups))."""
+        else where to split (t in [0, 1]: the worst pair's model minimum, kept off the ends)."""
         h = b.s - a.s
         d_a, d_b = a.slopes(self.segment) * h, b.slopes(self.segment) * h
         I, J = self._fast_candidates(a, b)
         thr = max(a.thr, b.thr)
-        rho, floor = self.params.rho, 4.0 * thr * thr
+        rho = self.params.rho
         y_a, y_b, dy_a, dy_b = certify.pair_test_data(a.eigvals, b.eigvals, d_a, d_b, I, J)
-        bad, t_min = certify.uncertified_pairs(y_a, y_b, dy_a, dy_b, rho, floor)
-        wrong = _comparable(a, b) & certify.inconsistent_labels(a.eigvals, b.eigvals, d_a, d_b, rho, 2.0 * thr)
-        links = [(i, j) for i, j, _ in events]  # labels that must be resolved together
-        t_split = None
+        bad, t_min = certify.uncertified_pairs(y_a, y_b, dy_a, dy_b, rho, 4.0 * thr * thr,
+                                               self.params.doubt)
+        labels = ~(a.excluded | b.excluded) & (a.status == b.status)
+        wrong = labels & certify.inconsistent_labels(a.eigvals, b.eigvals, d_a, d_b, rho, 2.0 * thr)
+        if _enters_past_guard(a, b).any():
+            return 0.5
         if bad.any():
             worst = np.argmin(np.where(bad, np.minimum(y_a, y_b), np.inf))
-            t_split = t_min[worst]
-            links += list(zip(I[bad], J[bad]))
+            return float(np.clip(t_min[worst], 0.125, 0.875))
         if wrong.any():
-            t_split = 0.5 if t_split is None else t_split
-            links += [(k,) for k in np.flatnonzero(wrong)]
-        if t_split is None:
-            others = np.flatnonzero(_comparable(a, b) & (a.status >= 0))
-            models = [self._event_model(a, b, i, j, d_a, d_b) for i, j, _ in events]
-            for (i, j, _), (m, D) in zip(events, models):  # one sign change of D per event, each pair apart
-                if len(certify.cubic_roots_in_unit(D)) != 1:
-                    t_split = 0.5
-                    break
-                near, t_near = certify.event_pair_clearance(m, D, a.eigvals[others], b.eigvals[others],
-                                                            d_a[others], d_b[others], rho, floor)
-                if near.any():
-                    t_split = t_near[np.argmax(near)]
-                    links += [(i, j, k) for k in others[near]]
-                    break
-            if t_split is None and len(models) > 1:
-                apart, t_worst = certify.event_pairs_apart(models, rho, floor)
-                t_split = None if apart else t_worst
-        if t_split is None:
-            return None
-        return float(np.clip(t_split, 0.125, 0.875)), _groups(a, b, links)
+            return 0.5
+        others = np.flatnonzero((a.status == b.status) & (a.status >= 0) & ~a.excluded & ~b.excluded)
+        models = [self._event_model(a, b, i, j, d_a, d_b) for i, j, _ in events]
+        for m, D in models:  # one sign change of D per event, and each pair apart from the rest
+            if len(certify.cubic_roots_in_unit(D)) != 1:
+                return 0.5
+            bad, t_min = certify.event_pair_clearance(m, D, a.eigvals[others], b.eigvals[others],
+                                                      d_a[others], d_b[others], rho, 4.0 * thr * thr)
+            if bad.any():
+                return float(np.clip(t_min[np.argmax(bad)], 0.125, 0.875))
+        if len(models) > 1:
+            apart, t_worst = certify.event_pairs_apart(models, rho, 4.0 * thr * thr)
+            if not apart:
+                return float(np.clip(t_worst, 0.125, 0.875))
+        return None
 
     @staticmethod
     def _event_model(a: Sample, b: Sample, i: int, j: int, d_a: Array, d_b: Array):
@@ -490,7 +439,7 @@ class StepScan:
             if verdict.kind == "clean" or self._narrow(a, b):
                 continue
             if verdict.kind == "split":
-                self.insert(verdict.split_at, verdict.cluster)
+                self.insert(verdict.split_at)
                 return True
             for i, j, what in verdict.events:
                 if self.params.slopes:
@@ -553,45 +502,13 @@ class StepScan:
                          pair=(i, j), resolved=resolved)
 
 
-def _comparable(a: Sample, b: Sample) -> Array:
-    """Labels a certification can use over [a, b]: known at both ends, not excluded, status
-    unchanged."""
-    return a.known_mask & b.known_mask & ~a.excluded & ~b.excluded & (a.status == b.status)
-
-
-def _partners(eigvals: Array, upper: Array, lower: Array) -> Array:
-    """The conjugate partner (among `lower`) of each eigenvalue in `upper`."""
-    return lower[np.argmin(np.abs(eigvals[lower][None, :] - np.conj(eigvals[upper])[:, None]), axis=1)]
-
-
-def _groups(a: Sample, b: Sample, links: list) -> tuple[Array, ...]:
-    """Connected components of the labels in `links` (tuples resolved together), each complex
-    label linked to its conjugate partner at either end: groups of eigenvalues near each other,
-    which one shift resolves (cluster.py)."""
-    parent: dict = {}
-
-    def root(k):
-        while parent.setdefault(k, k) != k:
-            k = parent[k]
-        return k
-
-    def link(group):
-        r0 = root(int(group[0]))
-        for k in group[1:]:
-            parent[root(int(k))] = r0
-
-    for group in links:
-        link(group)
-    for smp in (a, b):
-        upper, lower = np.flatnonzero(smp.status > 0), np.flatnonzero(smp.status < 0)
-        for k in list(parent):
-            if smp.status[k] != 0:
-                side = upper if smp.status[k] < 0 else lower
-                link((k, _partners(smp.eigvals, np.array([k]), side)[0]))
-    comps: dict = {}
-    for k in parent:
-        comps.setdefault(root(k), []).append(k)
-    return tuple(np.array(sorted(c), dtype=int) for c in comps.values())
+def _enters_past_guard(a: Sample, b: Sample) -> Array:
+    """Labels that join or leave the tracked set over [a, b] (excluded at one end only) without
+    being in the guard band at the other end: an eigenvalue must cross the guard band to reach
+    the window, so one found inside the window already entered within the interval unseen."""
+    guard_a = np.zeros(a.excluded.size, bool) if a.guard is None else a.guard
+    guard_b = np.zeros(b.excluded.size, bool) if b.guard is None else b.guard
+    return (a.excluded & ~b.excluded & ~guard_b) | (b.excluded & ~a.excluded & ~guard_a)
 
 
 def scan_step(problem: Problem, segment: Segment, start: Sample, end: Sample,

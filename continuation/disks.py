@@ -28,13 +28,14 @@ exact redundancy (T_i - R F_x,i = 0). Physically the rolling position of such a 
 arbitrary. Its gauge is fixed at the committed value: for each null direction m, one of the
 disk's equations (the one the null direction weighs most, redundant there) is replaced by
 kappa m . (q_i - q_c,i) = 0, with kappa the scale of the disk's stiffness.
-A disk counts as free when both its pair contacts carry less than the Newton tolerance: delta
-<= delta_join = (newton_tol / k_n)^(2/3), the overlap at which a Hertz contact carries
-newton_tol. Below it a pair's force is not resolved by the solver anyway (its equation is
-dropped at a residual of at most k_n delta_join^(3/2) = newton_tol), and the disk's position
-would be set by rounding: at eps = 0 the load transmitted along the chain decays geometrically
-(about 0.37 per disk on the paper's scene), and the disks beyond the front touch at overlaps of
-a few units in the last place, which open and close under Newton's updates. The stability
+A disk counts as free when both its pair overlaps are at most delta_join = 8 eps_mach L (eps_mach
+the double-precision epsilon, L the ring length, the largest coordinate): a few units in the
+last place of the positions. At eps = 0 the load transmitted along the chain decays
+geometrically (about 0.37 per disk on the paper's scene), and the disks beyond the front touch at
+overlaps of rounding size, which open and close under Newton's updates and whose stiffness
+k_n delta^(1/2) (1e-4 of the substrate's) is set by rounding, not by the load: below delta_join
+an overlap is noise, and such a disk is treated as free (its dropped equation has a residual of
+at most the pair forces, k_n delta_join^(3/2) ~ 1e-17). The stability
 matrix keeps the physical J; its spectrum is the coupled chain's plus each free disk's block
 (eigensystem), and the free disks' modes are excluded from collision detection (decoupled, they
 cannot form a complex pair with anything; identical free disks even share their eigenvalues).
@@ -43,7 +44,7 @@ row is dropped. The number of free disks falls as the load spreads (tests/test_f
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.sparse as sp
@@ -51,11 +52,16 @@ import scipy.sparse as sp
 from diskfriction.continuation.linalg import SingularMatrix, solve
 from diskfriction.continuation.problem import Problem
 from diskfriction.continuation.spectra import Eigensystem, eigensystem
+from diskfriction.continuation.spectral_window import Window, sized, window_eigensystem
 from diskfriction.symbolic import System
 
 SPARSE_FROM = 240
 """Chains with at least this many degrees of freedom (N = 80 with rotation) use sparse J and
 SuperLU; below, dense LAPACK is faster (benchmarks/scaling.py)."""
+
+DELTA_JOIN_ULPS = 8
+"""A pair overlap of at most this many units in the last place of the ring length is rounding:
+a disk whose two pairs are that small is free (module docstring)."""
 
 DERIVATIVE_STEP = (1e-11, 1e-7)
 """Range of the finite-difference length along the branch (samples.matrix_derivative,
@@ -99,17 +105,19 @@ class DiskEquilibria(Problem):
     """The continuation problem of one System (see the module docstring)."""
 
     def __init__(self, system: System, q: np.ndarray, xi: np.ndarray, F_x: float,
-                 matrix: str | None = None, newton_tol: float = 1e-11):
+                 matrix: str | None = None, newton_tol: float = 1e-11, sparse: bool | None = None,
+                 window: Window | None = None):
         self.system = system
         self.matrix = matrix or system.scene.matrix
         self.newton_tol = newton_tol
-        self.sparse = system.ndof >= SPARSE_FROM
+        self.window = window
+        self.sparse = (system.ndof >= SPARSE_FROM or window is not None) if sparse is None else sparse
         self._csr = _CsrPattern(system.rows, system.cols, system.ndof) if self.sparse else None
         self.e_x1 = np.zeros(system.ndof)
         self.e_x1[0] = 1.0
         self._last = (None, None, None)  # (q bytes, xi, (F, J values) or None) of the last trial q
         s = system.scene
-        self.delta_join = (newton_tol / s.k_n) ** (2.0 / 3.0)
+        self.delta_join = DELTA_JOIN_ULPS * np.finfo(float).eps * s.L
         w = np.empty(2 * system.kernels.D)
         system.kernels.wall_increment_coeffs(s.R, w)
         self._wall_w = w[:system.kernels.D].copy()
@@ -199,7 +207,10 @@ class DiskEquilibria(Problem):
         return self._physical(q, row_scale=None if self.matrix == "J" else 1.0 / self.system.mass_diagonal())
 
     def eigensystem(self, q, F_x, vectors: bool = False) -> Eigensystem:
-        """The coupled chain's eigensystem and each free disk's block, the latter excluded."""
+        """The coupled chain's eigensystem and each free disk's block, the latter excluded; or,
+        with a spectral window, the window's eigenvalues (_window_eigensystem)."""
+        if self.window is not None:
+            return self._window_eigensystem(q, F_x, vectors)
         A = self.stability_matrix(q, F_x)
         A = A.toarray() if sp.issparse(A) else A
         if not self.free:
@@ -217,6 +228,19 @@ class DiskEquilibria(Problem):
                 right[np.ix_(idx, idx)] = part.right
                 left[np.ix_(idx, idx)] = part.left
         return Eigensystem(values, right, left, excluded)
+
+    def _window_eigensystem(self, q, F_x, vectors: bool) -> Eigensystem:
+        """The spectral window's eigenvalues (spectral_window.py), k fixed at the first call; the
+        modes of free disks (right vectors on their dofs alone) also excluded."""
+        A = self.stability_matrix(q, F_x)
+        if self.window.k == 0:
+            self.window = sized(self.window, A)
+        found = window_eigensystem(A, self.window, vectors)
+        if not self.free or found.right is None:
+            return found
+        free_dofs = np.concatenate([d.dofs for d in self.free])
+        on_free = np.sum(np.abs(found.right[free_dofs]) ** 2, axis=0) / np.sum(np.abs(found.right) ** 2, axis=0)
+        return replace(found, excluded=found.excluded | (on_free > 0.999))
 
     def derivative_step(self, x) -> float:
         delta = self.system.overlaps(x[:-1])

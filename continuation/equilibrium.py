@@ -65,7 +65,8 @@ def equilibrium_at(system: System, F_x: float) -> Equilibrium:
         q, xi = system.rest_state()
         return Equilibrium(0.0, q, xi, 0.0)
     try:
-        branch = sweep(system, 0.0, F_x, None, SweepParams(detection=DetectionParams(enabled=False)))
+        no_spectra = DetectionParams(enabled=False, spectra=False)  # the equilibria alone
+        branch = sweep(system, 0.0, F_x, None, SweepParams(detection=no_spectra))
     except (EquilibriumError, ContinuationError) as error:
         raise NoEquilibrium(f"no equilibrium beyond F_x = 0 (asked for {F_x:g}): the branch from "
                             f"rest cannot start: {error}", 0.0, F_x) from None

@@ -34,9 +34,7 @@ class Sample:
     """A branch point at segment coordinate s: x = (u, p), tracked eigenvalues, status per
     eigenvalue, status threshold thr; excluded modes (never part of a collision); with slopes:
     tangent t (unit, oriented along the branch), dlam = d lambda / d tau along t, and the
-    eigensystem (vectors in label order) that seeds the collision locator. known: the labels
-    computed here (None: all); a cluster sample (collisions.py) knows only its cluster, and
-    its other entries are interpolated placeholders that nothing tests."""
+    eigensystem (vectors in label order) that seeds the collision locator."""
 
     s: float
     x: Array
@@ -47,16 +45,12 @@ class Sample:
     tangent: Optional[Array] = None
     dlam: Optional[Array] = None
     system: Optional[Eigensystem] = None
-    known: Optional[Array] = None
+    guard: Optional[Array] = None
     uid: int = field(default_factory=lambda: next(_uid), init=False, repr=False, compare=False)
 
     @property
     def p(self) -> float:
         return float(self.x[-1])
-
-    @property
-    def known_mask(self) -> Array:
-        return np.ones(self.eigvals.size, bool) if self.known is None else self.known
 
     def at(self, s: float) -> "Sample":
         """The same point at another segment coordinate (a new step starts at its old end)."""
@@ -66,7 +60,7 @@ class Sample:
         """Labels permuted: new[i] = old[perm[i]]."""
         take = lambda a: None if a is None else a[perm]  # noqa: E731
         return replace(self, eigvals=self.eigvals[perm], status=self.status[perm],
-                       excluded=self.excluded[perm], dlam=take(self.dlam), known=take(self.known),
+                       excluded=self.excluded[perm], dlam=take(self.dlam), guard=take(self.guard),
                        system=None if self.system is None else self.system.permuted(perm))
 
     def slopes(self, segment) -> Array:
@@ -101,19 +95,12 @@ def predicted_match(ref_values: Array, ref_dlam: Array, values: Array, dlam: Arr
 
 def continuation_perm(left: Sample, right: Sample) -> Array:
     """Labels of `right` continuing `left`: by prediction if both carry slopes, else by the
-    nearest eigenvalue (spectra.match_eigenvalues). Only labels `right` knows are permuted (a
-    cluster sample's other entries are placeholders); `left`'s placeholders serve as
-    predictions."""
+    nearest eigenvalue (spectra.match_eigenvalues)."""
     if left.dlam is None or right.dlam is None:
         return match_eigenvalues(left.eigvals, right.eigvals)
     step = right.x - left.x
-    ds_l, ds_r = float(step @ left.tangent), float(step @ right.tangent)
-    if right.known is None:
-        return predicted_match(left.eigvals, left.dlam, right.eigvals, right.dlam, ds_l, ds_r)
-    K = np.flatnonzero(right.known)  # a cluster sample: only its own labels move
-    perm = np.arange(left.eigvals.size)
-    perm[K] = K[predicted_match(left.eigvals[K], left.dlam[K], right.eigvals[K], right.dlam[K], ds_l, ds_r)]
-    return perm
+    return predicted_match(left.eigvals, left.dlam, right.eigvals, right.dlam,
+                           float(step @ left.tangent), float(step @ right.tangent))
 
 
 def make_sample(s: float, x: Array, system: Eigensystem, rel_tol: float,
@@ -123,9 +110,10 @@ def make_sample(s: float, x: Array, system: Eigensystem, rel_tol: float,
     slopes, else by nearest eigenvalue: spectra.match_eigenvalues)."""
     values = np.asarray(system.values, dtype=complex)
     excluded = system.excluded if system.excluded is not None else np.zeros(values.size, bool)
-    system = Eigensystem(values, system.right, system.left, excluded)
+    system = Eigensystem(values, system.right, system.left, excluded, system.guard)
     sample = Sample(s, x, values, eigen_status(values, rel_tol), imag_threshold(values, rel_tol),
-                    excluded, tangent, dlam, system if system.right is not None else None)
+                    excluded, tangent, dlam, system if system.right is not None else None,
+                    system.guard)
     return sample if reference is None else sample.relabel(continuation_perm(reference, sample))
 
 

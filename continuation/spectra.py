@@ -126,18 +126,22 @@ class Eigensystem:
     A r_i = lambda_i r_i) and left vectors (rows of `left`, l_i^H A = lambda_i l_i^H) scaled so
     that l_i^H r_i = 1; `excluded` marks modes kept out of collision detection (exactly
     decoupled modes such as free rolling disks, whose eigenvalues are degenerate by symmetry
-    and can never become complex: see continuation/disks.py)."""
+    and can never become complex: see continuation/disks.py; or, when only a spectral window
+    is tracked, the eigenvalues beyond its guard band: continuation/spectral_window.py); `guard` marks
+    the eigenvalues in a window's guard band, the only ones that may enter or leave the
+    tracked set between two samples."""
 
     values: Array
     right: Optional[Array] = None
     left: Optional[Array] = None
     excluded: Optional[Array] = None
+    guard: Optional[Array] = None
 
     def permuted(self, perm: Array) -> "Eigensystem":
         """The same eigensystem with labels new[i] = old[perm[i]]."""
         pick = lambda a, axis: None if a is None else np.take(a, perm, axis=axis)  # noqa: E731
         return Eigensystem(self.values[perm], pick(self.right, 1), pick(self.left, 0),
-                           pick(self.excluded, 0))
+                           pick(self.excluded, 0), pick(self.guard, 0))
 
 
 def eigensystem(A: Array, vectors: bool, count: bool = True) -> Eigensystem:

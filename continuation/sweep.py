@@ -24,6 +24,7 @@ import numpy as np
 from diskfriction.continuation.arclength import ContinuationParams, continuation
 from diskfriction.continuation.collisions import Collision, DetectionParams
 from diskfriction.continuation.disks import DiskEquilibria, relax
+from diskfriction.continuation.spectral_window import Window
 from diskfriction.continuation.spectra import count_complex_pairs
 from diskfriction.symbolic import System
 
@@ -36,6 +37,8 @@ class SweepParams:
 
     ds_max = None takes span / 60; ds starts at ds_max / 2. newton_tol bounds max|F| at every
     stored point [force]. detection: the collision detector's parameters (continuation core).
+    window: (lo, hi) of Re lambda [the matrix's raw units] to track instead of the whole
+    spectrum (spectral_window.py); None: every eigenvalue.
     """
 
     ds_max: Optional[float] = None
@@ -43,6 +46,7 @@ class SweepParams:
     newton_tol: float = 1e-11
     max_steps: int = 20_000
     detection: DetectionParams = DetectionParams()
+    window: Optional[tuple[float, float]] = None
 
 
 @dataclass(frozen=True)
@@ -54,7 +58,10 @@ class DiskBranch:
     1 = the requested sweep; free (m,) free rolling modes (disks touching only the substrate,
     continuation/disks.py), excluded from the collisions; collisions of the requested leg, in
     branch order; status per leg; events: contact events (opening, closing, Coulomb cap, a
-    free disk joining) the steps were cut at.
+    free disk joining) the steps were cut at; window: (lo, hi) of Re lambda tracked, or None
+    (then every eigenvalue); with a window, eigenvalues holds the k tracked eigenvalues, of
+    which those with Re lambda in [lo, hi] are certified, n_complex counts the pairs there and
+    only collisions there are listed.
     """
 
     F_x: np.ndarray
@@ -69,6 +76,7 @@ class DiskBranch:
     matrix: str
     status: tuple[str, ...]
     events: int
+    window: Optional[tuple[float, float]] = None
 
     def __len__(self) -> int:
         return self.F_x.size
@@ -90,7 +98,8 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
     ds_max = params.ds_max or span / 60
     F_1 = min(START_FRACTION * system.scene.F_y, 0.5 * legs[0][2])
     q, xi = relax(system, *system.rest_state(), F_1)
-    problem = DiskEquilibria(system, q, xi, F_1, matrix, params.newton_tol)
+    window = None if params.window is None else Window(*params.window)
+    problem = DiskEquilibria(system, q, xi, F_1, matrix, params.newton_tol, window=window)
     rows, collisions, status, events = [], (), [], 0
     F_start = F_1
     for leg, a, b in legs:
@@ -118,7 +127,12 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
             collisions = branch.collisions
         F_start = float(branch.p[-1])
     F_x, q, xi, eig, res, leg, free = (np.array(c) for c in zip(*rows))
-    n_complex = np.array([count_complex_pairs(e, params.detection.rel_tol) for e in eig])
+    rel_tol = params.detection.rel_tol
+    if window is None:
+        n_complex = np.array([count_complex_pairs(e, rel_tol) for e in eig])
+    else:  # the pairs in the window; collisions with their double eigenvalue there
+        n_complex = np.array([count_complex_pairs(e[window.inside(e)], rel_tol) for e in eig])
+        collisions = tuple(c for c in collisions if window.lo <= c.eigenvalue <= window.hi)
     return DiskBranch(F_x, q, xi, eig, n_complex, res, leg, free, tuple(collisions), matrix,
-                      tuple(status), events)
+                      tuple(status), events, params.window)
 

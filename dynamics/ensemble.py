@@ -29,6 +29,7 @@ import json
 import logging
 import signal
 import threading
+import warnings
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Callable, Optional
@@ -261,8 +262,10 @@ def workers_ignore_interrupts():
 
     A terminal sends Ctrl-C to the whole process group: without this every dask worker would
     die with a KeyboardInterrupt traceback while this process shuts them down in order. The
-    disposition is process-wide, so a Ctrl-C during the start itself (about a second) is
-    ignored too; afterwards this process handles it as before. Only the main thread may set
+    disposition is process-wide, so a Ctrl-C during the start itself (about a second, a few
+    on a loaded machine) is ignored too and has to be pressed again; afterwards this process
+    handles it as before. (Blocking SIGINT instead of ignoring it does not keep it: dask's
+    threads that do not block it take it, and discard it.) Only the main thread may set
     handlers: elsewhere this does nothing."""
     if threading.current_thread() is not threading.main_thread():
         yield
@@ -283,17 +286,18 @@ def _run_tasks(scene, todo, summaries, scheduler, tick) -> None:
     from diskfriction.continuation.equilibrium import equilibrium_at
     from diskfriction.symbolic import System
 
-    cluster = None
-    if scheduler is None:
-        with workers_ignore_interrupts():
-            cluster = LocalCluster(n_workers=None, threads_per_worker=1, processes=True,
-                                   dashboard_address=None, silence_logs=logging.CRITICAL)
+    cluster = client = None
     try:
-        client = Client(scheduler or cluster)
-    except (OSError, ValueError) as error:
-        raise SchedulerUnreachable(f"cannot use the dask scheduler at {scheduler!r}: "
-                                   f"{(str(error).splitlines() or [''])[0]}") from None
-    try:
+        if scheduler is None:
+            with workers_ignore_interrupts(), warnings.catch_warnings():
+                warnings.simplefilter("ignore", UserWarning)  # "port 8787 in use": another cluster
+                cluster = LocalCluster(n_workers=None, threads_per_worker=1, processes=True,
+                                       dashboard_address=None, silence_logs=logging.CRITICAL)
+        try:
+            client = Client(scheduler or cluster)
+        except (OSError, ValueError) as error:
+            raise SchedulerUnreachable(f"cannot use the dask scheduler at {scheduler!r}: "
+                                       f"{(str(error).splitlines() or [''])[0]}") from None
         system = System.from_scene(scene)
         states = {F: equilibrium_at(system, F) for F in dict.fromkeys(F for F, _, _ in todo)}
         futures = {client.submit(run_realization, scene, F, states[F].q, states[F].xi, spec,
@@ -306,6 +310,8 @@ def _run_tasks(scene, todo, summaries, scheduler, tick) -> None:
             summaries[F].append(summary)
             tick()
     finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
+        with workers_ignore_interrupts():  # shutting down: a second Ctrl-C must not cut it short
+            if client is not None:
+                client.close()
+            if cluster is not None:
+                cluster.close()

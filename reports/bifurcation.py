@@ -6,9 +6,11 @@ Files hold raw units (MODEL.md: m = 1, 2R = 1, k_n = 2000); the diagram shows th
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Optional
 
 import numpy as np
 
+from diskfriction.continuation.collisions import Collision
 from diskfriction.continuation.sweep import DiskBranch
 from diskfriction.files import save_json, save_npz, write_atomic
 from diskfriction.reports.units import F_X_LABEL, PaperUnits, eig_label
@@ -17,28 +19,45 @@ from diskfriction.scenes import Scene
 DPI = 110
 
 
-def collision_records(branch: DiskBranch) -> list[dict]:
-    """One JSON object per located collision of the requested leg, raw units.
+def collision_record(c: Collision, parameter: str, matrix: str, window=None) -> dict:
+    """One located collision as a JSON object, keyed by the parameter's name.
 
     At a collision the two eigenvalues coincide on the real axis: lambda_im is 0 by definition
-    and lambda_re is the double eigenvalue. `bracket` is the F_x interval (width <= 1e-10)
+    and lambda_re is the double eigenvalue. `bracket` is the parameter interval (width <= 1e-10)
     across which the count of complex pairs changes; `eigenvector` and `jordan_vector` form the
-    Jordan chain (A - lambda) v = 0, (A - lambda) w = v of the stability matrix.
+    Jordan chain (A - lambda) v = 0, (A - lambda) w = v of the stability matrix A. `window`: the
+    band [lo, hi] of Re lambda the sweep tracked and certified (only collisions there are
+    listed), or null when it covered the whole spectrum.
     """
-    return [{"F_x": float(c.p), "kind": c.kind, "lambda_re": float(c.eigenvalue), "lambda_im": 0.0,
-             "matrix": branch.matrix, "bracket": [float(b) for b in c.bracket],
-             "resolved": bool(c.resolved), "residual": float(c.residual),
-             "eigenvector": np.asarray(c.eigenvector, dtype=float).tolist(),
-             "jordan_vector": np.asarray(c.generalized_eigenvector, dtype=float).tolist()}
-            for c in branch.collisions]
+    return {parameter: float(c.p), "kind": c.kind, "lambda_re": float(c.eigenvalue),
+            "lambda_im": 0.0, "matrix": matrix, "window": None if window is None else list(window),
+            "bracket": [float(b) for b in c.bracket],
+            "resolved": bool(c.resolved), "residual": float(c.residual),
+            "eigenvector": np.asarray(c.eigenvector, dtype=float).tolist(),
+            "jordan_vector": np.asarray(c.generalized_eigenvector, dtype=float).tolist()}
+
+
+RECORD_KEYS = ("kind", "lambda_re", "lambda_im", "matrix", "window", "bracket", "resolved",
+               "residual", "eigenvector", "jordan_vector")
+"""The keys of a collision record besides the parameter's name."""
+
+
+def collision_records(branch: DiskBranch) -> list[dict]:
+    """One JSON object per located collision of the requested leg, raw units, keyed F_x
+    (collision_record)."""
+    window = None if branch.window is None else tuple(float(w) for w in branch.window)
+    return [collision_record(c, "F_x", branch.matrix, window) for c in branch.collisions]
 
 
 def save_branch(out: Path, branch: DiskBranch, scene: Scene) -> None:
     """DIR/branch.npz (every accepted point: F_x, q, xi, eigenvalues, n_complex, residual,
-    leg) and DIR/collisions.json, each written atomically."""
+    leg, free rolling modes; window: the band of Re lambda tracked, nan nan for the whole
+    spectrum) and DIR/collisions.json, each written atomically."""
     save_npz(Path(out) / "branch.npz", F_x=branch.F_x, q=branch.q, xi=branch.xi,
              eigenvalues=branch.eigenvalues, n_complex=branch.n_complex,
-             residual=branch.residual, leg=branch.leg, matrix=np.array(branch.matrix),
+             residual=branch.residual, leg=branch.leg, free=branch.free,
+             window=np.array(branch.window if branch.window is not None else (np.nan, np.nan)),
+             matrix=np.array(branch.matrix),
              k_n=np.array(scene.k_n), N=np.array(scene.N))
     save_json(Path(out) / "collisions.json", collision_records(branch))
 
@@ -97,7 +116,7 @@ def leg_label(leg_id: int, F: np.ndarray) -> str:
 
 def draw_spectrum(top, bottom, F_x: np.ndarray, lam: np.ndarray, leg: np.ndarray,
                   n_complex: np.ndarray, collisions: list[tuple[float, str, float]],
-                  matrix: str) -> list:
+                  matrix: str, x_label: str = F_X_LABEL, eig_unit: Optional[str] = None) -> list:
     """Im (top) and Re (bottom, symlog) of every eigenvalue `lam` (rows: points at F_x, already
     in the paper's unit of `matrix`; columns tracked along the branch) against F_x.
 
@@ -106,7 +125,9 @@ def draw_spectrum(top, bottom, F_x: np.ndarray, lam: np.ndarray, leg: np.ndarray
     loading legs solid, unloading dashed. Complex windows of the requested leg are shaded,
     from its located collisions (F_x, "birth" | "death", double eigenvalue in the same unit):
     births ^, deaths v, and a bubble narrower than a pixel as one diamond. Returns the legend
-    handles that key all of it (the caller places the legend). Plots only: no physics."""
+    handles that key all of it (the caller places the legend). Axis labels: x_label, and
+    Re / Im of `matrix` in eig_unit (default the paper's unit of `matrix`). Plots only: no
+    physics."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
@@ -160,30 +181,50 @@ def draw_spectrum(top, bottom, F_x: np.ndarray, lam: np.ndarray, leg: np.ndarray
     if bubbles:
         handles.append(Line2D([], [], ls="", marker=BUBBLE[0], color=BUBBLE[1],
                               label=f"bubble narrower than a pixel ({len(bubbles)})"))
-    top.set_ylabel(eig_label("Im", matrix))
-    bottom.set_ylabel(eig_label("Re", matrix))
+    top.set_ylabel(eig_label("Im", matrix, eig_unit))
+    bottom.set_ylabel(eig_label("Re", matrix, eig_unit))
     bottom.set_yscale("symlog", linthresh=1e-4)
-    bottom.set_xlabel(F_X_LABEL)
+    bottom.set_xlabel(x_label)
     return handles
 
 
-def plot_diagram(branch: DiskBranch, scene: Scene, path: Path) -> None:
-    """Im(lambda) (top) and Re(lambda) (bottom) of every eigenvalue against F_x in the paper's
-    units (lambda / k_n for the paper's scene): draw_spectrum."""
+def diagram_axes():
+    """A new figure of a bifurcation diagram: (figure, Im panel on top, Re panel below)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    unit = PaperUnits.of(scene).eigenvalue(branch.matrix)
     fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(10, 7), dpi=DPI)
-    handles = draw_spectrum(top, bottom, branch.F_x, branch.eigenvalues / unit, branch.leg,
-                            branch.n_complex,
-                            [(c.p, c.kind, c.eigenvalue / unit) for c in branch.collisions],
-                            branch.matrix)
-    top.set_title(f"{scene.name}: spectrum of {branch.matrix}, N = {scene.N}", fontsize=9)
+    return fig, top, bottom
+
+
+def save_diagram(fig, top, handles: list, title: str, path: Path) -> None:
+    """Title, the legend right of the panels, written atomically as PNG, figure closed."""
+    import matplotlib.pyplot as plt
+
+    top.set_title(title, fontsize=9)
     top.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     fig.subplots_adjust(left=0.095, right=0.76, bottom=0.08, top=0.95, hspace=0.06)  # fixed:
     # tight_layout would measure every label first, a third of the plot's time
     write_atomic(Path(path), lambda tmp: fig.savefig(tmp, dpi=DPI, format="png"))
     plt.close(fig)
+
+
+def plot_diagram(branch: DiskBranch, scene: Scene, path: Path) -> None:
+    """Im(lambda) (top) and Re(lambda) (bottom) of every eigenvalue against F_x in the paper's
+    units (lambda / k_n for the paper's scene): draw_spectrum."""
+    unit = PaperUnits.of(scene).eigenvalue(branch.matrix)
+    fig, top, bottom = diagram_axes()
+    lam, title = branch.eigenvalues / unit, f"{scene.name}: spectrum of {branch.matrix}, N = {scene.N}"
+    if branch.window is not None:  # only the window is certified: the rest is not drawn
+        lo, hi = (w / unit for w in branch.window)
+        lam = np.where((lam.real >= lo) & (lam.real <= hi), lam, np.nan)
+        title += f", window {lo:.5g} <= Re <= {hi:.5g} (the rest of the spectrum not tracked)"
+    handles = draw_spectrum(top, bottom, branch.F_x, lam, branch.leg, branch.n_complex,
+                            [(c.p, c.kind, c.eigenvalue / unit) for c in branch.collisions],
+                            branch.matrix)
+    if branch.window is not None:
+        bottom.set_yscale("linear")
+        bottom.set_ylim(lo, hi)
+    save_diagram(fig, top, handles, title, path)

@@ -43,6 +43,8 @@ TIME_LABEL = r"$t$ [$\tau$]"
 F_X_LABEL = r"$F_x$ [raw force, as the paper quotes it]"
 
 
-def eig_label(part: str, matrix: str) -> str:
-    """Axis label of Re or Im of an eigenvalue of `matrix`, with its paper unit."""
-    return rf"{part} $\lambda$ of {matrix} [{EIG_UNIT_LABEL[matrix]}]"
+def eig_label(part: str, matrix: str, unit: str | None = None) -> str:
+    """Axis label of Re or Im of an eigenvalue of `matrix`, with `unit` (default its paper
+    unit; "" for none)."""
+    unit = EIG_UNIT_LABEL[matrix] if unit is None else unit
+    return rf"{part} $\lambda$ of {matrix}" + (f" [{unit}]" if unit else "")

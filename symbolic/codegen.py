@@ -40,18 +40,24 @@ def _printable(expr: sp.Expr) -> sp.Expr:
     return sp.sympify(expr).subs(delta, sd**2)
 
 
-def _body(exprs: dict[str, sp.Expr]) -> tuple[list[str], set[str]]:
-    """cse'd assignments for named outputs ('f[0]', 'J[1, 2]', ...) and the symbols they use."""
+def cse_assignments(exprs: dict[str, sp.Expr], temporary: str = "c") -> list[str]:
+    """Python assignments of named outputs ('f[0]', 'J[1, 2]', ...) after common-subexpression
+    elimination, the temporaries named temporary0, temporary1, ..."""
     printer = _KernelPrinter()
     names = list(exprs)
-    printable = [_printable(exprs[n]) for n in names]
-    used = {s.name for e in printable for s in e.free_symbols}
-    replacements, reduced = sp.cse(printable, symbols=sp.numbered_symbols("c"),
-                                   optimizations="basic")
+    replacements, reduced = sp.cse([exprs[n] for n in names],
+                                   symbols=sp.numbered_symbols(temporary), optimizations="basic")
     lines = [f"{s} = {printer.doprint(e)}" for s, e in replacements]
     lines += [f"{name} = {printer.doprint(sp.Float(e) if e.is_number else e)}"
               for name, e in zip(names, reduced)]
-    return lines, used
+    return lines
+
+
+def _body(exprs: dict[str, sp.Expr]) -> tuple[list[str], set[str]]:
+    """cse'd assignments for named outputs ('f[0]', 'J[1, 2]', ...) and the symbols they use."""
+    printable = {n: _printable(e) for n, e in exprs.items()}
+    used = {s.name for e in printable.values() for s in e.free_symbols}
+    return cse_assignments(printable), used
 
 
 def _kernel(c: ContactExprs, with_J: bool) -> str:

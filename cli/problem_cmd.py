@@ -1,0 +1,196 @@
+"""``diskfriction bifurcate --problem FILE.py[:NAME] [--p A:B]``: a problem from the user's file.
+
+FILE.py is the user's own code: it is imported as a module (its folder first on sys.path, as
+`python FILE.py` would have it), never evaluated from a string of a scene. NAME (default
+`problem`) must be a continuation.BifurcationProblem. Everything that can be wrong with the
+file is one line naming it, exit 2, before anything is computed: no such file, not a .py
+file, an exception or syntax error while importing (with its line), no object NAME, an object
+of another type, a parameter name that would clash with the outputs' keys, functions that
+raise or return arrays of the wrong shape or non-finite values at the start. Warnings raised
+while importing (e.g. derivatives computed by differences) are one line each.
+"""
+from __future__ import annotations
+
+import argparse
+import hashlib
+import importlib.util
+import sys
+import traceback
+import warnings
+from dataclasses import replace
+from pathlib import Path
+
+from diskfriction.cli.common import EXIT_FAILED, CommandError, number, output_dir
+from diskfriction.cli.progress import Progress
+from diskfriction.files import warn
+
+DEFAULT_NAME = "problem"
+SHOWN_WARNINGS = 5
+"""Warnings of the run printed at most (the detector may warn once per retried location)."""
+
+
+def split_target(text: str) -> tuple[Path, str]:
+    """'FILE.py[:NAME]' -> (FILE.py, NAME or 'problem')."""
+    path, sep, name = text.rpartition(":")
+    if sep and name.isidentifier() and path:
+        return Path(path), name
+    return Path(text), DEFAULT_NAME
+
+
+def _fail(path: Path, what: str) -> CommandError:
+    return CommandError(f"bifurcate error: {path}: {what}")
+
+
+def _error_line(path: Path, error: BaseException) -> str:
+    """'ExcType: message (line N)', the line the last frame in `path` was at."""
+    if isinstance(error, SyntaxError):
+        return f"SyntaxError: {error.msg} (line {error.lineno})"
+    frames = [f for f in traceback.extract_tb(error.__traceback__)
+              if Path(f.filename).resolve() == path.resolve()]
+    where = f" (line {frames[-1].lineno})" if frames else ""
+    message = (str(error).splitlines() or [""])[0]
+    return f"{type(error).__name__}: {message}{where}"
+
+
+def import_file(path: Path):
+    """The module of the user's file `path`, imported under a name of its own; a CommandError
+    (one line, exit 2) if it is missing, not .py, or raises while importing. Warnings it
+    raises are printed, one line each."""
+    if not path.is_file():
+        raise _fail(path, "no such file")
+    if path.suffix != ".py":
+        raise _fail(path, "not a Python file (.py)")
+    name = f"diskfriction_user_{hashlib.sha256(str(path.resolve()).encode()).hexdigest()[:12]}"
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module  # as an import does: dataclasses and pickle look modules up
+    sys.path.insert(0, str(path.resolve().parent))
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            spec.loader.exec_module(module)
+    except BaseException as error:  # noqa: BLE001 - SystemExit too: the user's code may do anything
+        del sys.modules[name]
+        if isinstance(error, KeyboardInterrupt):
+            raise
+        raise _fail(path, f"failed to import: {_error_line(path, error)}") from None
+    finally:
+        sys.path.remove(str(path.resolve().parent))
+    for w in caught:
+        warn(f"{path}: {w.message}")
+    return module
+
+
+def load_problem(text: str):
+    """(path, name, BifurcationProblem) from 'FILE.py[:NAME]'; a CommandError otherwise."""
+    from diskfriction.continuation.api import BifurcationProblem
+
+    path, name = split_target(text)
+    module = import_file(path)
+    if not hasattr(module, name):
+        found = [k for k, v in vars(module).items() if isinstance(v, BifurcationProblem)]
+        hint = f"; it defines {', '.join(found)}" if found else "; it defines no BifurcationProblem"
+        raise _fail(path, f"no object named {name!r}{hint}")
+    spec = getattr(module, name)
+    if not isinstance(spec, BifurcationProblem):
+        raise _fail(path, f"{name} is a {type(spec).__name__}, not a "
+                          "diskfriction.continuation.BifurcationProblem")
+    return path, name, spec
+
+
+def run_problem(args: argparse.Namespace) -> int:
+    """The --problem form of `bifurcate` (module docstring); exit 0 if the branch reached the
+    end of the span, 1 if it stopped before (what was reached is written and said)."""
+    given = [option for option, value in (("SCENE", args.scene), ("--fx", args.fx),
+                                          ("--matrix", args.matrix)) if value is not None]
+    if given:
+        raise CommandError(f"bifurcate error: --problem: takes no {', '.join(given)} "
+                           "(the problem file defines the equations and the matrix)")
+    from diskfriction.cli.bifurcate_cmd import parse_range
+
+    span = parse_range(args.p, "p", nonnegative=False) if args.p is not None else None
+    if args.ds_max is not None:
+        number("bifurcate", "ds-max", args.ds_max)
+    path, name, spec = load_problem(args.problem)
+    label = f"{path}:{name}"
+    if span is None and spec.p_span is None:
+        raise CommandError(f"bifurcate error: --p: needed, {label} has no p_span")
+    span = span or spec.p_span
+    from diskfriction.reports.problem import RESERVED
+
+    if spec.parameter in RESERVED:
+        raise _fail(path, f"{name}: parameter name {spec.parameter!r} clashes with the outputs' "
+                          f"keys ({', '.join(sorted(RESERVED))})")
+    stem = path.stem if name == DEFAULT_NAME else f"{path.stem}-{name}"
+    out = output_dir("bifurcate", args.out, Path("out") / "bifurcate" / stem)
+    options = replace(spec.options, detection=replace(spec.options.detection, mode=args.detection),
+                      ds_max=args.ds_max or spec.options.ds_max)
+    return _continue(spec, label, span, options, out, args.json)
+
+
+def _continue(spec, label: str, span, options, out: Path, as_json: bool) -> int:
+    """Check the problem at the start, continue it, write and print the results."""
+    import json
+
+    from diskfriction.continuation.api import ProblemError, check_problem, solve_branch
+    from diskfriction.continuation.arclength import ContinuationError
+    from diskfriction.continuation.memory import sweep_bytes
+    from diskfriction.memory import NotEnoughMemory, require_memory
+    from diskfriction.reports.bifurcation import collision_record
+    from diskfriction.reports.problem import plot_problem_diagram, save_outputs
+
+    a, b = span
+    try:
+        u0 = check_problem(spec.problem, spec.start(a), a)
+        n = u0.size
+        require_memory(sweep_bytes(n), f"{label}: a branch of {n} x {n} dense matrices")
+    except (ProblemError, NotEnoughMemory) as error:
+        raise CommandError(f"bifurcate error: {label}: {error}") from None
+    progress = Progress("bifurcate")
+    reached = {"p": a}
+
+    def on_point(k, p, u, eigenvalues) -> None:
+        reached["p"] = p
+        progress(abs(p - a) / abs(b - a), f"{spec.parameter} = {p:.6g}")
+
+    try:
+        progress.stage(f"continuation {spec.parameter} {a:g} -> {b:g}")
+        try:
+            result = solve_branch(spec.problem, u0, span, options, callback=on_point)
+        except ContinuationError as error:
+            raise CommandError(f"bifurcate error: {label}: {error}", EXIT_FAILED) from None
+        except Exception as error:  # noqa: BLE001 - the user's functions run inside the core
+            raise CommandError(f"bifurcate error: {label}: the run stopped at {spec.parameter} = "
+                               f"{reached['p']:.10g}: {type(error).__name__}: {error}", EXIT_FAILED) from None
+        progress.stage(f"writing {out}/branch.npz, collisions.json, special_points.json")
+        save_outputs(out, result, spec)
+        progress.stage(f"plotting {out}/diagram.png")
+        plot_problem_diagram(result, spec, f"{label}: spectrum of {spec.matrix}", out / "diagram.png")
+    finally:
+        progress.close()
+    records = [collision_record(c, spec.parameter, spec.matrix) for c in result.collisions]
+    if as_json:
+        print(json.dumps([{k: r[k] for k in (spec.parameter, "kind", "lambda_re", "lambda_im", "matrix")}
+                          for r in records], indent=1))
+    else:
+        _print_summary(result, spec, out)
+    return 0 if result.success else EXIT_FAILED
+
+
+def _print_summary(result, spec, out: Path) -> None:
+    """What was reached and located, in the problem's names and units."""
+    units = f" {spec.units}" if spec.units else ""
+    p = result.p
+    print(f"{len(p)} points, {spec.parameter} {p[0]:.6g} .. {p[-1]:.6g}{units}, max residual "
+          f"{result.branch.residual.max():.1e}, status {result.message}")
+    print(f"{len(result.collisions)} collisions ({spec.matrix}):")
+    for c in result.collisions:
+        print(f"  {c.kind:5s}  {spec.parameter} = {c.p:.12g}{units}  lambda = {c.eigenvalue:.9g}")
+    for s in result.folds + result.hopf:
+        value = "" if s.kind == "fold" else f"  lambda = {complex(s.value):.6g}"
+        print(f"  {s.kind:5s}  {spec.parameter} = {s.p:.12g}{units}{value}")
+    for line in result.warnings[:SHOWN_WARNINGS]:
+        print(f"  warning: {line}")
+    if len(result.warnings) > SHOWN_WARNINGS:
+        print(f"  ... and {len(result.warnings) - SHOWN_WARNINGS} more warnings")
+    print(f"wrote {out}/branch.npz, collisions.json, special_points.json, diagram.png")

@@ -1,0 +1,321 @@
+"""The public front end: any one-parameter problem G(u, p) = 0 continued over a span of p, with
+every eigenvalue collision, fold and Hopf point on the branch located.
+
+    from diskfriction.continuation import Options, problem_from_functions, solve_branch
+
+    problem = problem_from_functions(G, A=A)   # dG/du, dG/dp by differences (one warning)
+    result = solve_branch(problem, u0, (0.0, 6.0), Options(ds_max=0.05))
+    result.collisions, result.folds, result.hopf, result.branch.eigenvalues
+
+scipy.integrate.solve_ivp's conventions: one front-end function (solve_branch), an options
+object checked at the door (Options), one result object of arrays and located points
+(BranchResult). Problems come from plain callables (problem_from_functions), from sympy
+expressions compiled to cached numba kernels (problem_from_sympy), or from any subclass of
+the core's Problem (problem.py: a history carried alongside u, events, a sparse Jacobian).
+A problem file for `diskfriction bifurcate --problem` exports a BifurcationProblem: the
+problem with its starting guess, its parameter's name and units and its matrix's name.
+The reference with a worked example is docs/api.md.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable, Mapping, Optional, Sequence, Union
+
+import numpy as np
+import scipy.sparse as sp
+
+from diskfriction.errors import OneLineError
+
+from .arclength import Callback, ContinuationParams, continuation
+from .bifurcations import SpecialPoint, locate_folds, locate_hopf
+from .branch import Branch
+from .collisions import Collision, DetectionParams
+from .differences import (METHODS, ParameterDerivative, StateDerivative, check_complex_step,
+                          warn_differences)
+from .problem import FunctionProblem, Problem
+from .segment import SegmentSolveError
+
+Array = np.ndarray
+Function = Callable[[Array, float], Array]
+
+STEPS_PER_SPAN = 50
+"""Default largest step: the span of p over this many steps (arclength in x = (u, p))."""
+LOCATOR_TOL = 1e-2
+"""Folds and Hopf points are refined on points solved to this fraction of newton_tol."""
+
+
+class ProblemError(OneLineError):
+    """A problem that cannot be continued as given (a function fails, returns the wrong shape
+    or non-finite values at the start): one line naming what is wrong, exit code 2."""
+
+    exit_code = 2
+
+
+def problem_from_functions(G: Function, *, dG_du: Optional[Function] = None,
+                           dG_dp: Optional[Function] = None, A: Optional[Function] = None,
+                           differences: str = "central") -> FunctionProblem:
+    """The problem G(u, p) = 0 from plain callables of (u, p): u a float array (n,), p a float.
+
+    G -> (n,); dG_du -> (n, n); dG_dp -> (n,); A -> (m, m), the matrix whose spectrum is
+    tracked (e.g. M^-1 K(p) for M u'' + K(p) u = 0; default dG/du). A missing dG_du or dG_dp
+    is computed by `differences` ("central" or "complex-step", continuation/differences.py)
+    and a DerivativeWarning states its accuracy."""
+    if differences not in METHODS:
+        raise ValueError(f"differences must be one of {METHODS}, got {differences!r}")
+    missing = [name for name, f in (("dG/du", dG_du), ("dG/dp", dG_dp)) if f is None]
+    warn_differences(missing, differences)
+    return FunctionProblem(G, dG_du or StateDerivative(G, differences),
+                           dG_dp or ParameterDerivative(G, differences), A)
+
+
+def problem_from_sympy(G: Sequence, u: Sequence, p, *, A=None,
+                       values: Optional[Mapping] = None) -> FunctionProblem:
+    """The problem G(u, p) = 0 from sympy expressions: G a sequence of n expressions in the
+    symbols u (n of them), p and the constants given in `values` ({symbol: number}); A an
+    m x m sympy Matrix of the tracked matrix (default dG/du). dG/du and dG/dp are derived
+    exactly; every function is printed after cse as a numba kernel of a module cached by the
+    hash of the expressions (symbolic/problems.py), so the second run compiles nothing."""
+    from diskfriction.symbolic.problems import compile_problem
+
+    kernels = compile_problem(G, u, p, A, values or {})
+    return FunctionProblem(kernels.residual, kernels.jacobian, kernels.dG_dp, kernels.stability)
+
+
+@dataclass(frozen=True)
+class Options:
+    """Options of solve_branch (steps in the Euclidean arclength of x = (u, p)).
+
+    ds_max: largest step (None: |p_stop - p_start| / 50); ds: first step (None: ds_max / 4);
+    ds_min: the run stops when the step must shrink below it (None: 1e-8 ds_max);
+    newton_tol: max|G| at every stored point [units of G]; max_newton: corrector iterations;
+    max_steps: accepted points at most; detection: the collision detector's parameters
+    (collisions.DetectionParams: collisions located to |dp| <= tol_p = 1e-10);
+    special_points: what to locate after the run (bifurcations.py), "fold" and/or "hopf";
+    a Hopf point is where a complex pair of the tracked matrix crosses Re = 0, a Hopf
+    bifurcation when that matrix is the Jacobian of u' = G(u, p): leave "hopf" out for any
+    other (e.g. M^-1 K, whose eigenvalues are omega^2). Nothing is located for a problem with a
+    commit hook (its state is gone after the run)."""
+
+    ds_max: Optional[float] = None
+    ds: Optional[float] = None
+    ds_min: Optional[float] = None
+    newton_tol: float = 1e-10
+    max_newton: int = 8
+    max_steps: int = 10_000
+    detection: DetectionParams = DetectionParams()
+    special_points: tuple[str, ...] = ("fold", "hopf")
+
+    def __post_init__(self):
+        for name in ("ds_max", "ds", "ds_min", "newton_tol"):
+            value = getattr(self, name)
+            if value is not None and not (math.isfinite(value) and value > 0):
+                raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
+        if self.max_newton < 1 or self.max_steps < 1:
+            raise ValueError("max_newton and max_steps must be >= 1")
+        if not set(self.special_points) <= {"fold", "hopf"}:
+            raise ValueError(f"special_points may hold 'fold' and 'hopf', got {self.special_points!r}")
+
+    def params(self, p_start: float, p_stop: float) -> ContinuationParams:
+        """The core's ContinuationParams for the span p_start -> p_stop."""
+        ds_max = self.ds_max or abs(p_stop - p_start) / STEPS_PER_SPAN
+        ds = self.ds or ds_max / 4
+        ds_min = self.ds_min or min(1e-8 * ds_max, ds)
+        return ContinuationParams(ds=ds, ds_min=ds_min, ds_max=ds_max, newton_tol=self.newton_tol,
+                                  max_newton=self.max_newton, p_min=min(p_start, p_stop),
+                                  p_max=max(p_start, p_stop), max_steps=self.max_steps,
+                                  direction=1 if p_stop > p_start else -1)
+
+
+@dataclass(frozen=True)
+class BranchResult:
+    """What solve_branch returns.
+
+    branch: the core's Branch (branch.py): one row per accepted point, p (m,), u (m, n),
+    eigenvalues (m, n_A) tracked (column i is one eigenvalue followed along the branch),
+    n_complex (m,), residual (m,), tangent, status, and the located collisions;
+    folds, hopf: bifurcations.SpecialPoint (p, u, bracket, step, value) in branch order;
+    warnings: the detector's and the locators'.
+    Shortcuts: p, u, eigenvalues, collisions (collisions.Collision: p, kind "birth" | "death",
+    the double eigenvalue, its Jordan chain, bracket), success (the branch reached the end
+    of the span) and message (why it stopped)."""
+
+    branch: Branch
+    folds: tuple[SpecialPoint, ...] = ()
+    hopf: tuple[SpecialPoint, ...] = ()
+    warnings: tuple[str, ...] = ()
+
+    @property
+    def p(self) -> Array:
+        return self.branch.p
+
+    @property
+    def u(self) -> Array:
+        return self.branch.u
+
+    @property
+    def eigenvalues(self) -> Array:
+        return self.branch.eigenvalues
+
+    @property
+    def collisions(self) -> tuple[Collision, ...]:
+        return self.branch.collisions
+
+    @property
+    def success(self) -> bool:
+        return self.branch.status == "p_end"
+
+    @property
+    def message(self) -> str:
+        return self.branch.status
+
+
+def _span(p_span) -> tuple[float, float]:
+    """(p_start, p_stop): two finite, different numbers."""
+    try:
+        a, b = (float(v) for v in p_span)
+    except (TypeError, ValueError):
+        raise ValueError(f"p_span must be two numbers (p_start, p_stop), got {p_span!r}") from None
+    if not (math.isfinite(a) and math.isfinite(b)) or a == b:
+        raise ValueError(f"p_span must be two finite, different numbers, got {p_span!r}")
+    return a, b
+
+
+def _evaluated(what: str, call: Callable[[], object], p: float):
+    """call(), or a ProblemError naming `what` and the exception it raised."""
+    try:
+        return call()
+    except Exception as error:  # noqa: BLE001 - the user's code may raise anything
+        line = (str(error).splitlines() or [""])[0]
+        raise ProblemError(f"{what} raised {type(error).__name__} at p = {p:g}: {line}") from None
+
+
+def _check_matrix(what: str, M, rows: int) -> None:
+    """A square (rows x rows; any size if rows < 0) dense or sparse matrix of finite numbers."""
+    shape = tuple(np.shape(M))
+    if len(shape) != 2 or shape[0] != shape[1] or (rows >= 0 and shape[0] != rows):
+        need = f"({rows}, {rows})" if rows >= 0 else "square"
+        raise ProblemError(f"{what} returned shape {shape}, expected {need}")
+    if not np.all(np.isfinite(M.data if sp.issparse(M) else np.asarray(M))):
+        raise ProblemError(f"{what} returned non-finite values")
+
+
+def check_problem(problem: Problem, u0, p: float) -> Array:
+    """u0 as a float array, after checking the problem at (u0, p): G -> (n,), dG/du -> (n, n),
+    dG/dp -> (n,), the tracked matrix square, all finite, n = u0.size, and derivatives by the
+    complex step valid for G (differences.check_complex_step). Else a ProblemError."""
+    try:
+        u0 = np.asarray(u0, dtype=float)
+    except (TypeError, ValueError):
+        raise ProblemError(f"u0 is not an array of numbers (got {type(u0).__name__})") from None
+    if u0.ndim != 1 or u0.size == 0 or not np.all(np.isfinite(u0)):
+        raise ProblemError(f"u0 must be a non-empty 1-D array of finite numbers (got shape {u0.shape})")
+    n = u0.size
+    for what, f, shape in (("G(u, p)", problem.residual, (n,)), ("dG/dp", problem.dG_dp, (n,))):
+        value = np.asarray(_evaluated(what, lambda: f(u0, p), p))
+        if value.shape != shape:
+            raise ProblemError(f"{what} returned shape {value.shape}, expected {shape} (u0 has {n} entries)")
+        if not np.all(np.isfinite(value)):
+            raise ProblemError(f"{what} returned non-finite values at p = {p:g}")
+    _check_matrix("dG/du", _evaluated("dG/du", lambda: problem.jacobian(u0, p), p), n)
+    A = _evaluated("the tracked matrix A", lambda: problem.stability_matrix(u0, p), p)
+    _check_matrix("the tracked matrix A", A, -1)
+    differenced = (getattr(problem, "G_u", None), getattr(problem, "G_p", None))
+    if any(isinstance(f, (StateDerivative, ParameterDerivative)) and f.method == "complex-step"
+           for f in differenced):
+        try:
+            check_complex_step(problem.G, u0, p)
+        except ValueError as error:
+            raise ProblemError(str(error)) from None
+    return u0
+
+
+def _stateless(problem: Problem) -> bool:
+    """The problem carries no state alongside u (its commit hook is the base class's)."""
+    return type(problem).commit is Problem.commit
+
+
+def special_points(problem: Problem, branch: Branch, options: Options):
+    """(folds, hopf, warnings) of a finished branch of a stateless problem, as options.special_points
+    asks (bifurcations.py): folds to |dx| <= 1e-9, Hopf points to |dp| <= detection.tol_p, their
+    points solved to max|G| <= newton_tol / 100 (with the branch's own tolerance a fold's p
+    would be off by up to ~newton_tol / |dG/dp|)."""
+    tol = LOCATOR_TOL * options.newton_tol
+    locators = {"fold": lambda: locate_folds(problem, branch, newton_tol=tol),
+                "hopf": lambda: locate_hopf(problem, branch, tol_p=options.detection.tol_p,
+                                            rel_tol=options.detection.rel_tol, newton_tol=tol)}
+    found, warnings = {"fold": (), "hopf": ()}, []
+    for kind in options.special_points if _stateless(problem) else ():
+        try:
+            found[kind] = tuple(locators[kind]())
+        except SegmentSolveError as error:
+            warnings.append(f"{kind} points not located: {error}")
+    return found["fold"], found["hopf"], tuple(warnings)
+
+
+def solve_branch(problem: Problem, u0, p_span, options: Options = Options(), *,
+                 callback: Optional[Callback] = None) -> BranchResult:
+    """Continue G(u, p) = 0 from p_span[0] to p_span[1] and locate what happens on the way.
+
+    u0 is a guess of the state at p_span[0], corrected there by Newton (ContinuationError if it
+    does not converge). The branch is followed by pseudo-arclength continuation through folds
+    (arclength.py) until p leaves the span; at every accepted point the spectrum of the
+    tracked matrix is stored, and every birth and death of a complex pair is located to
+    |dp| <= options.detection.tol_p (collisions.py); folds and Hopf points are located after
+    the run (bifurcations.py). callback(k, p, u, eigenvalues) is called at every accepted
+    point. Bad input (span, options, a problem whose functions fail or return wrong shapes at
+    the start) raises ValueError or ProblemError before anything is computed."""
+    p_start, p_stop = _span(p_span)
+    params = options.params(p_start, p_stop)
+    u0 = check_problem(problem, u0, p_start)
+    branch = continuation(problem, u0, p_start, params, options.detection, callback=callback)
+    folds, hopf, warnings = special_points(problem, branch, options)
+    return BranchResult(branch, folds, hopf, branch.warnings + warnings)
+
+
+Start = Union[Sequence[float], Array, Callable[[float], Array]]
+
+
+@dataclass(frozen=True)
+class BifurcationProblem:
+    """A problem with what a problem file gives besides its equations (`diskfriction
+    bifurcate --problem FILE.py[:NAME]` imports FILE.py and takes NAME, default `problem`).
+
+    problem: the equations (problem_from_functions, problem_from_sympy or a Problem subclass);
+    u0: a guess of the state at the start of the span, an array or a function of p;
+    p_span: the span the command runs without --p (None: --p is required);
+    parameter: the name of p, a Python identifier (axis labels, the keys of branch.npz and
+    collisions.json); units: its units ("" for none);
+    matrix: the name of the tracked matrix, e.g. "M^-1 K"; eigenvalue_units: its eigenvalues'
+    units; options: the Options the command uses for this problem (its --ds-max overrides
+    ds_max)."""
+
+    problem: Problem
+    u0: Start
+    p_span: Optional[tuple[float, float]] = None
+    parameter: str = "p"
+    units: str = ""
+    matrix: str = "A"
+    eigenvalue_units: str = ""
+    options: Options = Options()
+
+    def __post_init__(self):
+        if not isinstance(self.problem, Problem):
+            raise TypeError(f"problem must be a continuation Problem (problem_from_functions, "
+                            f"problem_from_sympy or a subclass), got {type(self.problem).__name__}")
+        if not self.parameter.isidentifier():
+            raise ValueError(f"parameter must be a name such as P, F_x or I (it keys the output "
+                             f"files), got {self.parameter!r}")
+        if self.p_span is not None:
+            _span(self.p_span)
+
+    def start(self, p: float):
+        """The guess of the state at p (checked by solve_branch); a ProblemError if u0(p) fails."""
+        return _evaluated("u0(p)", lambda: self.u0(p), p) if callable(self.u0) else self.u0
+
+    def solve(self, p_span=None, options: Optional[Options] = None, *,
+              callback: Optional[Callback] = None) -> BranchResult:
+        """solve_branch over p_span (default self.p_span) with options (default self.options)."""
+        span = _span(p_span if p_span is not None else self.p_span)
+        return solve_branch(self.problem, self.start(span[0]), span, options or self.options,
+                            callback=callback)

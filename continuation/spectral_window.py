@@ -1,0 +1,115 @@
+"""A spectral window: the eigenvalues near a band of real parts, by sparse shift-invert, when a
+full dense spectrum (O(n^3)) is too expensive (a chain of 1000 disks: n = 3000).
+
+The window W = [lo, hi] of Re lambda is tracked with a guard band of width g = GUARD (hi - lo)
+on each side. At every sample the k eigenvalues nearest sigma = (lo + hi) / 2 are computed by
+ARPACK in shift-invert mode (scipy.sparse.linalg.eigs on (A - sigma I)^-1, one sparse LU), for
+the right vectors and, on A^T, for the left ones; a two-sided Rayleigh-Ritz projection on the
+two k-dimensional subspaces (the pencil (W^H A V, W^H V)) pairs them and normalises
+l_i^H r_i = 1. Completeness: the k nearest eigenvalues include every eigenvalue within the
+distance of the farthest one; if that distance does not exceed the reach of the guard band
+(|lambda - sigma| = (hi - lo) / 2 + g, plus the largest |Im| seen), some eigenvalue of the band
+may be missing and WindowCrowded is raised (choose a narrower window). The k eigenvalues keep
+their labels along the branch like a full spectrum's; those beyond the guard band are
+`excluded` (their labels may jump between samples), those in the guard band are `guard`: the
+detection certifies pairs of eigenvalues inside W and the guard band, and lets an eigenvalue
+join or leave the tracked set only through the guard band (collisions._enters_past_guard). A
+collision is reported when its double eigenvalue lies in W (sweep.py); the certificate covers
+exactly the window.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse.linalg as spla
+
+from .linalg import Matrix, work
+from .spectra import Eigensystem
+
+Array = np.ndarray
+
+GUARD = 0.25
+"""Width of each guard band, as a fraction of the window's width."""
+
+MARGIN = 1.5
+"""k is set at the first sample to MARGIN times the eigenvalues within reach, plus EXTRA."""
+EXTRA = 8
+
+
+class WindowCrowded(RuntimeError):
+    """More eigenvalues reach the window and its guard bands than the k tracked."""
+
+
+@dataclass(frozen=True)
+class Window:
+    """lo, hi: the band of Re lambda tracked [the stability matrix's units]; k: the number of
+    eigenvalues computed (0: decided at the first sample)."""
+
+    lo: float
+    hi: float
+    k: int = 0
+
+    def __post_init__(self):
+        if not self.lo < self.hi:
+            raise ValueError(f"window needs lo < hi, got {self.lo}, {self.hi}")
+
+    @property
+    def sigma(self) -> float:
+        return 0.5 * (self.lo + self.hi)
+
+    @property
+    def guard(self) -> float:
+        return GUARD * (self.hi - self.lo)
+
+    def reach(self, values: Array) -> float:
+        """Distance from sigma that the guard bands reach, for eigenvalues with these |Im|."""
+        return 0.5 * (self.hi - self.lo) + self.guard + float(np.max(np.abs(values.imag), initial=0.0))
+
+    def inside(self, values: Array) -> Array:
+        return (values.real >= self.lo) & (values.real <= self.hi)
+
+
+def sized(window: Window, A: Matrix) -> Window:
+    """The window with its k: MARGIN times the eigenvalues within reach at A, plus EXTRA."""
+    k = EXTRA
+    n = A.shape[0]
+    while True:
+        values = spla.eigs(A, k=min(k, n - 2), sigma=window.sigma, return_eigenvectors=False)
+        near = np.abs(values - window.sigma) <= window.reach(values)
+        if not near.all() or k >= n - 2:
+            return Window(window.lo, window.hi, min(n - 2, int(MARGIN * near.sum()) + EXTRA))
+        k *= 2
+
+
+def window_eigensystem(A: Matrix, window: Window, vectors: bool) -> Eigensystem:
+    """The window.k eigenvalues of the sparse A nearest the window's centre (module docstring),
+    with normalised left and right vectors if `vectors`; excluded beyond the guard bands,
+    guard within them. Raises WindowCrowded."""
+    work.spectra += 1
+    k, sigma = window.k, window.sigma
+    if not vectors:
+        values = spla.eigs(A, k=k, sigma=sigma, return_eigenvectors=False)
+        return _classified(Eigensystem(values.astype(complex)), window)
+    theta, V = spla.eigs(A, k=k, sigma=sigma)
+    _, W = spla.eigs(A.T, k=k, sigma=sigma)
+    M, B = W.conj().T @ (A @ V), W.conj().T @ V
+    values, vl, vr = sla.eig(M, B, left=True, right=True)
+    right = V @ vr
+    left = (W @ vl).conj().T
+    left = left / np.einsum("ij,ji->i", left, right)[:, None]
+    return _classified(Eigensystem(values.astype(complex), right, left), window)
+
+
+def _classified(system: Eigensystem, window: Window) -> Eigensystem:
+    values = system.values
+    far = np.abs(values - window.sigma).max()
+    if far <= window.reach(values):
+        raise WindowCrowded(f"the {window.k} eigenvalues nearest {window.sigma:.6g} all lie within "
+                            f"{far:.3g} of it: the window [{window.lo:.6g}, {window.hi:.6g}] and its "
+                            "guard bands may hold more; choose a narrower window")
+    re, g = values.real, window.guard
+    excluded = (re < window.lo - g) | (re > window.hi + g)
+    guard = ~excluded & ~window.inside(values)
+    return Eigensystem(values, system.right, system.left, excluded, guard)

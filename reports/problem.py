@@ -1,0 +1,80 @@
+"""Outputs of any problem's branch (`diskfriction bifurcate --problem`): branch.npz,
+collisions.json, special_points.json and the diagram, in the problem's own names and units.
+
+The same files as the disks' (reports/bifurcation.py), with the parameter's name where the
+disks have F_x: branch.npz holds the parameter's values under its name, u, eigenvalues,
+n_complex, residual, and the strings parameter, units, matrix; collisions.json one record per
+collision keyed by the parameter's name (bifurcation.collision_record); special_points.json
+the folds and Hopf points.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from diskfriction.continuation.api import BifurcationProblem, BranchResult
+from diskfriction.continuation.bifurcations import SpecialPoint
+from diskfriction.files import save_json, save_npz
+from diskfriction.reports.bifurcation import (RECORD_KEYS, collision_record, diagram_axes,
+                                              draw_spectrum, save_diagram)
+
+BRANCH_KEYS = ("u", "eigenvalues", "n_complex", "residual", "parameter", "units", "matrix")
+"""The arrays of branch.npz besides the parameter's values."""
+RESERVED = frozenset(BRANCH_KEYS + RECORD_KEYS + ("value_re", "value_im"))
+"""Names a parameter cannot have: they key the other entries of the files."""
+FOLD, HOPF = ("s", "k"), ("*", "C0")
+"""Marker and colour of a fold and of a Hopf point on the diagram."""
+
+
+def parameter_label(spec: BifurcationProblem) -> str:
+    """'P [k/l]', or the bare name without units."""
+    return f"{spec.parameter} [{spec.units}]" if spec.units else spec.parameter
+
+
+def special_point_record(point: SpecialPoint, parameter: str) -> dict:
+    """A fold or Hopf point as a JSON object: kind, the parameter's value, bracket, the value
+    (0 at a fold, the eigenvalue i omega at a Hopf point) and u."""
+    return {parameter: float(point.p), "kind": point.kind,
+            "bracket": [float(b) for b in point.bracket], "value_re": float(np.real(point.value)),
+            "value_im": float(np.imag(point.value)), "u": np.asarray(point.u, dtype=float).tolist()}
+
+
+def save_outputs(out: Path, result: BranchResult, spec: BifurcationProblem) -> None:
+    """DIR/branch.npz, DIR/collisions.json, DIR/special_points.json, each written atomically."""
+    b, name = result.branch, spec.parameter
+    save_npz(Path(out) / "branch.npz", **{name: b.p}, u=b.u, eigenvalues=b.eigenvalues,
+             n_complex=b.n_complex, residual=b.residual, parameter=np.array(name),
+             units=np.array(spec.units), matrix=np.array(spec.matrix))
+    save_json(Path(out) / "collisions.json",
+              [collision_record(c, name, spec.matrix) for c in result.collisions])
+    save_json(Path(out) / "special_points.json",
+              [special_point_record(s, name) for s in result.folds + result.hopf])
+
+
+def plot_problem_diagram(result: BranchResult, spec: BifurcationProblem, title: str, path: Path) -> None:
+    """Im and Re of every eigenvalue of the tracked matrix against the parameter
+    (bifurcation.draw_spectrum), with the folds (open squares at Re = 0, where a real
+    eigenvalue passes zero) and Hopf points (stars at Re = 0 and at Im = omega) marked and a
+    dotted line at each."""
+    from matplotlib.lines import Line2D
+
+    b = result.branch
+    fig, top, bottom = diagram_axes()
+    handles = draw_spectrum(top, bottom, b.p, b.eigenvalues, np.ones(len(b), int), b.n_complex,
+                            [(c.p, c.kind, c.eigenvalue) for c in result.collisions], spec.matrix,
+                            x_label=parameter_label(spec), eig_unit=spec.eigenvalue_units)
+    handles[0].set_label(f"branch {b.p[0]:.3g} -> {b.p[-1]:.3g}")  # not a load: no (un)loading
+    scale = float(np.max(np.abs(b.eigenvalues.real), initial=0.0))
+    if scale > 0:  # the linear core of the symlog axis: 1e-3 of this problem's spectrum
+        bottom.set_yscale("symlog", linthresh=1e-3 * scale)
+    for points, (marker, color), what in ((result.folds, FOLD, "fold"), (result.hopf, HOPF, "Hopf point")):
+        for s in points:
+            bottom.plot(s.p, 0.0, marker, color=color, ms=7, mfc="none")
+            top.axvline(s.p, color=color, ls=":", lw=0.8)
+            if s.kind == "hopf":
+                top.plot(s.p, abs(np.imag(s.value)), marker, color=color, ms=7)
+        if points:
+            handles.append(Line2D([], [], ls="", marker=marker, color=color, mfc="none",
+                                  label=f"{what} ({len(points)})"))
+    save_diagram(fig, top, handles, title, path)
