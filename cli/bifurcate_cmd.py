@@ -35,7 +35,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(run=run)
 
 
-def parse_range(text: str) -> tuple[float, float]:
+def parse_range(text: str, command: str = "bifurcate") -> tuple[float, float]:
     """'A:B' -> (A, B), both finite, >= 0 and different; else a one-line CommandError."""
     parts = text.split(":")
     try:
@@ -43,12 +43,12 @@ def parse_range(text: str) -> tuple[float, float]:
     except ValueError:
         a = b = None
     if a is None or not (math.isfinite(a) and math.isfinite(b)):
-        raise CommandError(f"bifurcate error: --fx: expected A:B with two numbers (got {text!r})")
+        raise CommandError(f"{command} error: --fx: expected A:B with two numbers (got {text!r})")
     if a < 0 or b < 0:
-        raise CommandError(f"bifurcate error: --fx: F_x must be >= 0: {NEGATIVE_LOAD} "
+        raise CommandError(f"{command} error: --fx: F_x must be >= 0: {NEGATIVE_LOAD} "
                            f"(got {text!r})")
     if a == b:
-        raise CommandError(f"bifurcate error: --fx: empty range (got {text!r})")
+        raise CommandError(f"{command} error: --fx: empty range (got {text!r})")
     return a, b
 
 

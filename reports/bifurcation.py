@@ -9,28 +9,13 @@ from pathlib import Path
 
 import numpy as np
 
+from diskfriction.continuation.records import collision_records
 from diskfriction.continuation.sweep import DiskBranch
 from diskfriction.files import save_json, save_npz, write_atomic
 from diskfriction.reports.units import F_X_LABEL, PaperUnits, eig_label
 from diskfriction.scenes import Scene
 
 DPI = 110
-
-
-def collision_records(branch: DiskBranch) -> list[dict]:
-    """One JSON object per located collision of the requested leg, raw units.
-
-    At a collision the two eigenvalues coincide on the real axis: lambda_im is 0 by definition
-    and lambda_re is the double eigenvalue. `bracket` is the F_x interval (width <= 1e-10)
-    across which the count of complex pairs changes; `eigenvector` and `jordan_vector` form the
-    Jordan chain (A - lambda) v = 0, (A - lambda) w = v of the stability matrix.
-    """
-    return [{"F_x": float(c.p), "kind": c.kind, "lambda_re": float(c.eigenvalue), "lambda_im": 0.0,
-             "matrix": branch.matrix, "bracket": [float(b) for b in c.bracket],
-             "resolved": bool(c.resolved), "residual": float(c.residual),
-             "eigenvector": np.asarray(c.eigenvector, dtype=float).tolist(),
-             "jordan_vector": np.asarray(c.generalized_eigenvector, dtype=float).tolist()}
-            for c in branch.collisions]
 
 
 def save_branch(out: Path, branch: DiskBranch, scene: Scene) -> None:
