@@ -22,8 +22,9 @@ from diskfriction.cli.simulate_cmd import SCHEDULER, SINGLE_AMPLITUDE
 
 VARY = "KEY=LO:HI:COUNT[:log]"
 T_END = 1000.0
-"""Default duration of a slide run [raw time], verify's: sigma t_end > ln(1e-3 / 1e-10) = 16
-for every pair growing faster than sigma = 0.016 (the paper's windows grow at 0.02 .. 0.3)."""
+"""Default duration of a slide run [raw time], verify's: sigma t_end > ln(1e-4 / 1e-10) = 14
+for every pair growing faster than sigma = 0.014 [1 / time], enough for the growth to reach
+the substrate's breach (dynamics/maps.py); the paper's sliding windows grow at 0.02 .. 0.3."""
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:

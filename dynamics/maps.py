@@ -17,9 +17,11 @@ worker, raw units):
     below it whose run did not: the lowest sliding load lies in (F_slide_lo, F_slide]. Its
     effective friction coefficient mu_eff = F_slide / (N F_y) is to be compared with the
     Coulomb limit: no static equilibrium can hold F_x > N mu F_y, so mu_eff <= mu. A run
-    started from rest slides within t_end only if its growth e^(sigma t_end) takes the
-    amplitude to the contacts' nonlinearity (~1e-6 .. 1e-3): a window with
-    sigma t_end < ln(1e-3 / amplitude) cannot be seen to slide.
+    grows as e^(sigma t) from its amplitude a, and can slide within t_end only once that
+    reaches the displacements at which the substrate contacts breach (1e-4 .. 1e-3 raw on the
+    paper's scene): a window with sigma t_end below about ln(1e-4 / a) (14 for verify's
+    a = 1e-10) cannot be seen to slide, so F_slide is an upper bound that can fall as t_end
+    grows (docs/maps.md measures by how much).
   * status: "ok" (the branch reached F_to), "ended" (it stopped before F_to; `reason` says
     where and why, as continuation.equilibrium does), or "failed" (no branch at all, e.g. no
     sticking equilibrium at small mu; `reason` is the continuation's own line).

@@ -92,8 +92,8 @@ def key_label(axis: Axis) -> str:
 def draw_bands(ax, y: float, record: dict, params: MapParams) -> None:
     """One cell's row at height y: its branch's extent (grey line, x where it ended), complex
     windows (orange), windows whose run slid (red, thinner; adjacent ones merged as complex
-    windows are, continuation.windows.complex_spans), F_slide (black triangle); a failed
-    cell says why."""
+    windows are, continuation.windows.complex_spans), F_slide (black triangle); a failed or
+    ended cell says why."""
     s = record["summary"]
     if s["status"] == "failed":
         ax.text(params.F_from, y, f"  failed: {s['reason']}"[:110], va="center", fontsize=6,
@@ -102,6 +102,7 @@ def draw_bands(ax, y: float, record: dict, params: MapParams) -> None:
     ax.plot([record["windows"][0][0], s["F_end"]], [y, y], color="0.6", lw=0.8, zorder=1)
     if s["status"] == "ended":
         ax.plot(s["F_end"], y, "x", color="k", ms=6, zorder=4)
+        ax.text(s["F_end"], y, f"  {s['reason']}"[:120], va="center", fontsize=6, color="C3")
     for a, b in complex_spans(Window(*w) for w in record["windows"]):
         ax.broken_barh([(a, b - a)], (y - 0.3, 0.6), facecolors="C1", edgecolors="C1",
                        linewidth=0.6, alpha=0.6, zorder=2)
