@@ -1,4 +1,5 @@
-"""``diskfriction bifurcate [SCENE] [--fx A:B] [--matrix J|M^-1J] [--out DIR] [--json]``."""
+"""``diskfriction bifurcate [SCENE] [--fx A:B] [--matrix J|M^-1J] [--detection fast|exhaustive]
+[--out DIR] [--json]``."""
 from __future__ import annotations
 
 import argparse
@@ -12,6 +13,7 @@ from diskfriction.cli.progress import Progress
 from diskfriction.scenes.scene import NEGATIVE_LOAD
 
 MATRICES = {"J": "J", "M^-1J": "M^-1 J", "M^-1 J": "M^-1 J"}
+DETECTIONS = ("fast", "exhaustive")  # continuation.collisions.MODES, without importing scipy
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -31,6 +33,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--out", metavar="DIR", help="output directory (default: out/bifurcate/SCENE)")
     parser.add_argument("--ds-max", type=float, metavar="DS",
                         help="largest arclength step (default: span / 60)")
+    parser.add_argument("--detection", default="fast", metavar="fast|exhaustive",
+                        help="collision detection: fast (eigenvalue slopes, Hermite "
+                             "certification, Newton locator; the default) or exhaustive "
+                             "(bisection with full spectra, version 0.1; slow, for checking)")
     parser.add_argument("--json", action="store_true", help="print the collision list to stdout")
     parser.set_defaults(run=run)
 
@@ -59,11 +65,15 @@ def run(args: argparse.Namespace) -> int:
         raise CommandError(f"bifurcate error: --matrix: must be J or M^-1J (got {args.matrix!r})")
     if args.ds_max is not None:
         number("bifurcate", "ds-max", args.ds_max)
+    if args.detection not in DETECTIONS:
+        raise CommandError(f"bifurcate error: --detection: must be fast or exhaustive "
+                           f"(got {args.detection!r})")
     matrix = MATRICES[args.matrix] if args.matrix else scene.matrix
     out = output_dir("bifurcate", args.out, Path("out") / "bifurcate" / scene.name)
     check_sweep_memory("bifurcate", scene)
 
     from diskfriction.continuation.arclength import ContinuationError
+    from diskfriction.continuation.collisions import DetectionParams
     from diskfriction.continuation.disks import EquilibriumError
     from diskfriction.continuation.sweep import SweepParams, sweep
     from diskfriction.reports.bifurcation import collision_records, plot_diagram, save_branch
@@ -83,7 +93,8 @@ def run(args: argparse.Namespace) -> int:
         progress.stage(f"sweep F_x {F_from:g} -> {F_to:g}" + (f" (from rest via {F_from:g})"
                                                               if F_from else ""))
         try:
-            branch = sweep(system, F_from, F_to, matrix, SweepParams(ds_max=args.ds_max), on_point)
+            params = SweepParams(ds_max=args.ds_max, detection=DetectionParams(mode=args.detection))
+            branch = sweep(system, F_from, F_to, matrix, params, on_point)
         except (EquilibriumError, ContinuationError) as error:
             raise CommandError(f"bifurcate error: {scene.source}: {error}", EXIT_FAILED) from None
         progress.stage(f"writing {out}/branch.npz, collisions.json")
@@ -100,6 +111,10 @@ def run(args: argparse.Namespace) -> int:
         print(f"{len(branch)} equilibria, F_x {branch.F_x[0]:.6g} .. {branch.F_x[-1]:.6g}, "
               f"max residual {branch.residual.max():.1e}, {branch.events} contact events "
               f"split, status {', '.join(branch.status)}")
+        if branch.free.any():
+            print(f"free rolling modes (disks held by the substrate alone, excluded from the "
+                  f"collisions): {branch.free[0]} at F_x = {branch.F_x[0]:.3g}, "
+                  f"{branch.free[-1]} at F_x = {branch.F_x[-1]:.3g}")
         print(f"{len(records)} collisions ({matrix}):")
         for r in records:
             print(f"  {r['kind']:5s}  F_x = {r['F_x']:.10f}  lambda = {r['lambda_re']:.6g}  "

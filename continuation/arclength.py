@@ -176,7 +176,7 @@ def continuation(problem: Problem, u0: Array, p0: float,
     for every accepted point k. Returns a Branch.
     """
     _validate_start(p0, params)
-    with blas_threads(np.size(u0)):
+    with blas_threads():
         return _continuation(problem, np.asarray(u0, dtype=float), float(p0), params, detection, callback)
 
 

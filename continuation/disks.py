@@ -28,13 +28,14 @@ exact redundancy (T_i - R F_x,i = 0). Physically the rolling position of such a 
 arbitrary. Its gauge is fixed at the committed value: for each null direction m, one of the
 disk's equations (the one the null direction weighs most, redundant there) is replaced by
 kappa m . (q_i - q_c,i) = 0, with kappa the scale of the disk's stiffness.
-A disk counts as free when both its pair contacts carry less than the Newton tolerance: delta
-<= delta_join = (newton_tol / k_n)^(2/3), the overlap at which a Hertz contact carries
-newton_tol. Below it a pair's force is not resolved by the solver anyway (its equation is
-dropped at a residual of at most k_n delta_join^(3/2) = newton_tol), and the disk's position
-would be set by rounding: at eps = 0 the load transmitted along the chain decays geometrically
-(about 0.37 per disk on the paper's scene), and the disks beyond the front touch at overlaps of
-a few units in the last place, which open and close under Newton's updates. The stability
+A disk counts as free when both its pair overlaps are at most delta_join = 8 eps_mach L (eps_mach
+the double-precision epsilon, L the ring length, the largest coordinate): a few units in the
+last place of the positions. At eps = 0 the load transmitted along the chain decays
+geometrically (about 0.37 per disk on the paper's scene), and the disks beyond the front touch at
+overlaps of rounding size, which open and close under Newton's updates and whose stiffness
+k_n delta^(1/2) (1e-4 of the substrate's) is set by rounding, not by the load: below delta_join
+an overlap is noise, and such a disk is treated as free (its dropped equation has a residual of
+at most the pair forces, k_n delta_join^(3/2) ~ 1e-17). The stability
 matrix keeps the physical J; its spectrum is the coupled chain's plus each free disk's block
 (eigensystem), and the free disks' modes are excluded from collision detection (decoupled, they
 cannot form a complex pair with anything; identical free disks even share their eigenvalues).
@@ -56,6 +57,10 @@ from diskfriction.symbolic import System
 SPARSE_FROM = 240
 """Chains with at least this many degrees of freedom (N = 80 with rotation) use sparse J and
 SuperLU; below, dense LAPACK is faster (benchmarks/scaling.py)."""
+
+DELTA_JOIN_ULPS = 8
+"""A pair overlap of at most this many units in the last place of the ring length is rounding:
+a disk whose two pairs are that small is free (module docstring)."""
 
 DERIVATIVE_STEP = (1e-11, 1e-7)
 """Range of the finite-difference length along the branch (samples.matrix_derivative,
@@ -99,17 +104,17 @@ class DiskEquilibria(Problem):
     """The continuation problem of one System (see the module docstring)."""
 
     def __init__(self, system: System, q: np.ndarray, xi: np.ndarray, F_x: float,
-                 matrix: str | None = None, newton_tol: float = 1e-11):
+                 matrix: str | None = None, newton_tol: float = 1e-11, sparse: bool | None = None):
         self.system = system
         self.matrix = matrix or system.scene.matrix
         self.newton_tol = newton_tol
-        self.sparse = system.ndof >= SPARSE_FROM
+        self.sparse = system.ndof >= SPARSE_FROM if sparse is None else sparse
         self._csr = _CsrPattern(system.rows, system.cols, system.ndof) if self.sparse else None
         self.e_x1 = np.zeros(system.ndof)
         self.e_x1[0] = 1.0
         self._last = (None, None, None)  # (q bytes, xi, (F, J values) or None) of the last trial q
         s = system.scene
-        self.delta_join = (newton_tol / s.k_n) ** (2.0 / 3.0)
+        self.delta_join = DELTA_JOIN_ULPS * np.finfo(float).eps * s.L
         w = np.empty(2 * system.kernels.D)
         system.kernels.wall_increment_coeffs(s.R, w)
         self._wall_w = w[:system.kernels.D].copy()

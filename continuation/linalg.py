@@ -10,15 +10,17 @@ bordered matrix in CSC form (the border adds 2n + 1 entries; for the disk chain,
 block-tridiagonal K with periodic corners, fill-in stays O(n)). Both factorizations solve with
 the matrix and with its transpose (left null vectors of the locator).
 
-BLAS threads. OpenBLAS starts a thread per core even for 30 x 30 matrices; on a machine where
-anything else runs this triples the wall time of small solves and eigenvalue problems.
-`blas_threads(n)` limits BLAS to one thread below `THREADED_FROM` unknowns (threadpoolctl), where
-threads do not pay: measured on the 2-core machine of docs/continuation.md, dgeev of 300 x 300
-takes 36 ms on one thread and 69 ms on two while another process runs.
+BLAS threads. OpenBLAS starts a thread per core even for 30 x 30 matrices, and on a machine
+where anything else runs, threads that wait for each other cost far more than they give:
+measured on the 2-core machine of docs/continuation.md while another process ran, the full
+eigendecomposition (values and both vectors) of a 600 x 600 matrix took 1.6 s on one thread and
+6.5 s on two, 1200 x 1200 6.5 s and 70 s. `blas_threads()` therefore runs the core on one BLAS
+thread (threadpoolctl) whatever the size; the other core stays free for another job (a dask
+worker, a second sweep).
 """
 from __future__ import annotations
 
-import contextlib
+import functools
 from dataclasses import dataclass
 from typing import Union
 
@@ -29,11 +31,6 @@ import scipy.sparse.linalg as spla
 
 Array = np.ndarray
 Matrix = Union[Array, sp.spmatrix, sp.sparray]
-
-THREADED_FROM = 1500
-"""Problems with at least this many unknowns let BLAS use every core (dense spectra of
-n ~ 3000 gain from two threads; below that one thread is as fast and immune to load)."""
-
 
 @dataclass
 class Work:
@@ -125,10 +122,14 @@ def solve(M: Matrix, rhs: Array) -> Array:
     return factorize(M).solve(rhs)
 
 
-def blas_threads(n: int):
-    """Context limiting BLAS to one thread for problems with fewer than THREADED_FROM unknowns."""
-    if n >= THREADED_FROM:
-        return contextlib.nullcontext()
-    from threadpoolctl import threadpool_limits
+@functools.lru_cache(maxsize=1)
+def _controller():
+    """threadpoolctl's view of the loaded BLAS libraries, made once (about 1 ms each time)."""
+    from threadpoolctl import ThreadpoolController
 
-    return threadpool_limits(1, user_api="blas")
+    return ThreadpoolController()
+
+
+def blas_threads():
+    """Context running BLAS on one thread (module docstring)."""
+    return _controller().limit(limits=1, user_api="blas")

@@ -58,8 +58,10 @@ def workers_ignore_interrupts():
 
     A terminal sends Ctrl-C to the whole process group: without this every dask worker would
     die with a KeyboardInterrupt traceback while this process shuts them down in order. The
-    disposition is process-wide, so a Ctrl-C during the start itself (about a second) is
-    ignored too; afterwards this process handles it as before. Only the main thread may set
+    disposition is process-wide, so a Ctrl-C during the start itself (about a second, a few
+    on a loaded machine) is ignored too and has to be pressed again; afterwards this process
+    handles it as before. (Blocking SIGINT instead of ignoring it does not keep it: dask's
+    threads that do not block it take it, and discard it.) Only the main thread may set
     handlers: elsewhere this does nothing."""
     if threading.current_thread() is not threading.main_thread():
         yield
@@ -76,28 +78,29 @@ def dask_client(scheduler: Optional[str] = None, workers: Optional[int] = None):
     """A dask.distributed Client on the scheduler at `scheduler` ([tcp://]HOST:PORT), else on
     a LocalCluster of `workers` single-threaded processes (None: one per core). Raises
     SchedulerUnreachable (one line) if the scheduler cannot be used; closes the client and the
-    local cluster on leaving, also on an interrupt."""
+    local cluster on leaving, also on an interrupt, ignoring a second Ctrl-C meanwhile (it
+    would cut the shutdown short and leave workers behind)."""
     from dask.distributed import Client, LocalCluster
 
-    cluster = None
-    if scheduler is None:
-        with workers_ignore_interrupts():
-            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                   dashboard_address=None, scheduler_kwargs=HTTP_ANY_PORT,
-                                   silence_logs=logging.CRITICAL)
+    cluster = client = None
     try:
+        if scheduler is None:
+            with workers_ignore_interrupts():
+                cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                       dashboard_address=None, scheduler_kwargs=HTTP_ANY_PORT,
+                                       silence_logs=logging.CRITICAL)
         try:
             client = Client(scheduler or cluster)
         except (OSError, ValueError) as error:
             raise SchedulerUnreachable(f"cannot use the dask scheduler at {scheduler!r}: "
                                        f"{(str(error).splitlines() or [''])[0]}") from None
-        try:
-            yield client
-        finally:
-            client.close()
+        yield client
     finally:
-        if cluster is not None:
-            cluster.close()
+        with workers_ignore_interrupts():
+            if client is not None:
+                client.close()
+            if cluster is not None:
+                cluster.close()
 
 
 def as_finished(client, function: Callable, tasks: dict[Hashable, tuple]

@@ -20,10 +20,11 @@ DPI = 110
 
 def save_branch(out: Path, branch: DiskBranch, scene: Scene) -> None:
     """DIR/branch.npz (every accepted point: F_x, q, xi, eigenvalues, n_complex, residual,
-    leg) and DIR/collisions.json, each written atomically."""
+    leg, free rolling modes) and DIR/collisions.json, each written atomically."""
     save_npz(Path(out) / "branch.npz", F_x=branch.F_x, q=branch.q, xi=branch.xi,
              eigenvalues=branch.eigenvalues, n_complex=branch.n_complex,
-             residual=branch.residual, leg=branch.leg, matrix=np.array(branch.matrix),
+             residual=branch.residual, leg=branch.leg, free=branch.free,
+             matrix=np.array(branch.matrix),
              k_n=np.array(scene.k_n), N=np.array(scene.N))
     save_json(Path(out) / "collisions.json", collision_records(branch))
 

@@ -1,0 +1,117 @@
+"""Continuation cost against N (issue 8): the paper's scene with N disks, F_x 0 -> 0.12, J.
+
+For every N: wall time of the sweep (warm kernels), full spectra computed, LU factorizations and
+solves, collisions located, peak memory of the process; eps = 1e-4 and eps = 0; the fitted
+exponent of time against N; the fast detection against the exhaustive one (same collisions?)
+up to --exhaustive-up-to. Each run is a subprocess with a time budget: a run that would exceed
+it stops and prints how far it got (F_x reached), and is left out of the fit.
+
+Run: python benchmarks/scaling.py [--N 10,20,40,100,200,400,1000] [--budget 600]
+                                  [--exhaustive-up-to 100]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+CHILD = r"""
+import json, resource, sys, time
+from diskfriction.continuation.collisions import DetectionParams
+from diskfriction.continuation.linalg import work
+from diskfriction.continuation.sweep import SweepParams, sweep
+from diskfriction.scenes import Scene
+from diskfriction.symbolic import System
+
+N, eps, mode, budget = int(sys.argv[1]), float(sys.argv[2]), sys.argv[3], float(sys.argv[4])
+system = System.from_scene(Scene(N=N, eps=eps))
+reached = {"F_x": 0.0}
+
+
+class OutOfTime(Exception):
+    pass
+
+
+def progress(F_x):
+    reached["F_x"] = F_x
+    if time.perf_counter() - t0 > budget:
+        raise OutOfTime
+
+
+params = SweepParams(detection=DetectionParams(mode=mode))
+sweep(system, 0.0, 1e-3, "J", params)  # compile and warm up
+work.reset()
+t0 = time.perf_counter()
+out = {"N": N, "eps": eps, "mode": mode}
+try:
+    branch = sweep(system, 0.0, 0.12, "J", params, progress)
+    out.update(done=branch.status[-1] == "p_end", points=len(branch),
+               collisions=[c.p for c in branch.collisions], free=int(branch.free[-1]))
+except OutOfTime:
+    out.update(done=False, points=None, collisions=None)
+out.update(seconds=time.perf_counter() - t0, reached=reached["F_x"], spectra=work.spectra,
+           factorizations=work.factorizations, solves=work.solves,
+           peak_mb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
+print(json.dumps(out))
+"""
+
+
+def run(N: int, eps: float, mode: str, budget: float) -> dict:
+    proc = subprocess.run([sys.executable, "-c", CHILD, str(N), str(eps), mode, str(budget)],
+                          capture_output=True, text=True)
+    if proc.returncode != 0:
+        return {"N": N, "eps": eps, "mode": mode, "done": False,
+                "error": proc.stderr.strip().splitlines()[-1] if proc.stderr else "failed"}
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def row(r: dict) -> str:
+    if "error" in r:
+        return f"| {r['N']} | {r['eps']:g} | {r['mode']} | failed: {r['error']} |"
+    coll = "-" if r["collisions"] is None else len(r["collisions"])
+    status = "0.12" if r["done"] else f"stopped at F_x = {r['reached']:.4g}"
+    return (f"| {r['N']} | {r['eps']:g} | {r['mode']} | {r['seconds']:.1f} | {status} | "
+            f"{r['spectra']} | {r['factorizations']} | {r['solves']} | {coll} | {r['peak_mb']:.0f} |")
+
+
+def agreement(fast: dict, exhaustive: dict) -> str:
+    a, b = fast.get("collisions"), exhaustive.get("collisions")
+    if a is None or b is None:
+        return "not compared (a run did not finish)"
+    if len(a) != len(b):
+        return f"{len(a)} against {len(b)} collisions"
+    return f"same {len(a)} collisions, max |dF_x| = {np.max(np.abs(np.array(a) - b), initial=0):.1e}"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--N", default="10,20,40,100,200,400,1000")
+    ap.add_argument("--budget", type=float, default=600.0, help="seconds per run")
+    ap.add_argument("--exhaustive-up-to", type=int, default=100)
+    args = ap.parse_args()
+    sizes = [int(n) for n in args.N.split(",")]
+    print(f"{time.strftime('%Y-%m-%d %H:%M')}, load average {open('/proc/loadavg').read().split()[0]}")
+    print("| N | eps | detection | s | reached | spectra | LU | solves | collisions | peak MB |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    results = {}
+    for eps in (1e-4, 0.0):
+        for N in sizes:
+            r = results[(N, eps, "fast")] = run(N, eps, "fast", args.budget)
+            print(row(r), flush=True)
+            if eps and N <= args.exhaustive_up_to:
+                e = results[(N, eps, "exhaustive")] = run(N, eps, "exhaustive", args.budget)
+                print(row(e) + f" {agreement(r, e)}", flush=True)
+    for eps in (1e-4, 0.0):
+        done = [(N, results[(N, eps, "fast")]["seconds"]) for N in sizes
+                if results[(N, eps, "fast")].get("done")]
+        if len(done) >= 2:
+            slope = np.polyfit(np.log([n for n, _ in done]), np.log([s for _, s in done]), 1)[0]
+            print(f"eps = {eps:g}: time ~ N^{slope:.2f} over N = {', '.join(str(n) for n, _ in done)}")
+
+
+if __name__ == "__main__":
+    main()
