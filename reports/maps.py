@@ -89,6 +89,13 @@ def key_label(axis: Axis) -> str:
     return f"{axis.key} {unit}".strip() + (" (log grid)" if axis.log else "")
 
 
+def headline(reason: str, width: int = 150) -> str:
+    """The first two clauses of a cell's reason (where and why the branch ended, and the
+    contacts there), cut to `width` characters for a figure; map.csv keeps all of it."""
+    text = "; ".join(reason.split("; ")[:2])
+    return text if len(text) <= width else text[:width - 3] + "..."
+
+
 def draw_bands(ax, y: float, record: dict, params: MapParams) -> None:
     """One cell's row at height y: its branch's extent (grey line, x where it ended), complex
     windows (orange), windows whose run slid (red, thinner; adjacent ones merged as complex
@@ -96,13 +103,13 @@ def draw_bands(ax, y: float, record: dict, params: MapParams) -> None:
     ended cell says why."""
     s = record["summary"]
     if s["status"] == "failed":
-        ax.text(params.F_from, y, f"  failed: {s['reason']}"[:110], va="center", fontsize=6,
+        ax.text(params.F_from, y, f"  failed: {headline(s['reason'])}", va="center", fontsize=6,
                 color="C3")
         return
     ax.plot([record["windows"][0][0], s["F_end"]], [y, y], color="0.6", lw=0.8, zorder=1)
     if s["status"] == "ended":
         ax.plot(s["F_end"], y, "x", color="k", ms=6, zorder=4)
-        ax.text(s["F_end"], y, f"  {s['reason']}"[:120], va="center", fontsize=6, color="C3")
+        ax.text(s["F_end"], y, f"  {headline(s['reason'])}", va="center", fontsize=6, color="C3")
     for a, b in complex_spans(Window(*w) for w in record["windows"]):
         ax.broken_barh([(a, b - a)], (y - 0.3, 0.6), facecolors="C1", edgecolors="C1",
                        linewidth=0.6, alpha=0.6, zorder=2)
