@@ -84,6 +84,8 @@ def test_the_installed_package_is_the_wheel_not_the_checkout(installed):
     (["bifurcate", "tiny.toml", "--out", "b"], "wrote b/branch.npz"),
     (["simulate", "tiny.toml", "--fx", "0.01", "--t-end", "2", "--out", "s"], "wrote s/"),
     (["verify", "tiny.toml", "--t-end", "2", "--out", "v"], "wrote v/verify.json"),
+    (["map", "tiny.toml", "--vary", "contacts.mu=5:10:2", "--workers", "1", "--out", "m"],
+     "wrote m/map.csv"),
     (["report", "tiny.toml", "--only", "fig6", "--out", "r", "--cache", "r/cache"], "wrote r/report.md"),
 ], ids=lambda a: a[0] if isinstance(a, list) else None)
 def test_every_subcommand_runs_from_the_wheel(installed, args, says):
