@@ -7,7 +7,10 @@ up to --exhaustive-up-to. Each run is a subprocess with a time budget: a run tha
 it stops and prints how far it got (F_x reached), and is left out of the fit.
 
 Run: python benchmarks/scaling.py [--N 10,20,40,100,200,400,1000] [--budget 600]
-                                  [--exhaustive-up-to 100]
+                                  [--exhaustive-up-to 100] [--eps 1e-4,0]
+                                  [--window-N 1000 --window 0.0715:0.08]
+With --window-N, also a run tracking only that spectral window (bifurcate --window; lambda / k_n)
+at each of those N.
 """
 from __future__ import annotations
 
@@ -24,11 +27,15 @@ import json, resource, sys, time
 from diskfriction.continuation.collisions import DetectionParams
 from diskfriction.continuation.linalg import work
 from diskfriction.continuation.sweep import SweepParams, sweep
+from diskfriction.reports.units import PaperUnits
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
 
 N, eps, mode, budget = int(sys.argv[1]), float(sys.argv[2]), sys.argv[3], float(sys.argv[4])
-system = System.from_scene(Scene(N=N, eps=eps))
+scene = Scene(N=N, eps=eps)
+unit = PaperUnits.of(scene).eigenvalue("J")
+window = None if sys.argv[5] == "-" else tuple(float(w) * unit for w in sys.argv[5].split(":"))
+system = System.from_scene(scene)
 reached = {"F_x": 0.0}
 
 
@@ -42,11 +49,11 @@ def progress(F_x):
         raise OutOfTime
 
 
-params = SweepParams(detection=DetectionParams(mode=mode))
+params = SweepParams(detection=DetectionParams(mode=mode), window=window)
 sweep(system, 0.0, 1e-3, "J", params)  # compile and warm up
 work.reset()
 t0 = time.perf_counter()
-out = {"N": N, "eps": eps, "mode": mode}
+out = {"N": N, "eps": eps, "mode": mode + ("" if window is None else " " + sys.argv[5])}
 try:
     branch = sweep(system, 0.0, 0.12, "J", params, progress)
     out.update(done=branch.status[-1] == "p_end", points=len(branch),
@@ -60,8 +67,8 @@ print(json.dumps(out))
 """
 
 
-def run(N: int, eps: float, mode: str, budget: float) -> dict:
-    proc = subprocess.run([sys.executable, "-c", CHILD, str(N), str(eps), mode, str(budget)],
+def run(N: int, eps: float, mode: str, budget: float, window: str = "-") -> dict:
+    proc = subprocess.run([sys.executable, "-c", CHILD, str(N), str(eps), mode, str(budget), window],
                           capture_output=True, text=True)
     if proc.returncode != 0:
         return {"N": N, "eps": eps, "mode": mode, "done": False,
@@ -92,20 +99,26 @@ def main() -> None:
     ap.add_argument("--N", default="10,20,40,100,200,400,1000")
     ap.add_argument("--budget", type=float, default=600.0, help="seconds per run")
     ap.add_argument("--exhaustive-up-to", type=int, default=100)
+    ap.add_argument("--eps", default="1e-4,0")
+    ap.add_argument("--window-N", default="", help="N values for a spectral-window run")
+    ap.add_argument("--window", default="0.0715:0.08", help="LO:HI in lambda / k_n")
     args = ap.parse_args()
-    sizes = [int(n) for n in args.N.split(",")]
+    sizes = [int(n) for n in args.N.split(",") if n]
+    eps_values = [float(e) for e in args.eps.split(",")]
     print(f"{time.strftime('%Y-%m-%d %H:%M')}, load average {open('/proc/loadavg').read().split()[0]}")
     print("| N | eps | detection | s | reached | spectra | LU | solves | collisions | peak MB |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     results = {}
-    for eps in (1e-4, 0.0):
+    for N in [int(n) for n in args.window_N.split(",") if n]:
+        print(row(run(N, eps_values[0], "fast", args.budget, args.window)), flush=True)
+    for eps in eps_values:
         for N in sizes:
             r = results[(N, eps, "fast")] = run(N, eps, "fast", args.budget)
             print(row(r), flush=True)
             if eps and N <= args.exhaustive_up_to:
                 e = results[(N, eps, "exhaustive")] = run(N, eps, "exhaustive", args.budget)
                 print(row(e) + f" {agreement(r, e)}", flush=True)
-    for eps in (1e-4, 0.0):
+    for eps in eps_values:
         done = [(N, results[(N, eps, "fast")]["seconds"]) for N in sizes
                 if results[(N, eps, "fast")].get("done")]
         if len(done) >= 2:

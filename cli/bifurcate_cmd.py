@@ -53,21 +53,22 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(run=run)
 
 
-def parse_range(text: str, option: str = "fx", nonnegative: bool = True) -> tuple[float, float]:
+def parse_range(text: str, option: str = "fx", nonnegative: bool = True,
+                command: str = "bifurcate") -> tuple[float, float]:
     """'A:B' -> (A, B), both finite and different (and >= 0 for F_x); else a one-line
-    CommandError naming --OPTION."""
+    CommandError naming COMMAND and --OPTION."""
     parts = text.split(":")
     try:
         a, b = (float(p) for p in parts) if len(parts) == 2 else (None, None)
     except ValueError:
         a = b = None
     if a is None or not (math.isfinite(a) and math.isfinite(b)):
-        raise CommandError(f"bifurcate error: --{option}: expected A:B with two numbers (got {text!r})")
+        raise CommandError(f"{command} error: --{option}: expected A:B with two numbers (got {text!r})")
     if nonnegative and (a < 0 or b < 0):
-        raise CommandError(f"bifurcate error: --{option}: F_x must be >= 0: {NEGATIVE_LOAD} "
+        raise CommandError(f"{command} error: --{option}: F_x must be >= 0: {NEGATIVE_LOAD} "
                            f"(got {text!r})")
     if a == b:
-        raise CommandError(f"bifurcate error: --{option}: empty range (got {text!r})")
+        raise CommandError(f"{command} error: --{option}: empty range (got {text!r})")
     return a, b
 
 

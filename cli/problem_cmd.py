@@ -136,7 +136,7 @@ def _continue(spec, label: str, span, options, out: Path, as_json: bool) -> int:
     from diskfriction.continuation.arclength import ContinuationError
     from diskfriction.continuation.memory import sweep_bytes
     from diskfriction.memory import NotEnoughMemory, require_memory
-    from diskfriction.reports.bifurcation import collision_record
+    from diskfriction.continuation.records import collision_record
     from diskfriction.reports.problem import plot_problem_diagram, save_outputs
 
     a, b = span

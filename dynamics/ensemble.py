@@ -23,27 +23,19 @@ slid, fitted by V = a + b F_x (least squares, standard errors from the fit covar
 """
 from __future__ import annotations
 
-import contextlib
-import hashlib
 import json
-import logging
-import signal
-import threading
-import warnings
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Callable, Optional
 
 import numpy as np
 
+from diskfriction.dynamics.cluster import as_finished, code_version, dask_client, task_key
 from diskfriction.errors import OneLineError
-from diskfriction.files import save_json, source_digest
+from diskfriction.files import save_json
 from diskfriction.scenes import Scene
 
 MIN_FRONT_POINTS = 3
-RUN_SOURCES = ("diskfriction.scenes", "diskfriction.symbolic", "diskfriction.continuation",
-               "diskfriction.dynamics")
-"""The packages a realization's result depends on: its code version digests their sources."""
 MUST_MATCH = ("scene", "t_end", "amplitude", "kind", "code")
 """Parameters an ensemble directory is bound to (module docstring)."""
 
@@ -52,10 +44,6 @@ class EnsembleMismatch(OneLineError):
     """The output directory holds an ensemble with other run parameters; str() is one line."""
 
     exit_code = 2
-
-
-class SchedulerUnreachable(OneLineError):
-    """The dask scheduler given cannot be reached (or its address is malformed)."""
 
 
 @dataclass(frozen=True)
@@ -163,15 +151,8 @@ def aggregate(summaries: dict) -> Ensemble:
 
 # ---- running -------------------------------------------------------------------------------
 
-def code_version() -> str:
-    """Digest of the sources a realization's result depends on (RUN_SOURCES)."""
-    return source_digest(RUN_SOURCES)[:12]
-
-
 def realization_key(scene: Scene, F_x: float, spec: RunSpec, version: str) -> str:
-    text = json.dumps([asdict(replace(scene, source="")), F_x, asdict(spec), version],
-                      sort_keys=True, default=str)
-    return hashlib.sha256(text.encode()).hexdigest()[:16]
+    return task_key(asdict(replace(scene, source="")), F_x, asdict(spec), version)
 
 
 def run_path(out: Path, F_x: float, index: int, key: str) -> Path:
@@ -256,62 +237,18 @@ def done_count(summaries: dict) -> int:
     return sum(map(len, summaries.values()))
 
 
-@contextlib.contextmanager
-def workers_ignore_interrupts():
-    """Ignore SIGINT while worker processes are started, so that they inherit SIG_IGN.
-
-    A terminal sends Ctrl-C to the whole process group: without this every dask worker would
-    die with a KeyboardInterrupt traceback while this process shuts them down in order. The
-    disposition is process-wide, so a Ctrl-C during the start itself (about a second, a few
-    on a loaded machine) is ignored too and has to be pressed again; afterwards this process
-    handles it as before. (Blocking SIGINT instead of ignoring it does not keep it: dask's
-    threads that do not block it take it, and discard it.) Only the main thread may set
-    handlers: elsewhere this does nothing."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, previous)
-
-
 def _run_tasks(scene, todo, summaries, scheduler, tick) -> None:
     """Connect (a scheduler that cannot be reached fails before any sweep), get the equilibrium
     at every load of `todo`, submit the missing realizations, and write each one the moment it
-    finishes."""
-    from dask.distributed import Client, LocalCluster, as_completed
-
+    finishes (dynamics/cluster.py)."""
     from diskfriction.continuation.equilibrium import equilibrium_at
     from diskfriction.symbolic import System
 
-    cluster = client = None
-    try:
-        if scheduler is None:
-            with workers_ignore_interrupts(), warnings.catch_warnings():
-                warnings.simplefilter("ignore", UserWarning)  # "port 8787 in use": another cluster
-                cluster = LocalCluster(n_workers=None, threads_per_worker=1, processes=True,
-                                       dashboard_address=None, silence_logs=logging.CRITICAL)
-        try:
-            client = Client(scheduler or cluster)
-        except (OSError, ValueError) as error:
-            raise SchedulerUnreachable(f"cannot use the dask scheduler at {scheduler!r}: "
-                                       f"{(str(error).splitlines() or [''])[0]}") from None
+    with dask_client(scheduler) as client:
         system = System.from_scene(scene)
         states = {F: equilibrium_at(system, F) for F in dict.fromkeys(F for F, _, _ in todo)}
-        futures = {client.submit(run_realization, scene, F, states[F].q, states[F].xi, spec,
-                                 pure=False): (F, path)
-                   for F, spec, path in todo}
-        for future in as_completed(futures):
-            F, path = futures[future]
-            summary = future.result()
+        tasks = {(F, path): (scene, F, states[F].q, states[F].xi, spec) for F, spec, path in todo}
+        for (F, path), summary in as_finished(client, run_realization, tasks):
             save_json(path, summary)
             summaries[F].append(summary)
             tick()
-    finally:
-        with workers_ignore_interrupts():  # shutting down: a second Ctrl-C must not cut it short
-            if client is not None:
-                client.close()
-            if cluster is not None:
-                cluster.close()

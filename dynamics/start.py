@@ -78,12 +78,19 @@ class Spectrum:
         return abs(self.leading_root.imag)
 
 
+def growth_rates(eigenvalues: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(upper, sigma): the indices of the upper members (Im > 0) of the complex pairs among
+    `eigenvalues` of M^-1 J [1 / time^2] (continuation.spectra's classification, rel_tol
+    DEFAULT_REL_TOL), and their growth rates sigma = |Im sqrt(lambda)| [1 / time]."""
+    upper = np.flatnonzero(eigen_status(eigenvalues, DEFAULT_REL_TOL) == 1)
+    return upper, np.abs(np.sqrt(eigenvalues[upper].astype(complex)).imag)
+
+
 def spectrum(system: System, q: np.ndarray, xi: np.ndarray) -> Spectrum:
     """Eigenvalues and eigenvectors of M^-1 J(q, xi)."""
     J = system.jacobian(q, xi)
     lam, vec = np.linalg.eig(system.stability_matrix(J, "M^-1 J"))
-    upper = np.flatnonzero(eigen_status(lam, DEFAULT_REL_TOL) == 1)
-    sigma = np.abs(np.sqrt(lam[upper].astype(complex)).imag)
+    upper, sigma = growth_rates(lam)
     return Spectrum(lam, vec, upper[np.argsort(-sigma, kind="stable")])
 
 

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from typing import Callable, Optional
 
+import numpy as np
+
 from diskfriction.continuation.equilibrium import equilibrium_at
 from diskfriction.continuation.sweep import DiskBranch, sweep
 from diskfriction.continuation.windows import Window, complex_windows
@@ -19,30 +21,45 @@ from diskfriction.symbolic import System
 
 
 def windows(branch: DiskBranch) -> list[Window]:
-    """The complex windows of a branch from rest (continuation/windows.py)."""
-    return complex_windows(branch.F_x[0], branch.F_x[-1], branch.n_complex[0],
+    """The complex windows of a branch's requested leg (leg 1, which starts where a
+    preparation leg 0 ends) between its collisions (continuation/windows.py); none if the
+    branch has no point on leg 1."""
+    rows = np.flatnonzero(branch.leg == 1)
+    if not rows.size:
+        return []
+    start = rows[0] - 1 if rows[0] > 0 else rows[0]
+    return complex_windows(branch.F_x[start], branch.F_x[rows[-1]], branch.n_complex[start],
                            [(c.p, c.kind) for c in branch.collisions])
+
+
+def window_run(system: System, window: Window, index: int, t_end: float, amplitude: float) -> dict:
+    """One run at the midpoint F_x = (start + stop) / 2 of `window` (raw units): from the
+    equilibrium there, perturbed along the largest complex pair of M^-1 J (or, if M^-1 J is
+    all real, by a random velocity kick seeded with `index`), to t_end. The row: window,
+    complex_pairs, F_x, perturbation, sigma_predicted, sigma_measured, M_max, slid, V_cm.
+    Raises NoEquilibrium if the branch from rest does not reach F_x."""
+    a, b, pairs = window
+    F = 0.5 * (a + b)
+    eq = equilibrium_at(system, F)
+    kind = "eigenvector" if spectrum(system, eq.q, eq.xi).pairs.size else "random-velocity"
+    s = summarize(simulate(system, eq.q, eq.xi, F, t_end,
+                           perturbation=Perturbation(kind, amplitude, index)))
+    return {"window": [a, b], "complex_pairs": pairs, "F_x": F, "perturbation": kind,
+            "sigma_predicted": s["sigma_predicted"], "sigma_measured": s["sigma_measured"],
+            "M_max": s["M_max"], "slid": s["slid"], "V_cm": s["V_cm"]}
 
 
 def verify_windows(scene: Scene, matrix: str, t_end: float, amplitude: float,
                    progress: Optional[Callable[[str, Optional[float]], None]] = None) -> list[dict]:
-    """One row per window (raw units): window, complex_pairs, F_x, perturbation,
-    sigma_predicted, sigma_measured, M_max, slid, V_cm. progress(stage, fraction or None):
-    the stage "sweep ...", then "runs" with the fraction of windows done."""
+    """One row per window (window_run). progress(stage, fraction or None): the stage
+    "sweep ...", then "runs" with the fraction of windows done."""
     report = progress or (lambda stage, fraction=None: None)
     system = System.from_scene(scene)
     report(f"sweep F_x 0 -> {scene.F_x_range[1]:g} ({matrix})", None)
     todo = windows(sweep(system, 0.0, scene.F_x_range[1], matrix))
     report(f"one run to t = {t_end:g} in each of {len(todo)} windows", 0.0)
     rows = []
-    for k, (a, b, pairs) in enumerate(todo):
-        F = 0.5 * (a + b)
-        eq = equilibrium_at(system, F)
-        kind = "eigenvector" if spectrum(system, eq.q, eq.xi).pairs.size else "random-velocity"
-        s = summarize(simulate(system, eq.q, eq.xi, F, t_end,
-                               perturbation=Perturbation(kind, amplitude, k)))
-        rows.append({"window": [a, b], "complex_pairs": pairs, "F_x": F, "perturbation": kind,
-                     "sigma_predicted": s["sigma_predicted"], "sigma_measured": s["sigma_measured"],
-                     "M_max": s["M_max"], "slid": s["slid"], "V_cm": s["V_cm"]})
+    for k, window in enumerate(todo):
+        rows.append(window_run(system, window, k, t_end, amplitude))
         report(f"one run to t = {t_end:g} in each of {len(todo)} windows", (k + 1) / len(todo))
     return rows

@@ -16,8 +16,8 @@ import numpy as np
 from diskfriction.continuation.api import BifurcationProblem, BranchResult
 from diskfriction.continuation.bifurcations import SpecialPoint
 from diskfriction.files import save_json, save_npz
-from diskfriction.reports.bifurcation import (RECORD_KEYS, collision_record, diagram_axes,
-                                              draw_spectrum, save_diagram)
+from diskfriction.continuation.records import RECORD_KEYS, collision_record
+from diskfriction.reports.bifurcation import diagram_axes, draw_spectrum, save_diagram
 
 BRANCH_KEYS = ("u", "eigenvalues", "n_complex", "residual", "parameter", "units", "matrix")
 """The arrays of branch.npz besides the parameter's values."""

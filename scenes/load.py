@@ -316,15 +316,17 @@ def _entries(document: dict[str, Any], file: str) -> Iterator[tuple[str, Any]]:
             yield from (_entry(file, name, inner, item) for inner, item in value.items())
 
 
+def _check(file: str, key: str, value: Any) -> Any:
+    """The Scene value of ``value`` at the known dotted ``key``; a bad value raises."""
+    try:
+        return SCHEMA[key].check(value)
+    except _Invalid as invalid:
+        raise SceneError(file, key, invalid.what, value) from None
+
+
 def _checked(document: dict[str, Any], file: str) -> dict[str, Any]:
     """The Scene value of every key set in ``document``; the first bad key raises."""
-    values = {}
-    for key, value in _entries(document, file):
-        try:
-            values[key] = SCHEMA[key].check(value)
-        except _Invalid as invalid:
-            raise SceneError(file, key, invalid.what, value) from None
-    return values
+    return {key: _check(file, key, value) for key, value in _entries(document, file)}
 
 
 def load_scene(path: str | os.PathLike[str]) -> Scene:
@@ -333,6 +335,22 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
     file = os.fspath(path)
     defaults = _values(replace(Scene(), name=Path(file).stem))
     return _scene(defaults | _checked(_read_document(file), file), source=file)
+
+
+def number_keys() -> dict[str, type]:
+    """The dotted keys that hold one number, each with the type a scene gives it (int for
+    disks.N, float for the others): the keys a parameter map may vary."""
+    return {key: type(value) for key, value in _values(Scene()).items()
+            if isinstance(value, (int, float)) and not isinstance(value, bool)}
+
+
+def with_values(scene: Scene, values: dict[str, Any], origin: str) -> Scene:
+    """``scene`` with the dotted keys of ``values`` set, each checked by the schema as if a
+    file ``origin`` held it. Raises SceneError, as load_scene does, for an unknown key or a
+    value the key does not take (``disks.N = 2.5``: expected an integer)."""
+    entries = (_entry(origin, *key.rpartition(".")[::2], value) for key, value in values.items())
+    return _scene(_values(scene) | {key: _check(origin, key, value) for key, value in entries},
+                  source=scene.source)
 
 
 def default_scene_path() -> Path:

@@ -21,6 +21,7 @@ COMMANDS = {
     "bifurcate": [],
     "simulate": ["--fx", "0.01", "--t-end", "1"],
     "verify": ["--t-end", "1"],
+    "map": ["--vary", "contacts.mu=5:10:2"],
     "report": ["--only", "fig6"],
 }
 

@@ -139,8 +139,14 @@ def test_windows_are_the_intervals_between_collisions_with_their_pair_count():
 
     c = lambda p, kind: SimpleNamespace(p=p, kind=kind)
     branch = SimpleNamespace(F_x=np.array([0.0, 0.5, 1.0]), n_complex=np.array([1, 2, 0]),
+                             leg=np.array([1, 1, 1]),
                              collisions=[c(0.2, "birth"), c(0.4, "death"), c(0.7, "death")])
     assert windows(branch) == [(0.0, 0.2, 1), (0.2, 0.4, 2), (0.4, 0.7, 1), (0.7, 1.0, 0)]
+    # a sweep 0.5 -> 1 first loads from rest to 0.5 (leg 0): its windows start at 0.5
+    prepared = SimpleNamespace(F_x=np.array([0.0, 0.25, 0.5, 0.75, 1.0]),
+                               n_complex=np.array([0, 1, 3, 3, 2]), leg=np.array([0, 0, 0, 1, 1]),
+                               collisions=[c(0.9, "death")])
+    assert windows(prepared) == [(0.5, 0.9, 3), (0.9, 1.0, 2)]
 
 
 def test_verify_runs_every_window_and_writes_its_table(tmp_path):

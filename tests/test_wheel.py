@@ -87,6 +87,8 @@ def test_the_installed_package_is_the_wheel_not_the_checkout(installed):
     (["bifurcate", "tiny.toml", "--out", "b"], "wrote b/branch.npz"),
     (["simulate", "tiny.toml", "--fx", "0.01", "--t-end", "2", "--out", "s"], "wrote s/"),
     (["verify", "tiny.toml", "--t-end", "2", "--out", "v"], "wrote v/verify.json"),
+    (["map", "tiny.toml", "--vary", "contacts.mu=5:10:2", "--workers", "1", "--out", "m"],
+     "wrote m/map.csv"),
     (["report", "tiny.toml", "--only", "fig6", "--out", "r", "--cache", "r/cache"], "wrote r/report.md"),
     (["export", "lammps", "linear.toml", "--fx", "0.01", "--out", "e"], "wrote e/scene.data, e/in.scene"),
     (["crosscheck", "lammps", "linear.toml", "--fx", "0.01", "--t-end", "1", "--out", "c"],

@@ -1,0 +1,180 @@
+"""``diskfriction map [SCENE] --vary KEY=LO:HI:COUNT[:log] [--vary KEY2=...] [--fx A:B]
+[--matrix J|M^-1J] [--slide] [--scheduler ADDRESS] [--workers K] [--out DIR]``
+
+A full bifurcate in every cell of a grid of one or two numeric scene keys and, with --slide,
+one dynamics run per window between collisions (as verify does): which windows slide, the
+lowest sliding load F_slide and mu_eff = F_slide / (N F_y) against the Coulomb limit mu.
+Cells run as tasks on dask.distributed (a local cluster of this machine's cores, or
+--scheduler ADDRESS), each written to DIR/cells/ the moment it finishes; a rerun resumes.
+Writes DIR/map.csv (one row per cell), DIR/map.json and DIR/map.png (dynamics/maps.py,
+reports/maps.py). Raw units on the command line and in files; the figure uses the paper's.
+"""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from diskfriction.cli.bifurcate_cmd import MATRICES, parse_range
+from diskfriction.cli.common import (CommandError, add_scene_argument, check_sweep_memory,
+                                     number, output_dir, scene_from_args)
+from diskfriction.cli.progress import Progress
+from diskfriction.cli.simulate_cmd import SCHEDULER, SINGLE_AMPLITUDE
+
+VARY = "KEY=LO:HI:COUNT[:log]"
+T_END = 1000.0
+"""Default duration of a slide run [raw time], verify's: sigma t_end > ln(1e-4 / 1e-10) = 14
+for every pair growing faster than sigma = 0.014 [1 / time], enough for the growth to reach
+the substrate's breach (dynamics/maps.py); the paper's sliding windows grow at 0.02 .. 0.3."""
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "map", help="bifurcate (and with --slide, verify) over a grid of scene parameters",
+        description=__doc__.split("\n\n", 1)[1])
+    add_scene_argument(parser)
+    parser.add_argument("--vary", action="append", required=True, metavar=VARY,
+                        help="vary a numeric scene key (contacts.mu, disks.N, disks.eps, ...) "
+                             "over COUNT values from LO to HI, evenly or, with :log, evenly in "
+                             "log; give it twice for a map of two keys")
+    parser.add_argument("--fx", metavar="A:B",
+                        help="sweep F_x from A to B in every cell (raw units, A < B; default: "
+                             "the scene's F_x range)")
+    parser.add_argument("--matrix", metavar="J|M^-1J",
+                        help="matrix whose collisions define the windows (default: the scene's)")
+    parser.add_argument("--slide", action="store_true",
+                        help="run the dynamics once per window: which slide, F_slide, mu_eff")
+    parser.add_argument("--t-end", type=float, default=None, metavar="T",
+                        help=f"with --slide: duration of each run, raw time (default {T_END:g})")
+    parser.add_argument("--amplitude", type=float, default=None, metavar="A",
+                        help=f"with --slide: perturbation amplitude, raw (default "
+                             f"{SINGLE_AMPLITUDE:g}, as verify)")
+    parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                        help="dask scheduler to use instead of a local cluster")
+    parser.add_argument("--workers", type=int, default=None, metavar="K",
+                        help="worker processes of the local cluster (default: one per core)")
+    parser.add_argument("--out", metavar="DIR", help="output directory (default: out/map/SCENE)")
+    parser.set_defaults(run=run)
+
+
+def parse_vary(text: str):
+    """'KEY=LO:HI:COUNT[:log]' -> dynamics.maps.Axis; else a one-line CommandError naming the
+    specification (unknown or non-numeric key, malformed numbers, a grid grid_values refuses)."""
+    from diskfriction.dynamics.maps import Axis, grid_values
+    from diskfriction.scenes.load import SCHEMA, number_keys
+
+    def bad(what: str) -> CommandError:
+        return CommandError(f"map error: --vary: {what} (got {text!r})")
+
+    key, equals, spec = text.partition("=")
+    if not equals:
+        raise bad(f"expected {VARY}")
+    if key not in number_keys():
+        known = ", ".join(number_keys())
+        raise bad(f"{key} is {'not a numeric scene key' if key in SCHEMA else 'no scene key'}; "
+                  f"a map varies one of {known}")
+    parts = spec.split(":")
+    log = parts[3:] == ["log"]
+    try:
+        if len(parts) - log != 3:
+            raise ValueError(len(parts))
+        lo, hi, count = float(parts[0]), float(parts[1]), int(parts[2])
+    except ValueError:
+        raise bad(f"expected {VARY} with numbers LO, HI and an integer COUNT") from None
+    try:
+        return Axis(key, grid_values(lo, hi, count, log), log)
+    except ValueError as error:
+        raise bad(str(error)) from None
+
+
+def grid(scene, texts: list[str]):
+    """(axes, cells) of the --vary specifications: one or two distinct keys, every cell a
+    valid scene (a bad value is one line naming its --vary and key), else a CommandError."""
+    from diskfriction.dynamics.maps import map_cells
+    from diskfriction.scenes.load import SceneError
+
+    axes = [parse_vary(text) for text in texts]
+    keys = [axis.key for axis in axes]
+    if len(axes) > 2:
+        raise CommandError(f"map error: --vary: a map varies one or two keys (got {len(axes)}: "
+                           f"{', '.join(keys)})")
+    if len(set(keys)) < len(keys):
+        raise CommandError(f"map error: --vary: {keys[0]} given twice (got {texts[1]!r})")
+    try:
+        return axes, map_cells(scene, axes, scene.source)
+    except SceneError as error:
+        spec = texts[keys.index(error.key)]
+        raise CommandError(f"map error: --vary {spec}: cell {error.key} = {error.value!r}: "
+                           f"{error.what}") from None
+
+
+def run(args: argparse.Namespace) -> int:
+    scene = scene_from_args(args)
+    axes, cells = grid(scene, args.vary)
+    F_from, F_to = parse_range(args.fx, command="map") if args.fx is not None else scene.F_x_range
+    if F_from > F_to:
+        raise CommandError(f"map error: --fx: a map loads, A < B (got {args.fx!r})")
+    if args.matrix is not None and args.matrix not in MATRICES:
+        raise CommandError(f"map error: --matrix: must be J or M^-1J (got {args.matrix!r})")
+    for option, value in (("t-end", args.t_end), ("amplitude", args.amplitude)):
+        if value is not None and not args.slide:
+            raise CommandError(f"map error: --{option}: sets the slide runs; add --slide "
+                               f"(got {value!r})")
+    t_end = number("map", "t-end", args.t_end if args.t_end is not None else T_END)
+    amplitude = number("map", "amplitude",
+                       args.amplitude if args.amplitude is not None else SINGLE_AMPLITUDE, zero=True)
+    if args.scheduler is not None and not SCHEDULER.match(args.scheduler):
+        raise CommandError(f"map error: --scheduler: expected a dask scheduler address "
+                           f"[tcp://]HOST:PORT (got {args.scheduler!r})")
+    if args.workers is not None:
+        number("map", "workers", args.workers, integer=True)
+        if args.scheduler is not None:
+            raise CommandError(f"map error: --workers: sizes the local cluster; the scheduler "
+                               f"has its own workers (got {args.workers!r})")
+    out = output_dir("map", args.out, Path("out") / "map" / scene.name)
+    for cell in cells:
+        check_sweep_memory("map", cell.scene)
+
+    from diskfriction.dynamics.cluster import code_version
+    from diskfriction.dynamics.maps import MapParams, SlideParams, run_map
+    from diskfriction.dynamics.stepper import load_stepper
+    from diskfriction.reports.maps import plot_map, save_map
+    from diskfriction.symbolic import System
+
+    matrix = MATRICES[args.matrix] if args.matrix else scene.matrix
+    params = MapParams(F_from, F_to, matrix, SlideParams(t_end, amplitude) if args.slide else None)
+    progress = Progress("map")
+    try:
+        # compiled here once, so that the workers load them from the cache
+        system = System.from_scene(scene, progress.part("kernels"))
+        if args.slide:
+            load_stepper(system.kernels, progress.part("stepper"))
+        progress.stage(f"{len(cells)} cells: bifurcate F_x {F_from:g} -> {F_to:g} ({matrix})"
+                       + (f", one run per window to t = {t_end:g}" if args.slide else ""))
+        records = run_map(cells, params, out, args.scheduler, args.workers,
+                          lambda done, total: progress(done / total, f"{done}/{total} cells"))
+        progress.stage(f"writing {out}/map.csv, map.json")
+        save_map(out, scene, axes, params, code_version(), cells, records)
+        progress.stage(f"plotting {out}/map.png")
+        plot_map(axes, cells, records, params, out / "map.png",
+                 f"{scene.name}: {' x '.join(a.key for a in axes)}, {matrix}"
+                 + (f", runs to t = {t_end:g}" if args.slide else ""))
+    finally:
+        progress.close()
+    for cell, record in zip(cells, records):
+        print(describe(cell, record["summary"]))
+    print(f"wrote {out}/map.csv, map.json, map.png and {out}/cells/")
+    return 0
+
+
+def describe(cell, s: dict) -> str:
+    """One printed line per cell: its values, status, collisions, F_slide and mu_eff, or why
+    it failed or ended (raw units)."""
+    values = ", ".join(f"{key} = {value:g}" for key, value in cell.values)
+    if s["status"] == "failed":
+        return f"{values}: failed: {s['reason']}"
+    line = f"{values}: {s['status']}, {s['collisions']} collisions, {s['windows']} windows"
+    if s["runs"] is not None:
+        lo = "the first run" if s["F_slide_lo"] is None else f"stuck at {s['F_slide_lo']:.5g}"
+        line += (f", no run slid (of {s['runs']})" if s["F_slide"] is None else
+                 f", F_slide = {s['F_slide']:.5g} ({lo}), mu_eff = {s['mu_eff']:.4g}")
+    return line + (f"; {s['reason']}" if s["reason"] else "")
