@@ -79,6 +79,9 @@ def bordered(K: Matrix, c: Array, b: Array, d: float = 0.0) -> Matrix:
     return sp.csc_array((vals, (rows, cols)), shape=(n + 1, n + 1))
 
 
+_getrs = sla.get_lapack_funcs("getrs", dtype=float)
+
+
 @dataclass
 class Factorization:
     """An LU factorization of a square matrix; solve(r) = M^-1 r, solve(r, transpose=True) =
@@ -94,7 +97,9 @@ class Factorization:
         if self.sparse:
             x = self.lu.solve(np.ascontiguousarray(rhs, dtype=float), trans="T" if transpose else "N")
         else:
-            x = sla.lu_solve(self.lu, rhs, trans=1 if transpose else 0, check_finite=False)
+            # LAPACK's getrs directly: scipy's lu_solve wrapper costs ~40 us a call, 10x the
+            # solve itself at n = 30 (benchmarks/continuation_speed.py)
+            x, _ = _getrs(*self.lu, rhs, trans=1 if transpose else 0)
         if not np.all(np.isfinite(x)):
             raise SingularMatrix("solve produced non-finite values")
         return x
