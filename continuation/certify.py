@@ -33,6 +33,9 @@ Everything here is a pure function of arrays.
 """
 from __future__ import annotations
 
+import math
+
+import numba
 import numpy as np
 
 Array = np.ndarray
@@ -48,21 +51,78 @@ def cubic_at(c: tuple[Array, ...], t) -> Array:
     return c0 + t * (c1 + t * (c2 + t * c3))
 
 
-def cubic_min(c: tuple[Array, ...]) -> tuple[Array, Array]:
-    """(min over [0, 1] of the cubic, where it is attained), elementwise."""
-    c0, c1, c2, c3 = (np.asarray(a, dtype=float) for a in c)
-    cands = [np.zeros_like(c0), np.ones_like(c0)]
-    a, b, k = 3.0 * c3, 2.0 * c2, c1  # H' = a t^2 + b t + k
-    with np.errstate(divide="ignore", invalid="ignore"):
-        disc = np.sqrt(np.maximum(b * b - 4.0 * a * k, 0.0))
-        quad = np.abs(a) > 1e-300
-        for sign in (1.0, -1.0):
-            root = np.where(quad, (-b + sign * disc) / (2.0 * a), -k / b)
-            cands.append(np.where(np.isfinite(root), np.clip(root, 0.0, 1.0), 0.0))
-    ts = np.stack(cands)
-    vals = cubic_at(tuple(x[None] for x in (c0, c1, c2, c3)), ts)
-    k = np.argmin(vals, axis=0)
-    return np.take_along_axis(vals, k[None], 0)[0], np.take_along_axis(ts, k[None], 0)[0]
+@numba.njit(cache=True, error_model="numpy")
+def _cubic_min(c0: float, c1: float, c2: float, c3: float) -> tuple[float, float]:
+    """(min over [0, 1] of H = c0 + c1 t + c2 t^2 + c3 t^3, where it is attained): candidates
+    t = 0, 1 and the two roots of H' = 3 c3 t^2 + 2 c2 t + c1 clipped to [0, 1] (a non-finite
+    root counts as t = 0); the first of equal minima."""
+    a, b, k = 3.0 * c3, 2.0 * c2, c1
+    disc = math.sqrt(max(b * b - 4.0 * a * k, 0.0))
+    best_v, best_t = c0, 0.0
+    for sign in (0.0, 1.0, -1.0):  # 0: the end t = 1; +-1: the roots of H'
+        t = 1.0
+        if sign != 0.0:
+            root = (-b + sign * disc) / (2.0 * a) if abs(a) > 1e-300 else -k / b
+            t = min(max(root, 0.0), 1.0) if math.isfinite(root) else 0.0
+        v = c0 + t * (c1 + t * (c2 + t * c3))
+        if v < best_v:
+            best_v, best_t = v, t
+    return best_v, best_t
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _pair_margin(la: complex, lb: complex, da: complex, db: complex, rho: float, floor: float,
+                 doubt: float) -> tuple[bool, float, float]:
+    """One pair's certification from its difference g = lambda_i - lambda_j and slope dg at the
+    two ends: (uncertified?, min(y_a, y_b), t of the model minimum), with y = |g|^2,
+    y' = 2 Re(conj(g) dg) and the test of uncertified_pair (module docstring)."""
+    y_a, y_b = abs(la) ** 2, abs(lb) ** 2
+    dy_a = 2.0 * (la.real * da.real + la.imag * da.imag)
+    dy_b = 2.0 * (lb.real * db.real + lb.imag * db.imag)
+    c2, c3 = 3.0 * (y_b - y_a) - 2.0 * dy_a - dy_b, 2.0 * (y_a - y_b) + dy_a + dy_b
+    low, t_min = _cubic_min(y_a, dy_a, c2, c3)
+    y_min = min(y_a, y_b)
+    return low - doubt * abs(c3) < rho * y_min - floor, y_min, t_min
+
+
+@numba.njit(cache=True, error_model="numpy")
+def worst_uncertified_pair(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, real: Array,
+                           upper: Array, partner: Array, rho: float, floor: float,
+                           doubt: float = 0.25) -> float:
+    """Certify every pair that could collide over the interval (t in [0, 1]); lam_*: complex
+    eigenvalues at the ends in tracked order, d_*: their slopes d lambda / dt. Pairs: two real
+    eigenvalues (labels `real`), an upper complex one with a real one (`upper` x `real`), and
+    each upper one with its conjugate partner (`upper[k]`, `partner[k]`; partner is empty
+    when there is no lower one); in that order.
+
+    A pair is uncertified if its cubic Hermite model H of y = |lambda_i - lambda_j|^2 (y and
+    y' = 2 Re(conj(lambda_i - lambda_j)(lambda_i' - lambda_j')) at both ends) has
+        min_[0,1] H - doubt |c3| < rho min(y_a, y_b) - floor.
+    Returns t of the model minimum of the uncertified pair with the smallest min(y_a, y_b)
+    (the first such), or nan if every pair is certified. O(pairs) time, no pair arrays."""
+    worst_y, worst_t = math.inf, math.nan
+    n_real = real.size
+    for a in range(n_real):
+        i = real[a]
+        for b in range(a + 1, n_real):
+            j = real[b]
+            bad, y, t = _pair_margin(lam_a[i] - lam_a[j], lam_b[i] - lam_b[j], d_a[i] - d_a[j],
+                                     d_b[i] - d_b[j], rho, floor, doubt)
+            if bad and y < worst_y:
+                worst_y, worst_t = y, t
+    for i in upper:
+        for j in real:
+            bad, y, t = _pair_margin(lam_a[i] - lam_a[j], lam_b[i] - lam_b[j], d_a[i] - d_a[j],
+                                     d_b[i] - d_b[j], rho, floor, doubt)
+            if bad and y < worst_y:
+                worst_y, worst_t = y, t
+    for k in range(partner.size):
+        i, j = upper[k], partner[k]
+        bad, y, t = _pair_margin(lam_a[i] - lam_a[j], lam_b[i] - lam_b[j], d_a[i] - d_a[j],
+                                 d_b[i] - d_b[j], rho, floor, doubt)
+        if bad and y < worst_y:
+            worst_y, worst_t = y, t
+    return worst_t
 
 
 def cubic_roots_in_unit(c: tuple[float, ...]) -> list[float]:
@@ -80,28 +140,6 @@ def cubic_roots_in_unit(c: tuple[float, ...]) -> list[float]:
                 hi = mid
         roots.append(0.5 * (lo + hi))
     return roots
-
-
-def pair_test_data(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, I: Array,
-                   J: Array) -> tuple[Array, Array, Array, Array]:
-    """(y_a, y_b, y'_a, y'_b) of y = |lambda_I - lambda_J|^2 for pairs (I, J); slopes d =
-    d lambda / dt over the interval, y' = 2 Re(conj(lambda_I - lambda_J)(d_I - d_J)). For two
-    real eigenvalues y is the discriminant D, for conjugate partners y = 4 Im^2 = -D, for a
-    complex and a real eigenvalue the squared distance in the complex plane."""
-    g_a, g_b = lam_a[I] - lam_a[J], lam_b[I] - lam_b[J]
-    dg_a, dg_b = d_a[I] - d_a[J], d_b[I] - d_b[J]
-    return (np.abs(g_a) ** 2, np.abs(g_b) ** 2, 2.0 * np.real(np.conj(g_a) * dg_a),
-            2.0 * np.real(np.conj(g_b) * dg_b))
-
-
-def uncertified_pairs(y_a: Array, y_b: Array, dy_a: Array, dy_b: Array, rho: float,
-                      floor: float, doubt: float = 0.25) -> tuple[Array, Array]:
-    """(mask of pairs the cubic model does not certify, t of each pair's model minimum);
-    doubt: the fraction of the cubic term taken as the model's uncertainty."""
-    c = hermite_coefficients(y_a, y_b, dy_a, dy_b)
-    low, t_min = cubic_min(c)
-    bad = low - doubt * np.abs(c[3]) < rho * np.minimum(y_a, y_b) - floor
-    return bad, t_min
 
 
 GRID = np.linspace(0.0, 1.0, 33)
@@ -143,18 +181,24 @@ def event_pairs_apart(models: list, rho: float, floor: float) -> tuple[bool, flo
     return worst >= 0.0, t_worst
 
 
+@numba.njit(cache=True, error_model="numpy")
+def _nearest_gaps(lam: Array) -> Array:
+    """|lambda_i - lambda_j| minimised over j != i (inf for a single eigenvalue)."""
+    gaps = np.full(lam.size, np.inf)
+    for i in range(lam.size):
+        for j in range(i + 1, lam.size):
+            d = abs(lam[i] - lam[j])
+            gaps[i], gaps[j] = min(gaps[i], d), min(gaps[j], d)
+    return gaps
+
+
+@numba.njit(cache=True, error_model="numpy")
 def inconsistent_labels(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, rho: float,
                         floor: float) -> Array:
     """Mask of eigenvalues whose trapezoid defect |lambda_b - lambda_a - (d_a + d_b) / 2|
     exceeds rho times their smallest gap to another eigenvalue (at either end) plus floor."""
     defect = np.abs(lam_b - lam_a - 0.5 * (d_a + d_b))
-
-    def gaps(lam):
-        d = np.abs(lam[:, None] - lam[None, :])
-        np.fill_diagonal(d, np.inf)
-        return d.min(axis=1) if lam.size > 1 else np.full(lam.size, np.inf)
-
-    return defect > rho * np.minimum(gaps(lam_a), gaps(lam_b)) + floor
+    return defect > rho * np.minimum(_nearest_gaps(lam_a), _nearest_gaps(lam_b)) + floor
 
 
 def curvature_too_large(y_a: Array, y_b: Array, y_c: Array, t_c: float, rho: float, floor: float) -> bool:

@@ -21,7 +21,7 @@ Three parts, each a small piece of this module or its neighbours:
   * the locator: the collision of an event pair inside its interval.
 Two detections combine them (DetectionParams.mode):
   "fast" (default): samples carry eigenvalue slopes from left and right eigenvectors; intervals
-      are certified by cubic Hermite models of every pair's D (certify.uncertified_pairs) and
+      are certified by cubic Hermite models of every pair's D (certify.worst_uncertified_pair) and
       the labels by their slopes (certify.inconsistent_labels); an uncertified interval gets a
       new sample where the worst pair's model is lowest; events are located by Newton's method
       on the minimally augmented system (locate.py): linear solves, no eigensolver. One full
@@ -297,40 +297,36 @@ class StepScan:
                 or certify.outruns_gaps(a.eigvals, b.eigvals, real, self.params.rho, 2.0 * max(a.thr, b.thr)))
 
     @staticmethod
-    def _fast_candidates(a: Sample, b: Sample) -> tuple[Array, Array]:
-        """Fast: pairs (I, J) to certify over [a, b], among eigenvalues with unchanged status and
-        no excluded mode: two real ones, an upper complex one with a real one, and each upper
-        one with its conjugate partner (certify.py)."""
+    def _fast_candidates(a: Sample, b: Sample) -> tuple[Array, Array, Array]:
+        """Fast: labels whose pairs are certified over [a, b], among eigenvalues with unchanged
+        status and no excluded mode: (real, upper, partner of each upper one); the pairs are
+        two real ones, an upper complex one with a real one, and each upper one with its
+        conjugate partner (certify.worst_uncertified_pair)."""
         keep = (a.status == b.status) & ~a.excluded & ~b.excluded
         real = np.flatnonzero(keep & (a.status == 0))
         upper = np.flatnonzero(keep & (a.status > 0))
         lower = np.flatnonzero(keep & (a.status < 0))
-        I, J = np.triu_indices(real.size, 1)
-        pairs_I, pairs_J = [real[I], np.repeat(upper, real.size)], [real[J], np.tile(real, upper.size)]
+        partner = np.zeros(0, dtype=upper.dtype)
         if upper.size and lower.size:
             partner = lower[np.argmin(np.abs(a.eigvals[lower][None, :] - np.conj(a.eigvals[upper])[:, None]), axis=1)]
-            pairs_I.append(upper)
-            pairs_J.append(partner)
-        return np.concatenate(pairs_I), np.concatenate(pairs_J)
+        return real, upper, partner
 
     def _hermite_split(self, a: Sample, b: Sample, events: list) -> Optional[float]:
         """Fast: None if every candidate pair and every label is certified by the cubic models,
         else where to split (t in [0, 1]: the worst pair's model minimum, kept off the ends)."""
         h = b.s - a.s
         d_a, d_b = a.slopes(self.segment) * h, b.slopes(self.segment) * h
-        I, J = self._fast_candidates(a, b)
+        real, upper, partner = self._fast_candidates(a, b)
         thr = max(a.thr, b.thr)
         rho = self.params.rho
-        y_a, y_b, dy_a, dy_b = certify.pair_test_data(a.eigvals, b.eigvals, d_a, d_b, I, J)
-        bad, t_min = certify.uncertified_pairs(y_a, y_b, dy_a, dy_b, rho, 4.0 * thr * thr,
-                                               self.params.doubt)
+        t_worst = certify.worst_uncertified_pair(a.eigvals, b.eigvals, d_a, d_b, real, upper,
+                                                 partner, rho, 4.0 * thr * thr, self.params.doubt)
         labels = ~(a.excluded | b.excluded) & (a.status == b.status)
         wrong = labels & certify.inconsistent_labels(a.eigvals, b.eigvals, d_a, d_b, rho, 2.0 * thr)
         if _enters_past_guard(a, b).any():
             return 0.5
-        if bad.any():
-            worst = np.argmin(np.where(bad, np.minimum(y_a, y_b), np.inf))
-            return float(np.clip(t_min[worst], 0.125, 0.875))
+        if not math.isnan(t_worst):
+            return float(np.clip(t_worst, 0.125, 0.875))
         if wrong.any():
             return 0.5
         others = np.flatnonzero((a.status == b.status) & (a.status >= 0) & ~a.excluded & ~b.excluded)

@@ -154,3 +154,53 @@ def test_a_spectral_window_lists_the_full_detection_s_collisions_in_it():
     assert len(expected) >= 2 and window.window == (lo, hi)
     assert window.eigenvalues.shape[1] < system.ndof
     assert_same_collisions(locations(window), expected)
+
+
+def test_pair_certifier_flags_exactly_the_pairs_whose_model_dips():
+    """certify.worst_uncertified_pair against a brute-force reading of its own rule on a fine
+    grid: the Hermite cubic of y = |lambda_i - lambda_j|^2 from the end data, its minimum, and
+    the margin rho min(y_a, y_b) - floor after a quarter of the cubic term."""
+    from diskfriction.continuation import certify
+    rng = np.random.default_rng(3)
+    t = np.linspace(0.0, 1.0, 200001)
+    flagged = 0
+    for _ in range(200):
+        lam_a, lam_b = rng.normal(size=2), rng.normal(size=2)
+        d_a, d_b = 0.3 * rng.normal(size=2), 0.3 * rng.normal(size=2)
+        g, dg = lam_a[0] - lam_a[1], d_a[0] - d_a[1]
+        h, dh = lam_b[0] - lam_b[1], d_b[0] - d_b[1]
+        c = certify.hermite_coefficients(g * g, h * h, 2 * g * dg, 2 * h * dh)
+        H = certify.cubic_at(c, t)
+        margin = H.min() - 0.25 * abs(c[3]) - (0.5 * min(g * g, h * h) - 1e-12)
+        if abs(margin) < 1e-6:
+            continue  # too close to the threshold for the grid to decide
+        got = certify.worst_uncertified_pair(lam_a.astype(complex), lam_b.astype(complex),
+                                             d_a.astype(complex), d_b.astype(complex),
+                                             np.arange(2), np.zeros(0, np.int64),
+                                             np.zeros(0, np.int64), 0.5, 1e-12)
+        assert np.isnan(got) == (margin > 0)
+        if margin < 0:
+            flagged += 1
+            assert got == pytest.approx(t[np.argmin(H)], abs=1e-4)
+    assert 20 < flagged < 180, flagged  # both outcomes exercised
+
+
+def test_pair_certifier_covers_conjugate_and_complex_real_pairs():
+    """A conjugate pair whose imaginary part closes, and a complex eigenvalue that sweeps over a
+    real one, are flagged; the same eigenvalues moving apart are certified."""
+    from diskfriction.continuation import certify
+    none = np.zeros(0, np.int64)
+    # conjugate pair 1 +- 0.5 i -> 1 +- 0.5 i with Im slopes -1 then +1: Im dips to ~0.25
+    lam = np.array([1 + 0.5j, 1 - 0.5j])
+    closing = certify.worst_uncertified_pair(lam, lam, np.array([-1j, 1j]), np.array([1j, -1j]),
+                                             none, np.array([0]), np.array([1]), 0.5, 0.0)
+    opening = certify.worst_uncertified_pair(lam, lam * 1.5, np.array([0.5 + 0.25j, 0.5 - 0.25j]),
+                                             np.array([0.5 + 0.25j, 0.5 - 0.25j]), none, np.array([0]),
+                                             np.array([1]), 0.5, 0.0)
+    assert closing == pytest.approx(0.5) and np.isnan(opening)
+    # complex 0 + 0.1 i moving from Re -1 to +1 over the real eigenvalue 0
+    a, b = np.array([-1 + 0.1j, -1 - 0.1j, 0.0]), np.array([1 + 0.1j, 1 - 0.1j, 0.0])
+    d = np.array([2.0, 2.0, 0.0], complex)
+    sweep_over = certify.worst_uncertified_pair(a, b, d, d, np.array([2]), np.array([0]),
+                                                np.array([1]), 0.5, 0.0)
+    assert sweep_over == pytest.approx(0.5, abs=1e-6)
