@@ -188,6 +188,8 @@ class DiskEquilibria(Problem):
     def jacobian(self, q, F_x):
         """dG/dq = -J with the free disks' gauge rows."""
         rows, cols, vals = self.system.rows, self.system.cols, -self._values(q)
+        if self.sparse and not self.free:
+            return self._csr.matrix(vals)
         if self.free:
             gauge_rows = np.concatenate([d.dofs[d.rows] for d in self.free])
             keep = ~np.isin(rows, gauge_rows)

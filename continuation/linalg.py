@@ -71,12 +71,18 @@ def bordered(K: Matrix, c: Array, b: Array, d: float = 0.0) -> Matrix:
         M[n, :n] = b
         M[n, n] = d
         return M
-    K = sp.coo_array(K)
-    col = np.arange(n)
-    rows = np.concatenate([K.row, col, np.full(n, n), [n]])
-    cols = np.concatenate([K.col, np.full(n, n), col, [n]])
-    vals = np.concatenate([K.data, c, b, [d]])
-    return sp.csc_array((vals, (rows, cols)), shape=(n + 1, n + 1))
+    # CSC built directly: every column of K gains the border entry b_j in row n, then the
+    # column [c; d] (the COO round trip it replaces cost about as much as SuperLU's
+    # factorization at n = 300: cProfile of the N = 100 sweep)
+    K = sp.csc_array(K)
+    K.sum_duplicates()
+    ends = K.indptr[1:]
+    indices = np.insert(K.indices, ends, n)
+    data = np.insert(K.data, ends, b)
+    indptr = np.concatenate([K.indptr + np.arange(n + 1), [K.indptr[-1] + 2 * n + 1]])
+    indices = np.concatenate([indices, np.arange(n + 1)])
+    data = np.concatenate([data, c, [d]])
+    return sp.csc_array((data, indices, indptr), shape=(n + 1, n + 1))
 
 
 _getrs = sla.get_lapack_funcs("getrs", dtype=float)
@@ -110,7 +116,7 @@ def factorize(M: Matrix) -> Factorization:
     work.factorizations += 1
     if sp.issparse(M):
         try:
-            return Factorization(spla.splu(sp.csc_array(M)), True)
+            return Factorization(spla.splu(M if M.format == "csc" else sp.csc_array(M)), True)
         except RuntimeError as err:  # SuperLU: "Factor is exactly singular"
             raise SingularMatrix(str(err)) from None
     M = np.asarray(M, dtype=float)
