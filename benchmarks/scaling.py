@@ -1,8 +1,9 @@
 """Continuation cost against N (issue 8): the paper's scene with N disks, F_x 0 -> 0.12, J.
 
-For every N: wall time of the sweep (warm kernels), full spectra computed, LU factorizations and
-solves, collisions located, peak memory of the process; eps = 1e-4 and eps = 0; the fitted
-exponent of time against N; the fast detection against the exhaustive one (same collisions?)
+For every N: wall time of the sweep (warm kernels), full spectra computed and partial ones (the
+shift-inverts of split samples: continuation/nearest.py), LU factorizations and solves,
+collisions located, peak memory of the process; eps = 1e-4 and eps = 0; the fitted exponent of
+time against N; the fast detection against the exhaustive one (same collisions?)
 up to --exhaustive-up-to. Each run is a subprocess with a time budget: a run that would exceed
 it stops and prints how far it got (F_x reached), and is left out of the fit.
 
@@ -63,7 +64,7 @@ try:
 except OutOfTime:
     out.update(done=False, points=None, collisions=None)
 out.update(seconds=time.perf_counter() - t0, reached=reached["F_x"], spectra=work.spectra,
-           factorizations=work.factorizations, solves=work.solves,
+           partial=work.spectra_partial, factorizations=work.factorizations, solves=work.solves,
            peak_mb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
 print(json.dumps(out))
 """
@@ -84,7 +85,7 @@ def row(r: dict) -> str:
     coll = "-" if r["collisions"] is None else len(r["collisions"])
     status = "0.12" if r["done"] else f"stopped at F_x = {r['reached']:.4g}"
     return (f"| {r['N']} | {r['eps']:g} | {r['mode']} | {r['seconds']:.1f} | {status} | "
-            f"{r['spectra']} | {r['factorizations']} | {r['solves']} | {coll} | {r['peak_mb']:.0f} |")
+            f"{r['spectra']} + {r['partial']} | {r['factorizations']} | {r['solves']} | {coll} | {r['peak_mb']:.0f} |")
 
 
 def agreement(fast: dict, exhaustive: dict) -> str:
@@ -111,7 +112,7 @@ def main() -> None:
     sizes = [int(n) for n in args.N.split(",") if n]
     eps_values = [float(e) for e in args.eps.split(",")]
     print(f"{time.strftime('%Y-%m-%d %H:%M')}, load average {open('/proc/loadavg').read().split()[0]}")
-    print("| N | eps | detection | s | reached | spectra | LU | solves | collisions | peak MB |")
+    print("| N | eps | detection | s | reached | spectra full + partial | LU | solves | collisions | peak MB |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     results = {}
     for N in [int(n) for n in args.window_N.split(",") if n]:

@@ -88,7 +88,7 @@ def _pair_margin(la: complex, lb: complex, da: complex, db: complex, rho: float,
 @numba.njit(cache=True, error_model="numpy")
 def worst_uncertified_pair(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, real: Array,
                            upper: Array, partner: Array, rho: float, floor: float,
-                           doubt: float = 0.25) -> float:
+                           doubt: float = 0.25) -> tuple[float, Array]:
     """Certify every pair that could collide over the interval (t in [0, 1]); lam_*: complex
     eigenvalues at the ends in tracked order, d_*: their slopes d lambda / dt. Pairs: two real
     eigenvalues (labels `real`), an upper complex one with a real one (`upper` x `real`), and
@@ -98,9 +98,11 @@ def worst_uncertified_pair(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, r
     A pair is uncertified if its cubic Hermite model H of y = |lambda_i - lambda_j|^2 (y and
     y' = 2 Re(conj(lambda_i - lambda_j)(lambda_i' - lambda_j')) at both ends) has
         min_[0,1] H - doubt |c3| < rho min(y_a, y_b) - floor.
-    Returns t of the model minimum of the uncertified pair with the smallest min(y_a, y_b)
-    (the first such), or nan if every pair is certified. O(pairs) time, no pair arrays."""
+    Returns (t of the model minimum of the uncertified pair with the smallest min(y_a, y_b)
+    (the first such), or nan if every pair is certified; the mask of labels in any uncertified
+    pair). O(pairs) time, no pair arrays."""
     worst_y, worst_t = math.inf, math.nan
+    trouble = np.zeros(lam_a.size, np.bool_)
     n_real = real.size
     for a in range(n_real):
         i = real[a]
@@ -108,21 +110,27 @@ def worst_uncertified_pair(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, r
             j = real[b]
             bad, y, t = _pair_margin(lam_a[i] - lam_a[j], lam_b[i] - lam_b[j], d_a[i] - d_a[j],
                                      d_b[i] - d_b[j], rho, floor, doubt)
-            if bad and y < worst_y:
-                worst_y, worst_t = y, t
+            if bad:
+                trouble[i] = trouble[j] = True
+                if y < worst_y:
+                    worst_y, worst_t = y, t
     for i in upper:
         for j in real:
             bad, y, t = _pair_margin(lam_a[i] - lam_a[j], lam_b[i] - lam_b[j], d_a[i] - d_a[j],
                                      d_b[i] - d_b[j], rho, floor, doubt)
-            if bad and y < worst_y:
-                worst_y, worst_t = y, t
+            if bad:
+                trouble[i] = trouble[j] = True
+                if y < worst_y:
+                    worst_y, worst_t = y, t
     for k in range(partner.size):
         i, j = upper[k], partner[k]
         bad, y, t = _pair_margin(lam_a[i] - lam_a[j], lam_b[i] - lam_b[j], d_a[i] - d_a[j],
                                  d_b[i] - d_b[j], rho, floor, doubt)
-        if bad and y < worst_y:
-            worst_y, worst_t = y, t
-    return worst_t
+        if bad:
+            trouble[i] = trouble[j] = True
+            if y < worst_y:
+                worst_y, worst_t = y, t
+    return worst_t, trouble
 
 
 def cubic_roots_in_unit(c: tuple[float, ...]) -> list[float]:
@@ -182,7 +190,7 @@ def event_pairs_apart(models: list, rho: float, floor: float) -> tuple[bool, flo
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _nearest_gaps(lam: Array) -> Array:
+def nearest_gaps(lam: Array) -> Array:
     """|lambda_i - lambda_j| minimised over j != i (inf for a single eigenvalue)."""
     gaps = np.full(lam.size, np.inf)
     for i in range(lam.size):
@@ -192,13 +200,13 @@ def _nearest_gaps(lam: Array) -> Array:
     return gaps
 
 
-@numba.njit(cache=True, error_model="numpy")
-def inconsistent_labels(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, rho: float,
-                        floor: float) -> Array:
+def inconsistent_labels(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, gaps_a: Array,
+                        gaps_b: Array, rho: float, floor: float) -> Array:
     """Mask of eigenvalues whose trapezoid defect |lambda_b - lambda_a - (d_a + d_b) / 2|
-    exceeds rho times their smallest gap to another eigenvalue (at either end) plus floor."""
+    exceeds rho times their smallest gap to another eigenvalue (gaps_* at either end,
+    nearest_gaps) plus floor. A label with a nan is never flagged (the caller masks it out)."""
     defect = np.abs(lam_b - lam_a - 0.5 * (d_a + d_b))
-    return defect > rho * np.minimum(_nearest_gaps(lam_a), _nearest_gaps(lam_b)) + floor
+    return defect > rho * np.minimum(gaps_a, gaps_b) + floor
 
 
 def curvature_too_large(y_a: Array, y_b: Array, y_c: Array, t_c: float, rho: float, floor: float) -> bool:

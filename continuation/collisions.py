@@ -60,13 +60,17 @@ from .linalg import dense
 from .locate import LocatorFailed, locate_double_eigenvalue
 from .newton import residual_norm, tangent
 from .problem import Problem
-from .samples import Sample, continuation_perm, sample_at
+from .samples import Sample, continuation_perm, known, partial_sample_at, sample_at
 from .segment import Segment, refine_sign_change
 from .spectra import DEFAULT_REL_TOL, conjugate_pairing, pair_discriminant
 
 Array = np.ndarray
 
 MODES = ("fast", "exhaustive")
+PARTIAL_EXTRA = 6
+"""Eigenvalues a partial sample computes beyond those expected near its labels."""
+PARTIAL_CLUSTERS = 3
+"""Shift-inverts a partial sample may take (each costs about 1/5 of a full spectrum at n = 300)."""
 
 
 @dataclass(frozen=True)
@@ -79,7 +83,11 @@ class DetectionParams:
     no eigenvalue is computed at all, for a caller that needs only the equilibria, e.g.
     continuation.equilibrium); min_ds: intervals narrower
     than this in s are final (the segment coordinate's resolution, 100 ulp of 1);
-    locator_iterations: Newton iterations of the fast locator before it falls back to a split."""
+    locator_iterations: Newton iterations of the fast locator before it falls back to a split;
+    partial_from: matrix size n from which a split sample of the fast detection is partial
+    (only the eigenvalues near the labels in trouble, nearest.py; 0: always, a value above n:
+    never); partial_max_k: the most eigenvalues a partial sample computes (beyond that, or
+    when they do not cover the labels, the sample is a full spectrum)."""
 
     mode: str = "fast"
     rel_tol: float = DEFAULT_REL_TOL
@@ -91,6 +99,8 @@ class DetectionParams:
     min_ds: float = 1e-14
     locator_iterations: int = 12
     doubt: float = 0.25
+    partial_from: int = 240
+    partial_max_k: int = 16
 
     def __post_init__(self):
         if self.mode not in MODES:
@@ -105,6 +115,8 @@ class DetectionParams:
             raise ValueError(f"rho must be in (0, 1), got {self.rho}")
         if self.max_solves < 1 or self.locator_iterations < 1:
             raise ValueError("max_solves and locator_iterations must be >= 1")
+        if self.partial_from < 0 or self.partial_max_k < 1:
+            raise ValueError("partial_from must be >= 0 and partial_max_k >= 1")
 
     @property
     def slopes(self) -> bool:
@@ -163,11 +175,11 @@ def jordan_vectors(A: Array, lam: float):
     return v, w, float(abs(y @ v))
 
 
-def status_events(a: Sample, b: Sample):
+def status_events(a: Sample, b: Sample, active: Optional[Array] = None):
     """Births (0 -> +-1, paired at b) and deaths (+-1 -> 0, paired at a) on [a, b], and
-    whether the status change is fully explained by them. Modes excluded at either end never
-    take part."""
-    tracked = ~(a.excluded | b.excluded)
+    whether the status change is fully explained by them. Modes excluded at either end, and
+    labels outside `active` (default all), never take part."""
+    tracked = ~(a.excluded | b.excluded) & (True if active is None else active)
     sa, sb = np.where(tracked, a.status, 0), np.where(tracked, b.status, 0)
     if np.array_equal(sa, sb):
         return [], True
@@ -187,12 +199,15 @@ class _Budget(Exception):
 @dataclass(frozen=True)
 class Verdict:
     """kind: "clean" | "split" | "events"; events [(i, j, "birth" | "death")]; consistent:
-    whether the events explain the status change; split_at: where to sample next (in s)."""
+    whether the events explain the status change; split_at: where to sample next (in s);
+    labels: for a split of the fast detection, the mask of labels in trouble (the only ones a
+    partial sample there needs), or None if the next sample must be a full spectrum."""
 
     kind: str
     events: list
     consistent: bool
     split_at: float = math.nan
+    labels: Optional[Array] = None
 
 
 @dataclass
@@ -210,32 +225,170 @@ class StepScan:
     solves: int = 0
     warnings: list = field(default_factory=list)
     located: dict = field(default_factory=dict)
+    partial: int = 0
+    upgrades: int = 0
     _cache: dict = field(default_factory=dict)
+    _points: dict = field(default_factory=dict)
+    _born: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        self._born = {smp.s: -1 for smp in self.samples}  # insertion order by s (-1: the ends)
 
     @property
     def _start(self) -> int:
         return 1 if self.samples[0].s < 0.0 else 0
 
     # ---- sampler ---------------------------------------------------------------------------
+    def _point(self, s: float) -> tuple[Array, Optional[Array]]:
+        """The branch point at s (corrector solve, counted against max_solves) and, for the fast
+        detection, its unit tangent; kept, so a partial sample that fails costs no second solve."""
+        if s not in self._points:
+            if self.solves >= self.params.max_solves:
+                raise _Budget
+            x = self.segment.point(s)
+            self.solves += 1
+            self._points[s] = (x, tangent(self.problem, x, self.segment.sigma) if self.params.slopes else None)
+        return self._points[s]
+
     def insert(self, s: float):
-        """Corrector solve at s, new sample tracked to its left neighbour; the samples right of
-        it are relabelled to continue it. Returns (index, perm or None)."""
-        if self.solves >= self.params.max_solves:
-            raise _Budget
-        x = self.segment.point(s)
-        self.solves += 1
+        """A full sample at s tracked to its left neighbour; the samples right of it are
+        relabelled to continue it. Returns (index, perm or None)."""
+        x, t = self._point(s)
         idx = bisect.bisect([smp.s for smp in self.samples], s)
-        t = None
-        if self.params.slopes:
-            t = tangent(self.problem, x, self.segment.sigma)
-        new = sample_at(self.problem, s, x, self.params.rel_tol, self.samples[idx - 1], t)
-        self.samples.insert(idx, new)
-        perm = continuation_perm(new, self.samples[idx + 1])
+        self.samples.insert(idx, sample_at(self.problem, s, x, self.params.rel_tol, self.samples[idx - 1], t))
+        self._born[s] = len(self._born)
+        return idx, self._relabel_right(idx)
+
+    def _relabel_right(self, idx: int) -> Optional[Array]:
+        """Relabel the samples right of samples[idx] to continue it; the perm, None if identity."""
+        perm = continuation_perm(self.samples[idx], self.samples[idx + 1])
         if np.array_equal(perm, np.arange(perm.size)):
-            return idx, None
+            return None
         for k in range(idx + 1, len(self.samples)):
             self.samples[k] = self.samples[k].relabel(perm)
-        return idx, perm
+        return perm
+
+    # ---- partial samples -------------------------------------------------------------------
+    # A split of [l, r] for the labels T in trouble (Verdict.labels) needs only their
+    # eigenvalues at the new sample p: every pair with a label outside T is certified on [l, r]
+    # (so on [l, p] and [p, r]), and outside T no status changes. The children [l, p] and
+    # [p, r] are judged on the labels known at both ends (_active); their splits nest. This
+    # holds while the labels of l and r stay associated as they were when [l, r] was judged:
+    # a partial sample that relabels its right neighbour is inserted only if [l, r] and every
+    # interval whose certificate [l, r] inherits, judged again with the new labels, keep their
+    # trouble within the labels split for (_certificates_survive); a split that needs a full
+    # sample next to a partial one first makes every partial sample of the step full
+    # (_upgrade_partials), after which the step is as if it had been full throughout.
+    def _active(self, a: Sample, b: Sample) -> Array:
+        return known(a) & known(b)
+
+    def _partial_allowed(self, a: Sample, b: Sample, labels: Optional[Array]) -> bool:
+        return (labels is not None and self.params.slopes and a.eigvals.size >= self.params.partial_from
+                and not (a.excluded.any() or b.excluded.any())
+                and not np.any(labels & ~self._active(a, b)))
+
+    def _clusters(self, l: Sample, r: Sample, s: float, labels: Array) -> Optional[list]:
+        """The shift-inverts of a partial sample at s for `labels` (int array): [(labels of the
+        cluster, sigma, k), ...]. The labels' eigenvalues predicted at s (cubic Hermite over
+        [l, r]) are taken in order of real part and grouped while the group's k stays within
+        partial_max_k: sigma the middle of its real parts, k the eigenvalues of the nearest
+        full sample to the left within twice its reach of sigma, plus PARTIAL_EXTRA. None if
+        that takes more than PARTIAL_CLUSTERS groups."""
+        h = r.s - l.s
+        d_l, d_r = l.slopes(self.segment) * h, r.slopes(self.segment) * h
+        mu = certify.cubic_at(certify.hermite_coefficients(l.eigvals[labels], r.eigvals[labels],
+                                                           d_l[labels], d_r[labels]), (s - l.s) / h)
+        order = np.argsort(mu.real)
+        reference = next(smp for smp in reversed(self.samples) if smp.s <= l.s and not smp.partial).eigvals
+        k_max = min(self.params.partial_max_k, l.eigvals.size - 2)
+
+        def shift(group: list) -> tuple[float, int]:
+            sigma = 0.5 * float(mu.real[group].min() + mu.real[group].max())
+            reach = 2.0 * float(np.max(np.abs(mu[group] - sigma)))
+            return sigma, int(np.count_nonzero(np.abs(reference - sigma) <= reach)) + PARTIAL_EXTRA
+
+        groups = [[order[0]]]
+        for i in order[1:]:
+            if shift(groups[-1] + [i])[1] <= k_max:
+                groups[-1].append(i)
+            else:
+                groups.append([i])
+        clusters = [(labels[group], *shift(group)) for group in groups]
+        if len(clusters) > PARTIAL_CLUSTERS or any(k > k_max for _, _, k in clusters):
+            return None
+        return clusters
+
+    def _insert_partial(self, idx: int, s: float, labels: Array) -> bool:
+        """Split samples[idx], samples[idx + 1] at s with a partial sample of `labels`; False if
+        it cannot be made (too many eigenvalues, not covered) or relabels its right neighbour
+        in a way the interval's certificate does not survive: between two full samples the
+        interval is judged again with the new labels, and its trouble must stay within
+        `labels`; next to a partial sample any relabelling is refused."""
+        l, r = self.samples[idx], self.samples[idx + 1]
+        clusters = self._clusters(l, r, s, np.flatnonzero(labels))
+        if clusters is None:
+            return False
+        x, t = self._point(s)
+        new = partial_sample_at(self.problem, s, x, l, clusters, t)
+        if new is None:
+            return False
+        perm = continuation_perm(new, r)
+        if not np.array_equal(perm, np.arange(labels.size)) and not self._certificates_survive(idx, new, perm):
+            return False
+        self.samples.insert(idx + 1, new)
+        self._born[s] = len(self._born)
+        self._relabel_right(idx + 1)
+        self.partial += 1
+        return True
+
+    def _certificates_survive(self, idx: int, new: Sample, perm: Array) -> bool:
+        """Whether `new`, inserted right of samples[idx] with the samples right of it relabelled
+        by perm, leaves every certificate its intervals rely on valid: the interval it splits
+        and each ancestor up to the first between two full samples (the parent of an interval
+        is the one its younger end was inserted into) are judged again with the new labels, and
+        each one's trouble must stay within the labels of the sample inserted into it."""
+        trial = self.samples[:idx + 1] + [new] + [smp.relabel(perm) for smp in self.samples[idx + 1:]]
+        born = dict(self._born)
+        born[new.s] = len(born)
+        age = [born[smp.s] for smp in trial]
+        lo, child, hi = idx, idx + 1, idx + 2
+        while True:
+            a, b = trial[lo], trial[hi]
+            again = self._judge(a, b, None)
+            trouble = again.labels if again.kind == "split" else _in_events(again.events, perm.size)
+            if trouble is None or np.any(trouble & ~known(trial[child])):
+                return False
+            if not (a.partial or b.partial):
+                return True
+            if age[hi] > age[lo]:
+                child = hi
+                hi = next(k for k in range(hi + 1, len(trial)) if age[k] < age[child])
+            else:
+                child = lo
+                lo = next(k for k in range(lo - 1, -1, -1) if age[k] < age[child])
+
+    def _upgrade_partials(self) -> None:
+        """Every partial sample of the step becomes a full one (left to right, each tracked to
+        its full left neighbour, the samples right of it relabelled)."""
+        for k in range(self._start, len(self.samples)):
+            smp = self.samples[k]
+            if smp.partial:
+                self.samples[k] = sample_at(self.problem, smp.s, smp.x, self.params.rel_tol,
+                                            self.samples[k - 1], smp.tangent)
+                self._relabel_right(k)
+                self.upgrades += 1
+
+    def _split(self, idx: int, verdict: Verdict) -> None:
+        """Sample inside samples[idx], samples[idx + 1] at verdict.split_at: partial if the
+        verdict names the labels in trouble and they allow it, else full (after upgrading the
+        partial samples if an end is one)."""
+        a, b = self.samples[idx], self.samples[idx + 1]
+        if self._partial_allowed(a, b, verdict.labels) and self._insert_partial(idx, verdict.split_at, verdict.labels):
+            return
+        if a.partial or b.partial:
+            self._upgrade_partials()
+            return
+        self.insert(verdict.split_at)
 
     def _narrow(self, a: Sample, b: Sample) -> bool:
         """Nothing left to resolve in [a, b]: |dp| <= tol_p and max|dx| <= sqrt(tol_p) (the
@@ -255,14 +408,16 @@ class StepScan:
         return self._cache[key]
 
     def _judge(self, a: Sample, b: Sample, c: Optional[Sample]) -> Verdict:
-        events, consistent = status_events(a, b)
+        active = self._active(a, b)
+        events, consistent = status_events(a, b, active)
         mid = 0.5 * (a.s + b.s)
         if not consistent:
             return Verdict("split", events, False, mid)
         if self.params.slopes:
-            t_split = self._hermite_split(a, b, events)
-            if t_split is not None:
-                return Verdict("split", events, True, a.s + t_split * (b.s - a.s))
+            split = self._hermite_split(a, b, events, active)
+            if split is not None:
+                t_split, labels = split
+                return Verdict("split", events, True, a.s + t_split * (b.s - a.s), labels)
         elif c is None or self._uncertified(a, b, c):
             return Verdict("split", events, True, mid)
         return Verdict("events" if events else "clean", events, True)
@@ -297,12 +452,12 @@ class StepScan:
                 or certify.outruns_gaps(a.eigvals, b.eigvals, real, self.params.rho, 2.0 * max(a.thr, b.thr)))
 
     @staticmethod
-    def _fast_candidates(a: Sample, b: Sample) -> tuple[Array, Array, Array]:
-        """Fast: labels whose pairs are certified over [a, b], among eigenvalues with unchanged
-        status and no excluded mode: (real, upper, partner of each upper one); the pairs are
-        two real ones, an upper complex one with a real one, and each upper one with its
-        conjugate partner (certify.worst_uncertified_pair)."""
-        keep = (a.status == b.status) & ~a.excluded & ~b.excluded
+    def _fast_candidates(a: Sample, b: Sample, active: Array) -> tuple[Array, Array, Array]:
+        """Fast: labels whose pairs are certified over [a, b], among the active eigenvalues with
+        unchanged status and no excluded mode: (real, upper, partner of each upper one); the
+        pairs are two real ones, an upper complex one with a real one, and each upper one with
+        its conjugate partner (certify.worst_uncertified_pair)."""
+        keep = (a.status == b.status) & ~a.excluded & ~b.excluded & active
         real = np.flatnonzero(keep & (a.status == 0))
         upper = np.flatnonzero(keep & (a.status > 0))
         lower = np.flatnonzero(keep & (a.status < 0))
@@ -311,37 +466,47 @@ class StepScan:
             partner = lower[np.argmin(np.abs(a.eigvals[lower][None, :] - np.conj(a.eigvals[upper])[:, None]), axis=1)]
         return real, upper, partner
 
-    def _hermite_split(self, a: Sample, b: Sample, events: list) -> Optional[float]:
+    def _hermite_split(self, a: Sample, b: Sample, events: list, active: Array):
         """Fast: None if every candidate pair and every label is certified by the cubic models,
-        else where to split (t in [0, 1]: the worst pair's model minimum, kept off the ends)."""
+        else (where to split: t in [0, 1], the worst pair's model minimum kept off the ends;
+        the mask of labels in trouble, with the event pairs and conjugate partners, or None if
+        the next sample must be full)."""
         h = b.s - a.s
         d_a, d_b = a.slopes(self.segment) * h, b.slopes(self.segment) * h
-        real, upper, partner = self._fast_candidates(a, b)
+        real, upper, partner = self._fast_candidates(a, b, active)
         thr = max(a.thr, b.thr)
         rho = self.params.rho
-        t_worst = certify.worst_uncertified_pair(a.eigvals, b.eigvals, d_a, d_b, real, upper,
-                                                 partner, rho, 4.0 * thr * thr, self.params.doubt)
-        labels = ~(a.excluded | b.excluded) & (a.status == b.status)
-        wrong = labels & certify.inconsistent_labels(a.eigvals, b.eigvals, d_a, d_b, rho, 2.0 * thr)
+        t_worst, pairs = certify.worst_uncertified_pair(a.eigvals, b.eigvals, d_a, d_b, real, upper,
+                                                        partner, rho, 4.0 * thr * thr, self.params.doubt)
+        labels = ~(a.excluded | b.excluded) & (a.status == b.status) & active
+        wrong = labels & certify.inconsistent_labels(a.eigvals, b.eigvals, d_a, d_b, a.gaps, b.gaps,
+                                                     rho, 2.0 * thr)
+        in_events = _in_events(events, active.size)
+
+        def split(t: float, trouble: Array):
+            return float(np.clip(t, 0.125, 0.875)), _with_partners(a, b, trouble | in_events)
+
         if _enters_past_guard(a, b).any():
-            return 0.5
+            return 0.5, None
         if not math.isnan(t_worst):
-            return float(np.clip(t_worst, 0.125, 0.875))
+            return split(t_worst, pairs)
         if wrong.any():
-            return 0.5
-        others = np.flatnonzero((a.status == b.status) & (a.status >= 0) & ~a.excluded & ~b.excluded)
+            return split(0.5, _near_path(a, b, wrong))
+        others = np.flatnonzero((a.status == b.status) & (a.status >= 0) & ~a.excluded & ~b.excluded & active)
         models = [self._event_model(a, b, i, j, d_a, d_b) for i, j, _ in events]
         for m, D in models:  # one sign change of D per event, and each pair apart from the rest
             if len(certify.cubic_roots_in_unit(D)) != 1:
-                return 0.5
+                return split(0.5, in_events)
             bad, t_min = certify.event_pair_clearance(m, D, a.eigvals[others], b.eigvals[others],
                                                       d_a[others], d_b[others], rho, 4.0 * thr * thr)
             if bad.any():
-                return float(np.clip(t_min[np.argmax(bad)], 0.125, 0.875))
+                near = np.zeros(active.size, bool)
+                near[others[bad]] = True
+                return split(t_min[np.argmax(bad)], near)
         if len(models) > 1:
             apart, t_worst = certify.event_pairs_apart(models, rho, 4.0 * thr * thr)
             if not apart:
-                return float(np.clip(t_worst, 0.125, 0.875))
+                return split(t_worst, in_events)
         return None
 
     @staticmethod
@@ -435,7 +600,10 @@ class StepScan:
             if verdict.kind == "clean" or self._narrow(a, b):
                 continue
             if verdict.kind == "split":
-                self.insert(verdict.split_at)
+                if self.params.slopes:
+                    self._split(idx, verdict)
+                else:
+                    self.insert(verdict.split_at)
                 return True
             for i, j, what in verdict.events:
                 if self.params.slopes:
@@ -496,6 +664,41 @@ class StepScan:
                          left_right_overlap=overlap, bracket=bracket,
                          residual=residual_norm(self.problem, x), u=u.copy(), step=self.step,
                          pair=(i, j), resolved=resolved)
+
+
+def _in_events(events: list, n: int) -> Array:
+    """Mask of the labels of the event pairs [(i, j, kind), ...]."""
+    mask = np.zeros(n, bool)
+    mask[[k for i, j, _ in events for k in (i, j)]] = True
+    return mask
+
+
+def _with_partners(a: Sample, b: Sample, mask: Array) -> Array:
+    """mask with the conjugate partner (at either end) of every complex member added: a
+    partial sample's labels must include both members of a pair."""
+    out = mask.copy()
+    for smp in (a, b):
+        lower = np.flatnonzero(known(smp) & (smp.status < 0))
+        upper = np.flatnonzero(known(smp) & (smp.status > 0))
+        for group, other in ((upper, lower), (lower, upper)):
+            members = group[mask[group]]
+            if members.size and other.size:
+                distance = np.abs(smp.eigvals[other][None, :] - np.conj(smp.eigvals[members])[:, None])
+                out[other[np.argmin(distance, axis=1)]] = True
+    return out
+
+
+def _near_path(a: Sample, b: Sample, wrong: Array) -> Array:
+    """wrong with every label whose eigenvalue lies, at either end, within twice the
+    displacement plus the gap of a wrong label from its own value there (the eigenvalues it may
+    have been confused with)."""
+    out = wrong.copy()
+    for i in np.flatnonzero(wrong):
+        reach = 2.0 * (abs(b.eigvals[i] - a.eigvals[i]) + max(a.gaps[i], b.gaps[i]))
+        for smp in (a, b):
+            with np.errstate(invalid="ignore"):
+                out |= np.abs(smp.eigvals - smp.eigvals[i]) <= reach
+    return out
 
 
 def _enters_past_guard(a: Sample, b: Sample) -> Array:

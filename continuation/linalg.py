@@ -35,14 +35,16 @@ Matrix = Union[Array, sp.spmatrix, sp.sparray]
 @dataclass
 class Work:
     """What the core spent since the last reset: full eigendecompositions (dense, O(n^3)),
-    LU factorizations and triangular solves. Printed by benchmarks/scaling.py."""
+    partial ones (a few eigenvalues near a shift: nearest.py), LU factorizations and
+    triangular solves. Printed by benchmarks/scaling.py."""
 
     spectra: int = 0
+    spectra_partial: int = 0
     factorizations: int = 0
     solves: int = 0
 
     def reset(self) -> None:
-        self.spectra = self.factorizations = self.solves = 0
+        self.spectra = self.spectra_partial = self.factorizations = self.solves = 0
 
 
 work = Work()

@@ -22,8 +22,11 @@ from typing import Optional
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from .certify import nearest_gaps
+from .nearest import ShiftInvertFailed, nearest_eigensystem
 from .problem import Problem
-from .spectra import Eigensystem, eigen_status, eigenvalue_slopes, imag_threshold, match_eigenvalues
+from .spectra import (Eigensystem, eigen_status, eigenvalue_slopes, imag_threshold, match_eigenvalues,
+                      status_at)
 
 Array = np.ndarray
 _uid = itertools.count()
@@ -33,8 +36,11 @@ _uid = itertools.count()
 class Sample:
     """A branch point at segment coordinate s: x = (u, p), tracked eigenvalues, status per
     eigenvalue, status threshold thr; excluded modes (never part of a collision); with slopes:
-    tangent t (unit, oriented along the branch), dlam = d lambda / d tau along t, and the
-    eigensystem (vectors in label order) that seeds the collision locator."""
+    tangent t (unit, oriented along the branch), dlam = d lambda / d tau along t, the
+    eigensystem (vectors in label order) that seeds the collision locator, and gaps: each
+    eigenvalue's distance to the nearest other one (a lower bound where not all are known).
+    known: None for a full sample; for a partial one (partial_sample_at) the mask of labels
+    computed, the others holding nan (status: the left neighbour's)."""
 
     s: float
     x: Array
@@ -46,6 +52,8 @@ class Sample:
     dlam: Optional[Array] = None
     system: Optional[Eigensystem] = None
     guard: Optional[Array] = None
+    gaps: Optional[Array] = None
+    known: Optional[Array] = None
     uid: int = field(default_factory=lambda: next(_uid), init=False, repr=False, compare=False)
 
     @property
@@ -61,7 +69,12 @@ class Sample:
         take = lambda a: None if a is None else a[perm]  # noqa: E731
         return replace(self, eigvals=self.eigvals[perm], status=self.status[perm],
                        excluded=self.excluded[perm], dlam=take(self.dlam), guard=take(self.guard),
+                       gaps=take(self.gaps), known=take(self.known),
                        system=None if self.system is None else self.system.permuted(perm))
+
+    @property
+    def partial(self) -> bool:
+        return self.known is not None
 
     def slopes(self, segment) -> Array:
         """d lambda / ds on `segment` (s in [0, 1] from x_a to x_b): dlam L / (sigma . t)."""
@@ -95,12 +108,24 @@ def predicted_match(ref_values: Array, ref_dlam: Array, values: Array, dlam: Arr
 
 def continuation_perm(left: Sample, right: Sample) -> Array:
     """Labels of `right` continuing `left`: by prediction if both carry slopes, else by the
-    nearest eigenvalue (spectra.match_eigenvalues)."""
+    nearest eigenvalue (spectra.match_eigenvalues). With a partial sample only the labels known
+    at both are matched (the others keep theirs)."""
     if left.dlam is None or right.dlam is None:
         return match_eigenvalues(left.eigvals, right.eigvals)
     step = right.x - left.x
-    return predicted_match(left.eigvals, left.dlam, right.eigvals, right.dlam,
-                           float(step @ left.tangent), float(step @ right.tangent))
+    ds_left, ds_right = float(step @ left.tangent), float(step @ right.tangent)
+    if not (left.partial or right.partial):
+        return predicted_match(left.eigvals, left.dlam, right.eigvals, right.dlam, ds_left, ds_right)
+    common = np.flatnonzero(known(left) & known(right))
+    perm = np.arange(left.eigvals.size)
+    perm[common] = common[predicted_match(left.eigvals[common], left.dlam[common], right.eigvals[common],
+                                          right.dlam[common], ds_left, ds_right)]
+    return perm
+
+
+def known(sample: Sample) -> Array:
+    """Mask of the labels computed at the sample (all of a full one)."""
+    return np.ones(sample.eigvals.size, bool) if sample.known is None else sample.known
 
 
 def make_sample(s: float, x: Array, system: Eigensystem, rel_tol: float,
@@ -113,7 +138,7 @@ def make_sample(s: float, x: Array, system: Eigensystem, rel_tol: float,
     system = Eigensystem(values, system.right, system.left, excluded, system.guard)
     sample = Sample(s, x, values, eigen_status(values, rel_tol), imag_threshold(values, rel_tol),
                     excluded, tangent, dlam, system if system.right is not None else None,
-                    system.guard)
+                    system.guard, None if dlam is None else nearest_gaps(values))
     return sample if reference is None else sample.relabel(continuation_perm(reference, sample))
 
 
@@ -127,3 +152,56 @@ def sample_at(problem: Problem, s: float, x: Array, rel_tol: float, reference: O
     system = problem.eigensystem(u, p, vectors=True)
     dlam = eigenvalue_slopes(system, matrix_derivative(problem, x, tangent, side))
     return make_sample(s, x, system, rel_tol, reference, tangent, dlam)
+
+
+def partial_sample_at(problem: Problem, s: float, x: Array, left: Sample, clusters: list,
+                      tangent: Array) -> Optional[Sample]:
+    """A partial sample at the branch point x: only some labels (known at `left`) are
+    computed. clusters: [(labels, sigma, k), ...]: each group of labels (int array) from the k
+    eigenvalues of the stability matrix nearest the real shift sigma (nearest.py), with vectors
+    and slopes along `tangent`; labels continue `left` by the trapezoid prediction
+    (predicted_match, rectangular: the k computed eigenvalues are the candidates). The other
+    labels hold nan (status and thr: left's; they keep their status inside the interval being
+    split, collisions.py). gaps: to the nearest of the k eigenvalues, at most the distance to
+    the edge of the disc they cover.
+
+    None when a disc does not cover its labels (every eigenvalue within twice its distance to
+    a label's prediction must be among the k, so that the match saw every candidate a full
+    spectrum would offer), when two groups claim the same eigenvalue, or when a shift-invert
+    fails."""
+    A = problem.stability_matrix(x[:-1], float(x[-1]))
+    dA = matrix_derivative(problem, x, tangent)
+    step = x - left.x
+    ds_left, ds_new = float(step @ left.tangent), float(step @ tangent)
+    n = left.eigvals.size
+    eigvals, dlam_all = np.full(n, np.nan, complex), np.full(n, np.nan, complex)
+    gaps, right, left_vectors = np.full(n, np.nan), None, None
+    for labels, sigma, k in clusters:
+        try:
+            system, radius = nearest_eigensystem(A, sigma, k)
+        except ShiftInvertFailed:
+            return None
+        dlam = eigenvalue_slopes(system, dA)
+        ref = left.eigvals[labels] + 0.5 * ds_left * left.dlam[labels]
+        cols = linear_sum_assignment(np.abs(ref[:, None] - (system.values - 0.5 * ds_new * dlam)[None, :]))[1]
+        values = system.values[cols]
+        predicted = ref + 0.5 * ds_new * dlam[cols]
+        if np.any(np.abs(predicted - sigma) + 2.0 * np.abs(values - predicted) >= radius):
+            return None
+        distance = np.abs(values[:, None] - system.values[None, :])
+        distance[np.arange(cols.size), cols] = np.inf
+        if right is None:
+            right = np.zeros((system.right.shape[0], n), complex, order="F")
+            left_vectors = np.zeros((n, system.left.shape[1]), complex)
+        eigvals[labels], dlam_all[labels] = values, dlam[cols]
+        gaps[labels] = np.minimum(distance.min(axis=1), radius - np.abs(values - sigma))
+        right[:, labels], left_vectors[labels] = system.right[:, cols], system.left[cols]
+    known = ~np.isnan(eigvals)
+    values = eigvals[known]
+    if np.any(nearest_gaps(values) <= left.thr):  # one eigenvalue matched to two labels
+        return None
+    status = left.status.copy()
+    status[known] = status_at(values, left.thr)
+    excluded = left.excluded.copy()
+    return Sample(s, x, eigvals, status, left.thr, excluded, tangent, dlam_all,
+                  Eigensystem(eigvals, right, left_vectors, excluded), None, gaps, known)

@@ -48,7 +48,12 @@ def imag_threshold(eigvals: Array, rel_tol: float = DEFAULT_REL_TOL) -> float:
 
 def eigen_status(eigvals: Array, rel_tol: float = DEFAULT_REL_TOL) -> Array:
     """Per eigenvalue: +1 if Im > thr (upper member of a pair), -1 if Im < -thr, 0 real."""
-    thr = imag_threshold(eigvals, rel_tol)
+    return status_at(eigvals, imag_threshold(eigvals, rel_tol))
+
+
+def status_at(eigvals: Array, thr: float) -> Array:
+    """eigen_status with a given threshold (a few eigenvalues of a spectrum whose scale is
+    known from a neighbouring full one)."""
     im = np.imag(eigvals)
     return (im > thr).astype(np.int8) - (im < -thr).astype(np.int8)
 

@@ -22,10 +22,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse.linalg as spla
 
 from .linalg import Matrix, work
+from .nearest import two_sided
 from .spectra import Eigensystem
 
 Array = np.ndarray
@@ -92,14 +92,9 @@ def window_eigensystem(A: Matrix, window: Window, vectors: bool) -> Eigensystem:
     if not vectors:
         values = spla.eigs(A, k=k, sigma=sigma, return_eigenvectors=False)
         return _classified(Eigensystem(values.astype(complex)), window)
-    theta, V = spla.eigs(A, k=k, sigma=sigma)
+    _, V = spla.eigs(A, k=k, sigma=sigma)
     _, W = spla.eigs(A.T, k=k, sigma=sigma)
-    M, B = W.conj().T @ (A @ V), W.conj().T @ V
-    values, vl, vr = sla.eig(M, B, left=True, right=True)
-    right = V @ vr
-    left = (W @ vl).conj().T
-    left = left / np.einsum("ij,ji->i", left, right)[:, None]
-    return _classified(Eigensystem(values.astype(complex), right, left), window)
+    return _classified(two_sided(A, V, W), window)
 
 
 def _classified(system: Eigensystem, window: Window) -> Eigensystem:

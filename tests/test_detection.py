@@ -178,10 +178,11 @@ def test_pair_certifier_flags_exactly_the_pairs_whose_model_dips():
                                              d_a.astype(complex), d_b.astype(complex),
                                              np.arange(2), np.zeros(0, np.int64),
                                              np.zeros(0, np.int64), 0.5, 1e-12)
-        assert np.isnan(got) == (margin > 0)
+        assert np.isnan(got[0]) == (margin > 0)
+        assert got[1].tolist() == [margin < 0] * 2
         if margin < 0:
             flagged += 1
-            assert got == pytest.approx(t[np.argmin(H)], abs=1e-4)
+            assert got[0] == pytest.approx(t[np.argmin(H)], abs=1e-4)
     assert 20 < flagged < 180, flagged  # both outcomes exercised
 
 
@@ -197,10 +198,87 @@ def test_pair_certifier_covers_conjugate_and_complex_real_pairs():
     opening = certify.worst_uncertified_pair(lam, lam * 1.5, np.array([0.5 + 0.25j, 0.5 - 0.25j]),
                                              np.array([0.5 + 0.25j, 0.5 - 0.25j]), none, np.array([0]),
                                              np.array([1]), 0.5, 0.0)
-    assert closing == pytest.approx(0.5) and np.isnan(opening)
+    assert closing[0] == pytest.approx(0.5) and np.isnan(opening[0])
+    assert closing[1].tolist() == [True, True] and not opening[1].any()
     # complex 0 + 0.1 i moving from Re -1 to +1 over the real eigenvalue 0
     a, b = np.array([-1 + 0.1j, -1 - 0.1j, 0.0]), np.array([1 + 0.1j, 1 - 0.1j, 0.0])
     d = np.array([2.0, 2.0, 0.0], complex)
     sweep_over = certify.worst_uncertified_pair(a, b, d, d, np.array([2]), np.array([0]),
                                                 np.array([1]), 0.5, 0.0)
-    assert sweep_over == pytest.approx(0.5, abs=1e-6)
+    assert sweep_over[0] == pytest.approx(0.5, abs=1e-6)
+    assert sweep_over[1].tolist() == [True, False, True]  # the conjugate partner stays apart
+
+
+@pytest.mark.parametrize("scene, matrix, k_max", [(Scene(), "J", 16), (Scene(), "M^-1 J", 16),
+                                                  (Scene(), "J", 8), (Scene(N=20, eps=1e-4), "J", 16)],
+                         ids=["paper-J", "paper-M^-1J", "paper-J-k8", "N20-eps1e-4"])
+def test_partial_split_samples_find_the_collisions_of_full_ones(scene, matrix, k_max):
+    """Split samples as partial spectra (forced at every size: partial_from = 0) give the same
+    collisions as full ones, to 1e-9, on the same branch, with fewer full spectra; k_max = 8
+    sends more splits to the fallbacks (a full sample, upgrading the partial ones)."""
+    from diskfriction.continuation.linalg import work
+
+    system = System.from_scene(scene)
+    runs, spent = {}, {}
+    for partial_from in (0, 10**9):
+        work.reset()
+        detection = DetectionParams(partial_from=partial_from, partial_max_k=k_max)
+        runs[partial_from] = sweep(system, 0.0, 0.12, matrix, SweepParams(detection=detection))
+        spent[partial_from] = (work.spectra, work.spectra_partial)
+    assert np.array_equal(runs[0].F_x, runs[10**9].F_x)
+    assert_same_collisions(locations(runs[0]), locations(runs[10**9]))
+    assert all(c.resolved for c in runs[0].collisions)
+    assert spent[10**9][1] == 0 < spent[0][1] and spent[0][0] < spent[10**9][0]
+
+
+@pytest.mark.parametrize("sparse", [True, False])
+def test_nearest_eigensystem_gives_the_k_nearest_with_normalised_vectors(sparse):
+    """Shift-invert against a dense eigendecomposition: the k eigenvalues nearest sigma (real
+    and complex ones), the radius they cover, residuals of both vectors, l^H r = 1."""
+    import scipy.sparse as sp
+
+    from diskfriction.continuation.nearest import nearest_eigensystem
+
+    rng = np.random.default_rng(7)
+    n, k, sigma = 80, 7, 20.3
+    A = sp.random(n, n, density=0.05, random_state=rng) * 4.0 + sp.diags(np.arange(n, dtype=float))
+    A = sp.csr_array(A)
+    exact = np.linalg.eigvals(A.toarray())
+    nearest = exact[np.argsort(np.abs(exact - sigma))[:k]]
+    system, radius = nearest_eigensystem(A if sparse else A.toarray(), sigma, k)
+    assert np.any(np.abs(exact.imag) > 1e-3)  # the matrix has complex pairs too
+    assert np.max(np.min(np.abs(nearest[:, None] - system.values[None, :]), axis=1)) <= 1e-9 * n
+    assert radius == pytest.approx(np.max(np.abs(nearest - sigma)), rel=1e-9)
+    R, L = system.right, system.left
+    assert np.max(np.abs(A @ R - R * system.values)) <= 1e-8 * n * np.max(np.abs(R))
+    assert np.max(np.abs(L @ A - system.values[:, None] * L)) <= 1e-8 * n * np.max(np.abs(L))
+    assert np.allclose(np.einsum("ij,ji->i", L, R), 1.0, atol=1e-10)
+
+
+def test_a_partial_sample_matches_the_full_one_on_its_labels_or_declines():
+    """partial_sample_at on a problem with a known spectrum: the labels asked for carry the
+    full sample's eigenvalues, slopes and status, the others nan; gaps never exceed the true
+    ones; a disc that cannot cover the labels (k too small) gives None."""
+    from diskfriction.continuation.samples import partial_sample_at, sample_at
+
+    n = 12
+    base = np.diag(np.arange(1.0, n + 1.0))
+    skew = np.zeros((n, n))
+    skew[4, 5], skew[5, 4] = 0.3, -0.3  # the pair 5, 6 moves towards a collision at p = 0.5/0.6
+    problem = FunctionProblem(lambda u, p: (base + p * skew) @ u, lambda u, p: base + p * skew,
+                              lambda u, p: skew @ u)
+    t = np.zeros(n + 1)
+    t[-1] = 1.0
+    x0, x1 = np.append(np.zeros(n), 0.5), np.append(np.zeros(n), 0.6)
+    left = sample_at(problem, 0.0, x0, 1e-9, None, t)
+    full = sample_at(problem, 1.0, x1, 1e-9, left, t)
+    labels = np.flatnonzero(np.abs(left.eigvals - 5.5) < 1.0)
+    assert labels.size == 2
+    part = partial_sample_at(problem, 1.0, x1, left, [(labels, 5.5, 6)], t)
+    assert part is not None and part.known.sum() == 2
+    assert np.allclose(part.eigvals[labels], full.eigvals[labels], atol=1e-10)
+    assert np.allclose(part.dlam[labels], full.dlam[labels], atol=1e-6)
+    assert np.array_equal(part.status, full.status)
+    assert np.all(np.isnan(part.eigvals[part.known == 0]))
+    assert np.all(part.gaps[labels] <= full.gaps[labels] + 1e-12)
+    assert partial_sample_at(problem, 1.0, x1, left, [(labels, 5.5, 2)], t) is None
