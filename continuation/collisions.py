@@ -70,7 +70,8 @@ MODES = ("fast", "exhaustive")
 PARTIAL_EXTRA = 6
 """Eigenvalues a partial sample computes beyond those expected near its labels."""
 PARTIAL_CLUSTERS = 3
-"""Shift-inverts a partial sample may take (each costs about 1/5 of a full spectrum at n = 300)."""
+"""Shift-inverts a partial sample may take (each costs about 1/4 of a full spectrum at n = 300;
+5 or 8 did not pay at N = 100 or 200, docs/continuation.md)."""
 
 
 @dataclass(frozen=True)
@@ -321,9 +322,7 @@ class StepScan:
     def _insert_partial(self, idx: int, s: float, labels: Array) -> bool:
         """Split samples[idx], samples[idx + 1] at s with a partial sample of `labels`; False if
         it cannot be made (too many eigenvalues, not covered) or relabels its right neighbour
-        in a way the interval's certificate does not survive: between two full samples the
-        interval is judged again with the new labels, and its trouble must stay within
-        `labels`; next to a partial sample any relabelling is refused."""
+        in a way a certificate does not survive (_certificates_survive)."""
         l, r = self.samples[idx], self.samples[idx + 1]
         clusters = self._clusters(l, r, s, np.flatnonzero(labels))
         if clusters is None:
@@ -378,17 +377,17 @@ class StepScan:
                 self._relabel_right(k)
                 self.upgrades += 1
 
-    def _split(self, idx: int, verdict: Verdict) -> None:
-        """Sample inside samples[idx], samples[idx + 1] at verdict.split_at: partial if the
-        verdict names the labels in trouble and they allow it, else full (after upgrading the
-        partial samples if an end is one)."""
+    def _split(self, idx: int, s: float, labels: Optional[Array] = None) -> None:
+        """Sample inside samples[idx], samples[idx + 1] at s: partial if `labels` (in trouble)
+        allow it, else full; a full sample next to a partial one is not tracked from it: the
+        step's partial samples become full first (the interval is judged again afterwards)."""
         a, b = self.samples[idx], self.samples[idx + 1]
-        if self._partial_allowed(a, b, verdict.labels) and self._insert_partial(idx, verdict.split_at, verdict.labels):
+        if self._partial_allowed(a, b, labels) and self._insert_partial(idx, s, labels):
             return
         if a.partial or b.partial:
             self._upgrade_partials()
             return
-        self.insert(verdict.split_at)
+        self.insert(s)
 
     def _narrow(self, a: Sample, b: Sample) -> bool:
         """Nothing left to resolve in [a, b]: |dp| <= tol_p and max|dx| <= sqrt(tol_p) (the
@@ -600,10 +599,7 @@ class StepScan:
             if verdict.kind == "clean" or self._narrow(a, b):
                 continue
             if verdict.kind == "split":
-                if self.params.slopes:
-                    self._split(idx, verdict)
-                else:
-                    self.insert(verdict.split_at)
+                self._split(idx, verdict.split_at, verdict.labels)
                 return True
             for i, j, what in verdict.events:
                 if self.params.slopes:
@@ -612,7 +608,7 @@ class StepScan:
                         continue
                     found = self._locate_fast(idx, i, j, what)
                     if found is None:
-                        self.insert(self._fallback_split(a, b))
+                        self._split(idx, self._fallback_split(a, b))
                     else:
                         self.located[key] = found
                     return True
