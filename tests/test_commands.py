@@ -215,6 +215,7 @@ def test_interrupting_an_ensemble_prints_one_line_and_exits_130(tmp_path):
             time.sleep(0.2)
         assert workers and all(ignores_sigint(w.pid) for w in workers)
         time.sleep(1.5)  # the workers start and take their realizations
+        err = "still running after 12 SIGINTs, 10 s apart"
         for _ in range(12):  # as a user would, press again if it came while the cluster started
             os.killpg(proc.pid, signal.SIGINT)
             try:
