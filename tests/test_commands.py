@@ -194,6 +194,13 @@ def ignores_sigint(pid: int) -> bool:
     return bool(mask & (1 << (signal.SIGINT - 1)))
 
 
+def default_sigint() -> None:
+    """SIGINT at its default in the command, as in a terminal's foreground job: a suite
+    started in the background by a non-interactive shell inherits SIG_IGN for it, which the
+    command (Python) would keep, and no Ctrl-C could reach it."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def test_interrupting_an_ensemble_prints_one_line_and_exits_130(tmp_path):
     """As a terminal does: SIGINT to the whole process group, once the dask workers run. The
     workers ignore it (else each may print a KeyboardInterrupt traceback while the parent
@@ -204,7 +211,7 @@ def test_interrupting_an_ensemble_prints_one_line_and_exits_130(tmp_path):
         [sys.executable, "-m", "diskfriction", "simulate", "--fx", "0.083", "--realizations",
          "2", "--t-end", "1e6", "--out", str(tmp_path / "out")],
         cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-        start_new_session=True)
+        start_new_session=True, preexec_fn=default_sigint)
     try:
         deadline = time.monotonic() + 120
         while time.monotonic() < deadline and proc.poll() is None:
