@@ -228,8 +228,6 @@ class StepScan:
     solves: int = 0
     warnings: list = field(default_factory=list)
     located: dict = field(default_factory=dict)
-    partial: int = 0
-    upgrades: int = 0
     _cache: dict = field(default_factory=dict)
     _points: dict = field(default_factory=dict)
     _born: dict = field(default_factory=dict)
@@ -339,29 +337,30 @@ class StepScan:
         if new is None:
             return False
         perm = continuation_perm(new, r)
-        if not np.array_equal(perm, np.arange(labels.size)) and not self._certificates_survive(idx, new, perm):
-            return False
-        self.samples.insert(idx + 1, new)
+        right = self.samples[idx + 1:]
+        relabels = not np.array_equal(perm, np.arange(labels.size))
+        trial = self.samples[:idx + 1] + [new] + ([smp.relabel(perm) for smp in right] if relabels else right)
         self._born[s] = len(self._born)
-        self._relabel_right(idx + 1)
-        self.partial += 1
+        if relabels and not self._certificates_survive(trial, idx + 1):
+            del self._born[s]
+            return False
+        self.samples = trial
         return True
 
-    def _certificates_survive(self, idx: int, new: Sample, perm: Array) -> bool:
-        """Whether `new`, inserted right of samples[idx] with the samples right of it relabelled
-        by perm, leaves every certificate its intervals rely on valid: the interval it splits
-        and each ancestor up to the first between two full samples (the parent of an interval
-        is the one its younger end was inserted into) are judged again with the new labels, and
-        each one's trouble must stay within the labels of the sample inserted into it."""
-        trial = self.samples[:idx + 1] + [new] + [smp.relabel(perm) for smp in self.samples[idx + 1:]]
-        born = dict(self._born)
-        born[new.s] = len(born)
-        age = [born[smp.s] for smp in trial]
-        lo, child, hi = idx, idx + 1, idx + 2
+    def _certificates_survive(self, trial: list, new: int) -> bool:
+        """Whether the samples `trial`, with trial[new] just inserted and the samples right of
+        it relabelled, leave every certificate their intervals rely on valid: the interval
+        trial[new] splits and each ancestor up to the first between two full samples (the
+        parent of an interval is the one its younger end was inserted into) are judged again
+        with the new labels, and each one's trouble must stay within the labels of the sample
+        inserted into it."""
+        age = [self._born[smp.s] for smp in trial]
+        n = trial[new].eigvals.size
+        lo, child, hi = new - 1, new, new + 1
         while True:
             a, b = trial[lo], trial[hi]
             again = self._judge(a, b, None)
-            trouble = again.labels if again.kind == "split" else _in_events(again.events, perm.size)
+            trouble = again.labels if again.kind == "split" else _in_events(again.events, n)
             if trouble is None or np.any(trouble & ~known(trial[child])):
                 return False
             if not (a.partial or b.partial):
@@ -382,7 +381,6 @@ class StepScan:
                 self.samples[k] = sample_at(self.problem, smp.s, smp.x, self.params.rel_tol,
                                             self.samples[k - 1], smp.tangent)
                 self._relabel_right(k)
-                self.upgrades += 1
 
     def _split(self, idx: int, s: float, labels: Optional[Array] = None) -> None:
         """Sample inside samples[idx], samples[idx + 1] at s: partial if `labels` (in trouble)

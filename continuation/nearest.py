@@ -17,7 +17,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .linalg import Matrix, factorize, work
+from .linalg import Matrix, factorize
 from .spectra import Eigensystem
 
 Array = np.ndarray
@@ -30,25 +30,26 @@ class ShiftInvertFailed(RuntimeError):
 def nearest_eigensystem(A: Matrix, sigma: float, k: int) -> tuple[Eigensystem, float]:
     """(the eigensystem of the k eigenvalues of A nearest sigma with normalised left and right
     vectors, radius: the largest |lambda - sigma| among them); every eigenvalue of A strictly
-    closer to sigma than radius is among the k. Raises ShiftInvertFailed."""
+    closer to sigma than radius is among the k. Raises ShiftInvertFailed. The caller books it
+    (linalg.work)."""
     n = A.shape[0]
     if not 0 < k < n - 1:
         raise ShiftInvertFailed(f"k = {k} must lie in 1..{n - 2} for an {n} x {n} matrix")
     shift = sp.identity(n, format="csr") * sigma if sp.issparse(A) else sigma * np.eye(n)
-    work.spectra_partial += 1
     try:
         lu = factorize(A - shift)
         inverse = spla.LinearOperator((n, n), matvec=lu.solve, dtype=float)
         inverse_t = spla.LinearOperator((n, n), matvec=lambda r: lu.solve(r, transpose=True), dtype=float)
-        _, V = spla.eigs(A, k=k, sigma=sigma, OPinv=inverse)
-        _, W = spla.eigs(A.T, k=k, sigma=sigma, OPinv=inverse_t)
+        v0 = np.random.default_rng(n).standard_normal(n)  # ARPACK's own start is random: runs would differ
+        _, V = spla.eigs(A, k=k, sigma=sigma, OPinv=inverse, v0=v0)
+        _, W = spla.eigs(A.T, k=k, sigma=sigma, OPinv=inverse_t, v0=v0)
     except (np.linalg.LinAlgError, spla.ArpackError, spla.ArpackNoConvergence) as err:
         raise ShiftInvertFailed(f"shift-invert at sigma = {sigma:.6g}: {err}") from None
-    system = two_sided(A, V, W)
+    system = _two_sided(A, V, W)
     return system, float(np.max(np.abs(system.values - sigma)))
 
 
-def two_sided(A: Matrix, V: Array, W: Array) -> Eigensystem:
+def _two_sided(A: Matrix, V: Array, W: Array) -> Eigensystem:
     """Two-sided Rayleigh-Ritz on the right subspace V and the left subspace W (module
     docstring): eigenvalues with right and left vectors, l_i^H r_i = 1."""
     M, B = W.conj().T @ (A @ V), W.conj().T @ V

@@ -23,6 +23,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from .certify import nearest_gaps
+from .linalg import work
 from .nearest import ShiftInvertFailed, nearest_eigensystem
 from .problem import Problem
 from .spectra import (Eigensystem, eigen_status, eigenvalue_slopes, imag_threshold, match_eigenvalues,
@@ -113,13 +114,11 @@ def continuation_perm(left: Sample, right: Sample) -> Array:
     if left.dlam is None or right.dlam is None:
         return match_eigenvalues(left.eigvals, right.eigvals)
     step = right.x - left.x
-    ds_left, ds_right = float(step @ left.tangent), float(step @ right.tangent)
-    if not (left.partial or right.partial):
-        return predicted_match(left.eigvals, left.dlam, right.eigvals, right.dlam, ds_left, ds_right)
     common = np.flatnonzero(known(left) & known(right))
     perm = np.arange(left.eigvals.size)
     perm[common] = common[predicted_match(left.eigvals[common], left.dlam[common], right.eigvals[common],
-                                          right.dlam[common], ds_left, ds_right)]
+                                          right.dlam[common], float(step @ left.tangent),
+                                          float(step @ right.tangent))]
     return perm
 
 
@@ -177,6 +176,7 @@ def partial_sample_at(problem: Problem, s: float, x: Array, left: Sample, cluste
     eigvals, dlam_all = np.full(n, np.nan, complex), np.full(n, np.nan, complex)
     gaps, right, left_vectors = np.full(n, np.nan), None, None
     for labels, sigma, k in clusters:
+        work.spectra_partial += 1
         try:
             system, radius = nearest_eigensystem(A, sigma, k)
         except ShiftInvertFailed:

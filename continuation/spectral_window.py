@@ -3,10 +3,8 @@ full dense spectrum (O(n^3)) is too expensive (a chain of 1000 disks: n = 3000).
 
 The window W = [lo, hi] of Re lambda is tracked with a guard band of width g = GUARD (hi - lo)
 on each side. At every sample the k eigenvalues nearest sigma = (lo + hi) / 2 are computed by
-ARPACK in shift-invert mode (scipy.sparse.linalg.eigs on (A - sigma I)^-1, one sparse LU), for
-the right vectors and, on A^T, for the left ones; a two-sided Rayleigh-Ritz projection on the
-two k-dimensional subspaces (the pencil (W^H A V, W^H V)) pairs them and normalises
-l_i^H r_i = 1. Completeness: the k nearest eigenvalues include every eigenvalue within the
+shift-invert with left and right vectors (nearest.py: one sparse LU of A - sigma I serves
+ARPACK on both sides, and a two-sided Rayleigh-Ritz projection pairs them). Completeness: the k nearest eigenvalues include every eigenvalue within the
 distance of the farthest one; if that distance does not exceed the reach of the guard band
 (|lambda - sigma| = (hi - lo) / 2 + g, plus the largest |Im| seen), some eigenvalue of the band
 may be missing and WindowCrowded is raised (choose a narrower window). The k eigenvalues keep
@@ -25,7 +23,7 @@ import numpy as np
 import scipy.sparse.linalg as spla
 
 from .linalg import Matrix, work
-from .nearest import two_sided
+from .nearest import nearest_eigensystem
 from .spectra import Eigensystem
 
 Array = np.ndarray
@@ -92,9 +90,7 @@ def window_eigensystem(A: Matrix, window: Window, vectors: bool) -> Eigensystem:
     if not vectors:
         values = spla.eigs(A, k=k, sigma=sigma, return_eigenvectors=False)
         return _classified(Eigensystem(values.astype(complex)), window)
-    _, V = spla.eigs(A, k=k, sigma=sigma)
-    _, W = spla.eigs(A.T, k=k, sigma=sigma)
-    return _classified(two_sided(A, V, W), window)
+    return _classified(nearest_eigensystem(A, sigma, k)[0], window)
 
 
 def _classified(system: Eigensystem, window: Window) -> Eigensystem:
