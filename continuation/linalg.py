@@ -22,12 +22,14 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
-from typing import Union
+from typing import Optional, Union
 
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+
+from .triangular import TriangularFactors
 
 Array = np.ndarray
 Matrix = Union[Array, sp.spmatrix, sp.sparray]
@@ -90,19 +92,32 @@ def bordered(K: Matrix, c: Array, b: Array, d: float = 0.0) -> Matrix:
 _getrs = sla.get_lapack_funcs("getrs", dtype=float)
 
 
+COPY_FACTORS_AT = 4
+"""The solve from which a sparse factorization solves with its copied triangular factors
+(triangular.py: the copy costs four to seven of SuperLU's solves and saves a third to
+two thirds of each later one)."""
+
+
 @dataclass
 class Factorization:
     """An LU factorization of a square matrix; solve(r) = M^-1 r, solve(r, transpose=True) =
-    M^-T r. Counts its solves in `solves`."""
+    M^-T r. Counts its solves in `solves`. A sparse one solves with SuperLU, and from its
+    COPY_FACTORS_AT-th solve on by compiled substitution over SuperLU's factors (triangular.py,
+    the same factors: the results agree to rounding)."""
 
     lu: object
     sparse: bool
     solves: int = 0
+    triangular: Optional[TriangularFactors] = None
 
     def solve(self, rhs: Array, transpose: bool = False) -> Array:
         self.solves += 1
         work.solves += 1
-        if self.sparse:
+        if self.sparse and self.triangular is None and self.solves >= COPY_FACTORS_AT:
+            self.triangular = TriangularFactors.of(self.lu)
+        if self.triangular is not None:
+            x = self.triangular.solve(rhs, transpose)
+        elif self.sparse:
             x = self.lu.solve(np.ascontiguousarray(rhs, dtype=float), trans="T" if transpose else "N")
         else:
             # LAPACK's getrs directly: scipy's lu_solve wrapper costs ~40 us a call, 10x the

@@ -142,6 +142,36 @@ def test_sparse_and_dense_solves_agree_at_N40():
     assert np.max(np.abs(ev[0] - ev[1])) <= 1e-9 * np.abs(ev[0]).max()
 
 
+def test_compiled_substitution_solves_like_superlu():
+    """A factorization solved with repeatedly switches from SuperLU's solve to substitution over
+    its copied factors (triangular.py): on the bordered A - sigma I of the N = 40 chain (near an
+    eigenvalue, so ill-conditioned) both give the same x and A^-T x to rounding, for vectors
+    and for the columns of a matrix."""
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+    from diskfriction.continuation.linalg import COPY_FACTORS_AT, bordered, factorize
+
+    system = System.from_scene(Scene(N=40, eps=1e-4))
+    q, xi = relax(system, *system.rest_state(), 0.01)
+    A = DiskEquilibria(system, q, xi, 0.01, "J", sparse=True).stability_matrix(q, 0.01)
+    n = A.shape[0]
+    sigma = np.sort(np.linalg.eigvals(A.toarray()).real)[n // 2] * (1 + 1e-6)
+    rng = np.random.default_rng(3)
+    M = bordered(A - sigma * sp.identity(n, format="csr"), rng.standard_normal(n), rng.standard_normal(n))
+    reference = spla.splu(sp.csc_array(M))
+    lu = factorize(M)
+    rhs = rng.standard_normal((n + 1, 3))
+    for k in range(COPY_FACTORS_AT + 2):
+        transpose = k % 2 == 1
+        x = lu.solve(rhs[:, k % 3], transpose)
+        expected = reference.solve(rhs[:, k % 3], trans="T" if transpose else "N")
+        assert np.max(np.abs(x - expected)) <= 1e-10 * np.max(np.abs(expected))
+    assert lu.triangular is not None
+    X = lu.solve(rhs)
+    assert np.max(np.abs(M @ X - rhs)) <= 1e-9 * np.max(np.abs(X))
+    assert np.max(np.abs(M.T @ lu.solve(rhs, transpose=True) - rhs)) <= 1e-9 * np.max(np.abs(X))
+
+
 def test_a_spectral_window_lists_the_full_detection_s_collisions_in_it():
     """N = 40, eps = 1e-4: tracking only 0.0553 <= Re lambda / k_n <= 0.0562 by shift-invert
     gives the collisions of the full detection whose eigenvalue lies in the window, within

@@ -1,0 +1,71 @@
+"""Sparse solves of the chain: SuperLU's own solve against compiled substitution over its
+factors (continuation/triangular.py), and what copying the factors costs.
+
+The matrix is the bordered A - sigma I of the locator and of a shift-invert (A the stability
+matrix J of the chain at F_x = 0.002, sigma in the middle of its spectrum). Run:
+python benchmarks/solve_speed.py [--N 100,1000] [--repeat 7]. Medians over repeats of many
+calls, one BLAS thread.
+"""
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from diskfriction.continuation.disks import DiskEquilibria, relax
+from diskfriction.continuation.linalg import bordered, blas_threads
+from diskfriction.continuation.triangular import TriangularFactors
+from diskfriction.scenes import Scene
+from diskfriction.symbolic import System
+
+
+def median_us(fn, calls: int, repeat: int) -> float:
+    fn()
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        for _ in range(calls):
+            fn()
+        times.append((time.perf_counter() - t0) / calls)
+    return statistics.median(times) * 1e6
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--N", default="100,1000")
+    ap.add_argument("--repeat", type=int, default=7)
+    args = ap.parse_args()
+    print(f"load average {open('/proc/loadavg').read().split()[0]} at the start")
+    for N in [int(v) for v in args.N.split(",")]:
+        system = System.from_scene(Scene(N=N, eps=1e-4))
+        q, xi = relax(system, *system.rest_state(), 0.002)
+        A = DiskEquilibria(system, q, xi, 0.002, "J", sparse=True).stability_matrix(q, 0.002)
+        n = A.shape[0]
+        rng = np.random.default_rng(0)
+        sigma = float(np.median(A.diagonal()))
+        M = sp.csc_array(bordered(A - sigma * sp.identity(n, format="csr"), rng.standard_normal(n),
+                                  rng.standard_normal(n)))
+        r = rng.standard_normal(n + 1)
+        calls = max(20, 60000 // n)
+        with blas_threads():
+            lu = spla.splu(M)
+            tri = TriangularFactors.of(lu)
+            rows = {"SuperLU factorization": median_us(lambda: spla.splu(M), calls // 10, args.repeat),
+                    "copy of the factors": median_us(lambda: TriangularFactors.of(spla.splu(M)),
+                                                     calls // 10, args.repeat)
+                    - median_us(lambda: spla.splu(M), calls // 10, args.repeat),
+                    "SuperLU solve": median_us(lambda: lu.solve(r), calls, args.repeat),
+                    "SuperLU solve, transposed": median_us(lambda: lu.solve(r, trans="T"), calls, args.repeat),
+                    "substitution": median_us(lambda: tri.solve(r), calls, args.repeat),
+                    "substitution, transposed": median_us(lambda: tri.solve(r, True), calls, args.repeat)}
+        print(f"N = {N} (bordered n = {n + 1}, nnz(L + U) = {lu.L.nnz + lu.U.nnz}):")
+        for what, us in rows.items():
+            print(f"    {what:<28}{us:9.1f} us")
+
+
+if __name__ == "__main__":
+    main()
