@@ -8,7 +8,8 @@ projection on the two subspaces (the k x k pencil (W^H A V, W^H V)) pairs left w
 vectors and normalises l_i^H r_i = 1. Completeness: the k eigenvalues returned are the k
 nearest sigma, so every eigenvalue with |lambda - sigma| < radius = max_i |lambda_i - sigma|
 is among them. Cost at n = 300 (the chain of 100 disks), k = 8: about 1/5 of a full dense
-eigendecomposition with both vectors (docs/continuation.md).
+eigendecomposition with both vectors (docs/continuation.md). ARPACK's Krylov space is at most
+KRYLOV_EXTRA vectors larger than k (krylov_size).
 """
 from __future__ import annotations
 
@@ -21,6 +22,20 @@ from .linalg import Matrix, factorize
 from .spectra import Eigensystem
 
 Array = np.ndarray
+
+
+KRYLOV_EXTRA = 60
+"""Most Arnoldi vectors ARPACK keeps beyond the k wanted (module docstring)."""
+
+
+def krylov_size(k: int, n: int) -> int:
+    """ARPACK's ncv for k eigenvalues of an n x n matrix: scipy's default max(2k + 1, 20), but at
+    most k + KRYLOV_EXTRA. Each Arnoldi step orthogonalises against all ncv vectors and each
+    restart costs O(n ncv^2), so for large k a Krylov space nearer 1.4 k is cheaper although it
+    restarts more: at n = 3000, k = 164 (the spectral window of N = 1000), both sides took
+    0.90 s with ncv = 222 against 1.23 s with 329; for k <= 22 at n = 300 the default stays the
+    fastest (benchmarks: docs/continuation.md)."""
+    return min(n - 1, max(20, min(2 * k + 1, k + KRYLOV_EXTRA)))
 
 
 class ShiftInvertFailed(RuntimeError):
@@ -41,17 +56,23 @@ def nearest_eigensystem(A: Matrix, sigma: float, k: int) -> tuple[Eigensystem, f
         inverse = spla.LinearOperator((n, n), matvec=lu.solve, dtype=float)
         inverse_t = spla.LinearOperator((n, n), matvec=lambda r: lu.solve(r, transpose=True), dtype=float)
         v0 = np.random.default_rng(n).standard_normal(n)  # ARPACK's own start is random: runs would differ
-        _, V = spla.eigs(A, k=k, sigma=sigma, OPinv=inverse, v0=v0)
-        _, W = spla.eigs(A.T, k=k, sigma=sigma, OPinv=inverse_t, v0=v0)
+        ncv = krylov_size(k, n)
+        _, V = spla.eigs(A, k=k, sigma=sigma, OPinv=inverse, v0=v0, ncv=ncv)
+        _, W = spla.eigs(A.T, k=k, sigma=sigma, OPinv=inverse_t, v0=v0, ncv=ncv)
     except (np.linalg.LinAlgError, spla.ArpackError, spla.ArpackNoConvergence) as err:
         raise ShiftInvertFailed(f"shift-invert at sigma = {sigma:.6g}: {err}") from None
-    system = _two_sided(A, V, W)
+    # A^T w = lambda w makes w^T (not w^H) a left row for lambda, and conj(w) the left
+    # vector l (l^H A = lambda l^H); with w^H the projection pairs a complex eigenvalue's right
+    # vector with its conjugate's left one, which is wrong when the k nearest hold one member
+    # of a conjugate pair (a tie in distance at the edge of the disc)
+    system = _two_sided(A, V, W.conj())
     return system, float(np.max(np.abs(system.values - sigma)))
 
 
 def _two_sided(A: Matrix, V: Array, W: Array) -> Eigensystem:
-    """Two-sided Rayleigh-Ritz on the right subspace V and the left subspace W (module
-    docstring): eigenvalues with right and left vectors, l_i^H r_i = 1."""
+    """Two-sided Rayleigh-Ritz on the right subspace V and the left subspace W (columns: left
+    vectors l, l^H A = lambda l^H; module docstring): eigenvalues with right and left vectors,
+    l_i^H r_i = 1."""
     M, B = W.conj().T @ (A @ V), W.conj().T @ V
     values, vl, vr = sla.eig(M, B, left=True, right=True)
     right = V @ vr

@@ -261,23 +261,30 @@ def test_partial_split_samples_find_the_collisions_of_full_ones(scene, matrix, k
     assert spent[10**9][1] == 0 < spent[0][1] and spent[0][0] < spent[10**9][0]
 
 
-@pytest.mark.parametrize("sparse", [True, False])
-def test_nearest_eigensystem_gives_the_k_nearest_with_normalised_vectors(sparse):
+@pytest.mark.parametrize("sparse, k", [(True, 7), (False, 7), (True, 90)])
+def test_nearest_eigensystem_gives_the_k_nearest_with_normalised_vectors(sparse, k):
     """Shift-invert against a dense eigendecomposition: the k eigenvalues nearest sigma (real
-    and complex ones), the radius they cover, residuals of both vectors, l^H r = 1."""
+    and complex ones), the radius they cover, residuals of both vectors, l^H r = 1. For k = 7
+    the edge of the disc splits a conjugate pair (either member may be returned), for k = 90
+    the Krylov space is cut to k + KRYLOV_EXTRA (krylov_size)."""
     import scipy.sparse as sp
 
-    from diskfriction.continuation.nearest import nearest_eigensystem
+    from diskfriction.continuation.nearest import KRYLOV_EXTRA, krylov_size, nearest_eigensystem
 
     rng = np.random.default_rng(7)
-    n, k, sigma = 80, 7, 20.3
+    n, sigma = 240, 20.3
+    assert (krylov_size(k, n) < 2 * k + 1) == (k > KRYLOV_EXTRA + 1)
     A = sp.random(n, n, density=0.05, random_state=rng) * 4.0 + sp.diags(np.arange(n, dtype=float))
     A = sp.csr_array(A)
     exact = np.linalg.eigvals(A.toarray())
     nearest = exact[np.argsort(np.abs(exact - sigma))[:k]]
     system, radius = nearest_eigensystem(A if sparse else A.toarray(), sigma, k)
     assert np.any(np.abs(exact.imag) > 1e-3)  # the matrix has complex pairs too
-    assert np.max(np.min(np.abs(nearest[:, None] - system.values[None, :]), axis=1)) <= 1e-9 * n
+    split = np.count_nonzero(nearest.imag > 1e-9) != np.count_nonzero(nearest.imag < -1e-9)
+    assert split == (k == 7)
+    found = np.minimum(np.abs(nearest[:, None] - system.values[None, :]),
+                       np.abs(nearest.conj()[:, None] - system.values[None, :]))
+    assert np.max(np.min(found, axis=1)) <= 1e-9 * n
     assert radius == pytest.approx(np.max(np.abs(nearest - sigma)), rel=1e-9)
     R, L = system.right, system.left
     assert np.max(np.abs(A @ R - R * system.values)) <= 1e-8 * n * np.max(np.abs(R))
