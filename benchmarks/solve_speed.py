@@ -9,8 +9,6 @@ calls, one BLAS thread.
 from __future__ import annotations
 
 import argparse
-import statistics
-import time
 
 import numpy as np
 import scipy.sparse as sp
@@ -21,17 +19,12 @@ from diskfriction.continuation.linalg import bordered, blas_threads
 from diskfriction.continuation.triangular import TriangularFactors
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
+from kernels import per_call  # benchmarks/kernels.py: this script's folder is on sys.path
 
 
 def median_us(fn, calls: int, repeat: int) -> float:
     fn()
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        for _ in range(calls):
-            fn()
-        times.append((time.perf_counter() - t0) / calls)
-    return statistics.median(times) * 1e6
+    return per_call(fn, calls, repeat) * 1e6
 
 
 def main() -> None:
