@@ -77,6 +77,13 @@ class Sample:
     def partial(self) -> bool:
         return self.known is not None
 
+    @property
+    def matrix_size(self) -> int:
+        """Rows of the stability matrix (more than the labels when a spectral window is
+        tracked)."""
+        right = None if self.system is None else self.system.right
+        return self.eigvals.size if right is None else right.shape[0]
+
     def slopes(self, segment) -> Array:
         """d lambda / ds on `segment` (s in [0, 1] from x_a to x_b): dlam L / (sigma . t)."""
         return self.dlam * (segment.length / float(segment.sigma @ self.tangent))
@@ -160,9 +167,9 @@ def partial_sample_at(problem: Problem, s: float, x: Array, left: Sample, cluste
     eigenvalues of the stability matrix nearest the real shift sigma (nearest.py), with vectors
     and slopes along `tangent`; labels continue `left` by the trapezoid prediction
     (predicted_match, rectangular: the k computed eigenvalues are the candidates). The other
-    labels hold nan (status and thr: left's; they keep their status inside the interval being
-    split, collisions.py). gaps: to the nearest of the k eigenvalues, at most the distance to
-    the edge of the disc they cover.
+    labels hold nan (status, thr, excluded and guard flags: left's; they keep their status
+    inside the interval being split, collisions.py). gaps: to the nearest of the k eigenvalues, at most the distance to
+    the edge of the disc they cover. Vectors only for the labels computed (Eigensystem.columns).
 
     None when a disc does not cover its labels (every eigenvalue within twice its distance to
     a label's prediction must be among the k, so that the match saw every candidate a full
@@ -174,7 +181,7 @@ def partial_sample_at(problem: Problem, s: float, x: Array, left: Sample, cluste
     ds_left, ds_new = float(step @ left.tangent), float(step @ tangent)
     n = left.eigvals.size
     eigvals, dlam_all = np.full(n, np.nan, complex), np.full(n, np.nan, complex)
-    gaps, right, left_vectors = np.full(n, np.nan), None, None
+    gaps, columns, rights, lefts = np.full(n, np.nan), np.full(n, -1), [], []
     for labels, sigma, k in clusters:
         work.spectra_partial += 1
         try:
@@ -190,12 +197,11 @@ def partial_sample_at(problem: Problem, s: float, x: Array, left: Sample, cluste
             return None
         distance = np.abs(values[:, None] - system.values[None, :])
         distance[np.arange(cols.size), cols] = np.inf
-        if right is None:
-            right = np.zeros((system.right.shape[0], n), complex, order="F")
-            left_vectors = np.zeros((n, system.left.shape[1]), complex)
         eigvals[labels], dlam_all[labels] = values, dlam[cols]
         gaps[labels] = np.minimum(distance.min(axis=1), radius - np.abs(values - sigma))
-        right[:, labels], left_vectors[labels] = system.right[:, cols], system.left[cols]
+        columns[labels] = sum(len(r) for r in lefts) + np.arange(cols.size)
+        rights.append(system.right[:, cols])
+        lefts.append(system.left[cols])
     known = ~np.isnan(eigvals)
     values = eigvals[known]
     if np.any(nearest_gaps(values) <= left.thr):  # one eigenvalue matched to two labels
@@ -203,5 +209,7 @@ def partial_sample_at(problem: Problem, s: float, x: Array, left: Sample, cluste
     status = left.status.copy()
     status[known] = status_at(values, left.thr)
     excluded = left.excluded.copy()
+    guard = None if left.guard is None else left.guard.copy()
     return Sample(s, x, eigvals, status, left.thr, excluded, tangent, dlam_all,
-                  Eigensystem(eigvals, right, left_vectors, excluded), None, gaps, known)
+                  Eigensystem(eigvals, np.hstack(rights), np.vstack(lefts), excluded, guard, columns),
+                  guard, gaps, known)

@@ -134,17 +134,30 @@ class Eigensystem:
     and can never become complex: see continuation/disks.py; or, when only a spectral window
     is tracked, the eigenvalues beyond its guard band: continuation/spectral_window.py); `guard` marks
     the eigenvalues in a window's guard band, the only ones that may enter or leave the
-    tracked set between two samples."""
+    tracked set between two samples; `columns`, when only some eigenvalues have vectors (a
+    partial sample, samples.partial_sample_at), the column of `right` and row of `left` of
+    each eigenvalue (-1: none), else None (eigenvalue i has column i)."""
 
     values: Array
     right: Optional[Array] = None
     left: Optional[Array] = None
     excluded: Optional[Array] = None
     guard: Optional[Array] = None
+    columns: Optional[Array] = None
+
+    def vectors(self, i: int) -> tuple[Array, Array]:
+        """(right vector, left vector) of eigenvalue i."""
+        c = i if self.columns is None else int(self.columns[i])
+        if c < 0:
+            raise ValueError(f"eigenvalue {i} has no vectors")
+        return self.right[:, c], self.left[c]
 
     def permuted(self, perm: Array) -> "Eigensystem":
         """The same eigensystem with labels new[i] = old[perm[i]]."""
         pick = lambda a, axis: None if a is None else np.take(a, perm, axis=axis)  # noqa: E731
+        if self.columns is not None:
+            return Eigensystem(self.values[perm], self.right, self.left, pick(self.excluded, 0),
+                               pick(self.guard, 0), self.columns[perm])
         return Eigensystem(self.values[perm], pick(self.right, 1), pick(self.left, 0),
                            pick(self.excluded, 0), pick(self.guard, 0))
 

@@ -172,18 +172,26 @@ def test_compiled_substitution_solves_like_superlu():
     assert np.max(np.abs(M.T @ lu.solve(rhs, transpose=True) - rhs)) <= 1e-9 * np.max(np.abs(X))
 
 
-def test_a_spectral_window_lists_the_full_detection_s_collisions_in_it():
+@pytest.mark.parametrize("partial_from", [None, 0], ids=["default", "partial-splits"])
+def test_a_spectral_window_lists_the_full_detection_s_collisions_in_it(partial_from):
     """N = 40, eps = 1e-4: tracking only 0.0553 <= Re lambda / k_n <= 0.0562 by shift-invert
     gives the collisions of the full detection whose eigenvalue lies in the window, within
-    1e-9, and counts the complex pairs there."""
+    1e-9, and counts the complex pairs there; also with every split sample partial where it
+    can be (partial_from = 0: at N = 40 the default, n >= 240, takes none), which then
+    computes fewer windowed spectra."""
+    from diskfriction.continuation.linalg import work
+
     system = System.from_scene(Scene(N=40, eps=1e-4))
     lo, hi = 0.0553 * system.scene.k_n, 0.0562 * system.scene.k_n
     full = sweep(system, 0.0, 0.12, "J")
-    window = sweep(system, 0.0, 0.12, "J", SweepParams(window=(lo, hi)))
+    detection = DetectionParams() if partial_from is None else DetectionParams(partial_from=partial_from)
+    work.reset()
+    window = sweep(system, 0.0, 0.12, "J", SweepParams(window=(lo, hi), detection=detection))
     expected = [(c.kind, c.p) for c in full.collisions if lo <= c.eigenvalue <= hi]
     assert len(expected) >= 2 and window.window == (lo, hi)
     assert window.eigenvalues.shape[1] < system.ndof
     assert_same_collisions(locations(window), expected)
+    assert (work.spectra_partial > 0) == (partial_from == 0)
 
 
 def test_pair_certifier_flags_exactly_the_pairs_whose_model_dips():
