@@ -168,8 +168,9 @@ def partial_sample_at(problem: Problem, s: float, x: Array, left: Sample, cluste
     and slopes along `tangent`; labels continue `left` by the trapezoid prediction
     (predicted_match, rectangular: the k computed eigenvalues are the candidates). The other
     labels hold nan (status, thr, excluded and guard flags: left's; they keep their status
-    inside the interval being split, collisions.py). gaps: to the nearest of the k eigenvalues, at most the distance to
-    the edge of the disc they cover. Vectors only for the labels computed (Eigensystem.columns).
+    inside the interval being split, collisions.py). gaps: to the nearest of the k eigenvalues,
+    at most the distance to the edge of the disc they cover. Vectors only for the labels
+    computed (Eigensystem.columns).
 
     None when a disc does not cover its labels (every eigenvalue within twice its distance to
     a label's prediction must be among the k, so that the match saw every candidate a full
@@ -199,7 +200,7 @@ def partial_sample_at(problem: Problem, s: float, x: Array, left: Sample, cluste
         distance[np.arange(cols.size), cols] = np.inf
         eigvals[labels], dlam_all[labels] = values, dlam[cols]
         gaps[labels] = np.minimum(distance.min(axis=1), radius - np.abs(values - sigma))
-        columns[labels] = sum(len(r) for r in lefts) + np.arange(cols.size)
+        columns[labels] = np.arange(cols.size) + sum(len(rows) for rows in lefts)
         rights.append(system.right[:, cols])
         lefts.append(system.left[cols])
     known = ~np.isnan(eigvals)

@@ -4,16 +4,16 @@ full dense spectrum (O(n^3)) is too expensive (a chain of 1000 disks: n = 3000).
 The window W = [lo, hi] of Re lambda is tracked with a guard band of width g = GUARD (hi - lo)
 on each side. At every sample the k eigenvalues nearest sigma = (lo + hi) / 2 are computed by
 shift-invert with left and right vectors (nearest.py: one sparse LU of A - sigma I serves
-ARPACK on both sides, and a two-sided Rayleigh-Ritz projection pairs them). Completeness: the k nearest eigenvalues include every eigenvalue within the
-distance of the farthest one; if that distance does not exceed the reach of the guard band
-(|lambda - sigma| = (hi - lo) / 2 + g, plus the largest |Im| seen), some eigenvalue of the band
-may be missing and WindowCrowded is raised (choose a narrower window). The k eigenvalues keep
-their labels along the branch like a full spectrum's; those beyond the guard band are
-`excluded` (their labels may jump between samples), those in the guard band are `guard`: the
-detection certifies pairs of eigenvalues inside W and the guard band, and lets an eigenvalue
-join or leave the tracked set only through the guard band (collisions._enters_past_guard). A
-collision is reported when its double eigenvalue lies in W (sweep.py); the certificate covers
-exactly the window.
+ARPACK on both sides, and a two-sided Rayleigh-Ritz projection pairs them). Completeness: the k
+nearest eigenvalues include every eigenvalue within the distance of the farthest one; if that
+distance does not exceed the reach of the guard band (|lambda - sigma| = (hi - lo) / 2 + g,
+plus the largest |Im| seen), some eigenvalue of the band may be missing and WindowCrowded is
+raised (choose a narrower window). The k eigenvalues keep their labels along the branch like a
+full spectrum's; those beyond the guard band are `excluded` (their labels may jump between
+samples), those in the guard band are `guard`: the detection certifies pairs of eigenvalues
+inside W and the guard band, and lets an eigenvalue join or leave the tracked set only through
+the guard band (collisions._enters_past_guard). A collision is reported when its double
+eigenvalue lies in W (sweep.py); the certificate covers exactly the window.
 """
 from __future__ import annotations
 
