@@ -9,16 +9,13 @@ of +1. Smooth test function of one pair (i, j): its discriminant D_ij = (lambda_
 
 Detection on one step x_a -> x_b (before the step is committed) works on samples (samples.py):
 branch points x(s), s in [0, 1], on the step's secant segment (segment.py), with tracked spectra.
-Three parts, each a small piece of this module or its neighbours:
-  * the sampler (samples.sample_at): corrector solve at s, eigensystem, labels;
-  * the certifier (certify.py): the verdict on an interval between neighbouring samples:
-      events  eigenvalues whose status goes 0 -> +-1 (births, paired at b) or +-1 -> 0 (deaths,
-              paired at a), paired by conjugacy and continuity of the pair's mean
-              (spectra.conjugate_pairing);
-      split   a status change the events do not explain, or a pair that could collide and is
-              not certified (where to sample next);
-      clean   neither;
-  * the locator: the collision of an event pair inside its interval.
+Three parts, each a module testable alone, and this module's StepScan, which acts on them:
+  * the sampler (samples.py): corrector solve at s (segment.py), eigensystem, labels; a split
+    sample is partial where partial_splits.py allows it (only the labels in trouble);
+  * the certifier (verdicts.py, over certify.py's models): the verdict on an interval between
+    neighbouring samples: events (births and deaths to locate), split (where to sample next,
+    and which labels are in trouble) or clean;
+  * the locator (locate.py): the collision of an event pair inside its interval.
 Two detections combine them (DetectionParams.mode):
   "fast" (default): samples carry eigenvalue slopes from left and right eigenvectors; intervals
       are certified by cubic Hermite models of every pair's D (certify.worst_uncertified_pair) and
@@ -26,7 +23,7 @@ Two detections combine them (DetectionParams.mode):
       new sample where the worst pair's model is lowest; events are located by Newton's method
       on the minimally augmented system (locate.py): linear solves, no eigensolver. One full
       spectrum per accepted point; a split sample computes, from n = partial_from on, only the
-      eigenvalues near the labels in trouble (partial samples: StepScan._split), else a full
+      eigenvalues near the labels in trouble (partial samples: partial_splits.py), else a full
       spectrum.
   "exhaustive" (version 0.1): samples without slopes; intervals certified by the three-sample
       quadratic of every pair's D and the motion of every real eigenvalue against its gap
@@ -52,7 +49,7 @@ from __future__ import annotations
 
 import bisect
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Optional
 
 import numpy as np
@@ -61,19 +58,16 @@ from . import certify
 from .linalg import dense
 from .locate import LocatorFailed, locate_double_eigenvalue
 from .newton import residual_norm, tangent
+from .partial_splits import certificates_survive, clusters, partial_allowed
 from .problem import Problem
-from .samples import Sample, continuation_perm, known, partial_sample_at, sample_at
+from .samples import Sample, continuation_perm, partial_sample_at, sample_at
 from .segment import Segment, refine_sign_change
-from .spectra import DEFAULT_REL_TOL, conjugate_pairing, pair_discriminant
+from .spectra import DEFAULT_REL_TOL, pair_discriminant
+from .verdicts import Verdict, event_model, judge, scaled_slopes
 
 Array = np.ndarray
 
 MODES = ("fast", "exhaustive")
-PARTIAL_EXTRA = 6
-"""Eigenvalues a partial sample computes beyond those expected near its labels."""
-PARTIAL_CLUSTERS = 3
-"""Shift-inverts a partial sample may take (each costs about 1/5 of a full spectrum at n = 300;
-more did not pay at N = 100 or 200, docs/continuation.md)."""
 
 
 @dataclass(frozen=True)
@@ -178,39 +172,8 @@ def jordan_vectors(A: Array, lam: float):
     return v, w, float(abs(y @ v))
 
 
-def status_events(a: Sample, b: Sample, active: Optional[Array] = None):
-    """Births (0 -> +-1, paired at b) and deaths (+-1 -> 0, paired at a) on [a, b], and
-    whether the status change is fully explained by them. Modes excluded at either end, and
-    labels outside `active` (default all), never take part."""
-    tracked = ~(a.excluded | b.excluded) & (True if active is None else active)
-    sa, sb = np.where(tracked, a.status, 0), np.where(tracked, b.status, 0)
-    if np.array_equal(sa, sb):
-        return [], True
-    born, died = (sa == 0) & (sb != 0), (sa != 0) & (sb == 0)
-    bu, bl = np.flatnonzero(born & (sb > 0)), np.flatnonzero(born & (sb < 0))
-    du, dl = np.flatnonzero(died & (sa > 0)), np.flatnonzero(died & (sa < 0))
-    events = [(i, j, "birth") for i, j in conjugate_pairing(b.eigvals, bu, bl, other=a.eigvals)]
-    events += [(i, j, "death") for i, j in conjugate_pairing(a.eigvals, du, dl, other=b.eigvals)]
-    consistent = bu.size == bl.size and du.size == dl.size and not np.any(sa * sb < 0)
-    return events, consistent
-
-
 class _Budget(Exception):
     pass
-
-
-@dataclass(frozen=True)
-class Verdict:
-    """kind: "clean" | "split" | "events"; events [(i, j, "birth" | "death")]; consistent:
-    whether the events explain the status change; split_at: where to sample next (in s);
-    labels: for a split of the fast detection, the mask of labels in trouble (the only ones a
-    partial sample there needs), or None if the next sample must be a full spectrum."""
-
-    kind: str
-    events: list
-    consistent: bool
-    split_at: float = math.nan
-    labels: Optional[Array] = None
 
 
 @dataclass
@@ -269,74 +232,19 @@ class StepScan:
             self.samples[k] = self.samples[k].relabel(perm)
         return perm
 
-    # ---- partial samples -------------------------------------------------------------------
-    # A split of [l, r] for the labels T in trouble (Verdict.labels) needs only their
-    # eigenvalues at the new sample p: every pair with a label outside T is certified on [l, r]
-    # (so on [l, p] and [p, r]), and outside T no status changes. The children [l, p] and
-    # [p, r] are judged on the labels known at both ends (_active); their splits nest. This
-    # holds while the labels of l and r stay associated as they were when [l, r] was judged:
-    # a partial sample that relabels its right neighbour is inserted only if [l, r] and every
-    # interval whose certificate [l, r] inherits, judged again with the new labels, keep their
-    # trouble within the labels split for (_certificates_survive); a split that needs a full
-    # sample next to a partial one first makes every partial sample of the step full
-    # (_upgrade_partials), after which the step is as if it had been full throughout.
-    def _active(self, a: Sample, b: Sample) -> Array:
-        return known(a) & known(b)
-
-    def _partial_allowed(self, a: Sample, b: Sample, labels: Optional[Array]) -> bool:
-        """A partial sample may split [a, b] for `labels`: fast detection, a stability matrix
-        of size n >= partial_from, labels known at both ends, and no excluded mode at either
-        end unless a spectral window is tracked (free disks' spectrum is computed block by
-        block and is cheap when they are many: at eps = 0, N = 100 partial samples took 15.3 s
-        against 13.5 s, 71 disks still free at F_x = 0.12; a window's excluded labels, beyond
-        its guard bands, are never in trouble, and a partial sample keeps its left neighbour's
-        excluded and guard flags for the labels it does not compute)."""
-        window = a.guard is not None and b.guard is not None
-        return (labels is not None and self.params.slopes and a.matrix_size >= self.params.partial_from
-                and (window or not (a.excluded.any() or b.excluded.any()))
-                and not np.any(labels & ~self._active(a, b)))
-
-    def _clusters(self, l: Sample, r: Sample, s: float, labels: Array) -> Optional[list]:
-        """The shift-inverts of a partial sample at s for `labels` (int array): [(labels of the
-        cluster, sigma, k), ...]. The labels' eigenvalues predicted at s (cubic Hermite over
-        [l, r]) are taken in order of real part and grouped while the group's k stays within
-        partial_max_k: sigma the middle of its real parts, k the eigenvalues of the nearest
-        full sample to the left within twice its reach of sigma, plus PARTIAL_EXTRA. None if
-        that takes more than PARTIAL_CLUSTERS groups."""
-        h = r.s - l.s
-        d_l, d_r = l.slopes(self.segment) * h, r.slopes(self.segment) * h
-        mu = certify.cubic_at(certify.hermite_coefficients(l.eigvals[labels], r.eigvals[labels],
-                                                           d_l[labels], d_r[labels]), (s - l.s) / h)
-        order = np.argsort(mu.real)
-        reference = next(smp for smp in reversed(self.samples) if smp.s <= l.s and not smp.partial).eigvals
-        k_max = min(self.params.partial_max_k, l.eigvals.size - 2)
-
-        def shift(group: list) -> tuple[float, int]:
-            sigma = 0.5 * float(mu.real[group].min() + mu.real[group].max())
-            reach = 2.0 * float(np.max(np.abs(mu[group] - sigma)))
-            return sigma, int(np.count_nonzero(np.abs(reference - sigma) <= reach)) + PARTIAL_EXTRA
-
-        groups = [[order[0]]]
-        for i in order[1:]:
-            if shift(groups[-1] + [i])[1] <= k_max:
-                groups[-1].append(i)
-            else:
-                groups.append([i])
-        clusters = [(labels[group], *shift(group)) for group in groups]
-        if len(clusters) > PARTIAL_CLUSTERS or any(k > k_max for _, _, k in clusters):
-            return None
-        return clusters
-
+    # ---- partial samples (partial_splits.py) ------------------------------------------------
     def _insert_partial(self, idx: int, s: float, labels: Array) -> bool:
         """Split samples[idx], samples[idx + 1] at s with a partial sample of `labels`; False if
         it cannot be made (too many eigenvalues, not covered) or relabels its right neighbour
-        in a way a certificate does not survive (_certificates_survive)."""
+        in a way a certificate does not survive (partial_splits.certificates_survive)."""
         l, r = self.samples[idx], self.samples[idx + 1]
-        clusters = self._clusters(l, r, s, np.flatnonzero(labels))
-        if clusters is None:
+        reference = next(smp for smp in reversed(self.samples) if smp.s <= l.s and not smp.partial)
+        shifts = clusters(l, r, s, np.flatnonzero(labels), reference.eigvals, self.segment,
+                          self.params.partial_max_k)
+        if shifts is None:
             return False
         x, t = self._point(s)
-        new = partial_sample_at(self.problem, s, x, l, clusters, t)
+        new = partial_sample_at(self.problem, s, x, l, shifts, t)
         if new is None:
             return False
         perm = continuation_perm(new, r)
@@ -344,36 +252,12 @@ class StepScan:
         relabels = not np.array_equal(perm, np.arange(labels.size))
         trial = self.samples[:idx + 1] + [new] + ([smp.relabel(perm) for smp in right] if relabels else right)
         self._born[s] = len(self._born)
-        if relabels and not self._certificates_survive(trial, idx + 1):
+        if relabels and not certificates_survive(trial, idx + 1, [self._born[smp.s] for smp in trial],
+                                                 lambda a, b: self._judge(a, b, None)):
             del self._born[s]
             return False
         self.samples = trial
         return True
-
-    def _certificates_survive(self, trial: list, new: int) -> bool:
-        """Whether the samples `trial`, with trial[new] just inserted and the samples right of
-        it relabelled, leave every certificate their intervals rely on valid: the interval
-        trial[new] splits and each ancestor up to the first between two full samples (the
-        parent of an interval is the one its younger end was inserted into) are judged again
-        with the new labels, and each one's trouble must stay within the labels of the sample
-        inserted into it."""
-        age = [self._born[smp.s] for smp in trial]
-        n = trial[new].eigvals.size
-        lo, child, hi = new - 1, new, new + 1
-        while True:
-            a, b = trial[lo], trial[hi]
-            again = self._judge(a, b, None)
-            trouble = again.labels if again.kind == "split" else _in_events(again.events, n)
-            if trouble is None or np.any(trouble & ~known(trial[child])):
-                return False
-            if not (a.partial or b.partial):
-                return True
-            if age[hi] > age[lo]:
-                child = hi
-                hi = next(k for k in range(hi + 1, len(trial)) if age[k] < age[child])
-            else:
-                child = lo
-                lo = next(k for k in range(lo - 1, -1, -1) if age[k] < age[child])
 
     def _upgrade_partials(self) -> None:
         """Every partial sample of the step becomes a full one (left to right, each tracked to
@@ -390,7 +274,8 @@ class StepScan:
         allow it, else full; a full sample next to a partial one is not tracked from it: the
         step's partial samples become full first (the interval is judged again afterwards)."""
         a, b = self.samples[idx], self.samples[idx + 1]
-        if self._partial_allowed(a, b, labels) and self._insert_partial(idx, s, labels):
+        if (self.params.slopes and partial_allowed(a, b, labels, self.params.partial_from)
+                and self._insert_partial(idx, s, labels)):
             return
         if a.partial or b.partial:
             self._upgrade_partials()
@@ -415,19 +300,8 @@ class StepScan:
         return self._cache[key]
 
     def _judge(self, a: Sample, b: Sample, c: Optional[Sample]) -> Verdict:
-        active = self._active(a, b)
-        events, consistent = status_events(a, b, active)
-        mid = 0.5 * (a.s + b.s)
-        if not consistent:
-            return Verdict("split", events, False, mid)
-        if self.params.slopes:
-            split = self._hermite_split(a, b, events, active)
-            if split is not None:
-                t_split, labels = split
-                return Verdict("split", events, True, a.s + t_split * (b.s - a.s), labels)
-        elif c is None or self._uncertified(a, b, c):
-            return Verdict("split", events, True, mid)
-        return Verdict("events" if events else "clean", events, True)
+        """verdicts.judge with this scan's segment and tolerances (c: the exhaustive stencil)."""
+        return judge(a, b, c, self.segment, self.params.rho, self.params.doubt, self.params.slopes)
 
     def _stencil(self, idx: int) -> Optional[Sample]:
         """Exhaustive: the nearest sample beyond [a, b] with the status of the adjacent end."""
@@ -439,108 +313,13 @@ class StepScan:
             return left or right
         return left if a.s - left.s <= right.s - b.s else right
 
-    def _candidates(self, a: Sample, b: Sample):
-        """Pairs that could collide over [a, b]: real-real pairs (I, J) and the upper members of
-        kept conjugate pairs, both with unchanged status and no excluded mode."""
-        keep = (a.status == b.status) & ~a.excluded & ~b.excluded
-        real = np.flatnonzero(keep & (a.status == 0))
-        I, J = np.triu_indices(real.size, 1)
-        return real[I], real[J], np.flatnonzero(keep & (a.status > 0)), real
-
-    def _uncertified(self, a: Sample, b: Sample, c: Sample) -> bool:
-        """Exhaustive: some pair bends too much over [a, b] in the quadratic through c, or some
-        real eigenvalue outruns its gap."""
-        I, J, upper, real = self._candidates(a, b)
-        t_c = (c.s - a.s) / (b.s - a.s)
-        floor = 4.0 * max(a.thr, b.thr) ** 2
-        y = [np.concatenate([(smp.eigvals.real[I] - smp.eigvals.real[J]) ** 2, smp.eigvals.imag[upper] ** 2])
-             for smp in (a, b, c)]
-        return (certify.curvature_too_large(*y, t_c, self.params.rho, floor)
-                or certify.outruns_gaps(a.eigvals, b.eigvals, real, self.params.rho, 2.0 * max(a.thr, b.thr)))
-
-    @staticmethod
-    def _fast_candidates(a: Sample, b: Sample, active: Array) -> tuple[Array, Array, Array]:
-        """Fast: labels whose pairs are certified over [a, b], among the active eigenvalues with
-        unchanged status and no excluded mode: (real, upper, partner of each upper one); the
-        pairs are two real ones, an upper complex one with a real one, and each upper one with
-        its conjugate partner (certify.worst_uncertified_pair)."""
-        keep = (a.status == b.status) & ~a.excluded & ~b.excluded & active
-        real = np.flatnonzero(keep & (a.status == 0))
-        upper = np.flatnonzero(keep & (a.status > 0))
-        lower = np.flatnonzero(keep & (a.status < 0))
-        partner = np.zeros(0, dtype=upper.dtype)
-        if upper.size and lower.size:
-            partner = lower[np.argmin(np.abs(a.eigvals[lower][None, :] - np.conj(a.eigvals[upper])[:, None]), axis=1)]
-        return real, upper, partner
-
-    def _hermite_split(self, a: Sample, b: Sample, events: list, active: Array):
-        """Fast: None if every candidate pair and every label is certified by the cubic models,
-        else (where to split: t in [0, 1], the worst pair's model minimum kept off the ends;
-        the mask of labels in trouble, with the event pairs and conjugate partners, or None if
-        the next sample must be full)."""
-        h = b.s - a.s
-        d_a, d_b = a.slopes(self.segment) * h, b.slopes(self.segment) * h
-        real, upper, partner = self._fast_candidates(a, b, active)
-        thr = max(a.thr, b.thr)
-        rho = self.params.rho
-        t_worst, pairs = certify.worst_uncertified_pair(a.eigvals, b.eigvals, d_a, d_b, real, upper,
-                                                        partner, rho, 4.0 * thr * thr, self.params.doubt)
-        labels = ~(a.excluded | b.excluded) & (a.status == b.status) & active
-        wrong = labels & certify.inconsistent_labels(a.eigvals, b.eigvals, d_a, d_b, a.gaps, b.gaps,
-                                                     rho, 2.0 * thr)
-        in_events = _in_events(events, active.size)
-
-        def split(t: float, trouble: Array):
-            return float(np.clip(t, 0.125, 0.875)), _with_partners(a, b, trouble | in_events)
-
-        if _enters_past_guard(a, b).any():
-            return 0.5, None
-        if not math.isnan(t_worst):
-            return split(t_worst, pairs)
-        if wrong.any():
-            return split(0.5, _near_path(a, b, wrong))
-        others = np.flatnonzero((a.status == b.status) & (a.status >= 0) & ~a.excluded & ~b.excluded & active)
-        models = [self._event_model(a, b, i, j, d_a, d_b) for i, j, _ in events]
-        for m, D in models:  # one sign change of D per event, and each pair apart from the rest
-            if len(certify.cubic_roots_in_unit(D)) != 1:
-                return split(0.5, in_events)
-            bad, t_min = certify.event_pair_clearance(m, D, a.eigvals[others], b.eigvals[others],
-                                                      d_a[others], d_b[others], rho, 4.0 * thr * thr)
-            if bad.any():
-                near = np.zeros(active.size, bool)
-                near[others[bad]] = True
-                return split(t_min[np.argmax(bad)], near)
-        if len(models) > 1:
-            apart, t_worst = certify.event_pairs_apart(models, rho, 4.0 * thr * thr)
-            if not apart:
-                return split(t_worst, in_events)
-        return None
-
-    @staticmethod
-    def _event_model(a: Sample, b: Sample, i: int, j: int, d_a: Array, d_b: Array):
-        """Cubic Hermite coefficients of the event pair's mean (Re) and signed discriminant D
-        (D = (lambda_i - lambda_j)^2 real side, -(Im_i - Im_j)^2 complex side) over [a, b]."""
-        def data(smp: Sample, d: Array):
-            li, lj = smp.eigvals[i], smp.eigvals[j]
-            mean, dmean = 0.5 * (li + lj).real, 0.5 * (d[i] + d[j]).real
-            if smp.status[i] == 0:
-                g = li.real - lj.real
-                return mean, dmean, g * g, 2.0 * g * (d[i].real - d[j].real)
-            im = li.imag - lj.imag
-            return mean, dmean, -im * im, -2.0 * im * (d[i].imag - d[j].imag)
-
-        (m0, dm0, y0, s0), (m1, dm1, y1, s1) = data(a, d_a), data(b, d_b)
-        return (certify.hermite_coefficients(m0, m1, dm0, dm1),
-                certify.hermite_coefficients(y0, y1, s0, s1))
-
     # ---- locators --------------------------------------------------------------------------
     def _locate_fast(self, idx: int, i: int, j: int, kind: str) -> Optional[Collision]:
         """Newton on the minimally augmented system from the cubic model's root; None if it
         fails or lands outside the interval."""
         a, b = self.samples[idx], self.samples[idx + 1]
         h = b.s - a.s
-        d_a, d_b = a.slopes(self.segment) * h, b.slopes(self.segment) * h
-        mean, D = self._event_model(a, b, i, j, d_a, d_b)
+        mean, D = event_model(a, b, i, j, *scaled_slopes(a, b, self.segment))
         roots = certify.cubic_roots_in_unit(D)
         t0 = roots[0] if roots else 0.5
         real_side = a if kind == "birth" else b
@@ -668,50 +447,6 @@ class StepScan:
                          left_right_overlap=overlap, bracket=bracket,
                          residual=residual_norm(self.problem, x), u=u.copy(), step=self.step,
                          pair=(i, j), resolved=resolved)
-
-
-def _in_events(events: list, n: int) -> Array:
-    """Mask of the labels of the event pairs [(i, j, kind), ...]."""
-    mask = np.zeros(n, bool)
-    mask[[k for i, j, _ in events for k in (i, j)]] = True
-    return mask
-
-
-def _with_partners(a: Sample, b: Sample, mask: Array) -> Array:
-    """mask with the conjugate partner (at either end) of every complex member added: a
-    partial sample's labels must include both members of a pair."""
-    out = mask.copy()
-    for smp in (a, b):
-        lower = np.flatnonzero(known(smp) & (smp.status < 0))
-        upper = np.flatnonzero(known(smp) & (smp.status > 0))
-        for group, other in ((upper, lower), (lower, upper)):
-            members = group[mask[group]]
-            if members.size and other.size:
-                distance = np.abs(smp.eigvals[other][None, :] - np.conj(smp.eigvals[members])[:, None])
-                out[other[np.argmin(distance, axis=1)]] = True
-    return out
-
-
-def _near_path(a: Sample, b: Sample, wrong: Array) -> Array:
-    """wrong with every label whose eigenvalue lies, at either end, within twice the
-    displacement plus the gap of a wrong label from its own value there (the eigenvalues it may
-    have been confused with)."""
-    out = wrong.copy()
-    for i in np.flatnonzero(wrong):
-        reach = 2.0 * (abs(b.eigvals[i] - a.eigvals[i]) + max(a.gaps[i], b.gaps[i]))
-        for smp in (a, b):
-            with np.errstate(invalid="ignore"):
-                out |= np.abs(smp.eigvals - smp.eigvals[i]) <= reach
-    return out
-
-
-def _enters_past_guard(a: Sample, b: Sample) -> Array:
-    """Labels that join or leave the tracked set over [a, b] (excluded at one end only) without
-    being in the guard band at the other end: an eigenvalue must cross the guard band to reach
-    the window, so one found inside the window already entered within the interval unseen."""
-    guard_a = np.zeros(a.excluded.size, bool) if a.guard is None else a.guard
-    guard_b = np.zeros(b.excluded.size, bool) if b.guard is None else b.guard
-    return (a.excluded & ~b.excluded & ~guard_b) | (b.excluded & ~a.excluded & ~guard_a)
 
 
 def scan_step(problem: Problem, segment: Segment, start: Sample, end: Sample,

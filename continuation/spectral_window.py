@@ -12,7 +12,7 @@ raised (choose a narrower window). The k eigenvalues keep their labels along the
 full spectrum's; those beyond the guard band are `excluded` (their labels may jump between
 samples), those in the guard band are `guard`: the detection certifies pairs of eigenvalues
 inside W and the guard band, and lets an eigenvalue join or leave the tracked set only through
-the guard band (collisions._enters_past_guard). A collision is reported when its double
+the guard band (verdicts._enters_past_guard). A collision is reported when its double
 eigenvalue lies in W (sweep.py); the certificate covers exactly the window.
 """
 from __future__ import annotations

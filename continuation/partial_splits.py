@@ -1,0 +1,104 @@
+"""Partial split samples: when a split sample may compute only the labels in trouble, and how.
+
+A split of [l, r] for the labels T in trouble (verdicts.Verdict.labels) needs only their
+eigenvalues at the new sample p: every pair with a label outside T is certified on [l, r] (so
+on [l, p] and [p, r]), and outside T no status changes. The children [l, p] and [p, r] are
+judged on the labels known at both ends (verdicts.active_labels); their splits nest. This holds
+while the labels of l and r stay associated as they were when [l, r] was judged: a partial
+sample that relabels its right neighbour is inserted only if [l, r] and every interval whose
+certificate [l, r] inherits, judged again with the new labels, keep their trouble within the
+labels split for (certificates_survive). A split that needs a full sample next to a partial one
+first makes every partial sample of the step full (collisions.StepScan._upgrade_partials),
+after which the step is as if it had been full throughout.
+
+The eigenvalues of a partial sample come from a few shift-inverts (nearest.py via
+samples.partial_sample_at), one per cluster of the labels' predicted eigenvalues (clusters).
+"""
+from __future__ import annotations
+
+from typing import Callable, Optional
+
+import numpy as np
+
+from . import certify
+from .samples import Sample, known
+from .segment import Segment
+from .verdicts import Verdict, active_labels, event_labels, scaled_slopes
+
+Array = np.ndarray
+
+PARTIAL_EXTRA = 6
+"""Eigenvalues a partial sample computes beyond those expected near its labels."""
+PARTIAL_CLUSTERS = 3
+"""Shift-inverts a partial sample may take (each costs about 1/5 of a full spectrum at n = 300;
+more did not pay at N = 100 or 200, docs/continuation.md)."""
+
+
+def partial_allowed(a: Sample, b: Sample, labels: Optional[Array], partial_from: int) -> bool:
+    """A partial sample may split [a, b] (fast detection) for `labels`: a stability matrix of
+    size n >= partial_from, labels known at both ends, and no excluded mode at either end
+    unless a spectral window is tracked (free disks' spectrum is computed block by block and is
+    cheap when they are many: at eps = 0, N = 100 partial samples took 15.3 s against 13.5 s,
+    71 disks still free at F_x = 0.12; a window's excluded labels, beyond its guard bands, are
+    never in trouble, and a partial sample keeps its left neighbour's excluded and guard flags
+    for the labels it does not compute)."""
+    window = a.guard is not None and b.guard is not None
+    return (labels is not None and a.matrix_size >= partial_from
+            and (window or not (a.excluded.any() or b.excluded.any()))
+            and not np.any(labels & ~active_labels(a, b)))
+
+
+def clusters(l: Sample, r: Sample, s: float, labels: Array, reference: Array, segment: Segment,
+             max_k: int) -> Optional[list]:
+    """The shift-inverts of a partial sample at s in [l, r] for `labels` (int array):
+    [(labels of the cluster, sigma, k), ...]. The labels' eigenvalues predicted at s (cubic
+    Hermite over [l, r]) are taken in order of real part and grouped while the group's k stays
+    within max_k: sigma the middle of its real parts, k the eigenvalues of `reference` (those
+    of the nearest full sample to the left) within twice its reach of sigma, plus
+    PARTIAL_EXTRA. None if that takes more than PARTIAL_CLUSTERS groups."""
+    d_l, d_r = scaled_slopes(l, r, segment)
+    mu = certify.cubic_at(certify.hermite_coefficients(l.eigvals[labels], r.eigvals[labels],
+                                                       d_l[labels], d_r[labels]), (s - l.s) / (r.s - l.s))
+    order = np.argsort(mu.real)
+    k_max = min(max_k, l.eigvals.size - 2)
+
+    def shift(group: list) -> tuple[float, int]:
+        sigma = 0.5 * float(mu.real[group].min() + mu.real[group].max())
+        reach = 2.0 * float(np.max(np.abs(mu[group] - sigma)))
+        return sigma, int(np.count_nonzero(np.abs(reference - sigma) <= reach)) + PARTIAL_EXTRA
+
+    groups = [[order[0]]]
+    for i in order[1:]:
+        if shift(groups[-1] + [i])[1] <= k_max:
+            groups[-1].append(i)
+        else:
+            groups.append([i])
+    found = [(labels[group], *shift(group)) for group in groups]
+    if len(found) > PARTIAL_CLUSTERS or any(k > k_max for _, _, k in found):
+        return None
+    return found
+
+
+def certificates_survive(trial: list, new: int, ages: list, judge: Callable[[Sample, Sample], Verdict]) -> bool:
+    """Whether the samples `trial`, with trial[new] just inserted and the samples right of it
+    relabelled, leave every certificate their intervals rely on valid: the interval trial[new]
+    splits and each ancestor up to the first between two full samples (the parent of an
+    interval is the one its younger end was inserted into; ages: the insertion order of each
+    sample, the step's ends oldest) are judged again with the new labels, and each one's
+    trouble must stay within the labels of the sample inserted into it."""
+    n = trial[new].eigvals.size
+    lo, child, hi = new - 1, new, new + 1
+    while True:
+        a, b = trial[lo], trial[hi]
+        again = judge(a, b)
+        trouble = again.labels if again.kind == "split" else event_labels(again.events, n)
+        if trouble is None or np.any(trouble & ~known(trial[child])):
+            return False
+        if not (a.partial or b.partial):
+            return True
+        if ages[hi] > ages[lo]:
+            child = hi
+            hi = next(k for k in range(hi + 1, len(trial)) if ages[k] < ages[child])
+        else:
+            child = lo
+            lo = next(k for k in range(lo - 1, -1, -1) if ages[k] < ages[child])

@@ -1,0 +1,237 @@
+"""The certifier's verdict on one interval [a, b] between neighbouring samples of a step.
+
+A verdict says what the interval still needs (collisions.py acts on it):
+  events  eigenvalues whose status goes 0 -> +-1 (births, paired at b) or +-1 -> 0 (deaths,
+          paired at a), paired by conjugacy and continuity of the pair's mean
+          (spectra.conjugate_pairing): the interval holds collisions to locate;
+  split   a status change the events do not explain, or a pair that could collide and is not
+          certified: a new sample is needed, at split_at; for the fast detection also the
+          labels in trouble, the only ones a partial sample there must compute;
+  clean   neither.
+Fast detection (samples with slopes): every pair that could collide is certified by the cubic
+Hermite model of its discriminant (certify.worst_uncertified_pair), the labels by their slopes
+(certify.inconsistent_labels), and each event pair must change sign once and stay apart from
+the other eigenvalues and event pairs (certify.event_pair_clearance, event_pairs_apart), so the
+locator can start from its model. Exhaustive detection (version 0.1): the quadratic through a
+third sample with the status of the adjacent end (certify.curvature_too_large) and the motion
+of every real eigenvalue against its gap (certify.outruns_gaps).
+
+Pure functions of samples (samples.Sample) and the tolerances they are given: rho is the
+certification margin, doubt the weight of a model's cubic term (certify.py); the resolution
+floor of a pair's discriminant is 4 thr^2 and of a label's defect 2 thr, thr the larger status
+threshold of the two ends (below it nothing can be resolved).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+
+from . import certify
+from .samples import Sample, known
+from .segment import Segment
+from .spectra import conjugate_pairing
+
+Array = np.ndarray
+
+SPLIT_OFF_ENDS = 0.125
+"""A fast split is placed at least this fraction of the interval away from either end (the
+worst pair's model minimum may sit at an end: a sample there would teach nothing new)."""
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """kind: "clean" | "split" | "events"; events [(i, j, "birth" | "death")]; consistent:
+    whether the events explain the status change; split_at: where to sample next (in s);
+    labels: for a split of the fast detection, the mask of labels in trouble (the only ones a
+    partial sample there needs), or None if the next sample must be a full spectrum."""
+
+    kind: str
+    events: list
+    consistent: bool
+    split_at: float = math.nan
+    labels: Optional[Array] = None
+
+
+def active_labels(a: Sample, b: Sample) -> Array:
+    """The labels known at both ends (all, between full samples)."""
+    return known(a) & known(b)
+
+
+def status_events(a: Sample, b: Sample, active: Optional[Array] = None):
+    """Births (0 -> +-1, paired at b) and deaths (+-1 -> 0, paired at a) on [a, b], and
+    whether the status change is fully explained by them. Modes excluded at either end, and
+    labels outside `active` (default all), never take part."""
+    tracked = ~(a.excluded | b.excluded) & (True if active is None else active)
+    sa, sb = np.where(tracked, a.status, 0), np.where(tracked, b.status, 0)
+    if np.array_equal(sa, sb):
+        return [], True
+    born, died = (sa == 0) & (sb != 0), (sa != 0) & (sb == 0)
+    bu, bl = np.flatnonzero(born & (sb > 0)), np.flatnonzero(born & (sb < 0))
+    du, dl = np.flatnonzero(died & (sa > 0)), np.flatnonzero(died & (sa < 0))
+    events = [(i, j, "birth") for i, j in conjugate_pairing(b.eigvals, bu, bl, other=a.eigvals)]
+    events += [(i, j, "death") for i, j in conjugate_pairing(a.eigvals, du, dl, other=b.eigvals)]
+    consistent = bu.size == bl.size and du.size == dl.size and not np.any(sa * sb < 0)
+    return events, consistent
+
+
+def judge(a: Sample, b: Sample, stencil: Optional[Sample], segment: Segment, rho: float,
+          doubt: float, fast: bool) -> Verdict:
+    """The verdict on [a, b] (module docstring): fast if the samples carry slopes, else
+    exhaustive with the third sample `stencil` (None: none available, the interval splits)."""
+    active = active_labels(a, b)
+    events, consistent = status_events(a, b, active)
+    mid = 0.5 * (a.s + b.s)
+    if not consistent:
+        return Verdict("split", events, False, mid)
+    if fast:
+        split = hermite_split(a, b, events, active, segment, rho, doubt)
+        if split is not None:
+            t_split, labels = split
+            return Verdict("split", events, True, a.s + t_split * (b.s - a.s), labels)
+    elif stencil is None or uncertified(a, b, stencil, rho):
+        return Verdict("split", events, True, mid)
+    return Verdict("events" if events else "clean", events, True)
+
+
+def scaled_slopes(a: Sample, b: Sample, segment: Segment) -> tuple[Array, Array]:
+    """The eigenvalue slopes at a and b per unit of the interval's parameter t in [0, 1]."""
+    h = b.s - a.s
+    return a.slopes(segment) * h, b.slopes(segment) * h
+
+
+def hermite_split(a: Sample, b: Sample, events: list, active: Array, segment: Segment,
+                  rho: float, doubt: float):
+    """Fast: None if every candidate pair and every label is certified by the cubic models,
+    else (where to split: t in [0, 1], the worst pair's model minimum kept SPLIT_OFF_ENDS off
+    the ends; the mask of labels in trouble, with the event pairs and conjugate partners, or
+    None if the next sample must be full)."""
+    d_a, d_b = scaled_slopes(a, b, segment)
+    real, upper, partner = _fast_candidates(a, b, active)
+    thr = max(a.thr, b.thr)
+    t_worst, pairs = certify.worst_uncertified_pair(a.eigvals, b.eigvals, d_a, d_b, real, upper,
+                                                    partner, rho, 4.0 * thr * thr, doubt)
+    labels = ~(a.excluded | b.excluded) & (a.status == b.status) & active
+    wrong = labels & certify.inconsistent_labels(a.eigvals, b.eigvals, d_a, d_b, a.gaps, b.gaps,
+                                                 rho, 2.0 * thr)
+    in_events = event_labels(events, active.size)
+
+    def split(t: float, trouble: Array):
+        return float(np.clip(t, SPLIT_OFF_ENDS, 1.0 - SPLIT_OFF_ENDS)), _with_partners(a, b, trouble | in_events)
+
+    if _enters_past_guard(a, b).any():
+        return 0.5, None
+    if not math.isnan(t_worst):
+        return split(t_worst, pairs)
+    if wrong.any():
+        return split(0.5, _near_path(a, b, wrong))
+    others = np.flatnonzero((a.status == b.status) & (a.status >= 0) & ~a.excluded & ~b.excluded & active)
+    models = [event_model(a, b, i, j, d_a, d_b) for i, j, _ in events]
+    for m, D in models:  # one sign change of D per event, and each pair apart from the rest
+        if len(certify.cubic_roots_in_unit(D)) != 1:
+            return split(0.5, in_events)
+        bad, t_min = certify.event_pair_clearance(m, D, a.eigvals[others], b.eigvals[others],
+                                                  d_a[others], d_b[others], rho, 4.0 * thr * thr)
+        if bad.any():
+            near = np.zeros(active.size, bool)
+            near[others[bad]] = True
+            return split(t_min[np.argmax(bad)], near)
+    if len(models) > 1:
+        apart, t_worst = certify.event_pairs_apart(models, rho, 4.0 * thr * thr)
+        if not apart:
+            return split(t_worst, in_events)
+    return None
+
+
+def event_model(a: Sample, b: Sample, i: int, j: int, d_a: Array, d_b: Array):
+    """Cubic Hermite coefficients of the event pair's mean (Re) and signed discriminant D
+    (D = (lambda_i - lambda_j)^2 real side, -(Im_i - Im_j)^2 complex side) over [a, b], from
+    the slopes per unit t (scaled_slopes)."""
+    def data(smp: Sample, d: Array):
+        li, lj = smp.eigvals[i], smp.eigvals[j]
+        mean, dmean = 0.5 * (li + lj).real, 0.5 * (d[i] + d[j]).real
+        if smp.status[i] == 0:
+            g = li.real - lj.real
+            return mean, dmean, g * g, 2.0 * g * (d[i].real - d[j].real)
+        im = li.imag - lj.imag
+        return mean, dmean, -im * im, -2.0 * im * (d[i].imag - d[j].imag)
+
+    (m0, dm0, y0, s0), (m1, dm1, y1, s1) = data(a, d_a), data(b, d_b)
+    return (certify.hermite_coefficients(m0, m1, dm0, dm1),
+            certify.hermite_coefficients(y0, y1, s0, s1))
+
+
+def uncertified(a: Sample, b: Sample, c: Sample, rho: float) -> bool:
+    """Exhaustive: some pair bends too much over [a, b] in the quadratic through c, or some
+    real eigenvalue outruns its gap."""
+    keep = (a.status == b.status) & ~a.excluded & ~b.excluded
+    real = np.flatnonzero(keep & (a.status == 0))
+    I, J = np.triu_indices(real.size, 1)
+    I, J, upper = real[I], real[J], np.flatnonzero(keep & (a.status > 0))
+    t_c = (c.s - a.s) / (b.s - a.s)
+    floor = 4.0 * max(a.thr, b.thr) ** 2
+    y = [np.concatenate([(smp.eigvals.real[I] - smp.eigvals.real[J]) ** 2, smp.eigvals.imag[upper] ** 2])
+         for smp in (a, b, c)]
+    return (certify.curvature_too_large(*y, t_c, rho, floor)
+            or certify.outruns_gaps(a.eigvals, b.eigvals, real, rho, 2.0 * max(a.thr, b.thr)))
+
+
+def event_labels(events: list, n: int) -> Array:
+    """Mask of the labels of the event pairs [(i, j, kind), ...]."""
+    mask = np.zeros(n, bool)
+    mask[[k for i, j, _ in events for k in (i, j)]] = True
+    return mask
+
+
+def _fast_candidates(a: Sample, b: Sample, active: Array) -> tuple[Array, Array, Array]:
+    """Labels whose pairs are certified over [a, b], among the active eigenvalues with
+    unchanged status and no excluded mode: (real, upper, partner of each upper one); the pairs
+    are two real ones, an upper complex one with a real one, and each upper one with its
+    conjugate partner (certify.worst_uncertified_pair)."""
+    keep = (a.status == b.status) & ~a.excluded & ~b.excluded & active
+    real = np.flatnonzero(keep & (a.status == 0))
+    upper = np.flatnonzero(keep & (a.status > 0))
+    lower = np.flatnonzero(keep & (a.status < 0))
+    partner = np.zeros(0, dtype=upper.dtype)
+    if upper.size and lower.size:
+        partner = lower[np.argmin(np.abs(a.eigvals[lower][None, :] - np.conj(a.eigvals[upper])[:, None]), axis=1)]
+    return real, upper, partner
+
+
+def _with_partners(a: Sample, b: Sample, mask: Array) -> Array:
+    """mask with the conjugate partner (at either end) of every complex member added: a
+    partial sample's labels must include both members of a pair."""
+    out = mask.copy()
+    for smp in (a, b):
+        lower = np.flatnonzero(known(smp) & (smp.status < 0))
+        upper = np.flatnonzero(known(smp) & (smp.status > 0))
+        for group, other in ((upper, lower), (lower, upper)):
+            members = group[mask[group]]
+            if members.size and other.size:
+                distance = np.abs(smp.eigvals[other][None, :] - np.conj(smp.eigvals[members])[:, None])
+                out[other[np.argmin(distance, axis=1)]] = True
+    return out
+
+
+def _near_path(a: Sample, b: Sample, wrong: Array) -> Array:
+    """wrong with every label whose eigenvalue lies, at either end, within twice the
+    displacement plus the gap of a wrong label from its own value there (the eigenvalues it may
+    have been confused with)."""
+    out = wrong.copy()
+    for i in np.flatnonzero(wrong):
+        reach = 2.0 * (abs(b.eigvals[i] - a.eigvals[i]) + max(a.gaps[i], b.gaps[i]))
+        for smp in (a, b):
+            with np.errstate(invalid="ignore"):
+                out |= np.abs(smp.eigvals - smp.eigvals[i]) <= reach
+    return out
+
+
+def _enters_past_guard(a: Sample, b: Sample) -> Array:
+    """Labels that join or leave the tracked set over [a, b] (excluded at one end only) without
+    being in the guard band at the other end: an eigenvalue must cross the guard band to reach
+    the window, so one found inside the window already entered within the interval unseen."""
+    guard_a = np.zeros(a.excluded.size, bool) if a.guard is None else a.guard
+    guard_b = np.zeros(b.excluded.size, bool) if b.guard is None else b.guard
+    return (a.excluded & ~b.excluded & ~guard_b) | (b.excluded & ~a.excluded & ~guard_a)

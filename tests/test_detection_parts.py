@@ -1,0 +1,151 @@
+"""The detection's parts alone (issue 8, Shape): the certifier's verdict on one interval
+(verdicts.py) and the partial-split rules (partial_splits.py), on samples of small problems of
+the continuation core whose collisions are known in closed form."""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from diskfriction.continuation import FunctionProblem
+from diskfriction.continuation.newton import tangent
+from diskfriction.continuation.partial_splits import (PARTIAL_CLUSTERS, PARTIAL_EXTRA, certificates_survive,
+                                                      clusters, partial_allowed)
+from diskfriction.continuation.samples import sample_at
+from diskfriction.continuation.segment import Segment
+from diskfriction.continuation.verdicts import Verdict, judge
+
+RHO, DOUBT, REL_TOL = 0.5, 0.25, 1e-9
+V, C = 10.0, 1e-3
+"""A fast eigenvalue V p meets the eigenvalue 2 with skew coupling C: a complex pair for
+|V p - 2| < 2 C, i.e. p in (0.2 - 2e-4, 0.2 + 2e-4)."""
+
+
+def bubble_problem(diagonal=(1.0, 2.0, 3.0)):
+    """A(p) = diag(V p, *diagonal) with the skew coupling C between the first two; the branch
+    is u = 0 (G = A(p) u)."""
+    n = len(diagonal) + 1
+
+    def A(p):
+        M = np.diag([V * p, *diagonal])
+        M[0, 2], M[2, 0] = C, -C
+        return M
+
+    dA = np.zeros((n, n))
+    dA[0, 0] = V
+    return FunctionProblem(lambda u, p: A(p) @ u, lambda u, p: A(p), lambda u, p: dA @ u)
+
+
+def interval(problem, n: int, p_a: float, p_b: float, slopes: bool = True):
+    """Samples at p_a (s = 0) and p_b (s = 1) on the branch u = 0, labels of b continuing a;
+    with slopes unless asked not to (the exhaustive detection's samples)."""
+    x_a, x_b = np.append(np.zeros(n), p_a), np.append(np.zeros(n), p_b)
+    segment = Segment(problem, x_a, x_b, tol=1e-12, max_iter=10)
+    t = (lambda x: tangent(problem, x, segment.sigma)) if slopes else (lambda x: None)
+    a = sample_at(problem, 0.0, x_a, REL_TOL, None, t(x_a))
+    b = sample_at(problem, 1.0, x_b, REL_TOL, a, t(x_b))
+    return a, b, segment
+
+
+def label_of(sample, value: float) -> int:
+    return int(np.argmin(np.abs(sample.eigvals - value)))
+
+
+def test_a_verdict_is_clean_far_from_any_encounter():
+    problem = bubble_problem()
+    a, b, segment = interval(problem, 4, 0.03, 0.07)
+    verdict = judge(a, b, None, segment, RHO, DOUBT, fast=True)
+    assert verdict.kind == "clean" and verdict.events == [] and verdict.consistent
+
+
+def test_a_verdict_splits_an_interval_that_hides_a_whole_bubble_for_the_pair_in_trouble():
+    """Both ends real, the bubble inside: no status change, but the pair's discriminant model
+    dips, so the interval splits inside it, for that pair's labels alone (the eigenvalues 1
+    and 3 stay 0.9 away)."""
+    problem = bubble_problem()
+    a, b, segment = interval(problem, 4, 0.19, 0.21)
+    assert not np.any(a.status) and not np.any(b.status)
+    verdict = judge(a, b, None, segment, RHO, DOUBT, fast=True)
+    assert verdict.kind == "split" and verdict.consistent and 0.0 < verdict.split_at < 1.0
+    fast, two = label_of(a, V * 0.19), label_of(a, 2.0)
+    assert np.flatnonzero(verdict.labels).tolist() == sorted([fast, two])
+
+
+def test_a_verdict_lists_the_birth_of_the_pair_and_its_labels():
+    """a real (p = 0.1995), b inside the bubble (p = 0.2001): one birth of the pair the fast
+    eigenvalue and the eigenvalue 2 form, the interval ready for the locator."""
+    problem = bubble_problem()
+    a, b, segment = interval(problem, 4, 0.1995, 0.2001)
+    assert np.count_nonzero(b.status) == 2
+    verdict = judge(a, b, None, segment, RHO, DOUBT, fast=True)
+    assert verdict.kind == "events" and len(verdict.events) == 1
+    i, j, kind = verdict.events[0]
+    assert kind == "birth" and {i, j} == {label_of(a, V * 0.1995), label_of(a, 2.0)}
+
+
+def test_the_exhaustive_verdict_needs_its_stencil():
+    """Without slopes an interval is certified by the quadratic through a third sample: with
+    none it splits; with one at p = 0.05 (s = 1.5) the pair of the fast eigenvalue and 1,
+    y = (1 - V p)^2, stays far from 0 on [0.02, 0.04] and it is clean; across the exact
+    crossing at p = 0.1, [0.08, 0.12] with a stencil at 0.13, y reaches 0 and it splits."""
+    problem = bubble_problem()
+
+    def verdict(p_a, p_b, p_c):
+        a, b, segment = interval(problem, 4, p_a, p_b, slopes=False)
+        stencil = None
+        if p_c is not None:
+            stencil = replace(interval(problem, 4, p_a, p_c, slopes=False)[1], s=(p_c - p_a) / (p_b - p_a))
+        return judge(a, b, stencil, segment, RHO, DOUBT, fast=False).kind
+
+    assert verdict(0.02, 0.04, None) == "split"
+    assert verdict(0.02, 0.04, 0.05) == "clean"
+    assert verdict(0.08, 0.12, 0.13) == "split"
+
+
+def test_partial_samples_are_allowed_by_size_and_known_labels_only():
+    problem = bubble_problem()
+    a, b, _ = interval(problem, 4, 0.19, 0.21)
+    labels = np.array([True, False, True, False])
+    assert partial_allowed(a, b, labels, partial_from=0)
+    assert not partial_allowed(a, b, labels, partial_from=5)  # n = 4 < 5
+    assert not partial_allowed(a, b, None, partial_from=0)  # the next sample must be full
+    half = replace(b, known=np.array([True, True, False, True]))
+    assert not partial_allowed(a, half, labels, partial_from=0)  # label 2 unknown at b
+
+
+def test_clusters_group_the_labels_by_their_predicted_eigenvalues():
+    """n = 40, eigenvalues V p and 1..39: labels near 1 and 2 share one shift, the one at 39
+    gets its own; four far-apart groups are more than PARTIAL_CLUSTERS."""
+    diagonal = tuple(float(k) for k in range(1, 40))
+    problem = bubble_problem(diagonal)
+    a, b, segment = interval(problem, 40, 0.03, 0.07)
+    reference = a.eigvals
+    at = {value: label_of(a, value) for value in (1.0, 2.0, 12.0, 25.0, 39.0)}
+    found = clusters(a, b, 0.5, np.array([at[1.0], at[2.0], at[39.0]]), reference, segment, 16)
+    assert [(sorted(lab.tolist()), sigma, k) for lab, sigma, k in found] == [
+        (sorted([at[1.0], at[2.0]]), pytest.approx(1.5), 2 + PARTIAL_EXTRA),
+        ([at[39.0]], pytest.approx(39.0), 1 + PARTIAL_EXTRA)]
+    spread = np.array([at[1.0], at[12.0], at[25.0], at[39.0]])
+    assert PARTIAL_CLUSTERS < 4 and clusters(a, b, 0.5, spread, reference, segment, 16) is None
+    assert clusters(a, b, 0.5, np.array([at[1.0]]), reference, segment, PARTIAL_EXTRA) is None  # k > max_k
+
+
+def test_certificates_survive_only_within_the_labels_the_new_sample_knows():
+    """trial = [a, p, b] with p partial (labels 0 and 2 known) just inserted: the interval p
+    splits must keep its trouble within p's labels; a full spectrum needed (labels None) or
+    trouble on an unknown label breaks the certificate."""
+    problem = bubble_problem()
+    a, b, _ = interval(problem, 4, 0.19, 0.21)
+    p = replace(a, s=0.5, known=np.array([True, False, True, False]))
+    trial, ages = [a, p, b], [-1, 0, -1]
+
+    def verdict(kind, labels=None, events=()):
+        return lambda l, r: Verdict(kind, list(events), True, 0.5, labels)
+
+    assert certificates_survive(trial, 1, ages, verdict("clean"))
+    assert certificates_survive(trial, 1, ages, verdict("split", np.array([True, False, True, False])))
+    assert certificates_survive(trial, 1, ages, verdict("events", events=[(0, 2, "birth")]))
+    assert not certificates_survive(trial, 1, ages, verdict("split", None))
+    assert not certificates_survive(trial, 1, ages, verdict("split", np.array([False, True, False, False])))
+    assert not certificates_survive(trial, 1, ages, verdict("events", events=[(1, 3, "death")]))
