@@ -224,6 +224,18 @@ class StepScan:
         return idx, self._relabel_right(idx)
 
     def _relabel_right(self, idx: int) -> Optional[Array]:
+        """Relabel the samples right of the full samples[idx] to continue it; the perm, None if
+        identity. A partial sample among them is then made full, in order (its certificates
+        rest on the labels it had: partial_splits.py)."""
+        perm = self._continue(idx)
+        if perm is not None:
+            for k in range(idx + 1, len(self.samples)):
+                if self.samples[k].partial:
+                    self._make_full(k)
+                    self._continue(k)
+        return perm
+
+    def _continue(self, idx: int) -> Optional[Array]:
         """Relabel the samples right of samples[idx] to continue it; the perm, None if identity."""
         perm = continuation_perm(self.samples[idx], self.samples[idx + 1])
         if np.array_equal(perm, np.arange(perm.size)):
@@ -231,6 +243,12 @@ class StepScan:
         for k in range(idx + 1, len(self.samples)):
             self.samples[k] = self.samples[k].relabel(perm)
         return perm
+
+    def _make_full(self, k: int) -> None:
+        """samples[k] recomputed as a full sample tracked to its (full) left neighbour."""
+        smp = self.samples[k]
+        self.samples[k] = sample_at(self.problem, smp.s, smp.x, self.params.rel_tol, self.samples[k - 1],
+                                    smp.tangent)
 
     # ---- partial samples (partial_splits.py) ------------------------------------------------
     def _insert_partial(self, idx: int, s: float, labels: Array) -> bool:
@@ -259,26 +277,28 @@ class StepScan:
         self.samples = trial
         return True
 
-    def _upgrade_partials(self) -> None:
-        """Every partial sample of the step becomes a full one (left to right, each tracked to
-        its full left neighbour, the samples right of it relabelled)."""
-        for k in range(self._start, len(self.samples)):
-            smp = self.samples[k]
-            if smp.partial:
-                self.samples[k] = sample_at(self.problem, smp.s, smp.x, self.params.rel_tol,
-                                            self.samples[k - 1], smp.tangent)
+    def _upgrade_partials(self, upto: int) -> None:
+        """samples[upto] and the partial samples it is tracked through become full: from the
+        nearest full sample left of it, each tracked to its full left neighbour, the samples
+        right of it relabelled (_relabel_right: a relabelling that reaches a partial sample
+        makes it full too)."""
+        first = next(k for k in range(upto, -1, -1) if not self.samples[k].partial)
+        for k in range(first + 1, upto + 1):
+            if self.samples[k].partial:
+                self._make_full(k)
                 self._relabel_right(k)
 
     def _split(self, idx: int, s: float, labels: Optional[Array] = None) -> None:
         """Sample inside samples[idx], samples[idx + 1] at s: partial if `labels` (in trouble)
-        allow it, else full; a full sample next to a partial one is not tracked from it: the
-        step's partial samples become full first (the interval is judged again afterwards)."""
+        allow it, else full; a full sample is tracked from a full neighbour, so a partial end
+        is made full first (with the partial samples it was tracked through; the interval is
+        judged again afterwards)."""
         a, b = self.samples[idx], self.samples[idx + 1]
         if (self.params.slopes and partial_allowed(a, b, labels, self.params.partial_from)
                 and self._insert_partial(idx, s, labels)):
             return
         if a.partial or b.partial:
-            self._upgrade_partials()
+            self._upgrade_partials(idx + 1 if b.partial else idx)
             return
         self.insert(s)
 

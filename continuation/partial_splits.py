@@ -7,9 +7,12 @@ judged on the labels known at both ends (verdicts.active_labels); their splits n
 while the labels of l and r stay associated as they were when [l, r] was judged: a partial
 sample that relabels its right neighbour is inserted only if [l, r] and every interval whose
 certificate [l, r] inherits, judged again with the new labels, keep their trouble within the
-labels split for (certificates_survive). A split that needs a full sample next to a partial one
-first makes every partial sample of the step full (collisions.StepScan._upgrade_partials),
-after which the step is as if it had been full throughout.
+labels split for (certificates_survive). A full sample is tracked from a full left neighbour,
+so a split that needs a full sample next to a partial one first makes that end full, with the
+partial samples it was tracked through back to the nearest full one
+(collisions.StepScan._upgrade_partials); a partial sample whose labels a full one then
+relabels is made full too (StepScan._relabel_right). Partial samples right of that, untouched,
+keep their labels and so their certificates.
 
 The eigenvalues of a partial sample come from a few shift-inverts (nearest.py via
 samples.partial_sample_at), one per cluster of the labels' predicted eigenvalues (clusters).

@@ -149,3 +149,50 @@ def test_certificates_survive_only_within_the_labels_the_new_sample_knows():
     assert not certificates_survive(trial, 1, ages, verdict("split", None))
     assert not certificates_survive(trial, 1, ages, verdict("split", np.array([False, True, False, False])))
     assert not certificates_survive(trial, 1, ages, verdict("events", events=[(1, 3, "death")]))
+
+
+def partial_scan():
+    """A fast StepScan on the n = 40 bubble problem over p = 0.03 .. 0.07, with two partial
+    samples (the labels near 1 and 2) at s = 0.5 and 0.75: [a, P1, P2, b]."""
+    from diskfriction.continuation.collisions import DetectionParams, StepScan
+
+    problem = bubble_problem(tuple(float(k) for k in range(1, 40)))
+    a, b, segment = interval(problem, 40, 0.03, 0.07)
+    scan = StepScan(problem, segment, [a, b], DetectionParams(partial_from=0), step=0)
+    labels = np.zeros(a.eigvals.size, bool)
+    labels[[label_of(a, 1.0), label_of(a, 2.0)]] = True
+    assert scan._insert_partial(0, 0.5, labels) and scan._insert_partial(1, 0.75, labels)
+    assert [smp.partial for smp in scan.samples] == [False, True, True, False]
+    return scan
+
+
+def test_a_partial_end_is_made_full_with_the_partial_samples_it_is_tracked_through_only():
+    """A split next to P1 that needs a full sample makes P1 full and leaves P2 partial (its
+    labels unchanged); next to P2 it makes both full (P2 is tracked through P1)."""
+    scan = partial_scan()
+    labels = scan.samples[2].eigvals.copy()
+    scan._upgrade_partials(1)
+    assert [smp.partial for smp in scan.samples] == [False, False, True, False]
+    assert np.array_equal(scan.samples[2].eigvals, labels, equal_nan=True)
+    scan = partial_scan()
+    scan._upgrade_partials(2)
+    assert [smp.partial for smp in scan.samples] == [False, False, False, False]
+    full = scan.samples[2].eigvals
+    assert np.allclose(full[~np.isnan(labels)], labels[~np.isnan(labels)], rtol=0, atol=1e-12)
+
+
+def test_a_relabelling_that_reaches_a_partial_sample_makes_it_full():
+    """Two labels of the samples right of a full one swapped: continuing it relabels them,
+    and the partial sample among them, whose certificates rested on its old labels, is
+    recomputed as a full one."""
+    scan = partial_scan()
+    scan._upgrade_partials(1)
+    known_labels = np.flatnonzero(scan.samples[2].known)
+    swap = np.arange(scan.samples[2].eigvals.size)
+    swap[known_labels[:2]] = known_labels[1::-1]
+    scan.samples[2:] = [smp.relabel(swap) for smp in scan.samples[2:]]
+    assert scan._relabel_right(1) is not None
+    assert [smp.partial for smp in scan.samples] == [False, False, False, False]
+    for k in (1, 2):  # every label continues its left neighbour's eigenvalue
+        left, right = scan.samples[k].eigvals, scan.samples[k + 1].eigvals
+        assert np.max(np.abs(right - left)) < 0.5
