@@ -1,5 +1,7 @@
 """Sparse solves of the chain: SuperLU's own solve against compiled substitution over its
-factors (continuation/triangular.py), and what copying the factors costs.
+factors (continuation/triangular.py), what copying the factors costs, and the factorization
+with the collision locator's borders as unit vectors and as it scales them
+(locate.BORDER_SCALE: fill and time).
 
 The matrix is the bordered A - sigma I of the locator and of a shift-invert (A the stability
 matrix J of the chain at F_x = 0.002, sigma in the middle of its spectrum). Run:
@@ -16,6 +18,7 @@ import scipy.sparse.linalg as spla
 
 from diskfriction.continuation.disks import DiskEquilibria, relax
 from diskfriction.continuation.linalg import bordered, blas_threads
+from diskfriction.continuation.locate import BORDER_SCALE
 from diskfriction.continuation.triangular import TriangularFactors
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
@@ -58,6 +61,13 @@ def main() -> None:
         print(f"N = {N} (bordered n = {n + 1}, nnz(L + U) = {lu.L.nnz + lu.U.nnz}):")
         for what, us in rows.items():
             print(f"    {what:<28}{us:9.1f} us")
+        unit = [v / np.linalg.norm(v) for v in (rng.standard_normal(n), rng.standard_normal(n))]
+        for label, scale in (("unit borders", 1.0), ("locator's borders", BORDER_SCALE * np.abs(A.data).max())):
+            B = sp.csc_array(bordered(A - sigma * sp.identity(n, format="csr"), scale * unit[0], scale * unit[1]))
+            with blas_threads():
+                fill = spla.splu(B)
+                us = median_us(lambda: spla.splu(B), calls // 10, args.repeat)
+            print(f"    factorization, {label:<17}{us:9.1f} us   nnz(L + U) = {fill.L.nnz + fill.U.nnz}")
 
 
 if __name__ == "__main__":
