@@ -43,8 +43,8 @@ def main() -> None:
         n = A.shape[0]
         rng = np.random.default_rng(0)
         sigma = float(np.median(A.diagonal()))
-        M = sp.csc_array(bordered(A - sigma * sp.identity(n, format="csr"), rng.standard_normal(n),
-                                  rng.standard_normal(n)))
+        K = A - sigma * sp.identity(n, format="csr")
+        M = sp.csc_array(bordered(K, rng.standard_normal(n), rng.standard_normal(n)))
         r = rng.standard_normal(n + 1)
         calls = max(20, 60000 // n)
         with blas_threads():
@@ -63,7 +63,7 @@ def main() -> None:
             print(f"    {what:<28}{us:9.1f} us")
         unit = [v / np.linalg.norm(v) for v in (rng.standard_normal(n), rng.standard_normal(n))]
         for label, scale in (("unit borders", 1.0), ("locator's borders", BORDER_SCALE * np.abs(A.data).max())):
-            B = sp.csc_array(bordered(A - sigma * sp.identity(n, format="csr"), scale * unit[0], scale * unit[1]))
+            B = sp.csc_array(bordered(K, scale * unit[0], scale * unit[1]))
             with blas_threads():
                 fill = spla.splu(B)
                 us = median_us(lambda: spla.splu(B), calls // 10, args.repeat)

@@ -67,13 +67,13 @@ class Located:
 
 
 BORDER_SCALE = 1e-6
-"""The borders b, c are unit vectors times BORDER_SCALE max|A|: far below A's entries, SuperLU's
-partial pivoting never takes a border entry before the last pivot, which keeps the fill of the
-two dense borders to their own row and column. At a located collision of N = 100 (n = 301):
-4455 entries in L + U against 23 020 with unit borders, the factorization 0.34 against
-0.73 ms; on benchmarks/solve_speed.py's matrix the same fill, 243 against 408 us (N = 100) and
-4.3 against 5.2 ms (N = 1000). g and h scale with the borders; their zeros, and so the Newton
-steps in (x, lambda), do not."""
+"""The borders b, c are unit vectors times BORDER_SCALE max(1, max|A_ij|) at the first iterate:
+far below A's entries, SuperLU's partial pivoting never takes a border entry before the last
+pivot, which keeps the fill of the two dense borders to their own row and column. At a located
+collision of N = 100 (n = 301): 4455 entries in L + U against 23 020 with unit borders, the
+factorization 0.34 against 0.73 ms; on benchmarks/solve_speed.py's matrix the same fill, 243
+against 408 us (N = 100) and 4.3 against 5.2 ms (N = 1000). g and h scale with the borders;
+their zeros, and so the Newton steps in (x, lambda), do not."""
 
 
 class LocatorFailed(RuntimeError):
@@ -92,9 +92,7 @@ def locate_double_eigenvalue(problem: Problem, x0: Array, lam0: float, right0: A
     the colliding pair (their real parts become the fixed borders c and b), tangent0 the branch
     tangent near x0. Raises LocatorFailed."""
     x, lam, t = np.array(x0, dtype=float), float(lam0), _unit(tangent0)
-    A0 = problem.stability_matrix(x[:-1], float(x[-1]))
-    scale = BORDER_SCALE * float(np.max(np.abs(A0.data if sp.issparse(A0) else A0), initial=1.0))
-    c, b = scale * _unit(right0), scale * _unit(left0)
+    c, b = _unit(right0), _unit(left0)  # scaled by _border_scale at the first A
     m = c.size  # A is m x m (m may differ from the number of unknowns)
     e = np.zeros(x.size)
     e[-1] = 1.0
@@ -110,6 +108,9 @@ def locate_double_eigenvalue(problem: Problem, x0: Array, lam0: float, right0: A
             t_new = branch.solve(e)
             t = t_new / np.linalg.norm(t_new) * np.sign(t_new @ t)
             A = problem.stability_matrix(u, p)
+            if it == 1:
+                scale = _border_scale(A)
+                c, b = scale * c, scale * b
             B = factorize(bordered(A - lam * _identity(A), b, c))
             vg = B.solve(e_m)
             v, g = vg[:m], vg[m]
@@ -147,6 +148,11 @@ def locate_double_eigenvalue(problem: Problem, x0: Array, lam0: float, right0: A
         if abs(dx[-1]) <= 0.01 * tol_p and residual <= newton_tol:
             return _finish(problem, x, lam, b, c, residual, abs(dx[-1]), it, tuple(history))
     raise LocatorFailed(f"no convergence in {max_iter} Newton iterations (|dp| = {history[-1]:.3g})")
+
+
+def _border_scale(A) -> float:
+    """BORDER_SCALE max(1, max|A_ij|) for a dense or sparse A."""
+    return BORDER_SCALE * float(np.max(np.abs(A.data if sp.issparse(A) else A), initial=1.0))
 
 
 def _identity(A):
