@@ -177,8 +177,8 @@ def test_a_spectral_window_lists_the_full_detection_s_collisions_in_it(partial_f
     """N = 40, eps = 1e-4: tracking only 0.0553 <= Re lambda / k_n <= 0.0562 by shift-invert
     gives the collisions of the full detection whose eigenvalue lies in the window, within
     1e-9, and counts the complex pairs there; also with every split sample partial where it
-    can be (partial_from = 0: at N = 40 the default, n >= 240, takes none), which then
-    computes fewer windowed spectra."""
+    can be (partial_from = 0: at N = 40 the default, n >= 240, takes none), which then takes
+    partial samples."""
     from diskfriction.continuation.linalg import work
 
     system = System.from_scene(Scene(N=40, eps=1e-4))
