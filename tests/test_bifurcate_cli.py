@@ -55,6 +55,7 @@ def test_the_diagram_draws_lines_windows_bubbles_and_a_key():
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
 
     from diskfriction.reports.bifurcation import draw_spectrum, narrow_bubbles, pair_line
 
@@ -73,6 +74,11 @@ def test_the_diagram_draws_lines_windows_bubbles_and_a_key():
     assert labels == ["loading 0 -> 1", "a complex pair (located windows)", "birth of a pair (2)",
                       "death of a pair (2)", "bubble narrower than a pixel (1)"]
     assert [line.get_xdata()[0] for line in top.get_lines() if line.get_marker() == "D"] == [0.8 + 5e-10]
+    (pair,), re_lines = (c.get_segments() for ax in (top, bottom) for c in ax.collections
+                         if isinstance(c, LineCollection))
+    assert (pair[0].tolist(), pair[-1].tolist()) == ([0.2, 0.0], [0.6, 0.0])  # closed at both
+    assert [xy[:, 1].tolist() for xy in re_lines] == [lam.real[:, k].tolist() for k in range(3)]
+    assert top.get_ylim()[1] >= 1e-3 and bottom.get_ylim()[1] >= 2.0  # autoscaled to the lines
     spans = [p.get_x() for p in top.patches]
     assert spans == pytest.approx([0.2, 0.8])  # the window, and the bubble's (below a pixel)
     plt.close(fig)
