@@ -49,7 +49,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import scipy.sparse as sp
 
-from diskfriction.continuation.linalg import SingularMatrix, solve
+from diskfriction.continuation.linalg import SingularMatrix, dense, solve
 from diskfriction.continuation.problem import Problem
 from diskfriction.continuation.spectra import Eigensystem, eigensystem
 from diskfriction.continuation.spectral_window import Window, sized, window_eigensystem
@@ -210,26 +210,34 @@ class DiskEquilibria(Problem):
 
     def eigensystem(self, q, F_x, vectors: bool = False) -> Eigensystem:
         """The coupled chain's eigensystem and each free disk's block, the latter excluded; or,
-        with a spectral window, the window's eigenvalues (_window_eigensystem)."""
+        with a spectral window, the window's eigenvalues (_window_eigensystem). Only the coupled
+        chain's modes carry vectors (n x n_c, Eigensystem.columns): a free disk's modes are
+        never in a collision, and n x n vectors would make every sample of a long chain at
+        eps = 0 as large as a full one (N = 1000: 288 MB, with 970 disks free)."""
         if self.window is not None:
             return self._window_eigensystem(q, F_x, vectors)
         A = self.stability_matrix(q, F_x)
-        A = A.toarray() if sp.issparse(A) else A
         if not self.free:
-            return eigensystem(A, vectors)
+            return eigensystem(dense(A), vectors)
         n = A.shape[0]
-        free_dofs = np.concatenate([d.dofs for d in self.free])
-        groups = [np.setdiff1d(np.arange(n), free_dofs)] + [d.dofs for d in self.free]
+        blocks = np.stack([d.dofs for d in self.free])  # (free disks, D) dofs
+        coupled = np.setdiff1d(np.arange(n), blocks.ravel())
+        chain = eigensystem(dense(A[coupled][:, coupled] if sp.issparse(A) else A[np.ix_(coupled, coupled)]),
+                            vectors)
         values, excluded = np.empty(n, complex), np.zeros(n, bool)
-        right, left = (np.zeros((n, n), complex), np.zeros((n, n), complex)) if vectors else (None, None)
-        for k, idx in enumerate(groups):
-            part = eigensystem(A[np.ix_(idx, idx)], vectors, count=k == 0)
-            values[idx] = part.values
-            excluded[idx] = k > 0
-            if vectors:
-                right[np.ix_(idx, idx)] = part.right
-                left[np.ix_(idx, idx)] = part.left
-        return Eigensystem(values, right, left, excluded)
+        values[coupled] = chain.values
+        D = blocks.shape[1]
+        entries = [np.asarray(A[blocks[:, i], blocks[:, j]]).ravel() for i in range(D) for j in range(D)]
+        values[blocks] = np.linalg.eigvals(np.stack(entries, axis=1).reshape(-1, D, D))
+        excluded[blocks] = True
+        if not vectors:
+            return Eigensystem(values, excluded=excluded)
+        right = np.zeros((n, coupled.size), complex)
+        left = np.zeros((coupled.size, n), complex)
+        right[coupled], left[:, coupled] = chain.right, chain.left
+        columns = np.full(n, -1)
+        columns[coupled] = np.arange(coupled.size)
+        return Eigensystem(values, right, left, excluded, columns=columns)
 
     def _window_eigensystem(self, q, F_x, vectors: bool) -> Eigensystem:
         """The spectral window's eigenvalues (spectral_window.py), k fixed at the first call; the

@@ -141,7 +141,7 @@ def make_sample(s: float, x: Array, system: Eigensystem, rel_tol: float,
     slopes, else by nearest eigenvalue: spectra.match_eigenvalues)."""
     values = np.asarray(system.values, dtype=complex)
     excluded = system.excluded if system.excluded is not None else np.zeros(values.size, bool)
-    system = Eigensystem(values, system.right, system.left, excluded, system.guard)
+    system = Eigensystem(values, system.right, system.left, excluded, system.guard, system.columns)
     sample = Sample(s, x, values, eigen_status(values, rel_tol), imag_threshold(values, rel_tol),
                     excluded, tangent, dlam, system if system.right is not None else None,
                     system.guard, None if dlam is None else nearest_gaps(values))

@@ -135,8 +135,9 @@ class Eigensystem:
     is tracked, the eigenvalues beyond its guard band: continuation/spectral_window.py); `guard` marks
     the eigenvalues in a window's guard band, the only ones that may enter or leave the
     tracked set between two samples; `columns`, when only some eigenvalues have vectors (a
-    partial sample, samples.partial_sample_at), the column of `right` and row of `left` of
-    each eigenvalue (-1: none), else None (eigenvalue i has column i)."""
+    partial sample, samples.partial_sample_at; the free disks' modes, DiskEquilibria.eigensystem),
+    the column of `right` and row of `left` of each eigenvalue (-1: none), else None
+    (eigenvalue i has column i)."""
 
     values: Array
     right: Optional[Array] = None
@@ -153,13 +154,13 @@ class Eigensystem:
         return self.right[:, c], self.left[c]
 
     def permuted(self, perm: Array) -> "Eigensystem":
-        """The same eigensystem with labels new[i] = old[perm[i]]."""
-        pick = lambda a, axis: None if a is None else np.take(a, perm, axis=axis)  # noqa: E731
-        if self.columns is not None:
-            return Eigensystem(self.values[perm], self.right, self.left, pick(self.excluded, 0),
-                               pick(self.guard, 0), self.columns[perm])
-        return Eigensystem(self.values[perm], pick(self.right, 1), pick(self.left, 0),
-                           pick(self.excluded, 0), pick(self.guard, 0))
+        """The same eigensystem with labels new[i] = old[perm[i]]. The vectors are shared, not
+        copied: `columns` says which of them each label has (a relabelling costs O(n), not
+        two n x n copies)."""
+        pick = lambda a: None if a is None else a[perm]  # noqa: E731
+        columns = None if self.right is None else (perm if self.columns is None else self.columns[perm])
+        return Eigensystem(self.values[perm], self.right, self.left, pick(self.excluded), pick(self.guard),
+                           columns)
 
 
 def eigensystem(A: Array, vectors: bool, count: bool = True) -> Eigensystem:
@@ -177,5 +178,11 @@ def eigensystem(A: Array, vectors: bool, count: bool = True) -> Eigensystem:
 def eigenvalue_slopes(system: Eigensystem, dA: Array) -> Array:
     """d lambda_i = l_i^H dA r_i for a perturbation dA of the matrix (first-order perturbation
     of simple eigenvalues; infinite at a collision, where the pair's discriminant stays smooth).
-    dA dense or sparse."""
-    return np.einsum("ij,ji->i", system.left, dA @ system.right)
+    dA dense or sparse. An eigenvalue without vectors (Eigensystem.columns -1: a free disk's
+    mode, kept out of collision detection, continuation/disks.py) gets 0: its slope only
+    predicts where it goes for tracking, and a free disk's block changes only through pair
+    overlaps of rounding size."""
+    slopes = np.einsum("ij,ji->i", system.left, dA @ system.right)
+    if system.columns is None:
+        return slopes
+    return np.where(system.columns >= 0, slopes[system.columns], 0.0)

@@ -9,6 +9,7 @@ from diskfriction.continuation import ContinuationParams, DetectionParams, Funct
 from diskfriction.continuation.disks import DiskEquilibria, relax
 from diskfriction.continuation.locate import locate_double_eigenvalue
 from diskfriction.continuation.newton import bordered_newton, tangent
+from diskfriction.continuation.spectra import eigenvalue_slopes
 from diskfriction.continuation.sweep import SweepParams, sweep
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
@@ -122,6 +123,38 @@ def test_eps_zero_runs_to_the_end_with_free_rolling_modes_excluded():
     rolling = np.sort(np.abs(modes.values[modes.excluded]))[:branch.free[0]]
     assert np.all(rolling <= s.k_t * np.sqrt(problem.delta_join) * (1 + s.R**2))
     assert branch.residual.max() <= 1e-10 and len(branch.collisions) > 0
+
+
+@pytest.mark.parametrize("sparse", [False, True])
+def test_free_disks_spectrum_is_the_matrix_spectrum_with_vectors_on_the_coupled_chain_alone(sparse):
+    """N = 30 at eps = 0 just after rest, most disks free: the eigenvalues are those of the
+    whole matrix (LAPACK on the dense J), only the coupled chain's carry vectors (n x n_c, no
+    n x n array), those are left and right eigenvectors with l^H r = 1, and the slopes are
+    l^H dA r for them and 0 for the free disks' modes."""
+    system = System.from_scene(Scene(N=30))
+    q, xi = relax(system, *system.rest_state(), 1e-5)  # where sweeps start (sweep.START_FRACTION)
+    problem = DiskEquilibria(system, q, xi, 1e-5, "J", sparse=sparse)
+    A = problem.stability_matrix(q, 1e-5)
+    A = A.toarray() if hasattr(A, "toarray") else A
+    n, free = A.shape[0], 3 * len(problem.free)
+    assert free >= n // 2
+    modes = problem.eigensystem(q, 1e-5, vectors=True)
+    whole = np.linalg.eigvals(A)
+    assert np.max(np.abs(np.sort_complex(modes.values) - np.sort_complex(whole))) <= 1e-9 * np.abs(whole).max()
+    assert modes.right.shape == (n, n - free) and modes.left.shape == (n - free, n)
+    assert np.array_equal(modes.columns < 0, modes.excluded) and modes.excluded.sum() == free
+    for i in np.flatnonzero(~modes.excluded):
+        r, l = modes.vectors(i)
+        scale = np.abs(modes.values[i]) + 1.0
+        assert np.linalg.norm(A @ r - modes.values[i] * r) <= 1e-9 * scale * np.linalg.norm(r)
+        assert np.linalg.norm(l.conj() @ A - modes.values[i] * l.conj()) <= 1e-9 * scale * np.linalg.norm(l)
+        assert abs(l.conj() @ r - 1.0) <= 1e-9
+    dA = np.diag(np.arange(n, dtype=float))
+    slopes = eigenvalue_slopes(modes, dA)
+    assert np.all(slopes[modes.excluded] == 0.0)
+    i = int(np.flatnonzero(~modes.excluded)[0])
+    r, l = modes.vectors(i)
+    assert abs(slopes[i] - l.conj() @ dA @ r) <= 1e-12 * np.abs(l).max() * np.abs(r).max() * n * n
 
 
 def test_sparse_and_dense_solves_agree_at_N40():
