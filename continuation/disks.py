@@ -106,8 +106,9 @@ class DiskEquilibria(Problem):
 
     def __init__(self, system: System, q: np.ndarray, xi: np.ndarray, F_x: float,
                  matrix: str | None = None, newton_tol: float = 1e-11, sparse: bool | None = None,
-                 window: Window | None = None):
+                 window: Window | None = None, gauge: bool = True):
         self.system = system
+        self.gauge = gauge  # False: no disk is treated as free (relax: its mass term regularises)
         self.matrix = matrix or system.scene.matrix
         self.newton_tol = newton_tol
         self.window = window
@@ -122,22 +123,28 @@ class DiskEquilibria(Problem):
         system.kernels.wall_increment_coeffs(s.R, w)
         self._wall_w = w[:system.kernels.D].copy()
         self._kappa = 1.5 * s.k_n * s.delta_w0 ** 0.5  # the substrate's normal stiffness
+        D = system.kernels.D  # every free disk has the same null directions and gauge rows:
+        self._free_template = free_modes(self._wall_w, bool(system.kernels.WALL_FRICTION), 0,
+                                         np.arange(D), self._kappa)
         self._set_committed(q, xi, F_x)
 
     # -- the committed state
     def _set_committed(self, q: np.ndarray, xi: np.ndarray, F_x: float) -> None:
         self.q_c, self.xi_c, self.F_c = q.copy(), xi.copy(), float(F_x)
         self._last = (None, None, None)
-        self.free = self._free_disks(q)
+        self.free = self._free_disks(q) if self.gauge else ()
+        self._gauge = _Gauge.of(self.free, self.system.rows, self.system.cols, self.system.ndof,
+                                self.sparse) if self.free else None
 
     def _free_disks(self, q: np.ndarray) -> tuple[FreeDisk, ...]:
         """Disks (other than disk 1, which carries F_x) whose pairs both have delta <= delta_join."""
         N, D = self.system.N, self.system.kernels.D
         loose = self.system.overlaps(q)[:N] <= self.delta_join
-        friction = bool(self.system.kernels.WALL_FRICTION)
-        out = [free_modes(self._wall_w, friction, i, np.arange(D) * N + i, self._kappa)
-               for i in range(1, N) if loose[i - 1] and loose[i]]
-        return tuple(d for d in out if d.modes.shape[1])
+        t = self._free_template
+        if not t.modes.shape[1]:
+            return ()
+        return tuple(replace(t, disk=i, dofs=np.arange(D) * N + i)
+                     for i in range(1, N) if loose[i - 1] and loose[i])
 
     @property
     def free_count(self) -> int:
@@ -169,37 +176,28 @@ class DiskEquilibria(Problem):
         vals = self._values(q) if xi is None else self.system.jacobian_values(q, xi)
         if self.sparse:
             return self._csr.matrix(vals, row_scale)
-        J = self._assemble(self.system.rows, self.system.cols, vals)
+        J = self._dense(vals)
         return J if row_scale is None else J * row_scale[:, None]
 
-    def _assemble(self, rows, cols, vals):
+    def _dense(self, vals):
+        """The dense matrix of values on J's pattern (duplicates summed)."""
         n = self.system.ndof
-        if self.sparse:
-            return sp.csr_array((vals, (rows, cols)), shape=(n, n))
-        return np.bincount(rows * n + cols, weights=vals, minlength=n * n).reshape(n, n)
+        return np.bincount(self.system.rows * n + self.system.cols, weights=vals, minlength=n * n).reshape(n, n)
 
     # -- Problem protocol
     def residual(self, q, F_x):
         G = self.system.forces(q, self._xi(q), F_x)
-        for d in self.free:
-            G[d.dofs[d.rows]] = d.kappa * (d.modes.T @ (q[d.dofs] - self.q_c[d.dofs]))
+        if self._gauge is not None:
+            g = self._gauge
+            G[g.rows] = np.einsum("fkd,fd->fk", g.weights, q[g.dofs] - self.q_c[g.dofs])
         return G
 
     def jacobian(self, q, F_x):
         """dG/dq = -J with the free disks' gauge rows."""
-        rows, cols, vals = self.system.rows, self.system.cols, -self._values(q)
-        if self.sparse and not self.free:
-            return self._csr.matrix(vals)
-        if self.free:
-            gauge_rows = np.concatenate([d.dofs[d.rows] for d in self.free])
-            keep = ~np.isin(rows, gauge_rows)
-            g_rows = np.concatenate([np.repeat(d.dofs[d.rows], d.dofs.size) for d in self.free])
-            g_cols = np.concatenate([np.tile(d.dofs, d.rows.size) for d in self.free])
-            g_vals = np.concatenate([(d.kappa * d.modes.T).ravel() for d in self.free])
-            rows = np.concatenate([rows[keep], g_rows])
-            cols = np.concatenate([cols[keep], g_cols])
-            vals = np.concatenate([vals[keep], g_vals])
-        return self._assemble(rows, cols, vals)
+        vals = -self._values(q)
+        if self._gauge is not None:
+            return self._gauge.jacobian(vals)
+        return self._csr.matrix(vals) if self.sparse else self._dense(vals)
 
     def dG_dp(self, q, F_x):
         return self.e_x1
@@ -280,6 +278,41 @@ class DiskEquilibria(Problem):
         return bool(slid.any()) or before != {d.disk for d in self.free}
 
 
+@dataclass(frozen=True)
+class _Gauge:
+    """The free disks' gauge rows, stacked once per set of free disks (a chain of 1000 disks
+    has up to 999): the disks' dofs (f, D), the equation rows their null directions replace
+    (f, k), the gauge rows' coefficients kappa m^T (f, k, D); and dG/dq's pattern: the entries
+    of -J outside those rows (keep, a mask over J's pattern) followed by the gauge rows'."""
+
+    dofs: np.ndarray
+    rows: np.ndarray
+    weights: np.ndarray
+    keep: np.ndarray
+    g_vals: np.ndarray
+    assemble: object
+
+    @classmethod
+    def of(cls, free: tuple, j_rows: np.ndarray, j_cols: np.ndarray, n: int, sparse: bool) -> "_Gauge":
+        dofs = np.stack([d.dofs for d in free])
+        rows = np.stack([d.dofs[d.rows] for d in free])
+        weights = np.stack([d.kappa * d.modes.T for d in free])
+        keep = ~np.isin(j_rows, rows.ravel())
+        D, k = dofs.shape[1], rows.shape[1]
+        all_rows = np.concatenate([j_rows[keep], np.repeat(rows, D, axis=1).ravel()])  # (disk, row, dof)
+        all_cols = np.concatenate([j_cols[keep], np.tile(dofs, (1, k)).ravel()])
+        if sparse:
+            assemble = _CsrPattern(all_rows, all_cols, n).matrix
+        else:
+            keys = all_rows * n + all_cols
+            assemble = lambda vals: np.bincount(keys, weights=vals, minlength=n * n).reshape(n, n)  # noqa: E731
+        return cls(dofs, rows, weights, keep, weights.ravel(), assemble)
+
+    def jacobian(self, vals: np.ndarray):
+        """dG/dq from the values of -J on its pattern."""
+        return self.assemble(np.concatenate([vals[self.keep], self.g_vals]))
+
+
 class _CsrPattern:
     """CSR assembly of a fixed triplet pattern (rows, cols, duplicates summed), computed once:
     a new matrix is a bincount of the values into the pattern's slots."""
@@ -304,8 +337,7 @@ def relax(system: System, q: np.ndarray, xi: np.ndarray, F_x: float, tol: float 
     continuation: (J + M / dt^2) dq = F with dt grown by the residual ratio (switched evolution
     relaxation). It converges where Newton cannot start: at the paper's rest state the pairs
     touch at delta = 0 and J has N zero (rolling) modes. Returns (q1, xi1) with xi1 committed."""
-    problem = DiskEquilibria(system, q, xi, 0.0)
-    problem.free = ()  # relaxation needs no gauge: the mass term regularises the zero modes
+    problem = DiskEquilibria(system, q, xi, 0.0, gauge=False)  # the mass term regularises the zero modes
     M = system.mass_diagonal()
     q1, dt = q.copy(), 1.0
     G = problem.residual(q1, F_x)

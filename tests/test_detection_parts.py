@@ -12,7 +12,7 @@ from diskfriction.continuation import FunctionProblem
 from diskfriction.continuation.newton import tangent
 from diskfriction.continuation.partial_splits import (PARTIAL_CLUSTERS, PARTIAL_EXTRA, certificates_survive,
                                                       clusters, partial_allowed)
-from diskfriction.continuation.samples import sample_at
+from diskfriction.continuation.samples import Sample, continuation_perm, label_gaps, sample_at
 from diskfriction.continuation.segment import Segment
 from diskfriction.continuation.verdicts import Verdict, judge
 
@@ -196,3 +196,23 @@ def test_a_relabelling_that_reaches_a_partial_sample_makes_it_full():
     for k in (1, 2):  # every label continues its left neighbour's eigenvalue
         left, right = scan.samples[k].eigvals, scan.samples[k + 1].eigvals
         assert np.max(np.abs(right - left)) < 0.5
+
+
+def test_free_modes_are_matched_among_themselves_and_give_no_gaps_to_the_chain():
+    """Free disks' modes (excluded) and the chain's are tracked apart: the chain eigenvalue
+    1.0 rising with slope 1 over 0.1 goes to 1.101, not to the free mode at 1.05, where the
+    trapezoid predictions of both meet (an assignment over all labels takes that one: 3.949
+    against 3.951 in total); the free modes take the free eigenvalues; and the chain
+    eigenvalue's gap ignores the free mode 0.051 away."""
+    def sample(x_p, values, dlam, excluded):
+        values = np.array(values, complex)
+        excluded = np.array(excluded)
+        return Sample(0.0, np.array([0.0, x_p]), values, np.zeros(4, np.int8), 1e-12, excluded,
+                      np.array([0.0, 1.0]), np.array(dlam, complex), None, None,
+                      label_gaps(values, excluded, None))
+
+    left = sample(0.0, [1.0, 3.0, 5.0, 5.0], [1.0, 0.0, 0.0, 0.0], [False, False, True, True])
+    right = sample(0.1, [3.0, 1.101, 5.0, 1.05], [0.0, 1.0, 0.0, 0.0], [False, False, True, True])
+    perm = continuation_perm(left, right)
+    assert perm[0] == 1 and perm[1] == 0 and sorted(perm[2:].tolist()) == [2, 3]
+    assert right.gaps[1] == pytest.approx(1.899) and right.gaps[3] == pytest.approx(3.95)
