@@ -9,6 +9,13 @@ sparse (SuperLU, O(n)) from n = 240 on and dense below, where n^2 is small. Per 
 q, the trial and committed histories, the tracked eigenvalues (complex) and the core's tangent,
 about POINT_VECTORS vectors of n doubles, for at most `points` points (the paper's diagram has
 about 700; a sweep stops after 20 000).
+
+The estimate is a lower bound, so the guard refuses only what cannot fit: the fast detection
+keeps every full sample of a step while it scans it, each with 4 n^2 doubles of eigenvectors (up
+to 24 samples in one step at N = 100), so a full-spectrum sweep peaks higher: 263 MB at N = 100,
+956 MB at N = 200, 5.3 GB within the first 10 minutes at N = 1000 (docs/continuation.md, Cost).
+A spectral window's samples hold n x k vectors, and at eps = 0 only the disks the load reached
+carry vectors.
 """
 from __future__ import annotations
 
