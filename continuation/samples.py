@@ -130,14 +130,19 @@ def continuation_perm(left: Sample, right: Sample) -> Array:
     perm = np.arange(left.eigvals.size)
     free_l, free_r = common & left.excluded, common & right.excluded
     if left.guard is None and free_l.any() and free_l.sum() == free_r.sum():
-        by_value = lambda smp, mask: np.flatnonzero(mask)[np.lexsort((smp.eigvals.imag[mask], smp.eigvals.real[mask]))]  # noqa: E731
-        perm[by_value(left, free_l)] = by_value(right, free_r)
+        perm[_by_value(left, free_l)] = _by_value(right, free_r)
         rest_l, rest_r = np.flatnonzero(common & ~left.excluded), np.flatnonzero(common & ~right.excluded)
     else:
         rest_l = rest_r = np.flatnonzero(common)
     perm[rest_l] = rest_r[predicted_match(left.eigvals[rest_l], left.dlam[rest_l], right.eigvals[rest_r],
                                           right.dlam[rest_r], ds_left, ds_right)]
     return perm
+
+
+def _by_value(sample: Sample, mask: Array) -> Array:
+    """The labels in mask in order of (Re, Im) of their eigenvalues, ties in label order."""
+    labels = np.flatnonzero(mask)
+    return labels[np.lexsort((sample.eigvals.imag[labels], sample.eigvals.real[labels]))]
 
 
 def known(sample: Sample) -> Array:

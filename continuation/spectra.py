@@ -163,10 +163,10 @@ class Eigensystem:
                            columns)
 
 
-def eigensystem(A: Array, vectors: bool, count: bool = True) -> Eigensystem:
+def eigensystem(A: Array, vectors: bool) -> Eigensystem:
     """All eigenvalues of the dense matrix A (LAPACK dgeev), with left and right vectors
-    normalised to l_i^H r_i = 1 if `vectors`; `count` books it as a full spectrum (linalg.work)."""
-    work.spectra += count
+    normalised to l_i^H r_i = 1 if `vectors`; booked as a full spectrum (linalg.work)."""
+    work.spectra += 1
     if not vectors:
         return Eigensystem(np.linalg.eigvals(A).astype(complex))
     lam, vl, vr = sla.eig(A, left=True, right=True, check_finite=False)
