@@ -125,6 +125,18 @@ def test_eps_zero_runs_to_the_end_with_free_rolling_modes_excluded():
     assert branch.residual.max() <= 1e-10 and len(branch.collisions) > 0
 
 
+def test_eps_zero_long_sparse_chain_finds_the_collisions_of_the_short_one():
+    """At eps = 0 the load reaches about 29 disks by F_x = 0.12, so N = 100 (sparse J, 70 and
+    more disks free throughout) and N = 20 (dense J) find the same collisions, kind by kind,
+    within 1e-9 in F_x; N = 100 runs to 0.12 with its free modes counted and falling."""
+    branches = {N: sweep(System.from_scene(Scene(N=N)), 0.0, 0.12, "J") for N in (20, 100)}
+    long, short = branches[100], branches[20]
+    assert long.status == ("p_end",) and long.F_x[-1] == 0.12
+    assert long.free[-1] > 0 and long.free[-1] < long.free[0]
+    assert [c.kind for c in long.collisions] == [c.kind for c in short.collisions]
+    assert max(abs(a.p - b.p) for a, b in zip(long.collisions, short.collisions)) <= 1e-9
+
+
 @pytest.mark.parametrize("sparse", [False, True])
 def test_free_disks_spectrum_is_the_matrix_spectrum_with_vectors_on_the_coupled_chain_alone(sparse):
     """N = 30 at eps = 0 just after rest, most disks free: the eigenvalues are those of the
