@@ -113,7 +113,7 @@ class DiskEquilibria(Problem):
         self.newton_tol = newton_tol
         self.window = window
         self.sparse = (system.ndof >= SPARSE_FROM or window is not None) if sparse is None else sparse
-        self._csr = _CsrPattern(system.rows, system.cols, system.ndof) if self.sparse else None
+        self._pattern = _pattern(system.rows, system.cols, system.ndof, self.sparse)
         self.e_x1 = np.zeros(system.ndof)
         self.e_x1[0] = 1.0
         self._last = (None, None, None)  # (q bytes, xi, (F, J values) or None) of the last trial q
@@ -133,8 +133,8 @@ class DiskEquilibria(Problem):
         self.q_c, self.xi_c, self.F_c = q.copy(), xi.copy(), float(F_x)
         self._last = (None, None, None)
         self.free = self._free_disks(q) if self.gauge else ()
-        self._gauge = _Gauge.of(self.free, self.system.rows, self.system.cols, self.system.ndof,
-                                self.sparse) if self.free else None
+        self._gauge_rows = _GaugeRows.of(self.free, self.system.rows, self.system.cols, self.system.ndof,
+                                         self.sparse) if self.free else None
 
     def _free_disks(self, q: np.ndarray) -> tuple[FreeDisk, ...]:
         """Disks (other than disk 1, which carries F_x) whose pairs both have delta <= delta_join."""
@@ -174,30 +174,22 @@ class DiskEquilibria(Problem):
         """The physical J at q (trial history unless xi is given), dense or sparse; with
         row_scale, diag(row_scale) J."""
         vals = self._values(q) if xi is None else self.system.jacobian_values(q, xi)
-        if self.sparse:
-            return self._csr.matrix(vals, row_scale)
-        J = self._dense(vals)
-        return J if row_scale is None else J * row_scale[:, None]
-
-    def _dense(self, vals):
-        """The dense matrix of values on J's pattern (duplicates summed)."""
-        n = self.system.ndof
-        return np.bincount(self.system.rows * n + self.system.cols, weights=vals, minlength=n * n).reshape(n, n)
+        return self._pattern.matrix(vals, row_scale)
 
     # -- Problem protocol
     def residual(self, q, F_x):
         G = self.system.forces(q, self._xi(q), F_x)
-        if self._gauge is not None:
-            g = self._gauge
+        if self._gauge_rows is not None:
+            g = self._gauge_rows
             G[g.rows] = np.einsum("fkd,fd->fk", g.weights, q[g.dofs] - self.q_c[g.dofs])
         return G
 
     def jacobian(self, q, F_x):
         """dG/dq = -J with the free disks' gauge rows."""
         vals = -self._values(q)
-        if self._gauge is not None:
-            return self._gauge.jacobian(vals)
-        return self._csr.matrix(vals) if self.sparse else self._dense(vals)
+        if self._gauge_rows is not None:
+            return self._gauge_rows.jacobian(vals)
+        return self._pattern.matrix(vals)
 
     def dG_dp(self, q, F_x):
         return self.e_x1
@@ -279,7 +271,7 @@ class DiskEquilibria(Problem):
 
 
 @dataclass(frozen=True)
-class _Gauge:
+class _GaugeRows:
     """The free disks' gauge rows, stacked once per set of free disks (a chain of 1000 disks
     has up to 999): the disks' dofs (f, D), the equation rows their null directions replace
     (f, k), the gauge rows' coefficients kappa m^T (f, k, D); and dG/dq's pattern: the entries
@@ -289,11 +281,10 @@ class _Gauge:
     rows: np.ndarray
     weights: np.ndarray
     keep: np.ndarray
-    g_vals: np.ndarray
-    assemble: object
+    pattern: object
 
     @classmethod
-    def of(cls, free: tuple, j_rows: np.ndarray, j_cols: np.ndarray, n: int, sparse: bool) -> "_Gauge":
+    def of(cls, free: tuple, j_rows: np.ndarray, j_cols: np.ndarray, n: int, sparse: bool) -> "_GaugeRows":
         dofs = np.stack([d.dofs for d in free])
         rows = np.stack([d.dofs[d.rows] for d in free])
         weights = np.stack([d.kappa * d.modes.T for d in free])
@@ -301,16 +292,28 @@ class _Gauge:
         D, k = dofs.shape[1], rows.shape[1]
         all_rows = np.concatenate([j_rows[keep], np.repeat(rows, D, axis=1).ravel()])  # (disk, row, dof)
         all_cols = np.concatenate([j_cols[keep], np.tile(dofs, (1, k)).ravel()])
-        if sparse:
-            assemble = _CsrPattern(all_rows, all_cols, n).matrix
-        else:
-            keys = all_rows * n + all_cols
-            assemble = lambda vals: np.bincount(keys, weights=vals, minlength=n * n).reshape(n, n)  # noqa: E731
-        return cls(dofs, rows, weights, keep, weights.ravel(), assemble)
+        return cls(dofs, rows, weights, keep, _pattern(all_rows, all_cols, n, sparse))
 
     def jacobian(self, vals: np.ndarray):
         """dG/dq from the values of -J on its pattern."""
-        return self.assemble(np.concatenate([vals[self.keep], self.g_vals]))
+        return self.pattern.matrix(np.concatenate([vals[self.keep], self.weights.ravel()]))
+
+
+def _pattern(rows: np.ndarray, cols: np.ndarray, n: int, sparse: bool):
+    """The assembly of a fixed triplet pattern: CSR (SuperLU's solves) or dense (LAPACK's)."""
+    return _CsrPattern(rows, cols, n) if sparse else _DensePattern(rows, cols, n)
+
+
+class _DensePattern:
+    """Dense assembly of a fixed triplet pattern (duplicates summed): a bincount of the values
+    into the flat n x n array."""
+
+    def __init__(self, rows: np.ndarray, cols: np.ndarray, n: int):
+        self.keys, self.n = rows * n + cols, n
+
+    def matrix(self, vals: np.ndarray, row_scale=None) -> np.ndarray:
+        J = np.bincount(self.keys, weights=vals, minlength=self.n * self.n).reshape(self.n, self.n)
+        return J if row_scale is None else J * row_scale[:, None]
 
 
 class _CsrPattern:
