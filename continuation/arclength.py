@@ -22,17 +22,20 @@ problem.commit is called, so intermediate points see the state committed at x_k.
 from __future__ import annotations
 
 import math
+from collections import deque
+from contextlib import closing
 from dataclasses import dataclass, replace
 from typing import Callable, Optional
 
 import numpy as np
 
 from .branch import Branch
-from .collisions import DetectionParams, scan_step
+from .collisions import DetectionParams
 from .linalg import SingularMatrix, blas_threads
 from .newton import NewtonResult, bordered_newton, fixed_p_newton, residual_norm, tangent
 from .problem import Problem
 from .samples import Sample, make_sample, matrix_derivative, sample_at
+from .scans import ScanJob, default_workers, scans_for
 from .segment import Segment, SegmentSolveError, refine_sign_change
 from .spectra import Eigensystem, count_complex_pairs, eigenvalue_slopes
 
@@ -194,47 +197,133 @@ def _continuation(problem, u0, p0, params, detection, callback) -> Branch:
     sample = _sorted(_sample(problem, 0.0, x, t, detection, None, side=+1))
     rec = _Recorder(detection.rel_tol, callback)
     rec.add(sample, 0.0, start, t, 0)
-    g = problem.event_functions(x[:-1], x[-1])
-    previous: Optional[Sample] = None
-    ds, status = params.ds, "max_steps"
-    while rec.steps < params.max_steps:
-        step = _attempt(problem, x, t, ds, params)
-        if isinstance(step, _Step):
-            try:
-                if g is not None:
-                    step = _cut_at_event(problem, x, step, g, params)
-                end = _sample(problem, 1.0, step.x, step.tangent, detection, sample, side=-1)
-                found, end, solves, warnings = scan_step(
-                    problem, Segment(problem, x, step.x, params.newton_tol, params.max_newton),
-                    sample, end, detection, rec.steps, previous, step.event)
-            except SegmentSolveError as err:
-                step = f"collision scan: {err}"
-            except SingularMatrix as err:
-                step = f"singular matrix: {err}"
-        if not isinstance(step, _Step):
-            ds *= 0.5
-            if ds < params.ds_min:
-                status = f"ds_min: {step} at p={x[-1]:.12g}"
-                break
-            continue
-        rec.collisions += found
-        rec.warnings += warnings
-        rec.events += step.event
-        step, end = _commit(problem, x, step, end, params, detection)
-        if step is None:
-            status = f"commit: no equilibrium after the commit at p={end.p:.12g}"
-            break
-        rec.add(end, ds, step.newton, step.tangent, solves)
-        previous = None if found else sample
-        x, t, sample = step.x, step.tangent, end
-        if g is not None:
-            g = problem.event_functions(x[:-1], x[-1])
-        if step.last:
-            status = "p_end"
-            break
-        if step.newton.iterations <= params.fast_newton:
-            ds = min(ds * params.growth, params.ds_max)
+    workers = default_workers(x.size - 1, detection)
+    with closing(scans_for(problem, workers)) as scans:
+        status = _follow(problem, scans, 2 * workers, _Start(x, t, sample, 0.0), rec, params, detection)
     return rec.branch(status)
+
+
+@dataclass(frozen=True)
+class _Start:
+    """Where a step starts: point, unit tangent, sample (labels tracked), event functions
+    there (None: no events), and ds, the arclength tried from it."""
+
+    x: Array
+    t: Array
+    sample: Sample
+    ds: float
+    g: Optional[Array] = None
+
+
+@dataclass(frozen=True)
+class _Pending:
+    """A committed step whose scan (scans.py) is not yet recorded: its start, the problem's
+    state committed there (to return to if the scan fails) and at its end (the callback's),
+    the step and its end sample after the commit (None: the commit found no equilibrium)."""
+
+    ticket: int
+    start: _Start
+    state: object
+    step: _Step
+    end: Optional[Sample]
+    after: object
+
+
+def _follow(problem: Problem, scans, depth: int, here: _Start, rec: "_Recorder",
+            params: ContinuationParams, detection: DetectionParams) -> str:
+    """Steps from `here` until the run ends; returns its status. Each accepted step is
+    committed and its scan submitted; the scans are recorded in order as they come back (at
+    once inline; with workers, the continuation goes on with up to `depth` scans pending). The
+    labels of points tracked from a step's unscanned end follow the scan's end_perm:
+    recorded = tracked[labels]. A failed scan rejects its step as a failed corrector does: the
+    problem returns to the state committed at the step's start and later scans are dropped."""
+    here = replace(here, ds=params.ds, g=problem.event_functions(here.x[:-1], here.x[-1]))
+    labels = np.arange(here.sample.eigvals.size)
+    pending: deque[_Pending] = deque()
+    previous: Optional[Sample] = None  # the exhaustive detection's stencil (scans inline)
+    status, stopped = "max_steps", False
+    while True:
+        while pending and (stopped or len(pending) > depth or scans.ready(pending[0].ticket)):
+            item = pending.popleft()
+            outcome = scans.result(item.ticket)
+            if outcome.failure is not None:
+                scans.discard([later.ticket for later in pending])
+                pending.clear()
+                problem.restore(item.state)
+                here, stopped = replace(item.start, ds=0.5 * item.start.ds), False
+                if here.ds < params.ds_min:
+                    status, stopped = f"ds_min: {outcome.failure} at p={here.x[-1]:.12g}", True
+                break
+            scan = outcome.result
+            ahead = bool(pending)  # later points were tracked from this step's unscanned end
+            of_label = np.argsort(labels)  # a label at the step's start -> its recorded label
+            rec.collisions += [replace(c, pair=(int(of_label[c.pair[0]]), int(of_label[c.pair[1]])))
+                               for c in scan.collisions]
+            rec.warnings += scan.warnings
+            rec.events += item.step.event
+            previous = None if scan.collisions or detection.slopes else item.start.sample
+            if item.end is None:
+                continue
+            if ahead:
+                end, labels = item.end, scan.end_perm[labels]
+            else:
+                end = item.end.relabel(scan.end_perm)
+                here = replace(here, sample=end)
+            _record(problem, rec, item, end.relabel(labels), scan.solves, ahead)
+        if stopped and not pending:
+            return status
+        if stopped:
+            continue
+        if rec.steps + len(pending) >= params.max_steps:
+            status, stopped = "max_steps", True
+            continue
+        here, stop = _advance(problem, scans, here, rec.steps + len(pending), pending, previous, params,
+                              detection)
+        if stop is not None:
+            status, stopped = stop, True
+
+
+def _advance(problem, scans, here: _Start, index: int, pending: deque, previous, params, detection):
+    """Step `index` from `here`: accepted, committed and its scan submitted (appended to
+    pending), or rejected (ds halved). Returns (where the next step starts, the run's status if
+    it stops there, else None)."""
+    step = _attempt(problem, here.x, here.t, here.ds, params)
+    if isinstance(step, _Step):
+        try:
+            if here.g is not None:
+                step = _cut_at_event(problem, here.x, step, here.g, params)
+            end = _sample(problem, 1.0, step.x, step.tangent, detection, here.sample, side=-1)
+        except SegmentSolveError as err:
+            step = f"collision scan: {err}"
+        except SingularMatrix as err:
+            step = f"singular matrix: {err}"
+    if not isinstance(step, _Step):
+        here = replace(here, ds=0.5 * here.ds)
+        return here, (f"ds_min: {step} at p={here.x[-1]:.12g}" if here.ds < params.ds_min else None)
+    state = problem.state()
+    ticket = scans.submit(ScanJob(state, here.x, step.x, params.newton_tol, params.max_newton, here.sample,
+                                  end, detection, index, previous, step.event))
+    committed, end = _commit(problem, here.x, step, end, params, detection)
+    pending.append(_Pending(ticket, here, state, step if committed is None else committed,
+                            None if committed is None else end, problem.state()))
+    if committed is None:
+        return here, f"commit: no equilibrium after the commit at p={end.p:.12g}"
+    ds = here.ds
+    if committed.newton.iterations <= params.fast_newton:
+        ds = min(ds * params.growth, params.ds_max)
+    g = problem.event_functions(committed.x[:-1], committed.x[-1]) if here.g is not None else None
+    return _Start(committed.x, committed.tangent, end, ds, g), ("p_end" if committed.last else None)
+
+
+def _record(problem: Problem, rec: "_Recorder", item: _Pending, end: Sample, solves: int, ahead: bool) -> None:
+    """rec.add for a scanned step; the callback sees the problem in the state committed at the
+    step's end (restored for it while the continuation is ahead)."""
+    now = problem.state() if ahead and rec.callback is not None else None
+    if now is not None:
+        problem.restore(item.after)
+    rec.add(end, item.start.ds, item.step.newton, item.step.tangent, solves)
+    if now is not None:
+        problem.restore(now)
 
 
 def _sample(problem: Problem, s: float, x: Array, t: Array, detection: DetectionParams,

@@ -84,7 +84,9 @@ class DetectionParams:
     partial_from: matrix size n from which a split sample of the fast detection is partial
     (only the eigenvalues near the labels in trouble, nearest.py; 0: always, a value above n:
     never); partial_max_k: the most eigenvalues a partial sample computes (beyond that, or
-    when they do not cover the labels, the sample is a full spectrum)."""
+    when they do not cover the labels, the sample is a full spectrum); workers: processes that
+    scan steps while the continuation goes on (scans.py; 0: every scan inline; None: 2 for the
+    fast detection from n = scans.PARALLEL_FROM on where the machine has 2 cores, else 0)."""
 
     mode: str = "fast"
     rel_tol: float = DEFAULT_REL_TOL
@@ -98,6 +100,7 @@ class DetectionParams:
     doubt: float = 0.25
     partial_from: int = 240
     partial_max_k: int = 16
+    workers: Optional[int] = None
 
     def __post_init__(self):
         if self.mode not in MODES:
@@ -114,6 +117,8 @@ class DetectionParams:
             raise ValueError("max_solves and locator_iterations must be >= 1")
         if self.partial_from < 0 or self.partial_max_k < 1:
             raise ValueError("partial_from must be >= 0 and partial_max_k >= 1")
+        if self.workers is not None and self.workers < 0:
+            raise ValueError(f"workers must be >= 0 (or None: automatic), got {self.workers}")
 
     @property
     def slopes(self) -> bool:
@@ -191,12 +196,14 @@ class StepScan:
     solves: int = 0
     warnings: list = field(default_factory=list)
     located: dict = field(default_factory=dict)
+    end_perm: Optional[Array] = None
     _cache: dict = field(default_factory=dict)
     _points: dict = field(default_factory=dict)
     _born: dict = field(default_factory=dict)
 
     def __post_init__(self):
         self._born = {smp.s: -1 for smp in self.samples}  # insertion order by s (-1: the ends)
+        self.end_perm = np.arange(self.samples[-1].eigvals.size)  # x_b's labels: new[i] = old[end_perm[i]]
 
     @property
     def _start(self) -> int:
@@ -242,6 +249,7 @@ class StepScan:
             return None
         for k in range(idx + 1, len(self.samples)):
             self.samples[k] = self.samples[k].relabel(perm)
+        self.end_perm = self.end_perm[perm]
         return perm
 
     def _make_full(self, k: int) -> None:
@@ -275,6 +283,8 @@ class StepScan:
             del self._born[s]
             return False
         self.samples = trial
+        if relabels:
+            self.end_perm = self.end_perm[perm]
         return True
 
     def _upgrade_partials(self, upto: int) -> None:
@@ -469,20 +479,30 @@ class StepScan:
                          pair=(i, j), resolved=resolved)
 
 
+@dataclass(frozen=True)
+class ScanResult:
+    """What the scan of one step found: its collisions in branch order (pair: labels of the
+    step's start sample); end_perm: the labels of x_b's sample after the scan (it continues
+    the samples inserted), end.relabel(end_perm); samples solved; warnings."""
+
+    collisions: list
+    end_perm: Array
+    solves: int
+    warnings: list
+
+
 def scan_step(problem: Problem, segment: Segment, start: Sample, end: Sample,
               params: DetectionParams, step: int, previous: Optional[Sample] = None,
-              ends_at_event: bool = False):
+              ends_at_event: bool = False) -> ScanResult:
     """Detect and locate the collisions between start (x_a) and end (x_b = segment.x_b).
 
     start: the sample of x_a (its labels are kept); end: the sample of x_b, labels continuing
     start; previous: the accepted point before x_a, the exhaustive detection's stencil (pass
     None if its step had collisions); ends_at_event: x_b lies just past a contact event.
-    Returns (collisions, end sample relabelled through the
-    inserted samples, samples solved, warnings).
     """
     a, b = start.at(0.0), end.at(1.0)
     if not params.enabled:
-        return [], b, 0, []
+        return ScanResult([], np.arange(b.eigvals.size), 0, [])
     samples = [a, b]
     if previous is not None and not params.slopes:
         s_prev = float(segment.sigma @ (previous.x - segment.x_a)) / segment.length
@@ -490,4 +510,4 @@ def scan_step(problem: Problem, segment: Segment, start: Sample, end: Sample,
             samples.insert(0, previous.at(s_prev))
     scan = StepScan(problem, segment, samples, params, step, ends_at_event)
     found = scan.run()
-    return found, scan.samples[-1], scan.solves, scan.warnings
+    return ScanResult(found, scan.end_perm, scan.solves, scan.warnings)

@@ -261,6 +261,15 @@ class DiskEquilibria(Problem):
         joins = [k % N for d in self.free for k in (d.disk - 1, d.disk)]
         return np.concatenate([g, delta[joins] - self.delta_join])
 
+    def state(self) -> tuple:
+        """(q, xi, F_x) committed and the spectral window (its size is fixed at the first
+        spectrum)."""
+        return self.q_c.copy(), self.xi_c.copy(), self.F_c, self.window
+
+    def restore(self, snapshot: tuple) -> None:
+        q, xi, F_x, self.window = snapshot
+        self._set_committed(q, xi, F_x)
+
     def commit(self, q_old, F_old, q_new, F_new) -> bool:
         """Commit the state at (q_new, F_new). True asks the core to re-solve there: when the
         Coulomb cap changed a history, or the set of free disks (and so the gauge) changed."""

@@ -48,6 +48,14 @@ class Work:
     def reset(self) -> None:
         self.spectra = self.spectra_partial = self.factorizations = self.solves = 0
 
+    def counts(self) -> tuple[int, int, int, int]:
+        return self.spectra, self.spectra_partial, self.factorizations, self.solves
+
+    def add(self, counts: tuple[int, int, int, int]) -> None:
+        """Book work done elsewhere (a scan worker's counts)."""
+        self.spectra, self.spectra_partial, self.factorizations, self.solves = (
+            a + b for a, b in zip(self.counts(), counts))
+
 
 work = Work()
 

@@ -16,6 +16,10 @@ Optional hooks (defaults below):
         history of contacts) updates it here; until then residual/jacobian must describe a step
         taken from the last committed point. Return True if the commit changed the problem so
         that (u_new, p_new) must be corrected again (the core then re-solves at fixed p_new).
+    state() -> a picklable snapshot of that state (default None: stateless);
+    restore(snapshot) -> None: return to a snapshot taken by state() (default: nothing).
+        The core scans a step on a worker process in the state committed at its start, and
+        returns to an earlier state when a scan fails (scans.py): both need the pair.
     event_functions(u, p) -> array g or None (default None: no events)
         Discrete changes of the problem (a contact opening, closing, sliding). An event on a
         step is a component with g != 0 at the committed point whose sign changes (g = 0 at the
@@ -61,6 +65,13 @@ class Problem(ABC):
     def commit(self, u_old: Array, p_old: float, u_new: Array, p_new: float) -> Optional[bool]:
         """Accept the step (u_old, p_old) -> (u_new, p_new); stateless problems do nothing."""
         return None
+
+    def state(self) -> object:
+        """A picklable snapshot of the committed state; stateless problems have none."""
+        return None
+
+    def restore(self, snapshot: object) -> None:
+        """Return to a snapshot taken by state(); stateless problems have nothing to restore."""
 
     def event_functions(self, u: Array, p: float) -> Optional[Array]:
         """Event functions (see the module docstring); None: the problem has no events."""

@@ -1,0 +1,239 @@
+"""Collision scans of accepted steps: inline, or on worker processes while the branch goes on.
+
+The scan of a step (collisions.scan_step) needs only the step's end points, the samples there
+and the problem's state committed at its start (Problem.state). Its labels continue those of
+the start sample, whatever labels that sample has (relabelling a sample relabels everything
+tracked from it). So the continuation may commit a step and go on while the step is scanned
+elsewhere, tracking its accepted points' labels directly from one another; when a scan comes
+back, its collisions and the labels of the points after it follow from one permutation
+(arclength.py). A scan that fails rejects its step: the continuation returns to the state
+committed at the step's start, and the scans of later steps are dropped.
+
+InlineScans scans at once, in this process (the problem is still in the step's start state).
+WorkerScans forks worker processes that each hold a copy of the problem as it was at the fork,
+restore the job's state, scan and send back the ScanResult with what it cost (linalg.work).
+Fork, not spawn: a worker inherits the compiled kernels instead of compiling them again. Jobs
+go to idle workers in order of submission; results are taken in any order and kept until asked
+for. On 2 cores, the paper scene with N = 100 (n = 300): the 74 scans took 13.1 s one after
+another and 7.7 s on two workers (2026-11-24, docs/continuation.md).
+"""
+from __future__ import annotations
+
+import multiprocessing
+import os
+import traceback
+from dataclasses import dataclass
+from multiprocessing.connection import wait
+from typing import Optional
+
+import numpy as np
+
+from .collisions import DetectionParams, ScanResult, scan_step
+from .linalg import SingularMatrix, blas_threads, work
+from .problem import Problem
+from .samples import Sample
+from .segment import Segment, SegmentSolveError
+
+Array = np.ndarray
+
+PARALLEL_FROM = 240
+"""Stability matrix size from which scans go to workers by default (a step's scan then costs
+tens of milliseconds or more, against about a millisecond to ship its two samples)."""
+
+
+@dataclass(frozen=True)
+class ScanJob:
+    """The scan of accepted step `step` from x_a to x_b (collisions.scan_step's arguments);
+    state: the problem's state committed at x_a (Problem.state); tol, max_iter: the corrector
+    of the step's intermediate points (segment.Segment)."""
+
+    state: object
+    x_a: Array
+    x_b: Array
+    tol: float
+    max_iter: int
+    start: Sample
+    end: Sample
+    detection: DetectionParams
+    step: int
+    previous: Optional[Sample] = None
+    ends_at_event: bool = False
+
+
+@dataclass(frozen=True)
+class ScanOutcome:
+    """A scan's result, or why it failed (failure: the step is rejected, as when its corrector
+    fails); spent: the linalg.work counts the scan booked."""
+
+    result: Optional[ScanResult]
+    failure: Optional[str]
+    spent: tuple
+
+
+def run_scan(problem: Problem, job: ScanJob) -> ScanOutcome:
+    """Scan job's step on `problem`, which is in job.state."""
+    before = work.counts()
+    result, failure = None, None
+    try:
+        result = scan_step(problem, Segment(problem, job.x_a, job.x_b, job.tol, job.max_iter),
+                           job.start, job.end, job.detection, job.step, job.previous, job.ends_at_event)
+    except SegmentSolveError as err:
+        failure = f"collision scan: {err}"
+    except SingularMatrix as err:
+        failure = f"singular matrix: {err}"
+    return ScanOutcome(result, failure, tuple(a - b for a, b in zip(work.counts(), before)))
+
+
+def default_workers(n: int, detection: DetectionParams) -> int:
+    """Workers for a continuation whose stability matrix is n x n: 2 (capped by the cores this
+    process may use) for the fast detection from n = PARALLEL_FROM on where fork exists, else
+    0 (inline). The exhaustive detection always scans inline: its stencil is a sample of the
+    previous step, known only once that step's scan is done."""
+    if not detection.enabled or detection.mode != "fast":
+        return 0
+    if detection.workers is not None:
+        return detection.workers
+    if n < PARALLEL_FROM:
+        return 0
+    if "fork" not in multiprocessing.get_all_start_methods():
+        return 0
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    return min(2, cores) if cores >= 2 else 0
+
+
+class InlineScans:
+    """Scans run at submission, in this process."""
+
+    def __init__(self, problem: Problem):
+        self.problem = problem
+        self._done: dict[int, ScanOutcome] = {}
+        self._tickets = 0
+
+    def submit(self, job: ScanJob) -> int:
+        self._tickets += 1
+        self._done[self._tickets] = run_scan(self.problem, job)
+        return self._tickets
+
+    def ready(self, ticket: int) -> bool:
+        return True
+
+    def result(self, ticket: int) -> ScanOutcome:
+        return self._done.pop(ticket)
+
+    def discard(self, tickets) -> None:
+        for t in tickets:
+            self._done.pop(t, None)
+
+    def close(self) -> None:
+        pass
+
+
+class WorkerError(RuntimeError):
+    """A worker process raised an unexpected exception (its traceback is the message) or died."""
+
+
+def _serve(problem: Problem, conn) -> None:
+    """A worker's loop: (ticket, job) in, (ticket, outcome or traceback text) out; None ends."""
+    with blas_threads():
+        while True:
+            message = conn.recv()
+            if message is None:
+                return
+            ticket, job = message
+            try:
+                problem.restore(job.state)
+                reply = run_scan(problem, job)
+            except Exception:  # noqa: BLE001 - sent back whole, raised in the parent
+                reply = traceback.format_exc()
+            conn.send((ticket, reply))
+
+
+class WorkerScans:
+    """Scans on `workers` forked processes (module docstring). Use as a context manager, or
+    call close(): the workers end with it."""
+
+    def __init__(self, problem: Problem, workers: int):
+        context = multiprocessing.get_context("fork")
+        self._conns, self._procs = [], []
+        for _ in range(workers):
+            parent, child = context.Pipe()
+            proc = context.Process(target=_serve, args=(problem, child), daemon=True)
+            proc.start()
+            child.close()
+            self._conns.append(parent)
+            self._procs.append(proc)
+        self._idle = list(self._conns)
+        self._queue: list[tuple[int, ScanJob]] = []
+        self._done: dict[int, ScanOutcome] = {}
+        self._dropped: set[int] = set()
+        self._tickets = 0
+
+    def submit(self, job: ScanJob) -> int:
+        self._tickets += 1
+        self._queue.append((self._tickets, job))
+        self._dispatch()
+        return self._tickets
+
+    def _dispatch(self) -> None:
+        while self._idle and self._queue:
+            self._idle.pop(0).send(self._queue.pop(0))
+
+    def _receive(self, timeout: Optional[float]) -> None:
+        busy = [c for c in self._conns if c not in self._idle]
+        for conn in wait(busy, timeout):
+            try:
+                ticket, reply = conn.recv()
+            except EOFError:
+                raise WorkerError("a scan worker died") from None
+            self._idle.append(conn)
+            if isinstance(reply, str):
+                raise WorkerError(f"a scan worker failed:\n{reply}")
+            if ticket in self._dropped:
+                self._dropped.discard(ticket)
+            else:
+                self._done[ticket] = reply
+        self._dispatch()
+
+    def ready(self, ticket: int) -> bool:
+        self._receive(0.0)
+        return ticket in self._done
+
+    def result(self, ticket: int) -> ScanOutcome:
+        while ticket not in self._done:
+            self._receive(None)
+        outcome = self._done.pop(ticket)
+        work.add(outcome.spent)  # booked in the worker
+        return outcome
+
+    def discard(self, tickets) -> None:
+        """Forget these scans: queued ones are not sent, running ones' results are dropped."""
+        tickets = set(tickets)
+        queued = {t for t, _ in self._queue} & tickets
+        self._queue = [(t, j) for t, j in self._queue if t not in queued]
+        for t in tickets - queued:
+            if self._done.pop(t, None) is None:
+                self._dropped.add(t)
+
+    def close(self) -> None:
+        for conn in self._conns:
+            try:
+                conn.send(None)
+            except (BrokenPipeError, OSError):
+                pass
+        for proc in self._procs:
+            proc.join(timeout=5)
+            if proc.is_alive():
+                proc.kill()
+        for conn in self._conns:
+            conn.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+def scans_for(problem: Problem, workers: int):
+    """WorkerScans with `workers` processes, or InlineScans if workers is 0."""
+    return WorkerScans(problem, workers) if workers > 0 else InlineScans(problem)
