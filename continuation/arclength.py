@@ -35,7 +35,7 @@ from .linalg import SingularMatrix, blas_threads
 from .newton import NewtonResult, bordered_newton, fixed_p_newton, residual_norm, tangent
 from .problem import Problem
 from .samples import Sample, make_sample, matrix_derivative, sample_at
-from .scans import ScanJob, default_workers, scans_for
+from .scans import ScanJob, default_workers, pending_depth, scans_for
 from .segment import Segment, SegmentSolveError, refine_sign_change
 from .spectra import Eigensystem, count_complex_pairs, eigenvalue_slopes
 
@@ -179,11 +179,13 @@ def continuation(problem: Problem, u0: Array, p0: float,
     for every accepted point k. Returns a Branch.
     """
     _validate_start(p0, params)
+    workers = default_workers(problem, np.size(u0), detection)
     with blas_threads():
-        return _continuation(problem, np.asarray(u0, dtype=float), float(p0), params, detection, callback)
+        return _continuation(problem, np.asarray(u0, dtype=float), float(p0), params, detection, workers,
+                             callback)
 
 
-def _continuation(problem, u0, p0, params, detection, callback) -> Branch:
+def _continuation(problem, u0, p0, params, detection, workers, callback) -> Branch:
     start = fixed_p_newton(problem, u0, p0, params.newton_tol, params.max_newton)
     if not start.converged:
         raise ContinuationError(f"no equilibrium found at p0={p0} (residual {start.residual:.3g})")
@@ -197,9 +199,8 @@ def _continuation(problem, u0, p0, params, detection, callback) -> Branch:
     sample = _sorted(_sample(problem, 0.0, x, t, detection, None, side=+1))
     rec = _Recorder(detection.rel_tol, callback)
     rec.add(sample, 0.0, start, t, 0)
-    workers = default_workers(x.size - 1, detection)
     with closing(scans_for(problem, workers)) as scans:
-        status = _follow(problem, scans, 2 * workers, _Start(x, t, sample, 0.0), rec, params, detection)
+        status = _follow(problem, scans, pending_depth(workers, sample), _Start(x, t, sample, 0.0), rec, params, detection)
     return rec.branch(status)
 
 

@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import multiprocessing
 import os
-import traceback
 from dataclasses import dataclass
 from multiprocessing.connection import wait
 from typing import Optional
@@ -39,6 +38,8 @@ Array = np.ndarray
 PARALLEL_FROM = 240
 """Stability matrix size from which scans go to workers by default (a step's scan then costs
 tens of milliseconds or more, against about a millisecond to ship its two samples)."""
+PENDING_BYTES = 2 ** 30
+"""Eigenvectors the continuation may hold in steps whose scans are pending (pending_depth)."""
 
 
 @dataclass(frozen=True)
@@ -84,21 +85,42 @@ def run_scan(problem: Problem, job: ScanJob) -> ScanOutcome:
     return ScanOutcome(result, failure, tuple(a - b for a, b in zip(work.counts(), before)))
 
 
-def default_workers(n: int, detection: DetectionParams) -> int:
-    """Workers for a continuation whose stability matrix is n x n: 2 (capped by the cores this
-    process may use) for the fast detection from n = PARALLEL_FROM on where fork exists, else
-    0 (inline). The exhaustive detection always scans inline: its stencil is a sample of the
-    previous step, known only once that step's scan is done."""
+def default_workers(problem: Problem, n: int, detection: DetectionParams) -> int:
+    """Workers for `problem`, whose stability matrix is n x n: detection.workers if set, else 2
+    (capped by the cores this process may use) for the fast detection from n = PARALLEL_FROM on
+    where fork exists; 0 (inline) for the exhaustive detection, whose stencil is a sample of the
+    previous step, known only once that step's scan is done. Raises ValueError for workers
+    asked of a problem whose committed state cannot be shipped (has_snapshots)."""
     if not detection.enabled or detection.mode != "fast":
         return 0
     if detection.workers is not None:
+        if detection.workers and not has_snapshots(problem):
+            raise ValueError(f"{type(problem).__name__} commits a state but has no state()/restore(): "
+                             "its steps cannot be scanned on workers (workers=0)")
         return detection.workers
-    if n < PARALLEL_FROM:
-        return 0
-    if "fork" not in multiprocessing.get_all_start_methods():
+    if n < PARALLEL_FROM or not has_snapshots(problem) or "fork" not in multiprocessing.get_all_start_methods():
         return 0
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-    return min(2, cores) if cores >= 2 else 0
+    return 2 if cores >= 2 else 0
+
+
+def has_snapshots(problem: Problem) -> bool:
+    """Whether a worker can be put in the problem's committed state: it commits none (no
+    commit()) or it implements state() and restore()."""
+    cls = type(problem)
+    return cls.commit is Problem.commit or (cls.state is not Problem.state and cls.restore is not Problem.restore)
+
+
+def pending_depth(workers: int, sample: Sample) -> int:
+    """How many scans may be pending before the continuation waits for the oldest: each holds
+    its end sample, whose vectors take as many bytes as `sample`'s. As many as PENDING_BYTES
+    allow, and at least 2 per worker (one running, one queued). A deep queue lets the
+    continuation run ahead through quiet steps while the workers are on crowded ones: at
+    N = 100 (2.9 MB a sample) depths 4, 8 and unbounded took 9.8, 9.5 and 9.1 s
+    (docs/continuation.md)."""
+    system = sample.system
+    vector_bytes = 0 if system is None or system.right is None else system.right.nbytes + system.left.nbytes
+    return max(2 * workers, int(PENDING_BYTES // max(vector_bytes, 1)))
 
 
 class InlineScans:
@@ -129,7 +151,8 @@ class InlineScans:
 
 
 class WorkerError(RuntimeError):
-    """A worker process raised an unexpected exception (its traceback is the message) or died."""
+    """A worker process raised an unexpected exception (type and message are this one's) or
+    died."""
 
 
 def _serve(problem: Problem, conn) -> None:
@@ -143,8 +166,8 @@ def _serve(problem: Problem, conn) -> None:
             try:
                 problem.restore(job.state)
                 reply = run_scan(problem, job)
-            except Exception:  # noqa: BLE001 - sent back whole, raised in the parent
-                reply = traceback.format_exc()
+            except Exception as err:  # noqa: BLE001 - the problem's own functions run here
+                reply = f"{type(err).__name__}: {err}"
             conn.send((ticket, reply))
 
 
@@ -187,7 +210,7 @@ class WorkerScans:
                 raise WorkerError("a scan worker died") from None
             self._idle.append(conn)
             if isinstance(reply, str):
-                raise WorkerError(f"a scan worker failed:\n{reply}")
+                raise WorkerError(f"in a scan worker: {reply}")
             if ticket in self._dropped:
                 self._dropped.discard(ticket)
             else:

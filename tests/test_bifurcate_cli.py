@@ -100,6 +100,7 @@ BAD = [
     (["--fx", "0:inf"], "--fx"),
     (["--matrix", "K"], "--matrix"),
     (["--ds-max", "-1"], "--ds-max"),
+    (["--workers", "-1"], "--workers"),
     (["missing.toml"], "missing.toml"),
 ]
 
