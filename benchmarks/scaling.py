@@ -2,15 +2,17 @@
 
 For every N: wall time of the sweep (warm kernels), full spectra computed and partial ones (the
 shift-inverts of split samples: continuation/nearest.py), LU factorizations and solves,
-collisions located, peak memory of the process; eps = 1e-4 and eps = 0; the fitted exponent of
-time against N; the fast detection against the exhaustive one (same collisions?)
-up to --exhaustive-up-to. Each run is a subprocess with a time budget: a run that would exceed
+collisions located, peak memory of the sweep's process and of its largest scan worker
+(continuation/scans.py); eps = 1e-4 and eps = 0; the fitted exponent of time against N; the
+fast detection against the exhaustive one (same collisions?) up to --exhaustive-up-to. The
+fast detection scans on --workers processes (default: the sweep's own choice, 2 from N = 80 on
+a machine with 2 cores); the exhaustive one always inline. Each run is a subprocess with a time budget: a run that would exceed
 it is stopped when the budget is spent (at the end of the LAPACK or ARPACK call running then,
 even inside a step), prints how far it got (the last accepted F_x) and is left out of the fit.
 
 Run: python benchmarks/scaling.py [--N 10,20,40,100,200,400,1000] [--budget 600]
                                   [--exhaustive-up-to 100] [--eps 1e-4,0]
-                                  [--window-N 1000 --window 0.0715:0.08]
+                                  [--window-N 1000 --window 0.0715:0.08] [--workers K]
 With --window-N, also a run tracking only that spectral window (bifurcate --window; lambda / k_n)
 at each of those N.
 """
@@ -27,7 +29,9 @@ import numpy as np
 CHILD = r"""
 import json, resource, signal, sys, time
 from diskfriction.continuation.collisions import DetectionParams
+from diskfriction.continuation.disks import DiskEquilibria
 from diskfriction.continuation.linalg import work
+from diskfriction.continuation.scans import default_workers
 from diskfriction.continuation.sweep import SweepParams, sweep
 from diskfriction.reports.units import PaperUnits
 from diskfriction.scenes import Scene
@@ -37,6 +41,7 @@ N, eps, mode, budget = int(sys.argv[1]), float(sys.argv[2]), sys.argv[3], float(
 scene = Scene(N=N, eps=eps)
 unit = PaperUnits.of(scene).eigenvalue("J")
 window = None if sys.argv[5] == "-" else tuple(float(w) * unit for w in sys.argv[5].split(":"))
+workers = None if sys.argv[6] == "auto" else int(sys.argv[6])
 system = System.from_scene(scene)
 reached = {"F_x": 0.0}
 
@@ -53,7 +58,8 @@ def out_of_time(signum, frame):
     raise OutOfTime
 
 
-params = SweepParams(detection=DetectionParams(mode=mode), window=window)
+params = SweepParams(detection=DetectionParams(mode=mode, workers=workers), window=window)
+used = default_workers(DiskEquilibria(system, *system.rest_state(), 0.0), system.ndof, params.detection)
 # compile and warm up on at most N = 100 (n = 300: the sparse path too), not on the big chain
 sweep(System.from_scene(Scene(N=min(N, 100), eps=eps)), 0.0, 1e-3, "J",
       SweepParams(detection=DetectionParams(mode=mode)))
@@ -61,7 +67,7 @@ work.reset()
 signal.signal(signal.SIGALRM, out_of_time)  # the budget also stops a run inside a step
 signal.alarm(max(1, round(budget)))
 t0 = time.perf_counter()
-out = {"N": N, "eps": eps, "mode": mode + ("" if window is None else " " + sys.argv[5])}
+out = {"N": N, "eps": eps, "mode": mode + ("" if window is None else " " + sys.argv[5]), "workers": used}
 try:
     branch = sweep(system, 0.0, 0.12, "J", params, progress)
     out.update(done=branch.status[-1] == "p_end", points=len(branch),
@@ -71,13 +77,14 @@ except OutOfTime:
 signal.alarm(0)
 out.update(seconds=time.perf_counter() - t0, reached=reached["F_x"], spectra=work.spectra,
            partial=work.spectra_partial, factorizations=work.factorizations, solves=work.solves,
-           peak_mb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
+           peak_mb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+           worker_mb=resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024)
 print(json.dumps(out))
 """
 
 
-def run(N: int, eps: float, mode: str, budget: float, window: str = "-") -> dict:
-    proc = subprocess.run([sys.executable, "-c", CHILD, str(N), str(eps), mode, str(budget), window],
+def run(N: int, eps: float, mode: str, budget: float, window: str = "-", workers: str = "auto") -> dict:
+    proc = subprocess.run([sys.executable, "-c", CHILD, str(N), str(eps), mode, str(budget), window, workers],
                           capture_output=True, text=True)
     if proc.returncode != 0:
         return {"N": N, "eps": eps, "mode": mode, "done": False,
@@ -90,8 +97,9 @@ def row(r: dict) -> str:
         return f"| {r['N']} | {r['eps']:g} | {r['mode']} | failed: {r['error']} |"
     coll = "-" if r["collisions"] is None else len(r["collisions"])
     status = "0.12" if r["done"] else f"stopped at F_x = {r['reached']:.4g}"
-    return (f"| {r['N']} | {r['eps']:g} | {r['mode']} | {r['seconds']:.1f} | {status} | "
-            f"{r['spectra']} + {r['partial']} | {r['factorizations']} | {r['solves']} | {coll} | {r['peak_mb']:.0f} |")
+    memory = f"{r['peak_mb']:.0f}" + (f" + {r['workers']} x {r['worker_mb']:.0f}" if r["workers"] else "")
+    return (f"| {r['N']} | {r['eps']:g} | {r['mode']} | {r['workers']} | {r['seconds']:.1f} | {status} | "
+            f"{r['spectra']} + {r['partial']} | {r['factorizations']} | {r['solves']} | {coll} | {memory} |")
 
 
 def agreement(fast: dict, exhaustive: dict) -> str:
@@ -114,18 +122,20 @@ def main() -> None:
     ap.add_argument("--eps", default="1e-4,0")
     ap.add_argument("--window-N", default="", help="N values for a spectral-window run")
     ap.add_argument("--window", default="0.0715:0.08", help="LO:HI in lambda / k_n")
+    ap.add_argument("--workers", default="auto", help="scan workers of the fast detection (auto: the sweep's choice)")
     args = ap.parse_args()
     sizes = [int(n) for n in args.N.split(",") if n]
     eps_values = [float(e) for e in args.eps.split(",")]
     print(f"{time.strftime('%Y-%m-%d %H:%M')}, load average {open('/proc/loadavg').read().split()[0]}")
-    print("| N | eps | detection | s | reached | spectra full + partial | LU | solves | collisions | peak MB |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    print("| N | eps | detection | workers | s | reached | spectra full + partial | LU | solves | collisions | "
+          "peak MB (sweep + workers x largest) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     results = {}
     for N in [int(n) for n in args.window_N.split(",") if n]:
-        print(row(run(N, eps_values[0], "fast", args.budget, args.window)), flush=True)
+        print(row(run(N, eps_values[0], "fast", args.budget, args.window, args.workers)), flush=True)
     for eps in eps_values:
         for N in sizes:
-            r = results[(N, eps, "fast")] = run(N, eps, "fast", args.budget)
+            r = results[(N, eps, "fast")] = run(N, eps, "fast", args.budget, workers=args.workers)
             print(row(r), flush=True)
             if eps and N <= args.exhaustive_up_to:
                 e = results[(N, eps, "exhaustive")] = run(N, eps, "exhaustive", args.budget)
