@@ -16,14 +16,15 @@ Events (problem.event_functions): if a component changes sign over the step, the
 the first such change, located on the branch (the step's segment) by the Illinois method to
 |dp| <= event_tol max(1, |p|) (a relative tolerance: it terminates at any p), and ends on the
 far side of it; the next step starts there. No step and no collision scan straddles an event.
-Each accepted step is scanned for eigenvalue collisions (collisions.scan_step) BEFORE
-problem.commit is called, so intermediate points see the state committed at x_k.
+Each accepted step is scanned for eigenvalue collisions (collisions.scan_step) in the state
+committed at x_k: inline, before problem.commit is called, or on a worker process restored to
+that state while the continuation goes on (scans.py; _follow says how the labels and a failed
+scan are handled then).
 """
 from __future__ import annotations
 
 import math
 from collections import deque
-from contextlib import closing
 from dataclasses import dataclass, replace
 from typing import Callable, Optional
 
@@ -199,8 +200,9 @@ def _continuation(problem, u0, p0, params, detection, workers, callback) -> Bran
     sample = _sorted(_sample(problem, 0.0, x, t, detection, None, side=+1))
     rec = _Recorder(detection.rel_tol, callback)
     rec.add(sample, 0.0, start, t, 0)
-    with closing(scans_for(problem, workers)) as scans:
-        status = _follow(problem, scans, pending_depth(workers, sample), _Start(x, t, sample, 0.0), rec, params, detection)
+    with scans_for(problem, workers) as scans:
+        status = _follow(problem, scans, pending_depth(workers, sample), _Start(x, t, sample, 0.0), rec,
+                         params, detection)
     return rec.branch(status)
 
 

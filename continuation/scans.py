@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import signal
 from dataclasses import dataclass
 from multiprocessing.connection import wait
 from typing import Optional
@@ -149,6 +150,12 @@ class InlineScans:
     def close(self) -> None:
         pass
 
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        pass
+
 
 class WorkerError(RuntimeError):
     """A worker process raised an unexpected exception (type and message are this one's) or
@@ -156,7 +163,10 @@ class WorkerError(RuntimeError):
 
 
 def _serve(problem: Problem, conn) -> None:
-    """A worker's loop: (ticket, job) in, (ticket, outcome or traceback text) out; None ends."""
+    """A worker's loop: (ticket, job) in, (ticket, outcome or the error in one line) out; None
+    ends it. Ctrl-C reaches the whole process group: the worker ignores it and the parent,
+    leaving the sweep, ends it."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     with blas_threads():
         while True:
             message = conn.recv()
@@ -237,26 +247,29 @@ class WorkerScans:
             if self._done.pop(t, None) is None:
                 self._dropped.add(t)
 
-    def close(self) -> None:
+    def close(self, wait: float = 5.0) -> None:
+        """End the workers: each finishes its scan (at most `wait` seconds) or is killed."""
         for conn in self._conns:
             try:
                 conn.send(None)
             except (BrokenPipeError, OSError):
                 pass
         for proc in self._procs:
-            proc.join(timeout=5)
+            proc.join(timeout=wait)
             if proc.is_alive():
                 proc.kill()
+                proc.join()
         for conn in self._conns:
             conn.close()
 
     def __enter__(self):
         return self
 
-    def __exit__(self, *exc):
-        self.close()
+    def __exit__(self, kind, value, tb):
+        self.close(wait=0.0 if kind is not None else 5.0)  # interrupted: no scan is awaited
 
 
 def scans_for(problem: Problem, workers: int):
-    """WorkerScans with `workers` processes, or InlineScans if workers is 0."""
+    """WorkerScans with `workers` processes, or InlineScans if workers is 0 (context managers:
+    leaving one ends its workers)."""
     return WorkerScans(problem, workers) if workers > 0 else InlineScans(problem)

@@ -240,6 +240,36 @@ def test_interrupting_an_ensemble_prints_one_line_and_exits_130(tmp_path):
     assert "Traceback" not in err
 
 
+def test_interrupting_a_sweep_with_scan_workers_prints_one_line_and_exits_130(tmp_path):
+    """N = 100 scans its steps on 2 forked workers (continuation/scans.py): they ignore SIGINT,
+    the command ends them and says one line."""
+    import psutil
+
+    scene = tmp_path / "n100.toml"
+    scene.write_text("[disks]\nN = 100\neps = 1e-4\n")
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "diskfriction", "bifurcate", str(scene), "--workers", "2", "--out",
+         str(tmp_path / "out")],
+        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        start_new_session=True, preexec_fn=default_sigint)
+    try:
+        deadline, workers = time.monotonic() + 120, []
+        while time.monotonic() < deadline and proc.poll() is None and len(workers) < 2:
+            workers = psutil.Process(proc.pid).children()
+            time.sleep(0.1)
+        assert len(workers) == 2 and all(ignores_sigint(w.pid) for w in workers)
+        time.sleep(1.0)  # scans under way
+        os.killpg(proc.pid, signal.SIGINT)
+        out, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 130, err
+    assert err.splitlines()[-1] == "interrupted: results written so far are kept; rerun to resume"
+    assert "Traceback" not in err
+    assert not any(w.is_running() and w.status() != psutil.STATUS_ZOMBIE for w in workers)
+
+
 # ---- progress -----------------------------------------------------------------------------------
 
 class Terminal(io.StringIO):
