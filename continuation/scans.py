@@ -2,8 +2,9 @@
 
 The scan of a step (collisions.scan_step) needs only the step's end points, the samples there
 and the problem's state committed at its start (Problem.state). Its labels continue those of
-the start sample, whatever labels that sample has (relabelling a sample relabels everything
-tracked from it). So the continuation may commit a step and go on while the step is scanned
+the start sample, whatever they are: a scan from a relabelled start is the same scan
+relabelled (up to ties between labels, such as the two real eigenvalues after a death, which
+the labels' order breaks). So the continuation may commit a step and go on while the step is scanned
 elsewhere, tracking its accepted points' labels directly from one another; when a scan comes
 back, its collisions and the labels of the points after it follow from one permutation
 (arclength.py). A scan that fails rejects its step: the continuation returns to the state
