@@ -23,6 +23,7 @@ from __future__ import annotations
 import multiprocessing
 import os
 import signal
+import sys
 from dataclasses import dataclass
 from multiprocessing.connection import wait
 from typing import Optional
@@ -89,8 +90,8 @@ def run_scan(problem: Problem, job: ScanJob) -> ScanOutcome:
 
 def default_workers(problem: Problem, n: int, detection: DetectionParams) -> int:
     """Workers for `problem`, whose stability matrix is n x n: detection.workers if set, else 2
-    (capped by the cores this process may use) for the fast detection from n = PARALLEL_FROM on
-    where fork exists; 0 (inline) for the exhaustive detection, whose stencil is a sample of the
+    for the fast detection from n = PARALLEL_FROM on, on Linux, when this process may use 2
+    cores or more; 0 (inline) for the exhaustive detection, whose stencil is a sample of the
     previous step, known only once that step's scan is done. Raises ValueError for workers
     asked of a problem whose committed state cannot be shipped (has_snapshots)."""
     if not detection.enabled or detection.mode != "fast":
@@ -100,8 +101,8 @@ def default_workers(problem: Problem, n: int, detection: DetectionParams) -> int
             raise ValueError(f"{type(problem).__name__} commits a state but has no state()/restore(): "
                              "its steps cannot be scanned on workers (workers=0)")
         return detection.workers
-    if n < PARALLEL_FROM or not has_snapshots(problem) or "fork" not in multiprocessing.get_all_start_methods():
-        return 0
+    if n < PARALLEL_FROM or not has_snapshots(problem) or not sys.platform.startswith("linux"):
+        return 0  # fork is the start method there (macOS has fork, but it is not safe to use)
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
     return 2 if cores >= 2 else 0
 
