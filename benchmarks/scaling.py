@@ -5,7 +5,7 @@ shift-inverts of split samples: continuation/nearest.py), LU factorizations and 
 collisions located, peak memory of the sweep's process and of its largest scan worker
 (continuation/scans.py); eps = 1e-4 and eps = 0; the fitted exponent of time against N; the
 fast detection against the exhaustive one (same collisions?) up to --exhaustive-up-to. The
-fast detection scans on --workers processes (default: the sweep's own choice, 2 from N = 80 on
+fast detection scans on --workers processes (default: the sweep's own choice, 2 from N = 20 on
 a machine with 2 cores); the exhaustive one always inline. Each run is a subprocess with a time budget: a run that would exceed
 it is stopped when the budget is spent (at the end of the LAPACK or ARPACK call running then,
 even inside a step), prints how far it got (the last accepted F_x) and is left out of the fit.

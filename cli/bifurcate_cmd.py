@@ -40,7 +40,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              "(bisection with full spectra, version 0.1; slow, for checking)")
     parser.add_argument("--workers", type=int, metavar="K",
                         help="processes that scan steps for collisions while the branch goes on "
-                             "(default: 2 from 80 disks with rotation, 120 without, on 2 cores or "
+                             "(default: 2 from 20 disks with rotation, 30 without, on 2 cores or "
                              "more; 0: scan each step before the next)")
     parser.add_argument("--window", metavar="LO:HI",
                         help="track only the eigenvalues with LO <= Re lambda <= HI (the "

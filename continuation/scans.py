@@ -38,9 +38,11 @@ from .segment import Segment, SegmentSolveError
 
 Array = np.ndarray
 
-PARALLEL_FROM = 240
-"""Stability matrix size from which scans go to workers by default (a step's scan then costs
-tens of milliseconds or more, against about a millisecond to ship its two samples)."""
+PARALLEL_FROM = 60
+"""Stability matrix size from which scans go to workers by default: N = 20 with rotation, where
+two workers made the sweep 0.53 s against 0.43 s inline; at N = 10 (the paper's scene, n = 30)
+they gain nothing (0.23-0.26 s either way) and its sweeps stay bit for bit version 0.1's
+detection (docs/continuation.md)."""
 PENDING_BYTES = 2 ** 30
 """Eigenvectors the continuation may hold in steps whose scans are pending (pending_depth)."""
 
