@@ -93,7 +93,7 @@ def run_scan(problem: Problem, job: ScanJob) -> ScanOutcome:
 def default_workers(problem: Problem, n: int, detection: DetectionParams) -> int:
     """Workers for `problem`, whose stability matrix is n x n: detection.workers if set, else 2
     for the fast detection from n = PARALLEL_FROM on, on Linux, when this process may use 2
-    cores or more; 0 (inline) for the exhaustive detection, whose stencil is a sample of the
+    cores or more and is not daemonic; 0 (inline) for the exhaustive detection, whose stencil is a sample of the
     previous step, known only once that step's scan is done. Raises ValueError for workers
     asked of a problem whose committed state cannot be shipped (has_snapshots)."""
     if not detection.enabled or detection.mode != "fast":
@@ -105,6 +105,8 @@ def default_workers(problem: Problem, n: int, detection: DetectionParams) -> int
         return detection.workers
     if n < PARALLEL_FROM or not has_snapshots(problem) or not sys.platform.startswith("linux"):
         return 0  # fork is the start method there (macOS has fork, but it is not safe to use)
+    if multiprocessing.current_process().daemon:
+        return 0  # a daemonic process (a dask worker, say) may not start children
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
     return 2 if cores >= 2 else 0
 

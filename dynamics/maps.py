@@ -206,8 +206,9 @@ def map_cell(scene: Scene, params: MapParams) -> dict:
     with slide runs, one row per window (dynamics.verify.window_run)."""
     from diskfriction.continuation.arclength import ContinuationError
     from diskfriction.continuation.disks import EquilibriumError
+    from diskfriction.continuation.collisions import DetectionParams
     from diskfriction.continuation.records import collision_records
-    from diskfriction.continuation.sweep import sweep
+    from diskfriction.continuation.sweep import SweepParams, sweep
     from diskfriction.dynamics.verify import windows
     from diskfriction.symbolic import System
 
@@ -217,7 +218,9 @@ def map_cell(scene: Scene, params: MapParams) -> dict:
               "windows": [], "runs": []}
     system = System.from_scene(scene)
     try:
-        branch = sweep(system, params.F_from, params.F_to, params.matrix)
+        # the cells already run one per core: each sweep scans its steps inline
+        branch = sweep(system, params.F_from, params.F_to, params.matrix,
+                       SweepParams(detection=DetectionParams(workers=0)))
     except (EquilibriumError, ContinuationError, np.linalg.LinAlgError) as error:
         summary |= {"status": "failed", "reason": f"no branch: {error}"}
     else:

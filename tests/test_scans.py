@@ -3,6 +3,8 @@ collisions as inline scans, a failed scan's step rejected after the continuation
 workers' errors and lifetimes."""
 from __future__ import annotations
 
+import multiprocessing
+
 import numpy as np
 import pytest
 
@@ -95,6 +97,9 @@ def test_a_failed_scan_rejects_its_step_after_the_branch_went_on(monkeypatch):
     assert np.array_equal(plain.F_x[:21], inline.F_x[:21]) and inline.F_x[21] < plain.F_x[21]
 
 
+LINEAR = FunctionProblem(lambda u, p: u - p, lambda u, p: np.eye(u.size), lambda u, p: -np.ones(u.size))
+
+
 class Snapshots(Problem):
     """A stateful problem (its committed p shifts G) with snapshots; restore(None) raises."""
 
@@ -128,16 +133,29 @@ class NoSnapshots(Snapshots):
 
 def test_workers_by_default_and_on_request():
     fast, exhaustive = DetectionParams(), DetectionParams(mode="exhaustive", workers=2)
-    linear = FunctionProblem(lambda u, p: u - p, lambda u, p: np.eye(u.size), lambda u, p: -np.ones(u.size))
-    assert has_snapshots(linear) and has_snapshots(Snapshots()) and not has_snapshots(NoSnapshots())
-    assert default_workers(linear, 30, fast) == 0  # small: inline
-    assert default_workers(linear, 300, exhaustive) == 0  # its stencil needs the previous scan
+    assert has_snapshots(LINEAR) and has_snapshots(Snapshots()) and not has_snapshots(NoSnapshots())
+    assert default_workers(LINEAR, 30, fast) == 0  # small: inline
+    assert default_workers(LINEAR, 300, exhaustive) == 0  # its stencil needs the previous scan
     assert default_workers(NoSnapshots(), 300, fast) == 0
-    assert default_workers(linear, 30, DetectionParams(workers=3)) == 3
+    assert default_workers(LINEAR, 30, DetectionParams(workers=3)) == 3
     with pytest.raises(ValueError, match="NoSnapshots commits a state"):
         default_workers(NoSnapshots(), 300, DetectionParams(workers=2))
     with pytest.raises(ValueError, match="workers must be >= 0"):
         DetectionParams(workers=-1)
+
+
+def _default_in(conn):
+    conn.send(default_workers(LINEAR, 300, DetectionParams()))
+
+
+def test_a_daemonic_process_scans_inline():
+    """A daemonic process (a dask worker by default, e.g. a map's cell) may not start children."""
+    context = multiprocessing.get_context("fork")
+    here, there = context.Pipe()
+    child = context.Process(target=_default_in, args=(there,), daemon=True)
+    child.start()
+    assert here.recv() == 0
+    child.join()
 
 
 def test_a_worker_error_is_raised_here_and_workers_end():
