@@ -30,6 +30,8 @@ from typing import Optional
 
 import numpy as np
 
+from diskfriction.errors import OneLineError
+
 from .collisions import DetectionParams, ScanResult, scan_step
 from .linalg import SingularMatrix, blas_threads, work
 from .problem import Problem
@@ -163,9 +165,9 @@ class InlineScans:
         pass
 
 
-class WorkerError(RuntimeError):
+class WorkerError(OneLineError):
     """A worker process raised an unexpected exception (type and message are this one's) or
-    died."""
+    died (killed for memory, say): the command says so in one line, exit 1."""
 
 
 def _serve(problem: Problem, conn) -> None:
@@ -215,7 +217,10 @@ class WorkerScans:
 
     def _dispatch(self) -> None:
         while self._idle and self._queue:
-            self._idle.pop(0).send(self._queue.pop(0))
+            try:
+                self._idle.pop(0).send(self._queue.pop(0))
+            except (BrokenPipeError, ConnectionResetError):
+                raise WorkerError("a scan worker died") from None
 
     def _receive(self, timeout: Optional[float]) -> None:
         busy = [c for c in self._conns if c not in self._idle]

@@ -168,3 +168,17 @@ def test_a_worker_error_is_raised_here_and_workers_end():
         scans.result(ticket)
     scans.close()
     assert not any(proc.is_alive() for proc in scans._procs)
+
+
+def test_a_dead_worker_is_one_line():
+    """A worker killed (by the kernel for memory, say): the sweep stops with a OneLineError,
+    which the command line prints as one line, exit 1."""
+    from diskfriction.errors import OneLineError
+
+    x = np.array([0.0, 0.0])
+    with WorkerScans(Snapshots(), 1) as scans:
+        scans._procs[0].kill()
+        scans._procs[0].join()
+        with pytest.raises(OneLineError, match="a scan worker died"):
+            scans.result(scans.submit(ScanJob(0.0, x, x + 0.1, 1e-10, 8, None, None, DetectionParams(), 0)))
+
