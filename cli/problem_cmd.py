@@ -124,8 +124,8 @@ def run_problem(args: argparse.Namespace) -> int:
     stem = path.stem if name == DEFAULT_NAME else f"{path.stem}-{name}"
     out = output_dir("bifurcate", args.out, Path("out") / "bifurcate" / stem)
     workers = spec.options.detection.workers if args.workers is None else args.workers
-    options = replace(spec.options, detection=replace(spec.options.detection, mode=args.detection, workers=workers),
-                      ds_max=args.ds_max or spec.options.ds_max)
+    detection = replace(spec.options.detection, mode=args.detection, workers=workers)
+    options = replace(spec.options, detection=detection, ds_max=args.ds_max or spec.options.ds_max)
     return _continue(spec, label, span, options, out, args.json)
 
 

@@ -221,15 +221,15 @@ class _Start:
 @dataclass(frozen=True)
 class _Pending:
     """A committed step whose scan (scans.py) is not yet recorded: its start, the problem's
-    state committed there (to return to if the scan fails) and at its end (the callback's),
-    the step and its end sample after the commit (None: the commit found no equilibrium)."""
+    state committed there (to return to if the scan fails; the next pending step's is the one
+    committed at this step's end), the step and its end sample after the commit (None: the
+    commit found no equilibrium)."""
 
     ticket: int
     start: _Start
     state: object
     step: _Step
     end: Optional[Sample]
-    after: object
 
 
 def _follow(problem: Problem, scans, depth: int, here: _Start, rec: "_Recorder",
@@ -272,7 +272,7 @@ def _follow(problem: Problem, scans, depth: int, here: _Start, rec: "_Recorder",
             else:
                 end = item.end.relabel(scan.end_perm)
                 here = replace(here, sample=end)
-            _record(problem, rec, item, end.relabel(labels), scan.solves, ahead)
+            _record(problem, rec, item, end.relabel(labels), scan.solves, pending[0].state if ahead else None)
         if stopped and not pending:
             return status
         if stopped:
@@ -308,7 +308,7 @@ def _advance(problem, scans, here: _Start, index: int, pending: deque, previous,
                                   end, detection, index, previous, step.event))
     committed, end = _commit(problem, here.x, step, end, params, detection)
     pending.append(_Pending(ticket, here, state, step if committed is None else committed,
-                            None if committed is None else end, problem.state()))
+                            None if committed is None else end))
     if committed is None:
         return here, f"commit: no equilibrium after the commit at p={end.p:.12g}"
     ds = here.ds
@@ -318,12 +318,14 @@ def _advance(problem, scans, here: _Start, index: int, pending: deque, previous,
     return _Start(committed.x, committed.tangent, end, ds, g), ("p_end" if committed.last else None)
 
 
-def _record(problem: Problem, rec: "_Recorder", item: _Pending, end: Sample, solves: int, ahead: bool) -> None:
+def _record(problem: Problem, rec: "_Recorder", item: _Pending, end: Sample, solves: int,
+            after: Optional[object]) -> None:
     """rec.add for a scanned step; the callback sees the problem in the state committed at the
-    step's end (restored for it while the continuation is ahead)."""
-    now = problem.state() if ahead and rec.callback is not None else None
+    step's end: `after`, restored for it while the continuation is ahead (else None: the
+    problem is in that state)."""
+    now = problem.state() if after is not None and rec.callback is not None else None
     if now is not None:
-        problem.restore(item.after)
+        problem.restore(after)
     rec.add(end, item.start.ds, item.step.newton, item.step.tangent, solves)
     if now is not None:
         problem.restore(now)

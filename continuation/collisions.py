@@ -86,7 +86,8 @@ class DetectionParams:
     never); partial_max_k: the most eigenvalues a partial sample computes (beyond that, or
     when they do not cover the labels, the sample is a full spectrum); workers: processes that
     scan steps while the continuation goes on (scans.py; 0: every scan inline; None: 2 for the
-    fast detection from n = scans.PARALLEL_FROM on where the machine has 2 cores, else 0)."""
+    fast detection from n = scans.PARALLEL_FROM on, on Linux with 2 cores, else 0:
+    scans.default_workers)."""
 
     mode: str = "fast"
     rel_tol: float = DEFAULT_REL_TOL

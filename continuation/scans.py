@@ -42,7 +42,7 @@ Array = np.ndarray
 
 PARALLEL_FROM = 60
 """Stability matrix size from which scans go to workers by default: N = 20 with rotation, where
-two workers made the sweep 0.53 s against 0.43 s inline; at N = 10 (the paper's scene, n = 30)
+two workers made the sweep 0.43 s against 0.53 s inline; at N = 10 (the paper's scene, n = 30)
 they gain nothing (0.23-0.26 s either way) and its sweeps stay bit for bit version 0.1's
 detection (docs/continuation.md)."""
 PENDING_BYTES = 2 ** 30
@@ -230,10 +230,10 @@ class WorkerScans:
             except EOFError:
                 raise WorkerError("a scan worker died") from None
             self._idle.append(conn)
-            if isinstance(reply, str):
-                raise WorkerError(f"in a scan worker: {reply}")
-            if ticket in self._dropped:
+            if ticket in self._dropped:  # its step was rejected: whatever came back is moot
                 self._dropped.discard(ticket)
+            elif isinstance(reply, str):
+                raise WorkerError(f"in a scan worker: {reply}")
             else:
                 self._done[ticket] = reply
         self._dispatch()
@@ -258,15 +258,15 @@ class WorkerScans:
             if self._done.pop(t, None) is None:
                 self._dropped.add(t)
 
-    def close(self, wait: float = 5.0) -> None:
-        """End the workers: each finishes its scan (at most `wait` seconds) or is killed."""
+    def close(self, grace: float = 5.0) -> None:
+        """End the workers: each finishes its scan (at most `grace` seconds) or is killed."""
         for conn in self._conns:
             try:
                 conn.send(None)
             except (BrokenPipeError, OSError):
                 pass
         for proc in self._procs:
-            proc.join(timeout=wait)
+            proc.join(timeout=grace)
             if proc.is_alive():
                 proc.kill()
                 proc.join()
@@ -277,7 +277,7 @@ class WorkerScans:
         return self
 
     def __exit__(self, kind, value, tb):
-        self.close(wait=0.0 if kind is not None else 5.0)  # interrupted: no scan is awaited
+        self.close(grace=0.0 if kind is not None else 5.0)  # interrupted: no scan is awaited
 
 
 def scans_for(problem: Problem, workers: int):

@@ -205,8 +205,8 @@ def map_cell(scene: Scene, params: MapParams) -> dict:
     located collisions (as bifurcate's collisions.json), windows [start, stop, pairs] and,
     with slide runs, one row per window (dynamics.verify.window_run)."""
     from diskfriction.continuation.arclength import ContinuationError
-    from diskfriction.continuation.disks import EquilibriumError
     from diskfriction.continuation.collisions import DetectionParams
+    from diskfriction.continuation.disks import EquilibriumError
     from diskfriction.continuation.records import collision_records
     from diskfriction.continuation.sweep import SweepParams, sweep
     from diskfriction.dynamics.verify import windows
