@@ -438,11 +438,28 @@ class StepScan:
                     return True
         return False
 
+    def _release_vectors(self) -> None:
+        """Drop the eigenvectors of the inner full samples that no locator can need any more:
+        both neighbours full and both intervals clean or narrow. That is final: a clean or
+        narrow interval is never split, and a relabelling permutes both its ends alike. (Next
+        to a partial sample an interval is clean only on the labels known at both ends.) Keeps
+        a busy step's peak memory down; the scan's results are the same."""
+        S = self.samples
+        for k in range(self._start + 1, len(S) - 1):
+            if (S[k].system is not None and not (S[k - 1].partial or S[k].partial or S[k + 1].partial)
+                    and self._settled(k - 1) and self._settled(k)):
+                S[k] = S[k].without_vectors()
+
+    def _settled(self, idx: int) -> bool:
+        verdict = self.verdict(idx)
+        return verdict.kind == "clean" or self._narrow(self.samples[idx], self.samples[idx + 1])
+
     def run(self) -> list:
         """Refine until every interval is final; return the collisions in branch order."""
         try:
             while self._advance():
-                pass
+                if self.params.slopes:
+                    self._release_vectors()
         except _Budget:
             self.warnings.append(f"step {self.step}: detection budget of {self.params.max_solves} "
                                  "solves exhausted; remaining events unresolved")

@@ -65,6 +65,13 @@ class Sample:
         """The same point at another segment coordinate (a new step starts at its old end)."""
         return replace(self, s=s)
 
+    def without_vectors(self) -> "Sample":
+        """The same sample without its eigenvectors (the slopes stay), under the same uid: the
+        verdicts cached on it stay valid (collisions.StepScan._release_vectors)."""
+        lean = replace(self, system=None)
+        object.__setattr__(lean, "uid", self.uid)
+        return lean
+
     def relabel(self, perm: Array) -> "Sample":
         """Labels permuted: new[i] = old[perm[i]]."""
         take = lambda a: None if a is None else a[perm]  # noqa: E731

@@ -372,3 +372,32 @@ def test_a_partial_sample_matches_the_full_one_on_its_labels_or_declines():
     assert np.all(np.isnan(part.eigvals[part.known == 0]))
     assert np.all(part.gaps[labels] <= full.gaps[labels] + 1e-12)
     assert partial_sample_at(problem, 1.0, x1, left, [(labels, 5.5, 2)], t) is None
+
+
+def test_settled_samples_drop_their_vectors_and_the_scan_finds_the_same(monkeypatch):
+    """A scan drops the eigenvectors of inner samples whose two intervals are settled (clean or
+    narrow, full neighbours): some samples of the N = 20 sweep lose them, and without the
+    release (monkeypatched away) the branch and its collisions are exactly the same."""
+    from diskfriction.continuation.collisions import StepScan
+
+    system = System.from_scene(Scene(N=20, eps=1e-4))
+    detection = DetectionParams(workers=0)
+    released, inner = [], []
+    run = StepScan.run
+
+    def counting_run(self):
+        found = run(self)
+        middle = self.samples[1:-1]
+        inner.append(len(middle))
+        released.append(sum(s.system is None and s.tangent is not None for s in middle))
+        return found
+
+    monkeypatch.setattr(StepScan, "run", counting_run)
+    lean = sweep(system, 0.0, 0.12, "J", SweepParams(detection=detection))
+    assert 0 < sum(released) < sum(inner)
+    monkeypatch.setattr(StepScan, "_release_vectors", lambda self: None)
+    released.clear()
+    kept = sweep(system, 0.0, 0.12, "J", SweepParams(detection=detection))
+    assert sum(released) == 0
+    assert np.array_equal(lean.F_x, kept.F_x) and np.array_equal(lean.eigenvalues, kept.eigenvalues)
+    assert [(c.p, c.kind, c.pair) for c in lean.collisions] == [(c.p, c.kind, c.pair) for c in kept.collisions]
