@@ -7,9 +7,8 @@ import numpy as np
 
 from diskfriction.reports.analysis import PAPER_V1, PAPER_V2
 from diskfriction.reports.registry import Section
-from diskfriction.reports.sections.common import ensemble_need, failures, fmt, new_figure, table
+from diskfriction.reports.sections.common import ensemble_need, failures, new_figure, table
 from diskfriction.reports.sections.runs import NEEDS_ENSEMBLE
-from diskfriction.reports.units import TIME_LABEL
 
 
 def needs(scene, settings):

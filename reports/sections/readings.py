@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 
-import numpy as np
-
 from diskfriction.reports import analysis as A
 from diskfriction.reports.registry import Section
 from diskfriction.reports.sections.common import branch_need, failures, new_figure, spectra_need, table
