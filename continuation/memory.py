@@ -11,11 +11,12 @@ about POINT_VECTORS vectors of n doubles, for at most `points` points (the paper
 about 700; a sweep stops after 20 000).
 
 The estimate is a lower bound, so the guard refuses only what cannot fit: the fast detection
-keeps every full sample of a step while it scans it, each with 4 n^2 doubles of eigenvectors (up
-to 24 samples in one step at N = 100), so a full-spectrum sweep peaks higher: 263 MB at N = 100,
-956 MB at N = 200, 5.3 GB within the first 10 minutes at N = 1000 (docs/continuation.md, Cost).
-A spectral window's samples hold n x k vectors, and at eps = 0 only the disks the load reached
-carry vectors.
+keeps the full samples of a step whose intervals are not yet settled while it scans it, each
+with 4 n^2 doubles of eigenvectors, and with scan workers each of the three processes holds
+such samples, so a full-spectrum sweep peaks higher: at N = 200 678 MB inline, 963 + 2 x 587
+MB (resident, shared pages counted in each) with two workers; within the first 10 minutes at
+N = 1000, 3.2 + 2 x 3.2 GB (docs/continuation.md, Cost). A spectral window's samples hold n x k
+vectors, and at eps = 0 only the disks the load reached carry vectors.
 """
 from __future__ import annotations
 
