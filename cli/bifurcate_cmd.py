@@ -113,7 +113,11 @@ def run(args: argparse.Namespace) -> int:
         raise CommandError(f"bifurcate error: --workers: must be >= 0 (got {args.workers})")
     matrix = MATRICES[args.matrix] if args.matrix else scene.matrix
     out = output_dir("bifurcate", args.out, Path("out") / "bifurcate" / scene.name)
-    check_sweep_memory("bifurcate", scene)
+    from diskfriction.continuation.scans import automatic_workers
+
+    workers = args.workers if args.workers is not None else \
+        automatic_workers(scene.ndof) if args.detection == "fast" else 0
+    check_sweep_memory("bifurcate", scene, 1 + workers)
 
     from diskfriction.continuation.arclength import ContinuationError
     from diskfriction.continuation.collisions import DetectionParams

@@ -91,15 +91,18 @@ def output_dir(command: str, given: Optional[str], default: Path) -> Path:
     return path
 
 
-def check_sweep_memory(command: str, scene: Scene) -> None:
+def check_sweep_memory(command: str, scene: Scene, processes: int = 1) -> None:
     """Refuse (one line, exit 2) a scene whose sweeps need more memory than this machine has:
-    continuation is dense in n = ndof (continuation/memory.py)."""
+    continuation is dense in n = ndof, in each of the `processes` that take spectra at once (a
+    sweep's and its scan workers, or a map's cells on this machine; continuation/memory.py)."""
     from diskfriction.continuation.memory import sweep_bytes
     from diskfriction.memory import NotEnoughMemory, require_memory
 
     n = scene.ndof
+    where = f" in {processes} processes" if processes > 1 else ""
     try:
-        require_memory(sweep_bytes(n), f"N = {scene.N}: a sweep of {n} x {n} dense matrices")
+        require_memory(sweep_bytes(n, processes=processes),
+                       f"N = {scene.N}: a sweep of {n} x {n} dense matrices{where}")
     except NotEnoughMemory as error:
         raise CommandError(f"{command} error: {scene.source}: {error}") from None
 

@@ -131,10 +131,12 @@ def run(args: argparse.Namespace) -> int:
             raise CommandError(f"map error: --workers: sizes the local cluster; the scheduler "
                                f"has its own workers (got {args.workers!r})")
     out = output_dir("map", args.out, Path("out") / "map" / scene.name)
-    for cell in cells:
-        check_sweep_memory("map", cell.scene)
+    from diskfriction.dynamics.cluster import code_version, local_workers
 
-    from diskfriction.dynamics.cluster import code_version
+    at_once = 1 if args.scheduler is not None else min(len(cells), local_workers(args.workers))
+    for cell in cells:
+        check_sweep_memory("map", cell.scene, at_once)
+
     from diskfriction.dynamics.maps import MapParams, SlideParams, run_map
     from diskfriction.dynamics.stepper import load_stepper
     from diskfriction.reports.maps import plot_map, save_map

@@ -8,7 +8,8 @@ DENSE_MATRICES n x n arrays of doubles at once. The Newton, tangent and locator 
 sparse (SuperLU, O(n)) from n = 240 on and dense below, where n^2 is small. Per stored point it keeps
 q, the trial and committed histories, the tracked eigenvalues (complex) and the core's tangent,
 about POINT_VECTORS vectors of n doubles, for at most `points` points (the paper's diagram has
-about 700; a sweep stops after 20 000).
+about 700; a sweep stops after 20 000). Scan workers (scans.py) form their own dense matrices:
+the dense part counts once per process.
 
 The estimate is a lower bound, so the guard refuses only what cannot fit: the fast detection
 keeps the full samples of a step whose intervals are not yet settled while it scans it, each
@@ -25,7 +26,9 @@ POINT_VECTORS = 8
 TYPICAL_POINTS = 2000
 
 
-def sweep_bytes(ndof: int, points: int = TYPICAL_POINTS) -> float:
-    """Estimated peak memory of a sweep [bytes] (float: N may be huge)."""
+def sweep_bytes(ndof: int, points: int = TYPICAL_POINTS, processes: int = 1) -> float:
+    """Estimated peak memory of a sweep [bytes] (float: N may be huge) whose spectra are taken
+    in `processes` processes at once (the sweep's and its scan workers, scans.py: each forms
+    its own dense matrices); the points are stored in the sweep's process alone."""
     n = float(ndof)
-    return 8.0 * (DENSE_MATRICES * n * n + POINT_VECTORS * n * points)
+    return 8.0 * (DENSE_MATRICES * n * n * processes + POINT_VECTORS * n * points)

@@ -105,7 +105,14 @@ def default_workers(problem: Problem, n: int, detection: DetectionParams) -> int
             raise ValueError(f"{type(problem).__name__} commits a state but has no state()/restore(): "
                              "its steps cannot be scanned on workers (workers=0)")
         return detection.workers
-    if n < PARALLEL_FROM or not has_snapshots(problem) or not sys.platform.startswith("linux"):
+    return automatic_workers(n) if has_snapshots(problem) else 0
+
+
+def automatic_workers(n: int) -> int:
+    """The fast detection's workers by default for an n x n stability matrix: 2 from n =
+    PARALLEL_FROM on, on Linux, when this process may use 2 cores or more and is not
+    daemonic; else 0."""
+    if n < PARALLEL_FROM or not sys.platform.startswith("linux"):
         return 0  # fork is the start method there (macOS has fork, but it is not safe to use)
     if multiprocessing.current_process().daemon:
         return 0  # a daemonic process (a dask worker, say) may not start children

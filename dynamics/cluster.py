@@ -73,6 +73,14 @@ def workers_ignore_interrupts():
         signal.signal(signal.SIGINT, previous)
 
 
+def local_workers(workers: Optional[int] = None) -> int:
+    """Processes of the local cluster that dask_client starts: `workers`, or one per core
+    (dask's CPU_COUNT, which heeds CPU affinity and cgroup limits)."""
+    from dask.system import CPU_COUNT
+
+    return workers or CPU_COUNT
+
+
 @contextlib.contextmanager
 def dask_client(scheduler: Optional[str] = None, workers: Optional[int] = None):
     """A dask.distributed Client on the scheduler at `scheduler` ([tcp://]HOST:PORT), else on
@@ -86,9 +94,9 @@ def dask_client(scheduler: Optional[str] = None, workers: Optional[int] = None):
     try:
         if scheduler is None:
             with workers_ignore_interrupts():
-                cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                       dashboard_address=None, scheduler_kwargs=HTTP_ANY_PORT,
-                                       silence_logs=logging.CRITICAL)
+                cluster = LocalCluster(n_workers=local_workers(workers), threads_per_worker=1,
+                                       processes=True, dashboard_address=None,
+                                       scheduler_kwargs=HTTP_ANY_PORT, silence_logs=logging.CRITICAL)
         try:
             client = Client(scheduler or cluster)
         except (OSError, ValueError) as error:

@@ -77,6 +77,30 @@ def test_a_scene_too_large_for_this_machine_is_refused_with_one_line(tmp_path, c
     assert f"N = {N}" in line and "more than this machine's" in line
 
 
+def test_the_memory_guard_counts_the_scan_workers(tmp_path):
+    """The sweep's dense matrices are formed in its process and in each scan worker: at an N
+    whose sweep fits in one process but not in three, check_sweep_memory refuses two workers
+    (one line naming the three processes) and lets one process go; `bifurcate` with its
+    default workers refuses it, exit 2."""
+    from diskfriction.cli.common import CommandError, check_sweep_memory
+    from diskfriction.continuation.memory import sweep_bytes
+    from diskfriction.continuation.scans import automatic_workers
+    from diskfriction.memory import physical_memory
+    from diskfriction.scenes import Scene
+
+    have, N = physical_memory(), 100
+    while sweep_bytes(Scene(N=N).ndof, processes=3) <= have:
+        N = int(N * 1.2)
+    scene = Scene(N=N)
+    assert sweep_bytes(scene.ndof, processes=1) < have
+    check_sweep_memory("bifurcate", scene, processes=1)
+    with pytest.raises(CommandError, match="in 3 processes"):
+        check_sweep_memory("bifurcate", scene, processes=3)
+    if automatic_workers(scene.ndof) == 2:
+        result = run_cli("bifurcate", scene_file(tmp_path, f"[disks]\nN = {N}\n"), "--out", str(tmp_path / "out"))
+        assert "in 3 processes" in one_line(result, "bifurcate")
+
+
 def test_the_scene_command_shows_a_large_scene(tmp_path):
     """A scene is a description: `scene` prints it whatever its size; commands refuse it."""
     result = run_cli("scene", scene_file(tmp_path, "[disks]\nN = 1000000000000\n"))
