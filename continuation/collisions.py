@@ -55,8 +55,7 @@ from typing import Optional
 import numpy as np
 
 from . import certify
-from .linalg import dense
-from .locate import LocatorFailed, locate_double_eigenvalue
+from .locate import LocatorFailed, jordan_chain_near, locate_double_eigenvalue
 from .newton import residual_norm, tangent
 from .partial_splits import certificates_survive, clusters, partial_allowed
 from .problem import Problem
@@ -160,22 +159,6 @@ def sample_discriminant(sample: Sample, i: int, j: int) -> float:
     """D_ij at a sample (spectra.pair_discriminant); nan if i, j cannot collide there."""
     ev, st = sample.eigvals, sample.status
     return float(pair_discriminant(ev[i], ev[j], st[i], st[j]))
-
-
-def jordan_vectors(A: Array, lam: float):
-    """(v, w, overlap) at a double eigenvalue lam of the dense A (exhaustive detection).
-
-    v: unit right null vector of A - lam I (smallest singular vector), sign fixed so that its
-    largest component is positive; w: least-squares solution of (A - lam I) w = v made
-    orthogonal to v (the generalized eigenvector of a Jordan block); overlap = |y . v| with y
-    the left null vector (0 for a Jordan block)."""
-    M = A - lam * np.eye(A.shape[0])
-    U, _, Vt = np.linalg.svd(M)
-    v, y = Vt[-1], U[:, -1]
-    v = v * np.sign(v[np.argmax(np.abs(v))])
-    w = np.linalg.lstsq(M, v, rcond=None)[0]
-    w = w - (v @ w) * v
-    return v, w, float(abs(y @ v))
 
 
 class _Budget(Exception):
@@ -488,7 +471,7 @@ class StepScan:
         mean_a, mean_b = (a.eigvals[i] + a.eigvals[j]).real / 2, (b.eigvals[i] + b.eigvals[j]).real / 2
         lam = float(mean_a + t * (mean_b - mean_a))
         u, p = x[:-1], float(x[-1])
-        v, w, overlap = jordan_vectors(dense(self.problem.stability_matrix(u, p)), lam)
+        v, w, overlap = jordan_chain_near(self.problem.stability_matrix(u, p), lam)
         # a sample on the collision itself (real side with D <= 4 thr^2) is its own bracket
         bracket = (min(a.p, b.p), max(a.p, b.p)) if self._narrow(a, b) or not resolved else (p, p)
         return Collision(p=p, kind=kind, eigenvalue=lam, eigenvector=v, generalized_eigenvector=w,

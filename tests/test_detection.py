@@ -105,6 +105,38 @@ def test_locator_converges_quadratically_to_a_closed_form_collision():
     assert found.overlap <= 1e-8  # a Jordan block: left and right eigenvectors orthogonal
 
 
+@pytest.mark.parametrize("sparse", [True, False])
+@pytest.mark.parametrize("offset", [0.0, 1e-9, 1e-7])
+def test_jordan_chain_near_a_double_eigenvalue_dense_or_sparse(sparse, offset, monkeypatch):
+    """jordan_chain_near at a Jordan block [[a, 1], [0, a]] inside a 400 x 400 block-diagonal
+    matrix: v = e_0, w = e_1 and overlap 0 to rounding at lambda = a, and within about the
+    offset (as least squares on the dense matrix gives them) with lambda off by 1e-9 or 1e-7
+    (an interpolated collision). No dense matrix for a sparse one: eps = 0 at N = 3000 spent
+    minutes in a dense SVD for such collisions."""
+    import scipy.sparse as sps
+
+    from diskfriction.continuation.locate import jordan_chain_near
+
+    a, n = -0.7, 400
+    rng = np.random.default_rng(3)
+    A = sps.diags_array(np.concatenate([[a, a], 1.0 + rng.random(n - 2)])).tolil()
+    A[0, 1] = 1.0
+    for i in range(2, n - 1, 2):  # 2 x 2 blocks with real eigenvalues away from a
+        A[i, i + 1] = 0.3
+    A = sps.csr_array(A) if sparse else A.toarray()
+    if sparse:
+        def no_dense(self, *args, **kwargs):
+            raise AssertionError("a sparse matrix made dense")
+
+        monkeypatch.setattr(sps.csr_array, "toarray", no_dense)
+        monkeypatch.setattr(sps.csc_array, "toarray", no_dense)
+    v, w, overlap = jordan_chain_near(A, a + offset)
+    tol = 1.5 * offset + 1e-12
+    e0, e1 = np.eye(n)[0], np.eye(n)[1]
+    assert np.allclose(v, e0, atol=tol) and overlap <= 2 * tol
+    assert np.allclose(w / np.linalg.norm(w), e1, atol=tol)
+
+
 def test_eps_zero_runs_to_the_end_with_free_rolling_modes_excluded():
     """N = 20 at eps = 0: disks beyond the load front touch their neighbours at overlaps of
     rounding size and are held by the substrate alone. Their rolling modes are counted at
