@@ -216,3 +216,43 @@ def test_free_modes_are_matched_among_themselves_and_give_no_gaps_to_the_chain()
     perm = continuation_perm(left, right)
     assert perm[0] == 1 and perm[1] == 0 and sorted(perm[2:].tolist()) == [2, 3]
     assert right.gaps[1] == pytest.approx(1.899) and right.gaps[3] == pytest.approx(3.95)
+
+
+def test_order_match_leaves_out_the_surplus_of_the_longer_list():
+    """Sorted lists whose sizes differ: the pairs keep the order and minimise the total
+    distance; the values the other list lacks (1.5), or one of each tie, are left out."""
+    from diskfriction.continuation.samples import order_match
+
+    a, b = np.array([1.0, 1.0, 1.0, 2.0, 2.0, 2.0, 5.0]), np.array([1.0, 1.0, 2.0, 2.0, 5.0])
+    i_a, i_b = order_match(a, b)
+    assert i_b.tolist() == [0, 1, 2, 3, 4] and np.array_equal(a[i_a], b)
+    j_b, j_a = order_match(b, a)
+    assert np.array_equal(j_a, i_a) and np.array_equal(j_b, i_b)
+    i_a, i_b = order_match(np.array([0.0, 1.0, 1.5, 2.0, 3.0]), np.array([0.0, 1.0, 2.0, 3.0]))
+    assert i_a.tolist() == [0, 1, 3, 4] and i_b.tolist() == [0, 1, 2, 3]
+    same = np.arange(4.0)
+    assert [x.tolist() for x in order_match(same, same)] == [[0, 1, 2, 3]] * 2
+
+
+def test_a_disk_joining_the_chain_takes_its_free_modes_into_the_chain_s_match():
+    """Four free disks (modes 0.5 and 0.7, excluded) and a chain (1, 2, 3); one disk joins:
+    its modes, now 0.52 and 0.69, are the chain's. The three disks still free are matched by
+    value, the chain's labels and the joining disk's two free labels by prediction among the
+    chain's, whatever the right sample's label order."""
+    def sample(x_p, values, excluded):
+        values, excluded = np.array(values, complex), np.array(excluded)
+        return Sample(0.0, np.array([0.0, x_p]), values, np.zeros(values.size, np.int8), 1e-12,
+                      excluded, np.array([0.0, 1.0]), np.zeros(values.size, complex), None, None,
+                      label_gaps(values, excluded, None))
+
+    chain, free = [1.0, 2.0, 3.0], [0.5, 0.7] * 4
+    left = sample(0.0, chain + free, [False] * 3 + [True] * 8)
+    values = np.array(chain + [0.52, 0.69] + [0.5, 0.7] * 3)
+    excluded = np.array([False] * 5 + [True] * 6)
+    order = np.random.default_rng(1).permutation(values.size)
+    right = sample(0.1, values[order], excluded[order])
+    perm = continuation_perm(left, right)
+    assert sorted(perm.tolist()) == list(range(11))
+    assert np.max(np.abs(left.eigvals - right.eigvals[perm])) <= 0.02 + 1e-12
+    assert np.array_equal(right.excluded[perm[:3]], [False] * 3)
+    assert right.excluded[perm[3:]].sum() == 6  # two of the eight free labels went to the chain
