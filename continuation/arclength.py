@@ -36,7 +36,7 @@ from .linalg import SingularMatrix, blas_threads
 from .newton import NewtonResult, bordered_newton, fixed_p_newton, residual_norm, tangent
 from .problem import Problem
 from .samples import Sample, make_sample, matrix_derivative, sample_at
-from .scans import ScanJob, default_workers, pending_depth, scans_for
+from .scans import ScanJob, default_workers, pending_full, scans_for
 from .segment import Segment, SegmentSolveError, refine_sign_change
 from .spectra import Eigensystem, count_complex_pairs, eigenvalue_slopes
 
@@ -201,8 +201,7 @@ def _continuation(problem, u0, p0, params, detection, workers, callback) -> Bran
     rec = _Recorder(detection.rel_tol, callback)
     rec.add(sample, 0.0, start, t, 0)
     with scans_for(problem, workers) as scans:
-        status = _follow(problem, scans, pending_depth(workers, sample), _Start(x, t, sample, 0.0), rec,
-                         params, detection)
+        status = _follow(problem, scans, workers, _Start(x, t, sample, 0.0), rec, params, detection)
     return rec.branch(status)
 
 
@@ -232,21 +231,23 @@ class _Pending:
     end: Optional[Sample]
 
 
-def _follow(problem: Problem, scans, depth: int, here: _Start, rec: "_Recorder",
+def _follow(problem: Problem, scans, workers: int, here: _Start, rec: "_Recorder",
             params: ContinuationParams, detection: DetectionParams) -> str:
     """Steps from `here` until the run ends; returns its status. Each accepted step is
     committed and its scan submitted; the scans are recorded in order as they come back (at
-    once inline; with workers, the continuation goes on with up to `depth` scans pending). The
-    labels of points tracked from a step's unscanned end follow the scan's end_perm:
-    recorded = tracked[labels]. A failed scan rejects its step as a failed corrector does: the
-    problem returns to the state committed at the step's start and later scans are dropped."""
+    once inline; with `workers`, the continuation goes on while the pending steps' end samples
+    stay within scans.pending_full). The labels of points tracked from a step's unscanned end
+    follow the scan's end_perm: recorded = tracked[labels]. A failed scan rejects its step as
+    a failed corrector does: the problem returns to the state committed at the step's start
+    and later scans are dropped."""
     here = replace(here, ds=params.ds, g=problem.event_functions(here.x[:-1], here.x[-1]))
     labels = np.arange(here.sample.eigvals.size)
     pending: deque[_Pending] = deque()
     previous: Optional[Sample] = None  # the exhaustive detection's stencil (scans inline)
     status, stopped = "max_steps", False
     while True:
-        while pending and (stopped or len(pending) > depth or scans.ready(pending[0].ticket)):
+        while pending and (stopped or pending_full(workers, [item.end for item in pending])
+                           or scans.ready(pending[0].ticket)):
             item = pending.popleft()
             outcome = scans.result(item.ticket)
             if outcome.failure is not None:

@@ -46,7 +46,7 @@ two workers made the sweep 0.43 s against 0.53 s inline; at N = 10 (the paper's 
 they gain nothing (0.23-0.26 s either way) and its sweeps stay bit for bit version 0.1's
 detection (docs/continuation.md)."""
 PENDING_BYTES = 2 ** 30
-"""Eigenvectors the continuation may hold in steps whose scans are pending (pending_depth)."""
+"""Eigenvectors the continuation may hold in steps whose scans are pending (pending_full)."""
 
 
 @dataclass(frozen=True)
@@ -127,16 +127,20 @@ def has_snapshots(problem: Problem) -> bool:
     return cls.commit is Problem.commit or (cls.state is not Problem.state and cls.restore is not Problem.restore)
 
 
-def pending_depth(workers: int, sample: Sample) -> int:
-    """How many scans may be pending before the continuation waits for the oldest: each holds
-    its end sample, whose vectors take as many bytes as `sample`'s. As many as PENDING_BYTES
-    allow, and at least 2 per worker (one running, one queued). A deep queue lets the
-    continuation run ahead through quiet steps while the workers are on crowded ones: at
-    N = 100 (2.9 MB a sample) depths 4, 8 and unbounded took 9.8, 9.5 and 9.1 s
-    (docs/continuation.md)."""
+def pending_full(workers: int, ends: list) -> bool:
+    """Whether the continuation must wait for the oldest pending scan: the end samples of the
+    pending steps (`ends`; None for a step whose commit found no equilibrium) are more than 2
+    per worker (one running, one queued) and hold more than PENDING_BYTES of eigenvectors,
+    counted as they are (a sample at eps = 0 grows as the load reaches more disks). A deep
+    queue lets the continuation run ahead through quiet steps while the workers are on crowded
+    ones: at N = 100 (2.9 MB a sample) 4, 8 and unbounded pending steps took 9.8, 9.5 and
+    9.1 s (docs/continuation.md)."""
+    return len(ends) > 2 * workers and sum(_vector_bytes(end) for end in ends if end is not None) > PENDING_BYTES
+
+
+def _vector_bytes(sample: Sample) -> int:
     system = sample.system
-    vector_bytes = 0 if system is None or system.right is None else system.right.nbytes + system.left.nbytes
-    return max(2 * workers, int(PENDING_BYTES // max(vector_bytes, 1)))
+    return 0 if system is None or system.right is None else system.right.nbytes + system.left.nbytes
 
 
 class InlineScans:
