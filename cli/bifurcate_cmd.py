@@ -117,7 +117,7 @@ def run(args: argparse.Namespace) -> int:
 
     workers = args.workers if args.workers is not None else \
         automatic_workers(scene.ndof) if args.detection == "fast" else 0
-    check_sweep_memory("bifurcate", scene, 1 + workers)
+    check_sweep_memory("bifurcate", scene, 1 + workers, dense=window is None and scene.eps > 0)
 
     from diskfriction.continuation.arclength import ContinuationError
     from diskfriction.continuation.collisions import DetectionParams

@@ -91,18 +91,19 @@ def output_dir(command: str, given: Optional[str], default: Path) -> Path:
     return path
 
 
-def check_sweep_memory(command: str, scene: Scene, processes: int = 1) -> None:
+def check_sweep_memory(command: str, scene: Scene, processes: int = 1, dense: bool = True) -> None:
     """Refuse (one line, exit 2) a scene whose sweeps need more memory than this machine has:
-    continuation is dense in n = ndof, in each of the `processes` that take spectra at once (a
-    sweep's and its scan workers, or a map's cells on this machine; continuation/memory.py)."""
+    continuation is dense in n = ndof (unless `dense` is False: a spectral window, or eps = 0),
+    in each of the `processes` that take spectra at once (a sweep's and its scan workers, or a
+    map's cells on this machine), and stores its points (continuation/memory.py)."""
     from diskfriction.continuation.memory import sweep_bytes
     from diskfriction.memory import NotEnoughMemory, require_memory
 
     n = scene.ndof
     where = f" in {processes} processes" if processes > 1 else ""
+    what = f"a sweep of {n} x {n} dense matrices{where}" if dense else f"a sweep's points of {n} unknowns"
     try:
-        require_memory(sweep_bytes(n, processes=processes),
-                       f"N = {scene.N}: a sweep of {n} x {n} dense matrices{where}")
+        require_memory(sweep_bytes(n, processes=processes, dense=dense), f"N = {scene.N}: {what}")
     except NotEnoughMemory as error:
         raise CommandError(f"{command} error: {scene.source}: {error}") from None
 

@@ -135,7 +135,7 @@ def run(args: argparse.Namespace) -> int:
 
     at_once = 1 if args.scheduler is not None else min(len(cells), local_workers(args.workers))
     for cell in cells:
-        check_sweep_memory("map", cell.scene, at_once)
+        check_sweep_memory("map", cell.scene, at_once, dense=cell.scene.eps > 0)
 
     from diskfriction.dynamics.maps import MapParams, SlideParams, run_map
     from diskfriction.dynamics.stepper import load_stepper

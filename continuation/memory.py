@@ -26,9 +26,11 @@ POINT_VECTORS = 8
 TYPICAL_POINTS = 2000
 
 
-def sweep_bytes(ndof: int, points: int = TYPICAL_POINTS, processes: int = 1) -> float:
+def sweep_bytes(ndof: int, points: int = TYPICAL_POINTS, processes: int = 1, dense: bool = True) -> float:
     """Estimated peak memory of a sweep [bytes] (float: N may be huge) whose spectra are taken
     in `processes` processes at once (the sweep's and its scan workers, scans.py: each forms
-    its own dense matrices); the points are stored in the sweep's process alone."""
+    its own dense matrices); the points are stored in the sweep's process alone. dense=False:
+    a sweep that forms no n x n matrix, as far as a lower bound can tell (a spectral window,
+    or eps = 0, where only the disks the load reached form a dense block)."""
     n = float(ndof)
-    return 8.0 * (DENSE_MATRICES * n * n * processes + POINT_VECTORS * n * points)
+    return 8.0 * (DENSE_MATRICES * n * n * processes * dense + POINT_VECTORS * n * points)

@@ -68,10 +68,11 @@ def test_a_read_only_out_is_one_line_and_exit_2(tmp_path):
 
 # ---- memory ---------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("N", [100_000, 10**12])
+@pytest.mark.parametrize("N, eps", [(100_000, 1e-4), (10**12, 0.0)])
 @pytest.mark.parametrize("command", COMMANDS)
-def test_a_scene_too_large_for_this_machine_is_refused_with_one_line(tmp_path, command, N):
-    scene = scene_file(tmp_path, f"[disks]\nN = {N}\n")
+def test_a_scene_too_large_for_this_machine_is_refused_with_one_line(tmp_path, command, N, eps):
+    """Pre-compressed (eps > 0: dense spectra) at N = 100 000, or any scene at N = 10^12."""
+    scene = scene_file(tmp_path, f"[disks]\nN = {N}\neps = {eps}\n")
     result = run_cli(command, scene, *COMMANDS[command], "--out", str(tmp_path / "out"))
     line = one_line(result, command)
     assert f"N = {N}" in line and "more than this machine's" in line
@@ -80,8 +81,9 @@ def test_a_scene_too_large_for_this_machine_is_refused_with_one_line(tmp_path, c
 def test_the_memory_guard_counts_the_scan_workers(tmp_path):
     """The sweep's dense matrices are formed in its process and in each scan worker: at an N
     whose sweep fits in one process but not in three, check_sweep_memory refuses two workers
-    (one line naming the three processes) and lets one process go; `bifurcate` with its
-    default workers refuses it, exit 2."""
+    (one line naming the three processes) and lets one process go, and three without dense
+    matrices (eps = 0); `bifurcate` with its default workers refuses the pre-compressed
+    scene, exit 2."""
     from diskfriction.cli.common import CommandError, check_sweep_memory
     from diskfriction.continuation.memory import sweep_bytes
     from diskfriction.continuation.scans import automatic_workers
@@ -91,13 +93,15 @@ def test_the_memory_guard_counts_the_scan_workers(tmp_path):
     have, N = physical_memory(), 100
     while sweep_bytes(Scene(N=N).ndof, processes=3) <= have:
         N = int(N * 1.2)
-    scene = Scene(N=N)
+    scene = Scene(N=N, eps=1e-4)  # pre-compressed: every disk in the chain, dense spectra
     assert sweep_bytes(scene.ndof, processes=1) < have
     check_sweep_memory("bifurcate", scene, processes=1)
     with pytest.raises(CommandError, match="in 3 processes"):
         check_sweep_memory("bifurcate", scene, processes=3)
+    check_sweep_memory("bifurcate", Scene(N=N), processes=3, dense=False)  # eps = 0: free disks
     if automatic_workers(scene.ndof) == 2:
-        result = run_cli("bifurcate", scene_file(tmp_path, f"[disks]\nN = {N}\n"), "--out", str(tmp_path / "out"))
+        result = run_cli("bifurcate", scene_file(tmp_path, f"[disks]\nN = {N}\neps = 1e-4\n"),
+                         "--out", str(tmp_path / "out"))
         assert "in 3 processes" in one_line(result, "bifurcate")
 
 
