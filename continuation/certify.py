@@ -191,12 +191,22 @@ def event_pairs_apart(models: list, rho: float, floor: float) -> tuple[bool, flo
 
 @numba.njit(cache=True, error_model="numpy")
 def nearest_gaps(lam: Array) -> Array:
-    """|lambda_i - lambda_j| minimised over j != i (inf for a single eigenvalue)."""
-    gaps = np.full(lam.size, np.inf)
-    for i in range(lam.size):
-        for j in range(i + 1, lam.size):
-            d = abs(lam[i] - lam[j])
-            gaps[i], gaps[j] = min(gaps[i], d), min(gaps[j], d)
+    """|lambda_i - lambda_j| minimised over j != i (inf for a single eigenvalue). In order of
+    real part, each eigenvalue looks at its neighbours only while their real parts differ by
+    less than its best distance so far (the nearest one is among them): about n log n for a
+    spectrum, where all pairs took 76 ms a sample at N = 3000, eps = 0 (9000 eigenvalues,
+    thousands of them equal free modes), more than half of that sweep."""
+    n = lam.size
+    gaps = np.full(n, np.inf)
+    order = np.argsort(lam.real)
+    re = lam.real[order]
+    for a in range(n):
+        i = order[a]
+        for step in (1, -1):
+            b = a + step
+            while 0 <= b < n and abs(re[b] - re[a]) < gaps[i]:
+                gaps[i] = min(gaps[i], abs(lam[i] - lam[order[b]]))
+                b += step
     return gaps
 
 

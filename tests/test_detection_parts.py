@@ -256,3 +256,20 @@ def test_a_disk_joining_the_chain_takes_its_free_modes_into_the_chain_s_match():
     assert np.max(np.abs(left.eigvals - right.eigvals[perm])) <= 0.02 + 1e-12
     assert np.array_equal(right.excluded[perm[:3]], [False] * 3)
     assert right.excluded[perm[3:]].sum() == 6  # two of the eight free labels went to the chain
+
+
+def test_nearest_gaps_equal_all_pairs_on_spectra_with_ties_and_pairs():
+    """The gaps from neighbours in order of real part are those of all pairs, to the bit, on
+    random spectra with equal values, equal real parts and conjugate pairs."""
+    from diskfriction.continuation.certify import nearest_gaps
+
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        n = int(rng.integers(1, 40))
+        lam = np.round(rng.standard_normal(n), int(rng.integers(0, 3))) \
+            + 1j * np.where(rng.random(n) < 0.3, np.round(rng.standard_normal(n), 1), 0.0)
+        if rng.random() < 0.3:
+            lam = np.concatenate([lam, np.conj(lam)])
+        pairs = [min((abs(complex(a) - complex(b)) for j, b in enumerate(lam) if j != i), default=np.inf)
+                 for i, a in enumerate(lam)]
+        assert np.array_equal(nearest_gaps(lam), pairs)
