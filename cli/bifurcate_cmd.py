@@ -113,19 +113,19 @@ def run(args: argparse.Namespace) -> int:
         raise CommandError(f"bifurcate error: --workers: must be >= 0 (got {args.workers})")
     matrix = MATRICES[args.matrix] if args.matrix else scene.matrix
     out = output_dir("bifurcate", args.out, Path("out") / "bifurcate" / scene.name)
-    from diskfriction.continuation.scans import automatic_workers
-
-    workers = args.workers if args.workers is not None else \
-        automatic_workers(scene.ndof) if args.detection == "fast" else 0
-    check_sweep_memory("bifurcate", scene, 1 + workers, dense=window is None and scene.eps > 0)
 
     from diskfriction.continuation.arclength import ContinuationError
     from diskfriction.continuation.collisions import DetectionParams
     from diskfriction.continuation.disks import EquilibriumError
+    from diskfriction.continuation.scans import planned_workers
     from diskfriction.continuation.spectral_window import WindowCrowded
     from diskfriction.continuation.sweep import SweepParams, sweep
     from diskfriction.reports.bifurcation import collision_records, plot_diagram, save_branch
     from diskfriction.symbolic import System
+
+    detection = DetectionParams(mode=args.detection, workers=args.workers)
+    check_sweep_memory("bifurcate", scene, 1 + planned_workers(scene.ndof, detection),
+                       dense=window is None and scene.eps > 0)
 
     progress = Progress("bifurcate")
     total = F_from + abs(F_to - F_from)  # preparation leg plus the sweep
@@ -147,7 +147,7 @@ def run(args: argparse.Namespace) -> int:
                 unit = PaperUnits.of(scene).eigenvalue(matrix)
                 window = (window[0] * unit, window[1] * unit)
             params = SweepParams(ds_max=args.ds_max, window=window,
-                                 detection=DetectionParams(mode=args.detection, workers=args.workers))
+                                 detection=detection)
             branch = sweep(system, F_from, F_to, matrix, params, on_point)
         except (EquilibriumError, ContinuationError, WindowCrowded) as error:
             raise CommandError(f"bifurcate error: {scene.source}: {error}", EXIT_FAILED) from None

@@ -93,25 +93,27 @@ def run_scan(problem: Problem, job: ScanJob) -> ScanOutcome:
 
 
 def default_workers(problem: Problem, n: int, detection: DetectionParams) -> int:
-    """Workers for `problem`, whose stability matrix is n x n: detection.workers if set, else 2
-    for the fast detection from n = PARALLEL_FROM on, on Linux, when this process may use 2
-    cores or more and is not daemonic; 0 (inline) for the exhaustive detection, whose stencil is a sample of the
-    previous step, known only once that step's scan is done. Raises ValueError for workers
-    asked of a problem whose committed state cannot be shipped (has_snapshots)."""
+    """Workers for `problem`, whose stability matrix is n x n: planned_workers, or 0 (inline)
+    for a problem whose committed state cannot be shipped (has_snapshots); asking for workers
+    explicitly for such a problem raises ValueError."""
+    workers = planned_workers(n, detection)
+    if workers and not has_snapshots(problem):
+        if detection.workers is not None:
+            raise ValueError(f"{type(problem).__name__} commits a state but has no state()/restore(): "
+                             "its steps cannot be scanned on workers (workers=0)")
+        return 0
+    return workers
+
+
+def planned_workers(n: int, detection: DetectionParams) -> int:
+    """Scan workers for an n x n stability matrix: 0 (inline) unless the detection is fast
+    (the exhaustive one's stencil is a sample of the previous step, known only once that
+    step's scan is done); then detection.workers if set, else 2 from n = PARALLEL_FROM on, on
+    Linux, when this process may use 2 cores or more and is not daemonic."""
     if not detection.enabled or detection.mode != "fast":
         return 0
     if detection.workers is not None:
-        if detection.workers and not has_snapshots(problem):
-            raise ValueError(f"{type(problem).__name__} commits a state but has no state()/restore(): "
-                             "its steps cannot be scanned on workers (workers=0)")
         return detection.workers
-    return automatic_workers(n) if has_snapshots(problem) else 0
-
-
-def automatic_workers(n: int) -> int:
-    """The fast detection's workers by default for an n x n stability matrix: 2 from n =
-    PARALLEL_FROM on, on Linux, when this process may use 2 cores or more and is not
-    daemonic; else 0."""
     if n < PARALLEL_FROM or not sys.platform.startswith("linux"):
         return 0  # fork is the start method there (macOS has fork, but it is not safe to use)
     if multiprocessing.current_process().daemon:

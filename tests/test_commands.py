@@ -86,7 +86,8 @@ def test_the_memory_guard_counts_the_scan_workers(tmp_path):
     scene, exit 2."""
     from diskfriction.cli.common import CommandError, check_sweep_memory
     from diskfriction.continuation.memory import sweep_bytes
-    from diskfriction.continuation.scans import automatic_workers
+    from diskfriction.continuation.collisions import DetectionParams
+    from diskfriction.continuation.scans import planned_workers
     from diskfriction.memory import physical_memory
     from diskfriction.scenes import Scene
 
@@ -99,7 +100,7 @@ def test_the_memory_guard_counts_the_scan_workers(tmp_path):
     with pytest.raises(CommandError, match="in 3 processes"):
         check_sweep_memory("bifurcate", scene, processes=3)
     check_sweep_memory("bifurcate", Scene(N=N), processes=3, dense=False)  # eps = 0: free disks
-    if automatic_workers(scene.ndof) == 2:
+    if planned_workers(scene.ndof, DetectionParams()) == 2:
         result = run_cli("bifurcate", scene_file(tmp_path, f"[disks]\nN = {N}\neps = 1e-4\n"),
                          "--out", str(tmp_path / "out"))
         assert "in 3 processes" in one_line(result, "bifurcate")
