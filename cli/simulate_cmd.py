@@ -13,7 +13,7 @@ import math
 import re
 from pathlib import Path
 
-from diskfriction.cli.common import (CommandError, add_scene_argument, check_sweep_memory,
+from diskfriction.cli.common import (EXIT_FAILED, CommandError, add_scene_argument, check_sweep_memory,
                                      number, output_dir, run_length, scene_from_args)
 from diskfriction.cli.progress import Progress
 from diskfriction.scenes.scene import NEGATIVE_LOAD
@@ -102,7 +102,7 @@ def run(args: argparse.Namespace) -> int:
 
 def single_run(scene, F_x: float, args, out: Path, progress: Progress) -> int:
     from diskfriction.continuation.equilibrium import equilibrium_at
-    from diskfriction.dynamics.simulate import simulate, summarize
+    from diskfriction.dynamics.simulate import UnstableStep, inaccuracy, simulate, summarize
     from diskfriction.dynamics.start import Perturbation, spectrum
     from diskfriction.dynamics.stepper import load_stepper
     from diskfriction.reports.simulation import plot_run, save_run
@@ -120,6 +120,8 @@ def single_run(scene, F_x: float, args, out: Path, progress: Progress) -> int:
         traj = simulate(system, eq.q, eq.xi, F_x, args.t_end, dt=args.dt,
                         perturbation=Perturbation(kind, args.amplitude, args.seed),
                         progress=lambda t: progress(t / args.t_end, f"t = {t:.1f}"))
+    except UnstableStep as error:
+        raise CommandError(f"simulate error: --dt: {error} (got {args.dt!r})") from None
     except ValueError as error:  # e.g. an eigenvector perturbation where all eigenvalues are real
         raise CommandError(f"simulate error: {error}") from None
     summary = summarize(traj)
@@ -131,9 +133,14 @@ def single_run(scene, F_x: float, args, out: Path, progress: Progress) -> int:
     sm, sp = summary["sigma_measured"], summary["sigma_predicted"]
     print(f"F_x = {F_x:g}, t_end = {args.t_end:g}, dt = {traj.dt:.4g}, {traj.steps} steps, "
           f"perturbation {kind} {args.amplitude:g}")
+    if not summary["accurate"]:
+        print(f"wrote {out}/trajectory.npz, summary.json, run.png (slid: not reported)")
+        raise CommandError(f"simulate error: {inaccuracy(summary)}; slid is not reported "
+                           f"(use a smaller --dt)", code=EXIT_FAILED)
     print(f"sigma measured {'-' if sm is None else f'{sm:.5g}'}, predicted {sp:.5g} (raw 1/time, "
           f"M^-1 J); slid: {summary['slid']}; max M = {summary['M_max']:.3g}")
-    print(f"V_cm = {summary['V_cm']:.4g} raw = {summary['V_cm'] / PaperUnits.of(scene).velocity:.4g} 2R/tau")
+    print(f"V_cm = {summary['V_cm']:.4g} raw = {summary['V_cm'] / PaperUnits.of(scene).velocity:.4g} 2R/tau; "
+          f"energy budget closes to {summary['budget_relative']:.2g} of the energy exchanged")
     print(f"wrote {out}/trajectory.npz, summary.json, run.png")
     return 0
 
@@ -154,9 +161,11 @@ def ensemble_run(scene, loads, args, out: Path, progress: Progress) -> int:
     progress.close()
     paper = lambda e: e.value / PaperUnits.of(scene).velocity
     for F in sorted(ens.summaries):
-        slid = sum(s["slid"] for s in ens.summaries[F])
+        slid = sum(s["slid"] is True for s in ens.summaries[F])
+        unresolved = sum(not s["accurate"] for s in ens.summaries[F])
         v1 = ens.V1[F]
-        print(f"F_x = {F:g}: {len(ens.summaries[F])} realizations, {slid} slid; "
+        print(f"F_x = {F:g}: {len(ens.summaries[F])} realizations, {slid} slid"
+              f"{f', {unresolved} not resolved (energy budget), left out' if unresolved else ''}; "
               f"V1 = {v1.value:.4g} +- {v1.error:.2g} raw ({paper(v1):.3g} 2R/tau, n = {v1.n}); "
               f"V_cm = {ens.V_cm[F].value:.4g} raw")
     print(f"V2 = {ens.V2.value:.4g} +- {ens.V2.error:.2g} raw ({paper(ens.V2):.3g} 2R/tau, n = {ens.V2.n})")

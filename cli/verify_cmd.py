@@ -66,6 +66,10 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+SLID = {True: "yes", False: "no", None: "not resolved"}
+"""The slid column: None where the run's energy budget did not close (dynamics/trajectory.py)."""
+
+
 def format_table(rows: list[dict], matrix: str) -> str:
     """Markdown table of the verify rows (raw units)."""
     fmt = lambda v: "-" if v is None else f"{v:.4g}"
@@ -75,6 +79,6 @@ def format_table(rows: list[dict], matrix: str) -> str:
     for r in rows:
         a, b = r["window"]
         lines.append(f"| {a:.5f} .. {b:.5f} | {r['complex_pairs']} | {r['F_x']:.5f} | "
-                     f"{fmt(r['sigma_predicted'])} | {fmt(r['sigma_measured'])} | {r['M_max']:.3g} | "
-                     f"{'yes' if r['slid'] else 'no'} |")
+                     f"{fmt(r['sigma_predicted'])} | {fmt(r['sigma_measured'])} | {fmt(r['M_max'])} | "
+                     f"{SLID[r['slid']]} |")
     return "\n".join(lines) + "\n"

@@ -20,6 +20,8 @@ Realizations differ in the seed of a random-velocity perturbation of the same eq
 Each is averaged over realizations (and for V2 over all loads, as in the paper), with the
 standard error of the mean. V_cm(F_x): mean centre-of-mass velocity of the realizations that
 slid, fitted by V = a + b F_x (least squares, standard errors from the fit covariance).
+Only accurate realizations (summary["accurate"]: the energy budget closes, dynamics/trajectory.py)
+enter the aggregates; the others are kept on disk and counted apart.
 """
 from __future__ import annotations
 
@@ -130,11 +132,13 @@ def sliding_speed(summary: dict) -> Optional[float]:
 
 
 def aggregate(summaries: dict) -> Ensemble:
-    """Front speeds and centre-of-mass velocities of finished realizations (see module doc)."""
+    """Front speeds and centre-of-mass velocities of the finished accurate realizations (see
+    module doc)."""
     loads = sorted(summaries)
-    V1 = {F: mean_estimate(breach_speed(s) for s in summaries[F]) for F in loads}
-    V2 = mean_estimate(sliding_speed(s) for F in loads for s in summaries[F])
-    V_cm = {F: mean_estimate(s["V_cm"] for s in summaries[F] if s["slid"]) for F in loads}
+    kept = {F: [s for s in summaries[F] if s["accurate"]] for F in loads}
+    V1 = {F: mean_estimate(breach_speed(s) for s in kept[F]) for F in loads}
+    V2 = mean_estimate(sliding_speed(s) for F in loads for s in kept[F])
+    V_cm = {F: mean_estimate(s["V_cm"] for s in kept[F] if s["slid"]) for F in loads}
     usable = [F for F in loads if V_cm[F].n > 0]
     fit = None
     if len(usable) >= 2:

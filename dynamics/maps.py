@@ -231,7 +231,7 @@ def map_cell(scene: Scene, params: MapParams) -> dict:
         if params.slide is not None:
             runs = slide_runs(system, todo, params.slide)
             F_slide, F_slide_lo = sliding_load(runs)
-            unreached = [f"no run at F_x = {r['F_x']:.6g}: {r['reason']}" for r in runs
+            unreached = [f"no result at F_x = {r['F_x']:.6g}: {r['reason']}" for r in runs
                          if r["slid"] is None]
             summary |= {"runs": len(runs), "sliding_windows": sum(r["slid"] is True for r in runs),
                         "F_slide": F_slide, "F_slide_lo": F_slide_lo,

@@ -20,7 +20,7 @@ from diskfriction.dynamics.growth import fit_growth, oscillation_period
 from diskfriction.dynamics.onset import OnsetParams, sliding_onset
 from diskfriction.dynamics.start import Perturbation, Spectrum, perturb, spectrum
 from diskfriction.dynamics.stepper import Stepper
-from diskfriction.dynamics.trajectory import Trajectory
+from diskfriction.dynamics.trajectory import BUDGET_BOUND, Trajectory
 from diskfriction.memory import require_memory
 from diskfriction.symbolic import System
 
@@ -43,7 +43,25 @@ def choose_dt(spec: Spectrum, fraction: float = DT_FRACTION) -> float:
     """dt = fraction * 2 / omega_max, omega_max^2 = largest |eigenvalue| of M^-1 J [time]."""
     if not 0 < fraction < 1:
         raise ValueError(f"dt fraction must be in (0, 1) (got {fraction})")
-    return fraction * 2.0 / spec.omega_max
+    return fraction * stability_limit(spec)
+
+
+def stability_limit(spec: Spectrum) -> float:
+    """2 / omega_max [time]: velocity Verlet amplifies a mode of frequency omega once
+    omega dt >= 2, so no step at or beyond this limit can resolve the start state's spectrum."""
+    return 2.0 / spec.omega_max
+
+
+class UnstableStep(ValueError):
+    """A time step at or beyond the stability limit 2 / omega_max of the start state."""
+
+    def __init__(self, dt: float, spec: Spectrum):
+        super().__init__(
+            f"dt = {dt:.6g} is not below velocity Verlet's stability limit 2 / omega_max = "
+            f"{stability_limit(spec):.6g} at the start (omega_max = {spec.omega_max:.6g}, the "
+            f"fastest mode of M^-1 J): the run would blow up; the default dt is "
+            f"{choose_dt(spec):.4g}")
+        self.dt = dt
 
 
 @dataclass(frozen=True)
@@ -68,17 +86,22 @@ class RunPlan:
 def plan_run(spec: Spectrum, t_end: float, dt: Optional[float] = None,
              stride: Optional[int] = None, dt_fraction: float = DT_FRACTION) -> RunPlan:
     """The steps of a run to t_end. dt is an upper bound (None: choose_dt(spec, dt_fraction)):
-    the run takes n_steps = ceil(t_end / dt) steps of t_end / n_steps, so that no step passes
-    t_end and the last one ends on it. stride None: FRAMES_PER_PERIOD frames per period."""
+    the run takes n_steps equal steps of t_end / n_steps, n_steps the smallest multiple of the
+    stride with t_end / n_steps <= dt, so that no step passes t_end, the last one ends on it and
+    the last frame is the end state. stride None: FRAMES_PER_PERIOD frames per period.
+    Raises UnstableStep if the step is not below stability_limit(spec)."""
     if not (np.isfinite(t_end) and t_end > 0):
         raise ValueError(f"t_end must be a positive number (got {t_end})")
     dt_max = choose_dt(spec, dt_fraction) if dt is None else float(dt)
     if not (np.isfinite(dt_max) and dt_max > 0):
         raise ValueError(f"dt must be a positive number (got {dt_max})")
-    n_steps = max(1, math.ceil(t_end / dt_max - 1e-9))
-    dt = t_end / n_steps
     period = oscillation_period(spec.eigenvalues, spec.leading_root.real)
-    return RunPlan(dt, n_steps, stride or max(1, int(period / (FRAMES_PER_PERIOD * dt))), period)
+    stride = stride or max(1, int(period / (FRAMES_PER_PERIOD * dt_max)))
+    n_steps = stride * max(1, math.ceil(t_end / (stride * dt_max) - 1e-9))
+    plan = RunPlan(t_end / n_steps, n_steps, stride, period)
+    if plan.dt >= stability_limit(spec):
+        raise UnstableStep(plan.dt, spec)
+    return plan
 
 
 def simulate(system: System, q: np.ndarray, xi: np.ndarray, F_x: float, t_end: float,
@@ -89,8 +112,9 @@ def simulate(system: System, q: np.ndarray, xi: np.ndarray, F_x: float, t_end: f
     """Newton's equations from the equilibrium (q, xi) at load F_x, perturbed, to t_end.
 
     dt: largest step [time] (plan_run: the steps end exactly at t_end); None takes
-    choose_dt(spectrum of M^-1 J at (q, xi), dt_fraction). stride: steps between recorded
-    frames; None records FRAMES_PER_PERIOD per oscillation period. Raises NotEnoughMemory
+    choose_dt(spectrum of M^-1 J at (q, xi), dt_fraction); one not below the stability limit
+    2 / omega_max raises UnstableStep. stride: steps between recorded frames; None records
+    FRAMES_PER_PERIOD per oscillation period. Raises NotEnoughMemory
     (diskfriction.memory) before anything is allocated when the frames would not fit.
     progress(t) is called between chunks of CHUNK_STEPS steps (never inside the step loop).
     """
@@ -120,37 +144,61 @@ def simulate(system: System, q: np.ndarray, xi: np.ndarray, F_x: float, t_end: f
 def summarize(traj: Trajectory, sigma_predicted: Optional[float] = None) -> dict:
     """Plain-type summary of a run (raw units), for JSON:
 
-    slid: some disk's onset of sliding was detected; sigma_measured / sigma_predicted: growth
-    rate of the fitted exponential phase of M(t) (M grows at 2 sigma; None if no exponential
-    phase was found, fit["reason"] says why) and the largest
-    |Im sqrt(lambda)| of M^-1 J at the start (or the value given); fit: its window and quality;
-    V_cm: centre-of-mass velocity dC_x/dt fitted over the last half of the run; C_y_range;
-    first_breach / onset: per disk {"t": [...], "x": [...]} (None where it never happened);
-    M_max; budget_error: max |budget - budget(0)|; W_slip: energy dissipated by sliding.
+    t_end: the time the run ended (its last step and last frame); accurate: the energy budget
+    closes within budget_bound of the energy exchanged (dynamics/trajectory.py; budget_error,
+    energy_exchanged, budget_relative); slid: some disk's onset of sliding was detected, None
+    when the run is not accurate (its dynamics are not resolved, so neither is the answer);
+    sigma_measured / sigma_predicted: growth rate of the fitted exponential phase of M(t) (M
+    grows at 2 sigma; None if no exponential phase was found, fit["reason"] says why) and the
+    largest |Im sqrt(lambda)| of M^-1 J at the start (or the value given); fit: its window and
+    quality; V_cm: centre-of-mass velocity dC_x/dt fitted over the last half of the run;
+    C_y_range; first_breach / onset: per disk {"t": [...], "x": [...]} (None where it never
+    happened); M_max; W_slip: energy dissipated by sliding.
     """
     fit = fit_growth(traj)
     half = traj.t >= traj.t[-1] / 2
-    V_cm = float(np.polyfit(traj.t[half], traj.C_x[half], 1)[0]) if half.sum() > 1 else 0.0
+    fitted = half.sum() > 1 and np.isfinite(traj.C_x[half]).all()
+    V_cm = float(np.polyfit(traj.t[half], traj.C_x[half], 1)[0]) if fitted else float("nan")
 
     def listed(a):
-        return [None if not np.isfinite(v) else float(v) for v in a]
+        return [finite(v) for v in a]
 
     sigma_pred = traj.sigma_predicted if sigma_predicted is None else float(sigma_predicted)
+    accurate = traj.accurate
     return {
         "F_x": traj.F_x,
-        "t_end": float(traj.t[-1]),
+        "t_end": traj.steps * traj.dt,
         "dt": traj.dt,
-        "slid": bool(np.isfinite(traj.onset_t).any()),
+        "accurate": accurate,
+        "slid": bool(np.isfinite(traj.onset_t).any()) if accurate else None,
         "sigma_measured": fit.as_dict()["sigma"],
         "sigma_predicted": sigma_pred,
         "fit": fit.as_dict(),
-        "V_cm": V_cm,
-        "C_y_range": float(np.ptp(traj.C_y)),
-        "M_max": float(traj.M.max()),
+        "V_cm": finite(V_cm),
+        "C_y_range": finite(float(np.ptp(traj.C_y))),
+        "M_max": finite(float(traj.M.max())),
         "first_breach": {"t": listed(traj.breach_t), "x": listed(traj.breach_x)},
         "onset": {"t": listed(traj.onset_t), "x": listed(traj.onset_x)},
-        "budget_error": traj.budget_error(),
-        "W_slip": float(traj.W_slip[-1]),
+        "budget_error": finite(traj.budget_error()),
+        "energy_exchanged": finite(traj.energy_exchanged()),
+        "budget_relative": finite(traj.budget_relative()),
+        "budget_bound": BUDGET_BOUND,
+        "W_slip": finite(float(traj.W_slip[-1])),
         "perturbation": {"kind": traj.perturbation.kind, "amplitude": traj.perturbation.amplitude,
                          "seed": traj.perturbation.seed, "pair": traj.perturbation.pair},
     }
+
+
+def finite(value: float) -> Optional[float]:
+    """value as a float, None if it is not finite (JSON has no inf or nan)."""
+    return float(value) if np.isfinite(value) else None
+
+
+def inaccuracy(summary: dict) -> str:
+    """Why a run's results are not reported (summary["accurate"] false), in one line."""
+    if summary["budget_relative"] is None:
+        return (f"the energy budget overflowed: dt = {summary['dt']:.4g} does not resolve the run")
+    return (f"the energy budget error {summary['budget_error']:.3g} is "
+            f"{summary['budget_relative']:.2g} of the energy exchanged "
+            f"({summary['energy_exchanged']:.3g}), beyond the bound {summary['budget_bound']:g}: "
+            f"dt = {summary['dt']:.4g} does not resolve the run")

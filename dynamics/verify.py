@@ -14,7 +14,7 @@ import numpy as np
 from diskfriction.continuation.equilibrium import equilibrium_at
 from diskfriction.continuation.sweep import DiskBranch, sweep
 from diskfriction.continuation.windows import Window, complex_windows
-from diskfriction.dynamics.simulate import simulate, summarize
+from diskfriction.dynamics.simulate import inaccuracy, simulate, summarize
 from diskfriction.dynamics.start import Perturbation, spectrum
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
@@ -36,7 +36,8 @@ def window_run(system: System, window: Window, index: int, t_end: float, amplitu
     """One run at the midpoint F_x = (start + stop) / 2 of `window` (raw units): from the
     equilibrium there, perturbed along the largest complex pair of M^-1 J (or, if M^-1 J is
     all real, by a random velocity kick seeded with `index`), to t_end. The row: window,
-    complex_pairs, F_x, perturbation, sigma_predicted, sigma_measured, M_max, slid, V_cm.
+    complex_pairs, F_x, perturbation, sigma_predicted, sigma_measured, M_max, accurate, slid
+    (None if the run is not accurate, with its reason), V_cm.
     Raises NoEquilibrium if the branch from rest does not reach F_x."""
     a, b, pairs = window
     F = 0.5 * (a + b)
@@ -44,9 +45,10 @@ def window_run(system: System, window: Window, index: int, t_end: float, amplitu
     kind = "eigenvector" if spectrum(system, eq.q, eq.xi).pairs.size else "random-velocity"
     s = summarize(simulate(system, eq.q, eq.xi, F, t_end,
                            perturbation=Perturbation(kind, amplitude, index)))
-    return {"window": [a, b], "complex_pairs": pairs, "F_x": F, "perturbation": kind,
-            "sigma_predicted": s["sigma_predicted"], "sigma_measured": s["sigma_measured"],
-            "M_max": s["M_max"], "slid": s["slid"], "V_cm": s["V_cm"]}
+    row = {"window": [a, b], "complex_pairs": pairs, "F_x": F, "perturbation": kind,
+           "sigma_predicted": s["sigma_predicted"], "sigma_measured": s["sigma_measured"],
+           "M_max": s["M_max"], "accurate": s["accurate"], "slid": s["slid"], "V_cm": s["V_cm"]}
+    return row if s["accurate"] else row | {"reason": inaccuracy(s)}
 
 
 def verify_windows(scene: Scene, matrix: str, t_end: float, amplitude: float,

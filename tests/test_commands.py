@@ -4,6 +4,7 @@ progress on a pipe and on a terminal, and a light start."""
 from __future__ import annotations
 
 import io
+import json
 import os
 import signal
 import subprocess
@@ -146,6 +147,22 @@ def test_a_negative_load_in_a_scene_is_refused_for_the_same_reason(tmp_path):
         result = run_cli(command, scene)
         assert result.returncode == 2 and "mirror image" in result.stderr
         assert result.stderr.count("\n") == 1
+
+
+def test_a_step_beyond_the_stability_limit_or_an_unresolved_run_is_not_reported(tmp_path):
+    """Issue 23: --dt 0.2 at F_x = 0.03 once reported "slid: True" with max M = 1e11. A step
+    not below 2 / omega_max is refused (exit 2, the option named); one below it whose run goes
+    unstable writes its files for inspection, reports no "slid" and exits 1."""
+    out = tmp_path / "out"
+    beyond = run_cli("simulate", "--fx", "0.03", "--t-end", "300", "--dt", "0.2", "--out", str(out))
+    assert beyond.returncode == 2 and "slid" not in beyond.stdout
+    line = error_line(beyond, "simulate")
+    assert "--dt" in line and "stability limit 2 / omega_max = 0.1366" in line and "0.2" in line
+    unresolved = run_cli("simulate", "--fx", "0.03", "--t-end", "300", "--dt", "0.13", "--out", str(out))
+    assert unresolved.returncode == 1 and "slid: True" not in unresolved.stdout
+    assert "energy budget" in error_line(unresolved, "simulate")
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["accurate"] is False and summary["slid"] is None
 
 
 # ---- a load beyond the branch from rest -------------------------------------------------------

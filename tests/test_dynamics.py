@@ -2,6 +2,7 @@
 closes at second order, growth rates match the spectrum, sliding and staying put."""
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -223,15 +224,60 @@ def test_bad_input_is_refused_at_the_door(paper, branch_point):
 
 
 def test_steps_end_exactly_at_t_end_and_never_pass_it():
-    """--dt is an upper bound: ceil(t_end / dt) steps of t_end / n_steps (issue 9)."""
+    """--dt is an upper bound: the fewest whole strides of steps of t_end / n_steps no longer
+    than dt (issue 9), so that the last frame is the end state (issue 23)."""
     from diskfriction.dynamics.simulate import plan_run
     from diskfriction.dynamics.start import Spectrum
 
+    spec = Spectrum(np.array([4e-4, 1e-4]), np.eye(2), np.array([], dtype=int))  # limit 100
+    for t_end, dt, stride, steps in [(10.0, 3.0, 1, 4), (10.0, 2.5, 1, 4), (1.0, 5.0, 1, 1),
+                                     (10.0, 3.0, 3, 6), (10.0, 0.1, 7, 105), (7.0, None, 1, 2)]:
+        plan = plan_run(spec, t_end, dt, stride)
+        assert plan.n_steps == steps and plan.n_steps % plan.stride == 0
+        assert plan.dt * plan.n_steps == pytest.approx(t_end, rel=1e-15)
+        assert plan.dt <= (dt or 0.05 * 100)
+
+
+def test_a_step_not_below_the_stability_limit_is_refused():
+    """Velocity Verlet amplifies a mode once omega dt >= 2 (issue 23): dt = 2 / omega_max is
+    refused, the step just below it is planned."""
+    from diskfriction.dynamics.simulate import UnstableStep, plan_run, stability_limit
+    from diskfriction.dynamics.start import Spectrum
+
     spec = Spectrum(np.array([4.0, 1.0]), np.eye(2), np.array([], dtype=int))  # omega_max = 2
-    for t_end, dt, steps in [(10.0, 3.0, 4), (10.0, 2.5, 4), (1.0, 5.0, 1), (7.0, None, 140)]:
-        plan = plan_run(spec, t_end, dt)
-        assert plan.n_steps == steps and plan.dt * plan.n_steps == pytest.approx(t_end, rel=1e-15)
-        assert plan.dt <= (dt or 0.05)
+    assert stability_limit(spec) == 1.0
+    with pytest.raises(UnstableStep, match="stability limit"):
+        plan_run(spec, 10.0, 1.0, 1)
+    assert plan_run(spec, 10.0, 0.99, 1).dt < 1.0
+
+
+def test_a_run_whose_budget_does_not_close_reports_no_sliding(paper, branch_point):
+    """Below the start's stability limit a run can still go unstable when contacts stiffen
+    (here at 0.95 of it, F_x = 0.03, where the chain does not slide): the budget does not
+    close, so the summary says the run is not accurate and reports slid as None, in JSON
+    without inf or nan; the same run at the default dt is accurate (issue 23)."""
+    from diskfriction.dynamics.simulate import stability_limit
+
+    q, xi = branch_point(0.03)
+    limit = stability_limit(spectrum(paper, q, xi))
+    start = Perturbation("eigenvector", 1e-10)
+    bad = summarize(simulate(paper, q, xi, 0.03, 300.0, dt=0.95 * limit, perturbation=start))
+    assert bad["accurate"] is False and bad["slid"] is None
+    assert bad["budget_relative"] is None or bad["budget_relative"] > bad["budget_bound"]
+    json.dumps(bad, allow_nan=False)
+    good = summarize(simulate(paper, q, xi, 0.03, 300.0, perturbation=start))
+    assert good["accurate"] is True and good["slid"] is False
+    assert good["budget_relative"] < 0.1 * good["budget_bound"]  # the default dt: 2e-4
+
+
+def test_the_last_frame_is_the_end_of_the_run(paper, branch_point):
+    """summary t_end is the time the run ended, which is also the last frame's (issue 23: it
+    was the last frame before t_end)."""
+    q, xi = branch_point(0.03)
+    traj = simulate(paper, q, xi, 0.03, 300.0, perturbation=Perturbation("eigenvector", 1e-10))
+    assert traj.steps % traj.stride == 0
+    assert traj.t[-1] == pytest.approx(300.0, rel=1e-12)
+    assert summarize(traj)["t_end"] == pytest.approx(300.0, rel=1e-12)
 
 
 def test_compiled_stepper_is_reused_from_the_cache_by_a_new_process(paper):

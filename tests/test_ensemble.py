@@ -17,11 +17,12 @@ from diskfriction.scenes import Scene
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def synthetic(V1, V2, V_cm, N=10, slid=True):
+def synthetic(V1, V2, V_cm, N=10, slid=True, accurate=True):
     """A summary whose breach front runs forward at V1 and sliding front backward at V2."""
     x = np.arange(N) + 0.5
     return {"first_breach": {"t": list(x / V1), "x": list(x)},
-            "onset": {"t": list((N - x) / V2), "x": list(x)}, "V_cm": V_cm, "slid": slid}
+            "onset": {"t": list((N - x) / V2), "x": list(x)}, "V_cm": V_cm,
+            "slid": slid if accurate else None, "accurate": accurate}
 
 
 def test_front_speeds_and_centre_of_mass_fit_are_recovered():
@@ -32,6 +33,14 @@ def test_front_speeds_and_centre_of_mass_fit_are_recovered():
     assert ens.V2.value == pytest.approx(2.0) and ens.V2.n == 6
     a, b = ens.V_cm_fit
     assert a.value == pytest.approx(-1e-3, abs=1e-12) and b.value == pytest.approx(0.03)
+
+
+def test_realizations_whose_budget_does_not_close_are_left_out_of_the_aggregates():
+    """An unresolved run (summary accurate false, slid None) carries no fronts or V_cm."""
+    good = [synthetic(0.2, 2.0, 1e-3)]
+    ens = aggregate({0.09: good + [synthetic(50.0, 90.0, 7.0, accurate=False)]})
+    assert ens.V1[0.09].n == 1 and ens.V1[0.09].value == pytest.approx(0.2)
+    assert ens.V2.n == 1 and ens.V_cm[0.09].value == pytest.approx(1e-3)
 
 
 def test_fronts_need_three_disks_and_missing_values_are_skipped():
