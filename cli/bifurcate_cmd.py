@@ -9,7 +9,8 @@ import math
 from pathlib import Path
 
 from diskfriction.cli.common import (EXIT_FAILED, CommandError, add_scene_argument,
-                                     check_sweep_memory, number, output_dir, scene_from_args)
+                                     check_sweep_memory, number, output_dir, path,
+                                     scene_from_args)
 from diskfriction.cli.progress import Progress
 from diskfriction.scenes.scene import NEGATIVE_LOAD
 
@@ -162,9 +163,10 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps([{k: r[k] for k in ("F_x", "kind", "lambda_re", "lambda_im", "matrix")}
                           for r in records], indent=1))
     else:
-        print(f"{len(branch)} equilibria, F_x {branch.F_x[0]:.6g} .. {branch.F_x[-1]:.6g}, "
-              f"max residual {branch.residual.max():.1e}, {branch.events} contact events "
-              f"split, status {', '.join(branch.status)}")
+        print(f"{len(branch)} equilibria, max residual {branch.residual.max():.1e}, "
+              f"{branch.events} contact events split")
+        for line in leg_lines(branch, F_to):
+            print(f"  {line}")
         if branch.free.any():
             print(f"free rolling modes (disks held by the substrate alone, excluded from the "
                   f"collisions): {branch.free[0]} at F_x = {branch.F_x[0]:.3g}, "
@@ -177,4 +179,33 @@ def run(args: argparse.Namespace) -> int:
             print(f"  {r['kind']:5s}  F_x = {r['F_x']:.10f}  lambda = {r['lambda_re']:.6g}  "
                   f"(lambda/k_n = {r['lambda_re'] / scene.k_n:.5g})")
         print(f"wrote {out}/branch.npz, collisions.json, diagram.png")
-    return 0 if branch.status[-1] == "p_end" else EXIT_FAILED
+    if branch.status[-1] != "p_end":
+        from diskfriction.continuation.branch import stop_reason
+        from diskfriction.continuation.equilibrium import contact_states
+
+        raise CommandError(f"bifurcate error: {scene.source}: the sweep ended at F_x = "
+                           f"{branch.F_x[-1]:.6g}, short of {F_to:g}: "
+                           f"{stop_reason(branch.status[-1], len(branch))}; there "
+                           f"{contact_states(system, branch.q[-1], branch.xi[-1])}; what it "
+                           f"reached is written", EXIT_FAILED)
+    return 0
+
+
+def leg_lines(branch, F_to: float) -> list[str]:
+    """What each leg of a sweep did, one line each: its direction, the loads it passed through
+    (cli.common.path), its points and how it ended."""
+    import numpy as np
+
+    from diskfriction.continuation.branch import stop_reason
+
+    lines = []
+    for leg, status in zip(sorted(set(branch.leg.tolist())), branch.status):
+        rows = np.flatnonzero(branch.leg == leg)
+        F = branch.F_x[np.r_[rows[0] - 1, rows] if rows[0] > 0 else rows]  # from where one ended
+        what = ("preparation: loading from rest" if leg == 0 else
+                ("loading" if F[-1] > F[0] else "unloading"))
+        floor = (" (the rest state F_x = 0 is singular: unloading ends where loading started)"
+                 if leg == 1 and F_to == 0 and status == "p_end" else "")
+        lines.append(f"leg {leg}, {what}: F_x {path(F)}, {rows.size} equilibria, "
+                     f"{stop_reason(status, rows.size)}{floor}")
+    return lines

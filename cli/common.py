@@ -67,6 +67,20 @@ def run_length(command: str, t_end: float, dt: Optional[float]) -> None:
                                f"would not take one step (got {dt!r})")
 
 
+def path(p, folds=()) -> str:
+    """The values a branch's parameter passed through, in order: its start, every turning point
+    (where p changes direction: the located folds' p when there are as many, else the samples
+    there) and its end, e.g. "1 -> 0 -> 1"."""
+    import numpy as np
+
+    p = np.asarray(p, dtype=float)
+    moved = np.flatnonzero(np.diff(p) != 0)  # the steps that moved p
+    step = np.sign(np.diff(p)[moved])
+    turns = [p[moved[k] + 1] for k in range(step.size - 1) if step[k] != step[k + 1]]
+    turns = list(folds) if len(folds) == len(turns) else turns
+    return " -> ".join(f"{v:.6g}" for v in [p[0], *turns, p[-1]])
+
+
 def code_targets(subparsers: argparse._SubParsersAction, command: str, help: str
                  ) -> argparse._SubParsersAction:
     """Add `command`, whose first argument names the other code it works with (CODE); the

@@ -20,7 +20,7 @@ import warnings
 from dataclasses import replace
 from pathlib import Path
 
-from diskfriction.cli.common import EXIT_FAILED, CommandError, number, output_dir
+from diskfriction.cli.common import EXIT_FAILED, CommandError, number, output_dir, path
 from diskfriction.cli.progress import Progress
 from diskfriction.files import warn
 
@@ -175,14 +175,20 @@ def _continue(spec, label: str, span, options, out: Path, as_json: bool) -> int:
                           for r in records], indent=1))
     else:
         _print_summary(result, spec, out)
-    return 0 if result.success else EXIT_FAILED
+    if not result.success:
+        from diskfriction.continuation.branch import stop_reason
+
+        raise CommandError(f"bifurcate error: {label}: the branch did not reach {spec.parameter} = "
+                           f"{b:g}: {stop_reason(result.message, len(result.p))}; what it reached is "
+                           f"written",
+                           EXIT_FAILED)
+    return 0
 
 
 def _print_summary(result, spec, out: Path) -> None:
     """What was reached and located, in the problem's names and units."""
     units = f" {spec.units}" if spec.units else ""
-    p = result.p
-    print(f"{len(p)} points, {spec.parameter} {p[0]:.6g} .. {p[-1]:.6g}{units}, max residual "
+    print(f"{len(result.p)} points, {spec.parameter} {path(result.p, [f.p for f in result.folds])}{units}, max residual "
           f"{result.branch.residual.max():.1e}, status {result.message}")
     print(f"{len(result.collisions)} collisions ({spec.matrix}):")
     for c in result.collisions:

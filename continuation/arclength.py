@@ -10,8 +10,10 @@ Step control (arclength ds in the Euclidean norm of x):
   * ds would drop below ds_min                                  -> stop, status "ds_min: ...";
   * accepted with <= fast_newton updates                        -> ds = min(growth ds, ds_max).
 End: when the corrected p leaves [p_min, p_max] the step is clipped: x is re-solved at the end
-value p_end (fixed-p Newton from the secant point at p_end), stored, and the run stops
-("p_end"); otherwise after max_steps accepted steps ("max_steps").
+value p_end (fixed-p Newton from the secant point at p_end), stored, and the run stops: "p_end"
+at the end the run heads for (p_max for direction +1, p_min for -1), "turned back: ..." at the
+other (the branch passed a fold and came back, short of its goal); otherwise after max_steps
+accepted steps ("max_steps").
 Events (problem.event_functions): if a component changes sign over the step, the step is cut at
 the first such change, located on the branch (the step's segment) by the Illinois method to
 |dp| <= event_tol max(1, |p|) (a relative tolerance: it terminates at any p), and ends on the
@@ -316,7 +318,17 @@ def _advance(problem, scans, here: _Start, index: int, pending: deque, previous,
     if committed.newton.iterations <= params.fast_newton:
         ds = min(ds * params.growth, params.ds_max)
     g = problem.event_functions(committed.x[:-1], committed.x[-1]) if here.g is not None else None
-    return _Start(committed.x, committed.tangent, end, ds, g), ("p_end" if committed.last else None)
+    return _Start(committed.x, committed.tangent, end, ds, g), (_end_status(committed.x[-1], params)
+                                                                if committed.last else None)
+
+
+def _end_status(p: float, params: ContinuationParams) -> str:
+    """The status of a run whose step landed on an end of [p_min, p_max]: "p_end" at the end
+    it heads for (p_max going up, p_min going down); at the other end the branch turned back
+    (a fold) and left the span on the side it started from, short of its goal."""
+    if p == (params.p_max if params.direction > 0 else params.p_min):
+        return "p_end"
+    return f"turned back: the branch folded and left the span on its starting side at p={p:.12g}"
 
 
 def _record(problem: Problem, rec: "_Recorder", item: _Pending, end: Sample, solves: int,

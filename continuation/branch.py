@@ -1,6 +1,7 @@
 """The result of a continuation run: one object of arrays (one row per accepted point)."""
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -20,8 +21,8 @@ class Branch:
     corrector updates; residual (m,): max|G| at the stored point; tangent (m, n+1): unit
     tangent in x = (u, p); detection_solves (m,): corrector solves spent on collision detection
     in the step ending at the point; collisions: located births and deaths in branch order;
-    status: why the run stopped ("p_end", "max_steps", "ds_min: ..."); warnings; events: steps
-    cut at an event (problem.event_functions).
+    status: why the run stopped ("p_end", "turned back: ...", "max_steps", "ds_min: ...");
+    warnings; events: steps cut at an event (problem.event_functions).
     """
 
     p: Array
@@ -45,3 +46,15 @@ class Branch:
     def x(self) -> Array:
         """Rows (u, p), shape (m, n+1)."""
         return np.column_stack([self.u, self.p])
+
+
+def stop_reason(status: str, points: int) -> str:
+    """A run's status for a sentence, without its location: "p_end" -> "reached",
+    "ds_min: corrector failed (...) at p=5.1" -> "corrector failed (...)", "turned back: the
+    branch folded ... at p=1" -> "the branch folded ..."; points: the run's accepted points."""
+    if status == "p_end":
+        return "reached"
+    if status == "max_steps":
+        return f"the run stopped after {points} points"
+    reason = re.sub(r"\s*at p=\S+$", "", status)
+    return re.sub(r"^(ds_min|commit|turned back):\s*", "", reason)

@@ -15,12 +15,12 @@ stiffness left; when too many hold there the branch folds over), e.g.
 """
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 
 import numpy as np
 
 from diskfriction.continuation.arclength import ContinuationError
+from diskfriction.continuation.branch import stop_reason
 from diskfriction.continuation.collisions import DetectionParams
 from diskfriction.continuation.disks import EquilibriumError
 from diskfriction.continuation.sweep import SweepParams, sweep
@@ -76,15 +76,6 @@ def equilibrium_at(system: System, F_x: float) -> Equilibrium:
     raise NoEquilibrium(f"no equilibrium beyond F_x = {F_end:.6g} (asked for {F_x:g}): "
                         f"{stop_reason(branch.status[-1], len(branch))}; there "
                         f"{contact_states(system, branch.q[-1], branch.xi[-1])}", F_end, F_x)
-
-
-def stop_reason(status: str, points: int) -> str:
-    """The continuation core's status without its location ("ds_min: corrector failed (...)
-    at p=5.1" -> "corrector failed (...)")."""
-    if status == "max_steps":
-        return f"the sweep stopped after {points} points"
-    reason = re.sub(r"\s*at p=\S+$", "", status)
-    return re.sub(r"^(ds_min|commit):\s*", "", reason)
 
 
 def disk_list(disks: list[int]) -> str:

@@ -57,8 +57,9 @@ class DiskBranch:
     `matrix`; n_complex (m,); residual (m,) max|F|; leg (m,) 0 = preparation from rest,
     1 = the requested sweep; free (m,) free rolling modes (disks touching only the substrate,
     continuation/disks.py), excluded from the collisions; collisions of the requested leg, in
-    branch order; status per leg; events: contact events (opening, closing, Coulomb cap, a
-    free disk joining) the steps were cut at; window: (lo, hi) of Re lambda tracked, or None
+    branch order; status per leg run (a leg that did not reach its end is the last run);
+    events: contact events (opening, closing, Coulomb cap, a free disk joining) the steps were
+    cut at; window: (lo, hi) of Re lambda tracked, or None
     (then every eigenvalue); with a window, eigenvalues holds the k tracked eigenvalues, of
     which those with Re lambda in [lo, hi] are certified, n_complex counts the pairs there and
     only collisions there are listed.
@@ -126,6 +127,8 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
         if leg == 1:
             collisions = branch.collisions
         F_start = float(branch.p[-1])
+        if branch.status != "p_end":
+            break  # a leg that ended short: the next would start from a load never asked for
     F_x, q, xi, eig, res, leg, free = (np.array(c) for c in zip(*rows))
     rel_tol = params.detection.rel_tol
     if window is None:

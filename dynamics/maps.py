@@ -182,7 +182,8 @@ def sliding_load(runs: list[dict]) -> tuple[Optional[float], Optional[float]]:
 def branch_summary(system, branch) -> dict:
     """status, F_end, reason, collisions, windows, complex_windows, F_complex and sigma_max of
     a swept branch (module docstring)."""
-    from diskfriction.continuation.equilibrium import contact_states, stop_reason
+    from diskfriction.continuation.branch import stop_reason
+    from diskfriction.continuation.equilibrium import contact_states
     from diskfriction.continuation.windows import complex_spans
     from diskfriction.dynamics.verify import windows
 

@@ -147,9 +147,9 @@ def draw_spectrum(top, bottom, F_x: np.ndarray, lam: np.ndarray, leg: np.ndarray
                    colors, style, 0.7)
         handles.append(Line2D([], [], color="0.7" if leg_id == 0 else "k", ls=style,
                               label=leg_label(leg_id, F)))
-    rows = np.flatnonzero(leg == 1)
+    rows = np.flatnonzero(leg == 1)  # none when the preparation leg ended short
     windows = complex_windows(F_x[rows[0]], F_x[rows[-1]], n_complex[rows[0]],
-                              [(p, kind) for p, kind, _ in collisions])
+                              [(p, kind) for p, kind, _ in collisions]) if rows.size else []
     for a, b in complex_spans(windows):
         top.axvspan(min(a, b), max(a, b), color="C1", alpha=0.12, lw=0)
     handles.append(Patch(color="C1", alpha=0.25, label="a complex pair (located windows)"))

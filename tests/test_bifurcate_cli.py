@@ -120,3 +120,30 @@ def test_a_branch_that_cannot_start_fails_with_one_line(tmp_path):
     result = bifurcate(str(scene), "--out", str(tmp_path))
     assert result.returncode == 1
     assert "relaxation did not converge" in error_line(result, "bifurcate")
+
+
+def test_a_loading_and_unloading_sweep_says_what_each_leg_did(tmp_path):
+    """--fx 0.06:0 loads from rest to 0.06, then unloads (issue 23: the summary said "F_x
+    1e-05 .. 1e-05 ... status p_end, p_end")."""
+    result = bifurcate("--fx", "0.06:0", "--out", str(tmp_path))
+    assert result.returncode == 0, result.stderr
+    legs = [line.strip() for line in result.stdout.splitlines() if line.strip().startswith("leg ")]
+    assert len(legs) == 2
+    assert legs[0].startswith("leg 0, preparation: loading from rest: F_x 1e-05 -> 0.06,")
+    assert legs[1].startswith("leg 1, unloading: F_x 0.06 -> 1e-05,") and "reached" in legs[1]
+    branch = np.load(tmp_path / "branch.npz")
+    counts = [int(leg.split(" equilibria")[0].rsplit(", ", 1)[1]) for leg in legs]
+    assert counts == [int((branch["leg"] == 0).sum()), int((branch["leg"] == 1).sum())]
+
+
+def test_a_sweep_stops_at_a_leg_that_ends_short_and_says_where(tmp_path):
+    """A preparation leg that ends before its load (a 4-disk chain with mu = 1 folds over at
+    F_x ~ 3e-5) is the sweep's last: no unloading from a load never reached; exit 1, one line."""
+    scene = tmp_path / "short.toml"
+    scene.write_text("[disks]\nN = 4\n[contacts]\nmu = 1.0\n")
+    result = bifurcate(str(scene), "--fx", "0.2:0", "--out", str(tmp_path / "out"))
+    assert result.returncode == 1
+    line = error_line(result, "bifurcate")
+    assert "the sweep ended at F_x = " in line and "short of 0" in line and "there " in line
+    branch = np.load(tmp_path / "out" / "branch.npz")
+    assert set(branch["leg"].tolist()) == {0} and branch["F_x"][-1] < 1e-4

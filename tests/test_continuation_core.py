@@ -70,11 +70,14 @@ def assert_count_changes_only_at_collisions(problem, branch, p_lo, p_hi, n_grid=
 
 def test_fold_of_scalar_equation_is_passed_and_located():
     """G = u^2 + p from (u, p) = (1, -1): the branch turns at the fold (0, 0) and lands on
-    p = -1 again at u = -1. Fold located to |x - x_fold| <= 1e-9, hence |p| <= 1e-15."""
+    p = -1 again at u = -1, the side it started from, short of p_max = 1: its status says it
+    turned back (issue 23: it said "p_end"). Fold located to |x - x_fold| <= 1e-9, hence
+    |p| <= 1e-15."""
     problem = FunctionProblem(G=lambda u, p: np.array([u[0] ** 2 + p]), G_u=lambda u, p: np.array([[2 * u[0]]]),
                               G_p=lambda u, p: np.array([1.0]))
     br = run(problem, 1, p_min=-1.0, p_max=1.0, ds=0.1, ds_max=0.2, u0=np.array([1.0]))
-    assert br.status == "p_end" and br.p[-1] == -1.0 and br.u[-1, 0] == pytest.approx(-1.0, abs=1e-10)
+    assert br.status.startswith("turned back") and br.status.endswith("at p=-1")
+    assert br.p[-1] == -1.0 and br.u[-1, 0] == pytest.approx(-1.0, abs=1e-10)
     assert np.all(np.abs(br.u[:, 0] ** 2 + br.p) <= 1e-12)
     folds = locate_folds(problem, br)
     assert len(folds) == 1
@@ -222,7 +225,7 @@ def test_collision_located_through_a_fold():
 
     problem = FunctionProblem(G, G_u, lambda u, p: np.array([1.0, 0, 0, 0, 0]), A=lambda u, p: A(u))
     br = run(problem, 5, p_min=-1.0, p_max=1.0, ds=0.1, u0=np.array([1.0, 0, 0, 0, 0]))
-    assert br.status == "p_end" and br.u[-1, 0] == pytest.approx(-1.0)
+    assert br.status.startswith("turned back") and br.u[-1, 0] == pytest.approx(-1.0)
     assert [c.kind for c in br.collisions] == ["birth", "birth"]
     assert [c.p for c in br.collisions] == pytest.approx([-0.09, -0.04], abs=TOL_P)
     assert [c.u[0] for c in br.collisions] == pytest.approx([0.3, -0.2], abs=1e-9)

@@ -125,7 +125,7 @@ def test_name_selects_the_problem_and_p_its_span(tmp_path, capsys):
     """))
     assert main(["bifurcate", "--problem", f"{path}:second", "--p=-1:2", "--out", str(tmp_path / "o")]) == 0
     out = capsys.readouterr().out
-    assert "T -1 .. 2 K" in out
+    assert "T -1 -> 2 K" in out
     branch = np.load(tmp_path / "o" / "branch.npz", allow_pickle=False)
     assert branch["T"][[0, -1]].tolist() == [-1.0, 2.0]
     assert np.allclose(branch["u"], branch["T"][:, None], atol=1e-10)
@@ -160,3 +160,26 @@ def test_detection_applies_to_a_problem_file(tmp_path, capsys):
     assert [r["P"] for r in records] == pytest.approx([3.5 - np.sqrt(2), 3.5 + np.sqrt(2)], abs=1e-10)
     code, line = run_in_process(capsys, "--problem", str(tmp_path / "missing.py"), "--detection", "slow")
     assert code == 2 and line == "bifurcate error: --detection: must be fast or exhaustive (got 'slow')"
+
+
+def test_a_branch_that_folds_back_out_of_its_span_exits_1_with_one_line(tmp_path):
+    """G = u^2 - p from p = 1 towards -1 (issue 23): the branch turns at the fold p = 0 and
+    leaves the span at p = 1 again, never reaching -1. What it reached is written and printed
+    (the parameter's path through the fold), and the command fails with one line."""
+    source = tmp_path / "fold.py"
+    source.write_text(HEADER + textwrap.dedent("""
+        problem = BifurcationProblem(
+            problem_from_functions(lambda u, p: np.array([u[0] ** 2 - p]),
+                                   dG_du=lambda u, p: np.array([[2 * u[0]]]),
+                                   dG_dp=lambda u, p: np.array([-1.0])),
+            u0=np.array([1.0]), p_span=(1.0, -1.0))
+        """))
+    out = tmp_path / "out"
+    result = run_cli("bifurcate", "--problem", str(source), "--out", str(out))
+    assert result.returncode == 1
+    line = error_line(result, "bifurcate")
+    assert "did not reach p = -1" in line and "folded" in line
+    first = result.stdout.splitlines()[0]
+    assert " p 1 -> " in first and first.split(" -> ")[2].startswith("1,")  # back to 1
+    assert abs(float(first.split(" -> ")[1])) < 1e-9  # through the located fold
+    assert (out / "branch.npz").exists()
