@@ -94,6 +94,9 @@ def run(args: argparse.Namespace) -> int:
     if args.detection not in DETECTIONS:
         raise CommandError(f"bifurcate error: --detection: must be fast or exhaustive "
                            f"(got {args.detection!r})")
+    if args.workers is not None and args.workers > 0 and args.detection != "fast":
+        raise CommandError(f"bifurcate error: --workers: scan workers serve the fast detection; "
+                           f"--detection {args.detection} scans each step inline (got {args.workers})")
     if args.problem is not None:
         from diskfriction.cli.problem_cmd import run_problem
 
@@ -152,6 +155,8 @@ def run(args: argparse.Namespace) -> int:
             branch = sweep(system, F_from, F_to, matrix, params, on_point)
         except (EquilibriumError, ContinuationError, WindowCrowded) as error:
             raise CommandError(f"bifurcate error: {scene.source}: {error}", EXIT_FAILED) from None
+        if window is not None:
+            check_window_covered(branch, args.window, matrix, unit)
         progress.stage(f"writing {out}/branch.npz, collisions.json")
         save_branch(out, branch, scene)
         progress.stage(f"plotting {out}/diagram.png")
@@ -189,6 +194,23 @@ def run(args: argparse.Namespace) -> int:
                            f"{contact_states(system, branch.q[-1], branch.xi[-1])}; what it "
                            f"reached is written", EXIT_FAILED)
     return 0
+
+
+def check_window_covered(branch, given: str, matrix: str, unit: float) -> None:
+    """A CommandError (exit 1) when no eigenvalue of the branch ever had its real part in the
+    window: there is nothing to report for a band of the spectrum the branch never reached.
+    unit: the raw value of one unit of --window (PaperUnits.eigenvalue)."""
+    import numpy as np
+
+    lo, hi = branch.window
+    lam = branch.eigenvalues.real
+    if ((lam >= lo) & (lam <= hi)).any():
+        return
+    span = lam[np.isfinite(lam)] / unit
+    raise CommandError(f"bifurcate error: --window: no eigenvalue of {matrix} has its real part in "
+                       f"the window anywhere on the branch; those tracked lie in "
+                       f"{span.min():.4g}:{span.max():.4g}: nothing to report (got {given!r})",
+                       EXIT_FAILED)
 
 
 def leg_lines(branch, F_to: float) -> list[str]:

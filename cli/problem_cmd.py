@@ -102,10 +102,12 @@ def run_problem(args: argparse.Namespace) -> int:
     """The --problem form of `bifurcate` (module docstring); exit 0 if the branch reached the
     end of the span, 1 if it stopped before (what was reached is written and said)."""
     given = [option for option, value in (("SCENE", args.scene), ("--fx", args.fx),
-                                          ("--matrix", args.matrix)) if value is not None]
+                                          ("--matrix", args.matrix), ("--window", args.window))
+             if value is not None]
     if given:
         raise CommandError(f"bifurcate error: --problem: takes no {', '.join(given)} "
-                           "(the problem file defines the equations and the matrix)")
+                           "(the problem file defines the equations and the matrix, whose whole "
+                           "spectrum is tracked)")
     from diskfriction.cli.bifurcate_cmd import parse_range
 
     span = parse_range(args.p, "p", nonnegative=False) if args.p is not None else None

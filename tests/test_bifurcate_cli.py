@@ -101,6 +101,7 @@ BAD = [
     (["--matrix", "K"], "--matrix"),
     (["--ds-max", "-1"], "--ds-max"),
     (["--workers", "-1"], "--workers"),
+    (["--workers", "2", "--detection", "exhaustive"], "--workers"),  # was ignored (issue 23)
     (["missing.toml"], "missing.toml"),
 ]
 
@@ -147,3 +148,13 @@ def test_a_sweep_stops_at_a_leg_that_ends_short_and_says_where(tmp_path):
     assert "the sweep ended at F_x = " in line and "short of 0" in line and "there " in line
     branch = np.load(tmp_path / "out" / "branch.npz")
     assert set(branch["leg"].tolist()) == {0} and branch["F_x"][-1] < 1e-4
+
+
+def test_a_window_no_eigenvalue_enters_is_refused_with_one_line(tmp_path):
+    """--window 5:6 lies above the whole spectrum (lambda / k_n <= 0.17): bifurcate used to say
+    "0 collisions" for a band it never saw (issue 23); it fails with one line and writes nothing."""
+    result = bifurcate("--window", "5:6", "--out", str(tmp_path / "out"))
+    assert result.returncode == 1
+    line = error_line(result, "bifurcate")
+    assert "--window" in line and "no eigenvalue of J" in line and "'5:6'" in line
+    assert not (tmp_path / "out" / "collisions.json").exists()

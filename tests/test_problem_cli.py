@@ -102,6 +102,8 @@ def test_a_bad_problem_file_is_one_line_naming_the_file_and_exit_2(tmp_path, cap
     ("two.py:first", (), "--p: needed, {dir}/two.py:first has no p_span"),
     ("two.py:second", ("--p", "1:1"), "--p: empty range (got '1:1')"),
     ("two.py:second", ("--fx", "0:1"), "--problem: takes no --fx"),
+    ("two.py:second", ("--window", "0:1"), "--problem: takes no --window"),  # was ignored (issue 23)
+    ("two.py:second", ("--workers", "2", "--detection", "exhaustive"), "--workers: scan workers"),
     ("two.py:second", ("--p", "a:b"), "--p: expected A:B with two numbers"),
 ])
 def test_targets_and_options_are_checked_before_anything_runs(tmp_path, capsys, target, args, what):
