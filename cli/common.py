@@ -124,8 +124,8 @@ def check_sweep_memory(command: str, scene: Scene, processes: int = 1, dense: bo
 
 def run_command(args: argparse.Namespace) -> int:
     """Run the chosen subcommand. A SceneError, CommandError or OneLineError (no equilibrium,
-    not enough memory, ...) becomes one line on stderr and its exit code; Ctrl-C one line and
-    130; a MemoryError one line and exit 1."""
+    not enough memory, ...) becomes one line on stderr and its exit code; Ctrl-C one line
+    (interrupted_line) and 130; a MemoryError one line and exit 1."""
     command = getattr(args, "command", "diskfriction")
     try:
         return args.run(args)
@@ -142,5 +142,18 @@ def run_command(args: argparse.Namespace) -> int:
         print(f"{command} error: out of memory ({error})", file=sys.stderr)
         return EXIT_FAILED
     except KeyboardInterrupt:
-        print("interrupted: results written so far are kept; rerun to resume", file=sys.stderr)
+        print(interrupted_line(args), file=sys.stderr)
         return EXIT_INTERRUPTED
+
+
+RESUMES = "interrupted: the finished {what} are kept in {where}; rerun the same command to resume"
+STARTS_OVER = "interrupted: {command} does not resume; run it again to get its results"
+
+
+def interrupted_line(args: argparse.Namespace) -> str:
+    """What Ctrl-C leaves: a command that resumes says what it keeps and where (args.keeps,
+    set by the command once it knows: ("realizations", DIR)); any other that it starts over."""
+    keeps = getattr(args, "keeps", None)
+    if keeps is not None:
+        return RESUMES.format(what=keeps[0], where=keeps[1])
+    return STARTS_OVER.format(command=getattr(args, "command", "the command"))

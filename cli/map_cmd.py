@@ -131,6 +131,7 @@ def run(args: argparse.Namespace) -> int:
             raise CommandError(f"map error: --workers: sizes the local cluster; the scheduler "
                                f"has its own workers (got {args.workers!r})")
     out = output_dir("map", args.out, Path("out") / "map" / scene.name)
+    args.keeps = ("cells", out / "cells")  # what Ctrl-C leaves to resume from (cli.common)
     from diskfriction.dynamics.cluster import code_version, local_workers
 
     at_once = 1 if args.scheduler is not None else min(len(cells), local_workers(args.workers))

@@ -54,8 +54,11 @@ def run(args: argparse.Namespace) -> int:
     for scene in scenes:
         check_sweep_memory("report", scene)
     out = output_dir("report", args.out, Path("out/report"))
-    log = build_report(scenes, out, only or None, settings,
-                       Path(args.cache) if args.cache else None)
+    from diskfriction.reports.builder import default_cache_dir
+
+    cache = Path(args.cache) if args.cache else default_cache_dir(out)
+    args.keeps = ("computations", cache)  # what Ctrl-C leaves to resume from (cli.common)
+    log = build_report(scenes, out, only or None, settings, cache)
     computed = sum(e.status == "computed" for e in log)
     failed = sum("failed" in e.status for e in log)
     print(f"wrote {out / 'report.md'} ({len(log)} computations: {computed} computed, "

@@ -91,6 +91,8 @@ def run(args: argparse.Namespace) -> int:
     number("simulate", "amplitude", args.amplitude, zero=True)
     out = output_dir("simulate", args.out, Path("out") / "simulate" / scene.name)
     check_sweep_memory("simulate", scene)
+    if not single:
+        args.keeps = ("realizations", out / "runs")  # what Ctrl-C leaves to resume from (cli.common)
     progress = Progress("simulate")
     try:
         if single:

@@ -281,7 +281,8 @@ def test_interrupting_an_ensemble_prints_one_line_and_exits_130(tmp_path):
             os.killpg(proc.pid, signal.SIGKILL)
     assert proc.returncode == 130, err
     lines = err.splitlines()
-    assert lines[-1] == "interrupted: results written so far are kept; rerun to resume"
+    assert lines[-1] == (f"interrupted: the finished realizations are kept in {tmp_path / 'out' / 'runs'}; "
+                         f"rerun the same command to resume")
     assert all(line.startswith("simulate: ") for line in lines[:-1]), err
     assert "Traceback" not in err
 
@@ -311,7 +312,8 @@ def test_interrupting_a_sweep_with_scan_workers_prints_one_line_and_exits_130(tm
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
     assert proc.returncode == 130, err
-    assert err.splitlines()[-1] == "interrupted: results written so far are kept; rerun to resume"
+    # bifurcate does not resume: it must not promise that a rerun does (issue 23)
+    assert err.splitlines()[-1] == "interrupted: bifurcate does not resume; run it again to get its results"
     assert "Traceback" not in err
     assert not any(w.is_running() and w.status() != psutil.STATUS_ZOMBIE for w in workers)
 

@@ -128,7 +128,9 @@ def test_bad_input_gets_one_line_and_exit_2(args, key, tmp_path):
     assert "Traceback" not in result.stderr
 
 
-def test_an_interrupt_ends_with_one_line_and_keeps_what_is_done(capsys):
+def test_an_interrupt_ends_with_one_line_that_says_whether_a_rerun_resumes(capsys):
+    """Only a command that keeps what it finished (args.keeps) promises that a rerun resumes
+    (issue 23: every command said so)."""
     import argparse
 
     from diskfriction.cli.common import EXIT_INTERRUPTED, run_command
@@ -136,9 +138,16 @@ def test_an_interrupt_ends_with_one_line_and_keeps_what_is_done(capsys):
     def interrupted(args):
         raise KeyboardInterrupt
 
-    assert run_command(argparse.Namespace(run=interrupted)) == EXIT_INTERRUPTED
+    def interrupted_after_planning(args):
+        args.keeps = ("cells", Path("out/map/cells"))
+        raise KeyboardInterrupt
+
+    assert run_command(argparse.Namespace(run=interrupted, command="verify")) == EXIT_INTERRUPTED
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "rerun to resume" in err
+    assert err == "interrupted: verify does not resume; run it again to get its results\n"
+    run_command(argparse.Namespace(run=interrupted_after_planning, command="map"))
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "cells are kept in out/map/cells; rerun the same command to resume" in err
 
 
 def test_windows_are_the_intervals_between_collisions_with_their_pair_count():
