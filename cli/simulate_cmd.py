@@ -80,6 +80,7 @@ def run(args: argparse.Namespace) -> int:
     scene = scene_from_args(args)
     loads = parse_loads(args.fx)
     run_length("simulate", args.t_end, args.dt)
+    number("simulate", "seed", args.seed, zero=True, integer=True)  # numpy seeds are >= 0
     if args.realizations is not None:
         number("simulate", "realizations", args.realizations, integer=True)
     if args.scheduler is not None and not SCHEDULER.match(args.scheduler):

@@ -130,6 +130,7 @@ BAD = [
     (["report", "--only", ","], "--only"),
     (["simulate", "--fx", "0.01", "--t-end", "1", "--dt", "2"], "--dt"),
     (["simulate", "--fx", "0.083,0.083", "--t-end", "1"], "given twice"),
+    (["simulate", "--fx", "0.03", "--t-end", "1", "--seed=-3"], "--seed: must be an integer >= 0 (got -3)"),
     (["simulate", "--fx", "-0.083", "--t-end", "1"], "mirror image"),
     (["bifurcate", "--fx=-0.1:0"], "mirror image"),
 ]
