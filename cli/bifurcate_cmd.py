@@ -9,9 +9,10 @@ import math
 from pathlib import Path
 
 from diskfriction.cli.common import (EXIT_FAILED, CommandError, add_scene_argument,
-                                     check_sweep_memory, number, output_dir, path,
+                                     check_memory, number, output_dir, path,
                                      scene_from_args)
 from diskfriction.cli.progress import Progress
+from diskfriction.words import count
 from diskfriction.scenes.scene import NEGATIVE_LOAD
 
 MATRICES = {"J": "J", "M^-1J": "M^-1 J", "M^-1 J": "M^-1 J"}
@@ -128,8 +129,8 @@ def run(args: argparse.Namespace) -> int:
     from diskfriction.symbolic import System
 
     detection = DetectionParams(mode=args.detection, workers=args.workers)
-    check_sweep_memory("bifurcate", scene, 1 + planned_workers(scene.ndof, detection),
-                       dense=window is None and scene.eps > 0)
+    check_memory("bifurcate", scene, 1 + planned_workers(scene.ndof, detection),
+                 dense=window is None and scene.eps > 0)
 
     progress = Progress("bifurcate")
     total = F_from + abs(F_to - F_from)  # preparation leg plus the sweep
@@ -168,7 +169,7 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps([{k: r[k] for k in ("F_x", "kind", "lambda_re", "lambda_im", "matrix")}
                           for r in records], indent=1))
     else:
-        print(f"{len(branch)} equilibria, max residual {branch.residual.max():.1e}, "
+        print(f"{count(len(branch), 'equilibrium', 'equilibria')}, max residual {branch.residual.max():.1e}, "
               f"{branch.events} contact events split")
         for line in leg_lines(branch, F_to):
             print(f"  {line}")
@@ -176,7 +177,7 @@ def run(args: argparse.Namespace) -> int:
             print(f"free rolling modes (disks held by the substrate alone, excluded from the "
                   f"collisions): {branch.free[0]} at F_x = {branch.F_x[0]:.3g}, "
                   f"{branch.free[-1]} at F_x = {branch.F_x[-1]:.3g}")
-        print(f"{len(records)} collisions ({matrix})" + (
+        print(f"{count(len(records), 'collision')} ({matrix})" + (
             "" if branch.window is None else f" with Re lambda in [{branch.window[0]:.6g}, "
             f"{branch.window[1]:.6g}] (raw; the window tracked: "
             f"{branch.eigenvalues.shape[1]} eigenvalues at each point)") + ":")
@@ -228,6 +229,6 @@ def leg_lines(branch, F_to: float) -> list[str]:
                 ("loading" if F[-1] > F[0] else "unloading"))
         floor = (" (the rest state F_x = 0 is singular: unloading ends where loading started)"
                  if leg == 1 and F_to == 0 and status == "p_end" else "")
-        lines.append(f"leg {leg}, {what}: F_x {path(F)}, {rows.size} equilibria, "
+        lines.append(f"leg {leg}, {what}: F_x {path(F)}, {count(rows.size, 'equilibrium', 'equilibria')}, "
                      f"{stop_reason(status, rows.size)}{floor}")
     return lines

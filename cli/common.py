@@ -105,19 +105,29 @@ def output_dir(command: str, given: Optional[str], default: Path) -> Path:
     return path
 
 
-def check_sweep_memory(command: str, scene: Scene, processes: int = 1, dense: bool = True) -> None:
-    """Refuse (one line, exit 2) a scene whose sweeps need more memory than this machine has:
-    continuation is dense in n = ndof (unless `dense` is False: a spectral window, or eps = 0),
-    in each of the `processes` that take spectra at once (a sweep's and its scan workers, or a
-    map's cells on this machine), and stores its points (continuation/memory.py)."""
-    from diskfriction.continuation.memory import sweep_bytes
+def check_memory(command: str, scene: Scene, processes: int = 1, dense: Optional[bool] = None,
+                 spectra: int = 0) -> None:
+    """Refuse (one line, exit 2) a scene whose work needs more memory than this machine has,
+    naming what it counted: the larger of a sweep, dense in n = ndof (unless `dense` is False: a
+    spectral window, a sweep without spectra, or eps = 0, the default None meaning eps > 0) in
+    each of the `processes` that take spectra at once (a sweep's and its scan workers, or a
+    map's cells on this machine), with its stored points (continuation/memory.py), and the dense
+    spectrum of M^-1 J at a run's start in each of the `spectra` processes that take one at once."""
+    from diskfriction.continuation.memory import spectrum_bytes, sweep_bytes
     from diskfriction.memory import NotEnoughMemory, require_memory
 
     n = scene.ndof
+    dense = scene.eps > 0 if dense is None else dense
     where = f" in {processes} processes" if processes > 1 else ""
-    what = f"a sweep of {n} x {n} dense matrices{where}" if dense else f"a sweep's points of {n} unknowns"
+    needs = [(sweep_bytes(n, processes=processes, dense=dense),
+              f"a sweep of {n} x {n} dense matrices{where}" if dense
+              else f"a sweep's points of {n} unknowns")]
+    if spectra:
+        at_once = f" in {spectra} processes" if spectra > 1 else ""
+        needs.append((spectrum_bytes(n, spectra), f"the dense {n} x {n} spectrum at a run's start{at_once}"))
+    nbytes, what = max(needs)
     try:
-        require_memory(sweep_bytes(n, processes=processes, dense=dense), f"N = {scene.N}: {what}")
+        require_memory(nbytes, f"N = {scene.N}: {what}")
     except NotEnoughMemory as error:
         raise CommandError(f"{command} error: {scene.source}: {error}") from None
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from diskfriction.cli.common import (add_scene_argument, check_sweep_memory, code_targets, load,
+from diskfriction.cli.common import (add_scene_argument, check_memory, code_targets, load,
                                      number, output_dir, run_length, scene_from_args)
 from diskfriction.cli.export_cmd import add_start_argument
 from diskfriction.cli.progress import Progress
@@ -52,7 +52,7 @@ def run(args: argparse.Namespace) -> int:
         number("crosscheck", "every", args.every, integer=True)
     check_representable(scene)
     out = output_dir("crosscheck", args.out, Path("out") / "crosscheck" / scene.name)
-    check_sweep_memory("crosscheck", scene)  # the default dt comes from the dense spectrum at the start
+    check_memory("crosscheck", scene, dense=False, spectra=1)  # dt: the start's spectrum
     lammps = find_lammps()
 
     from diskfriction.files import save_json, save_npz

@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from diskfriction.cli.common import (add_scene_argument, check_sweep_memory, code_targets, load,
+from diskfriction.cli.common import (add_scene_argument, check_memory, code_targets, load,
                                      output_dir, scene_from_args)
 from diskfriction.cli.progress import Progress
 
@@ -48,7 +48,7 @@ def run(args: argparse.Namespace) -> int:
     F_x = load("export", args.fx)
     check_representable(scene)
     out = output_dir("export", args.out, Path("out") / "export" / scene.name)
-    check_sweep_memory("export", scene)  # the default dt comes from the dense spectrum at the start
+    check_memory("export", scene, dense=False, spectra=1)  # the deck's dt: the start's spectrum
 
     from diskfriction.peers.crosscheck import default_dt
     from diskfriction.peers.lammps_deck import DUMP_FILE, deck, start_state

@@ -15,9 +15,10 @@ import argparse
 from pathlib import Path
 
 from diskfriction.cli.bifurcate_cmd import MATRICES, parse_range
-from diskfriction.cli.common import (CommandError, add_scene_argument, check_sweep_memory,
+from diskfriction.cli.common import (CommandError, add_scene_argument, check_memory,
                                      number, output_dir, scene_from_args)
 from diskfriction.cli.progress import Progress
+from diskfriction.words import count
 from diskfriction.cli.simulate_cmd import SCHEDULER, SINGLE_AMPLITUDE
 
 VARY = "KEY=LO:HI:COUNT[:log]"
@@ -136,7 +137,7 @@ def run(args: argparse.Namespace) -> int:
 
     at_once = 1 if args.scheduler is not None else min(len(cells), local_workers(args.workers))
     for cell in cells:
-        check_sweep_memory("map", cell.scene, at_once, dense=cell.scene.eps > 0)
+        check_memory("map", cell.scene, at_once, spectra=at_once if args.slide else 0)
 
     from diskfriction.dynamics.maps import MapParams, SlideParams, run_map
     from diskfriction.dynamics.stepper import load_stepper
@@ -175,7 +176,7 @@ def describe(cell, s: dict) -> str:
     values = ", ".join(f"{key} = {value:g}" for key, value in cell.values)
     if s["status"] == "failed":
         return f"{values}: failed: {s['reason']}"
-    line = f"{values}: {s['status']}, {s['collisions']} collisions, {s['windows']} windows"
+    line = f"{values}: {s['status']}, {count(s['collisions'], 'collision')}, {count(s['windows'], 'window')}"
     if s["runs"] is not None:
         lo = "the first run" if s["F_slide_lo"] is None else f"stuck at {s['F_slide_lo']:.5g}"
         line += (f", no run slid (of {s['runs']})" if s["F_slide"] is None else

@@ -22,6 +22,7 @@ from pathlib import Path
 
 from diskfriction.cli.common import EXIT_FAILED, CommandError, number, output_dir, path
 from diskfriction.cli.progress import Progress
+from diskfriction.words import count
 from diskfriction.files import warn
 
 DEFAULT_NAME = "problem"
@@ -190,9 +191,9 @@ def _continue(spec, label: str, span, options, out: Path, as_json: bool) -> int:
 def _print_summary(result, spec, out: Path) -> None:
     """What was reached and located, in the problem's names and units."""
     units = f" {spec.units}" if spec.units else ""
-    print(f"{len(result.p)} points, {spec.parameter} {path(result.p, [f.p for f in result.folds])}{units}, max residual "
+    print(f"{count(len(result.p), 'point')}, {spec.parameter} {path(result.p, [f.p for f in result.folds])}{units}, max residual "
           f"{result.branch.residual.max():.1e}, status {result.message}")
-    print(f"{len(result.collisions)} collisions ({spec.matrix}):")
+    print(f"{count(len(result.collisions), 'collision')} ({spec.matrix}):")
     for c in result.collisions:
         print(f"  {c.kind:5s}  {spec.parameter} = {c.p:.12g}{units}  lambda = {c.eigenvalue:.9g}")
     for s in result.folds + result.hopf:

@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from diskfriction.cli.common import CommandError, check_sweep_memory, output_dir
+from diskfriction.cli.common import CommandError, check_memory, output_dir
 from diskfriction.scenes.load import default_scene_path, load_scene
 
 
@@ -52,7 +52,7 @@ def run(args: argparse.Namespace) -> int:
     if args.cache == "":
         raise CommandError("report error: --cache: empty path (got '')")
     for scene in scenes:
-        check_sweep_memory("report", scene)
+        check_memory("report", scene, spectra=1)
     out = output_dir("report", args.out, Path("out/report"))
     from diskfriction.reports.builder import default_cache_dir
 

@@ -13,9 +13,10 @@ import math
 import re
 from pathlib import Path
 
-from diskfriction.cli.common import (EXIT_FAILED, CommandError, add_scene_argument, check_sweep_memory,
+from diskfriction.cli.common import (EXIT_FAILED, CommandError, add_scene_argument, check_memory,
                                      number, output_dir, run_length, scene_from_args)
 from diskfriction.cli.progress import Progress
+from diskfriction.words import count
 from diskfriction.scenes.scene import NEGATIVE_LOAD
 
 KINDS = ("random-velocity", "random-position", "eigenvector", "none")
@@ -91,7 +92,7 @@ def run(args: argparse.Namespace) -> int:
         args.amplitude = SINGLE_AMPLITUDE if single else ENSEMBLE_AMPLITUDE
     number("simulate", "amplitude", args.amplitude, zero=True)
     out = output_dir("simulate", args.out, Path("out") / "simulate" / scene.name)
-    check_sweep_memory("simulate", scene)
+    check_memory("simulate", scene, dense=False, spectra=1)  # equilibrium_at takes no spectra
     if not single:
         args.keeps = ("realizations", out / "runs")  # what Ctrl-C leaves to resume from (cli.common)
     progress = Progress("simulate")
@@ -167,7 +168,7 @@ def ensemble_run(scene, loads, args, out: Path, progress: Progress) -> int:
         slid = sum(s["slid"] is True for s in ens.summaries[F])
         unresolved = sum(not s["accurate"] for s in ens.summaries[F])
         v1 = ens.V1[F]
-        print(f"F_x = {F:g}: {len(ens.summaries[F])} realizations, {slid} slid"
+        print(f"F_x = {F:g}: {count(len(ens.summaries[F]), 'realization')}, {slid} slid"
               f"{f', {unresolved} not resolved (energy budget), left out' if unresolved else ''}; "
               f"V1 = {v1.value:.4g} +- {v1.error:.2g} raw ({paper(v1):.3g} 2R/tau, n = {v1.n}); "
               f"V_cm = {ens.V_cm[F].value:.4g} raw")

@@ -12,7 +12,7 @@ from pathlib import Path
 
 from diskfriction.cli.bifurcate_cmd import MATRICES
 from diskfriction.cli.common import (EXIT_FAILED, CommandError, add_scene_argument,
-                                     check_sweep_memory, number, output_dir, scene_from_args)
+                                     check_memory, number, output_dir, scene_from_args)
 from diskfriction.cli.progress import Progress
 from diskfriction.cli.simulate_cmd import SINGLE_AMPLITUDE
 
@@ -38,7 +38,10 @@ def run(args: argparse.Namespace) -> int:
     number("verify", "amplitude", args.amplitude, zero=True)
     matrix = MATRICES[args.matrix] if args.matrix else scene.matrix
     out = output_dir("verify", args.out, Path("out") / "verify" / scene.name)
-    check_sweep_memory("verify", scene)
+    from diskfriction.continuation.collisions import DetectionParams
+    from diskfriction.continuation.scans import planned_workers
+
+    check_memory("verify", scene, 1 + planned_workers(scene.ndof, DetectionParams()), spectra=1)
 
     from diskfriction.continuation.arclength import ContinuationError
     from diskfriction.continuation.disks import EquilibriumError

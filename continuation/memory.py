@@ -24,6 +24,9 @@ from __future__ import annotations
 DENSE_MATRICES = 12
 POINT_VECTORS = 8
 TYPICAL_POINTS = 2000
+SPECTRUM_MATRICES = 6
+"""A run's start spectrum (dynamics.start.spectrum: J, M^-1 J, LAPACK's copy, real and complex
+eigenvectors) holds about this many n x n arrays of doubles at once."""
 
 
 def sweep_bytes(ndof: int, points: int = TYPICAL_POINTS, processes: int = 1, dense: bool = True) -> float:
@@ -34,3 +37,10 @@ def sweep_bytes(ndof: int, points: int = TYPICAL_POINTS, processes: int = 1, den
     or eps = 0, where only the disks the load reached form a dense block)."""
     n = float(ndof)
     return 8.0 * (DENSE_MATRICES * n * n * processes * dense + POINT_VECTORS * n * points)
+
+
+def spectrum_bytes(ndof: int, processes: int = 1) -> float:
+    """Estimated peak memory of the dense eigendecomposition of M^-1 J at a run's start, in
+    `processes` processes at once [bytes]."""
+    n = float(ndof)
+    return 8.0 * SPECTRUM_MATRICES * n * n * processes

@@ -18,6 +18,7 @@ from diskfriction.dynamics.simulate import inaccuracy, simulate, summarize
 from diskfriction.dynamics.start import Perturbation, spectrum
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
+from diskfriction.words import count
 
 
 def windows(branch: DiskBranch) -> list[Window]:
@@ -59,9 +60,10 @@ def verify_windows(scene: Scene, matrix: str, t_end: float, amplitude: float,
     system = System.from_scene(scene)
     report(f"sweep F_x 0 -> {scene.F_x_range[1]:g} ({matrix})", None)
     todo = windows(sweep(system, 0.0, scene.F_x_range[1], matrix))
-    report(f"one run to t = {t_end:g} in each of {len(todo)} windows", 0.0)
+    stage = f"one run to t = {t_end:g} in each of {count(len(todo), 'window')}"
+    report(stage, 0.0)
     rows = []
     for k, window in enumerate(todo):
         rows.append(window_run(system, window, k, t_end, amplitude))
-        report(f"one run to t = {t_end:g} in each of {len(todo)} windows", (k + 1) / len(todo))
+        report(stage, (k + 1) / len(todo))
     return rows

@@ -81,11 +81,11 @@ def test_a_scene_too_large_for_this_machine_is_refused_with_one_line(tmp_path, c
 
 def test_the_memory_guard_counts_the_scan_workers(tmp_path):
     """The sweep's dense matrices are formed in its process and in each scan worker: at an N
-    whose sweep fits in one process but not in three, check_sweep_memory refuses two workers
+    whose sweep fits in one process but not in three, check_memory refuses two workers
     (one line naming the three processes) and lets one process go, and three without dense
     matrices (eps = 0); `bifurcate` with its default workers refuses the pre-compressed
     scene, exit 2."""
-    from diskfriction.cli.common import CommandError, check_sweep_memory
+    from diskfriction.cli.common import CommandError, check_memory
     from diskfriction.continuation.memory import sweep_bytes
     from diskfriction.continuation.collisions import DetectionParams
     from diskfriction.continuation.scans import planned_workers
@@ -97,14 +97,42 @@ def test_the_memory_guard_counts_the_scan_workers(tmp_path):
         N = int(N * 1.2)
     scene = Scene(N=N, eps=1e-4)  # pre-compressed: every disk in the chain, dense spectra
     assert sweep_bytes(scene.ndof, processes=1) < have
-    check_sweep_memory("bifurcate", scene, processes=1)
+    check_memory("bifurcate", scene, processes=1)
     with pytest.raises(CommandError, match="in 3 processes"):
-        check_sweep_memory("bifurcate", scene, processes=3)
-    check_sweep_memory("bifurcate", Scene(N=N), processes=3, dense=False)  # eps = 0: free disks
+        check_memory("bifurcate", scene, processes=3)
+    check_memory("bifurcate", Scene(N=N), processes=3, dense=False)  # eps = 0: free disks
     if planned_workers(scene.ndof, DetectionParams()) == 2:
         result = run_cli("bifurcate", scene_file(tmp_path, f"[disks]\nN = {N}\neps = 1e-4\n"),
                          "--out", str(tmp_path / "out"))
         assert "in 3 processes" in one_line(result, "bifurcate")
+
+
+NEEDS = {"bifurcate": "a sweep's points of 300000 unknowns",
+         "simulate": "the dense 300000 x 300000 spectrum at a run's start",
+         "verify": "the dense 300000 x 300000 spectrum at a run's start"}
+
+
+@pytest.mark.parametrize("command", sorted(NEEDS))
+def test_each_command_names_what_its_memory_estimate_counts(tmp_path, command):
+    """The paper's eps = 0 at N = 100 000 (issue 23: bifurcate said 38.4 GB, simulate 8.68e3
+    GB "for a sweep of dense matrices", which simulate never forms): bifurcate's sweep forms
+    no dense matrix at eps = 0, while simulate and verify take a dense spectrum at a run's
+    start; each line says which it counted, and the same need gives the same figure."""
+    scene = scene_file(tmp_path, "[disks]\nN = 100000\n")
+    result = run_cli(command, scene, *COMMANDS[command], "--out", str(tmp_path / "out"))
+    line = one_line(result, command)
+    assert f"N = 100000: {NEEDS[command]} needs about " in line
+    if command != "bifurcate":
+        assert "needs about 4.32e+03 GB" in line
+
+
+def test_counts_agree_with_their_nouns():
+    from diskfriction.words import count
+
+    assert [count(1, "collision"), count(2, "collision"), count(0, "window")] == [
+        "1 collision", "2 collisions", "0 windows"]
+    assert [count(1, "equilibrium", "equilibria"), count(3, "equilibrium", "equilibria")] == [
+        "1 equilibrium", "3 equilibria"]
 
 
 def test_the_scene_command_shows_a_large_scene(tmp_path):

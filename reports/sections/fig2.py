@@ -7,6 +7,7 @@ from diskfriction.continuation.windows import complex_spans, complex_windows
 from diskfriction.reports.bifurcation import draw_spectrum
 from diskfriction.reports.registry import Section
 from diskfriction.reports.sections.common import MATRICES, branch_need, failures, new_figure, table
+from diskfriction.words import count
 
 
 def needs(scene, settings):
@@ -52,7 +53,7 @@ def render(ctx):
                                               zip(b["collision_F_x"], b["collision_kind"])))
         win = ", ".join(f"{lo:.4f}-{hi:.4f}" for lo, hi in spans)
         text.append(f"{matrix}: {b['points']} points, status {', '.join(b['status'])}, "
-                    f"{len(b['collision_kind'])} collisions; complex windows: {win or 'none'}.\n")
+                    f"{count(len(b['collision_kind']), 'collision')}; complex windows: {win or 'none'}.\n")
         rows += [[matrix, f"{p:.6f}", kind, f"{lam / unit:.5g}", "" if ok else "unresolved"]
                  for p, kind, lam, ok in zip(b["collision_F_x"], b["collision_kind"],
                                               b["collision_eigenvalue"], b["collision_resolved"])]
