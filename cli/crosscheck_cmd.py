@@ -11,10 +11,11 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from diskfriction.cli.common import (add_scene_argument, check_memory, code_targets, load,
+from diskfriction.cli.common import (CommandError, add_scene_argument, check_memory, code_targets, load,
                                      number, output_dir, run_length, scene_from_args)
 from diskfriction.cli.export_cmd import add_start_argument
 from diskfriction.cli.progress import Progress
+from diskfriction.words import duration
 
 TABLE_ROWS = 10
 
@@ -56,7 +57,8 @@ def run(args: argparse.Namespace) -> int:
     lammps = find_lammps()
 
     from diskfriction.files import save_json, save_npz
-    from diskfriction.peers.crosscheck import Steps, crosscheck, default_dt, lever_arm_band
+    from diskfriction.dynamics.simulate import UnstableStep
+    from diskfriction.peers.crosscheck import crosscheck, lever_arm_band, plan_steps
     from diskfriction.peers.lammps_deck import start_state
     from diskfriction.reports.crosscheck import plot_deviation
     from diskfriction.symbolic import System
@@ -66,8 +68,13 @@ def run(args: argparse.Namespace) -> int:
         system = System.from_scene(scene, progress.part("kernels"))
         progress.stage(f"{args.start} state at F_x = {F_x:g}")
         start = start_state(system, F_x, args.start)
-        steps = Steps.plan(args.t_end, args.dt or default_dt(system, start), args.every)
-        progress.stage(f"both codes to t = {args.t_end:g} ({steps.steps} steps of {steps.dt:.4g})")
+        try:
+            steps = plan_steps(system, start, args.t_end, args.dt, args.every)
+        except UnstableStep as error:
+            raise CommandError(f"crosscheck error: --dt: {error} (got {args.dt!r})") from None
+        progress.stage(f"both codes to t = {args.t_end:g} ({steps.steps} steps of {steps.dt:.4g}"
+                       f"{shortened(args.dt, steps)}): about {duration(steps.seconds(system.N))} "
+                       f"(a rough estimate)")
         result = crosscheck(system, start, steps, lammps, out / "lammps")
         summary = result.summary()
         band = None
@@ -82,13 +89,23 @@ def run(args: argparse.Namespace) -> int:
         progress.close()
     print(f"start: {start.note}")
     print(f"LAMMPS {result.lammps_version}, conventions {scene.effects.conventions!r}, "
-          f"{steps.steps} steps of dt = {steps.dt:.17g}, compared every {steps.every} steps")
+          f"{steps.steps} steps of dt = {steps.dt:.17g}{shortened(args.dt, steps)}, compared every "
+          f"{steps.every} steps")
     print(table(result))
     if band is not None:
         print(f'conventions "model": the lever arm alone accounts for a theta deviation between '
               f'{band[0]:.2g} and {band[1]:.2g} at t = {result.t[-1]:g} (docs/physics.md)')
     print(f"wrote {out}/crosscheck.json, deviation.npz, deviation.png, lammps/")
     return 0
+
+
+def shortened(dt, steps) -> str:
+    """Why the step is shorter than --dt asked for, if it is by more than rounding: equal
+    steps end exactly at T, on a compared frame (a whole number of strides of --every)."""
+    if dt is None or steps.dt >= dt * (1 - 1e-9):
+        return ""
+    return (f"; --dt {dt:g} shortened: equal steps, {steps.every} per compared frame, end "
+            f"exactly at T")
 
 
 def table(result) -> str:

@@ -18,7 +18,7 @@ from diskfriction.cli.bifurcate_cmd import MATRICES, parse_range
 from diskfriction.cli.common import (CommandError, add_scene_argument, check_memory,
                                      number, output_dir, scene_from_args)
 from diskfriction.cli.progress import Progress
-from diskfriction.words import count
+from diskfriction.words import count, duration
 from diskfriction.cli.simulate_cmd import SCHEDULER, SINGLE_AMPLITUDE
 
 VARY = "KEY=LO:HI:COUNT[:log]"
@@ -152,8 +152,9 @@ def run(args: argparse.Namespace) -> int:
         system = System.from_scene(scene, progress.part("kernels"))
         if args.slide:
             load_stepper(system.kernels, progress.part("stepper"))
-        progress.stage(f"{len(cells)} cells: bifurcate F_x {F_from:g} -> {F_to:g} ({matrix})"
-                       + (f", one run per window to t = {t_end:g}" if args.slide else ""))
+        progress.stage(f"{count(len(cells), 'cell')}: bifurcate F_x {F_from:g} -> {F_to:g} ({matrix})"
+                       + (f", one run per window to t = {t_end:g}" if args.slide else "")
+                       + f"; {estimate(cells, params, out, at_once, args.scheduler is not None)}")
         records = run_map(cells, params, out, args.scheduler, args.workers,
                           lambda done, total: progress(done / total, f"{done}/{total} cells"))
         progress.stage(f"writing {out}/map.csv, map.json")
@@ -168,6 +169,22 @@ def run(args: argparse.Namespace) -> int:
         print(describe(cell, record["summary"]))
     print(f"wrote {out}/map.csv, map.json, map.png and {out}/cells/")
     return 0
+
+
+def estimate(cells, params, out: Path, at_once: int, remote: bool) -> str:
+    """The rough wall time of the cells not on disk yet (dynamics.maps.cell_seconds), on the
+    local cluster's workers (at_once), or per worker of a remote scheduler."""
+    from diskfriction.dynamics.cluster import code_version
+    from diskfriction.dynamics.maps import cell_path, cell_seconds
+
+    version = code_version()
+    todo = [c for c in cells if not cell_path(out, c.scene, params, version).exists()]
+    seconds = sum(cell_seconds(c.scene, params) for c in todo)
+    if not todo:
+        return "all on disk"
+    done = f"{len(cells) - len(todo)} on disk, " if len(todo) < len(cells) else ""
+    where = "divided by the scheduler's workers" if remote else f"on {count(at_once, 'worker')}"
+    return f"{done}about {duration(seconds / (1 if remote else at_once))} {where} (a rough estimate)"
 
 
 def describe(cell, s: dict) -> str:

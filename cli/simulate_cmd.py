@@ -16,7 +16,7 @@ from pathlib import Path
 from diskfriction.cli.common import (EXIT_FAILED, CommandError, add_scene_argument, check_memory,
                                      number, output_dir, run_length, scene_from_args)
 from diskfriction.cli.progress import Progress
-from diskfriction.words import count
+from diskfriction.words import count, duration
 from diskfriction.scenes.scene import NEGATIVE_LOAD
 
 KINDS = ("random-velocity", "random-position", "eigenvector", "none")
@@ -106,7 +106,7 @@ def run(args: argparse.Namespace) -> int:
 
 def single_run(scene, F_x: float, args, out: Path, progress: Progress) -> int:
     from diskfriction.continuation.equilibrium import equilibrium_at
-    from diskfriction.dynamics.simulate import UnstableStep, inaccuracy, simulate, summarize
+    from diskfriction.dynamics.simulate import UnstableStep, inaccuracy, plan_run, simulate, summarize
     from diskfriction.dynamics.start import Perturbation, spectrum
     from diskfriction.dynamics.stepper import load_stepper
     from diskfriction.reports.simulation import plot_run, save_run
@@ -117,13 +117,15 @@ def single_run(scene, F_x: float, args, out: Path, progress: Progress) -> int:
     progress.stage(f"sweep from rest to F_x = {F_x:g}")
     eq = equilibrium_at(system, F_x)
     load_stepper(system.kernels, progress.part("stepper"))
-    kind = args.perturbation or ("eigenvector" if spectrum(system, eq.q, eq.xi).pairs.size
-                                 else "random-velocity")
-    progress.stage(f"run to t = {args.t_end:g}")
+    spec = spectrum(system, eq.q, eq.xi)
+    kind = args.perturbation or ("eigenvector" if spec.pairs.size else "random-velocity")
     try:
+        plan = plan_run(spec, args.t_end, args.dt)
+        progress.stage(f"run to t = {args.t_end:g}: {plan.n_steps} steps, about "
+                       f"{duration(plan.seconds(system.N))} (a rough estimate)")
         traj = simulate(system, eq.q, eq.xi, F_x, args.t_end, dt=args.dt,
                         perturbation=Perturbation(kind, args.amplitude, args.seed),
-                        progress=lambda t: progress(t / args.t_end, f"t = {t:.1f}"))
+                        progress=lambda t: progress(t / args.t_end, f"t = {t:.1f}"), spec=spec)
     except UnstableStep as error:
         raise CommandError(f"simulate error: --dt: {error} (got {args.dt!r})") from None
     except ValueError as error:  # e.g. an eigenvector perturbation where all eigenvalues are real

@@ -33,6 +33,10 @@ FRAMES_PER_PERIOD = 20
 """Default recording: this many frames per period of the growing pair (or of the median mode),
 enough for the envelope of M (dynamics/growth.py) and the period mean of x (dynamics/onset.py)."""
 
+SECONDS_PER_DISK_STEP = 3.5e-8
+"""The stepper's cost, 0.032-0.036 us per disk and step at N = 10 .. 10 000 on one core
+(benchmarks/dynamics_speed.py): what run_seconds estimates a run with."""
+
 CHUNK_STEPS = 200_000
 """Steps per call into numba between progress reports."""
 
@@ -78,9 +82,19 @@ class RunPlan:
     def frames(self) -> int:
         return self.n_steps // self.stride + 1
 
+    def seconds(self, N: int) -> float:
+        """Estimated wall time of the steps [s] (SECONDS_PER_DISK_STEP)."""
+        return SECONDS_PER_DISK_STEP * self.n_steps * N
+
     def frame_bytes(self, ndof: int, N: int) -> float:
         """Memory of the recorded frames: t, q, v, 5 energy columns, N slips [bytes]."""
         return 8.0 * self.frames * (1 + 2 * ndof + 5 + N)
+
+
+def whole_strides(t_end: float, dt_max: float, stride: int) -> int:
+    """The fewest steps of equal length t_end / n <= dt_max, n a whole number of strides
+    (>= 1): the run ends exactly at t_end, on a recorded frame."""
+    return stride * max(1, math.ceil(t_end / (stride * dt_max) - 1e-9))
 
 
 def plan_run(spec: Spectrum, t_end: float, dt: Optional[float] = None,
@@ -97,7 +111,7 @@ def plan_run(spec: Spectrum, t_end: float, dt: Optional[float] = None,
         raise ValueError(f"dt must be a positive number (got {dt_max})")
     period = oscillation_period(spec.eigenvalues, spec.leading_root.real)
     stride = stride or max(1, int(period / (FRAMES_PER_PERIOD * dt_max)))
-    n_steps = stride * max(1, math.ceil(t_end / (stride * dt_max) - 1e-9))
+    n_steps = whole_strides(t_end, dt_max, stride)
     plan = RunPlan(t_end / n_steps, n_steps, stride, period)
     if plan.dt >= stability_limit(spec):
         raise UnstableStep(plan.dt, spec)
@@ -107,8 +121,8 @@ def plan_run(spec: Spectrum, t_end: float, dt: Optional[float] = None,
 def simulate(system: System, q: np.ndarray, xi: np.ndarray, F_x: float, t_end: float,
              dt: Optional[float] = None, stride: Optional[int] = None,
              perturbation: Perturbation = Perturbation(), dt_fraction: float = DT_FRACTION,
-             onset: OnsetParams = OnsetParams(), progress: Optional[Progress] = None
-             ) -> Trajectory:
+             onset: OnsetParams = OnsetParams(), progress: Optional[Progress] = None,
+             spec: Optional[Spectrum] = None) -> Trajectory:
     """Newton's equations from the equilibrium (q, xi) at load F_x, perturbed, to t_end.
 
     dt: largest step [time] (plan_run: the steps end exactly at t_end); None takes
@@ -117,8 +131,9 @@ def simulate(system: System, q: np.ndarray, xi: np.ndarray, F_x: float, t_end: f
     FRAMES_PER_PERIOD per oscillation period. Raises NotEnoughMemory
     (diskfriction.memory) before anything is allocated when the frames would not fit.
     progress(t) is called between chunks of CHUNK_STEPS steps (never inside the step loop).
+    spec: the spectrum of M^-1 J at (q, xi) if the caller has it (start.spectrum).
     """
-    spec = spectrum(system, q, xi)
+    spec = spec or spectrum(system, q, xi)
     plan = plan_run(spec, t_end, dt, stride, dt_fraction)
     require_memory(plan.frame_bytes(system.ndof, system.N),
                    f"recording {plan.frames} frames of a run to t_end = {t_end:g}")

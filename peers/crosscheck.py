@@ -22,13 +22,17 @@ from typing import Optional
 
 import numpy as np
 
+from diskfriction.dynamics.simulate import (SECONDS_PER_DISK_STEP, UnstableStep, choose_dt,
+                                            stability_limit, whole_strides)
 from diskfriction.dynamics.start import spectrum
-from diskfriction.dynamics.simulate import choose_dt
 from diskfriction.dynamics.stepper import Stepper
 from diskfriction.memory import require_memory
 from diskfriction.peers.lammps_deck import DUMP_FILE, Start, deck
 from diskfriction.peers.lammps_run import Lammps, read_dump, rebuild_theta
 from diskfriction.symbolic import System
+
+LAMMPS_RATIO = 4.2
+"""LAMMPS's time per disk-step over ours at N = 10 (2.4-4.2 from N = 10 000 to 10, docs/lammps.md)."""
 
 FRAMES = 1000
 """Default number of recorded frames of a cross-check (every = steps / FRAMES, rounded up)."""
@@ -49,10 +53,14 @@ class Steps:
         (every None: FRAMES frames)."""
         if not (math.isfinite(t_end) and t_end > 0 and math.isfinite(dt_max) and dt_max > 0):
             raise ValueError(f"t_end and dt must be positive numbers (got {t_end}, {dt_max})")
-        n = max(1, math.ceil(t_end / dt_max - 1e-9))
-        every = every or max(1, math.ceil(n / FRAMES))
-        n = every * math.ceil(n / every)
+        every = every or max(1, math.ceil(whole_strides(t_end, dt_max, 1) / FRAMES))
+        n = whole_strides(t_end, dt_max, every)
         return cls(t_end / n, n, every)
+
+    def seconds(self, N: int) -> float:
+        """Estimated wall time of both codes [s]: ours at SECONDS_PER_DISK_STEP, LAMMPS at
+        LAMMPS_RATIO times it (benchmarks/lammps_speed.py)."""
+        return (1 + LAMMPS_RATIO) * SECONDS_PER_DISK_STEP * self.steps * N
 
     @property
     def frames(self) -> int:
@@ -61,7 +69,23 @@ class Steps:
 
 def default_dt(system: System, start: Start) -> float:
     """dynamics.simulate's default step at the start: 0.05 x 2 / omega_max of M^-1 J [time]."""
-    return choose_dt(spectrum(system, start.q, np.zeros(2 * system.N)))
+    return choose_dt(_start_spectrum(system, start))
+
+
+def plan_steps(system: System, start: Start, t_end: float, dt: Optional[float] = None,
+               every: Optional[int] = None) -> Steps:
+    """Steps.plan with dt at most `dt` (None: default_dt), checked against the stability limit
+    2 / omega_max of the start (dynamics.simulate): UnstableStep if not below it, as simulate."""
+    spec = _start_spectrum(system, start)
+    steps = Steps.plan(t_end, choose_dt(spec) if dt is None else dt, every)
+    if steps.dt >= stability_limit(spec):
+        raise UnstableStep(steps.dt, spec)
+    return steps
+
+
+def _start_spectrum(system: System, start: Start):
+    """The spectrum of M^-1 J at the start, with zero histories (LAMMPS starts with none)."""
+    return spectrum(system, start.q, np.zeros(2 * system.N))
 
 
 @dataclass(frozen=True)

@@ -189,6 +189,7 @@ def test_a_step_beyond_the_stability_limit_or_an_unresolved_run_is_not_reported(
     assert "--dt" in line and "stability limit 2 / omega_max = 0.1366" in line and "0.2" in line
     unresolved = run_cli("simulate", "--fx", "0.03", "--t-end", "300", "--dt", "0.13", "--out", str(out))
     assert unresolved.returncode == 1 and "slid: True" not in unresolved.stdout
+    assert "simulate: run to t = 300: 2308 steps, about " in unresolved.stderr  # an estimate first
     assert "energy budget" in error_line(unresolved, "simulate")
     summary = json.loads((out / "summary.json").read_text())
     assert summary["accurate"] is False and summary["slid"] is None

@@ -177,7 +177,8 @@ def test_crosscheck_command_prints_the_table_and_writes_its_files(tmp_path):
     assert done.returncode == 0, done.stderr
     lines = done.stdout.splitlines()
     assert "max |dtheta|" in done.stdout and any(line.startswith(" whole run") for line in lines)
-    assert "500 steps of dt = 0.001" in done.stdout
+    assert "500 steps of dt = 0.001," in done.stdout and "shortened" not in done.stdout
+    assert "both codes to t = 0.5 (500 steps of 0.001): about " in done.stderr  # an estimate first
     for name in ("crosscheck.json", "deviation.npz", "deviation.png", "lammps/in.scene",
                  "lammps/dump.disks"):
         assert (out / name).exists(), name
@@ -190,3 +191,18 @@ def test_steps_end_on_t_end_and_every_divides_them():
         assert plan.dt * plan.steps == pytest.approx(t_end, rel=1e-14)
         fewer = plan.steps - plan.every  # the fewest such steps: fewer would be too long
         assert fewer == 0 or t_end / fewer > dt_max
+
+
+def test_crosscheck_says_when_every_shortens_dt_and_refuses_an_unstable_one(tmp_path):
+    """Issue 23: --every 7 made 100 steps of --dt 0.01 into 105 shorter ones, silently; a --dt
+    not below the start's stability limit is refused as simulate refuses it."""
+    scene_file = tmp_path / "linear.toml"
+    scene_file.write_text(format_scene(PAPER_LINEAR))
+    done = run_cli("crosscheck", "lammps", str(scene_file), "--fx", "0.03", "--t-end", "1",
+                   "--dt", "0.01", "--every", "7", "--out", str(tmp_path / "out"))
+    assert done.returncode == 0, done.stderr
+    assert "105 steps of dt = 0.0095238095238095" in done.stdout and "--dt 0.01 shortened" in done.stdout
+    unstable = run_cli("crosscheck", "lammps", str(scene_file), "--fx", "0.03", "--t-end", "1",
+                       "--dt", "0.2", "--out", str(tmp_path / "out2"))
+    assert unstable.returncode == 2 and "--dt" in error_line(unstable, "crosscheck")
+    assert "stability limit" in unstable.stderr and not (tmp_path / "out2" / "crosscheck.json").exists()

@@ -97,6 +97,7 @@ def test_a_map_of_one_cell_equals_bifurcate_on_the_same_scene(tmp_path):
     mapped = run_cli("map", str(scene), "--vary", "contacts.mu=10:10:1", "--matrix", "M^-1J",
                      "--workers", "1", "--out", str(tmp_path / "m"))
     assert bifurcate.returncode == 0 and mapped.returncode == 0, bifurcate.stderr + mapped.stderr
+    assert "1 cell: bifurcate" in mapped.stderr and "on 1 worker (a rough estimate)" in mapped.stderr
     alone = json.loads((tmp_path / "b" / "collisions.json").read_text())
     (cell,) = (tmp_path / "m" / "cells").glob("*.json")
     cell = json.loads(cell.read_text())
@@ -194,3 +195,18 @@ def test_bad_specifications_are_one_line_and_exit_2_before_anything_runs(tmp_pat
     assert result.returncode == 2 and result.stderr.count("\n") == 1, result.stderr
     assert says in error_line(result, "map")
     assert not (tmp_path / "out").exists()
+
+
+def test_the_estimate_printed_first_grows_with_what_a_cell_does(tmp_path):
+    """Issue 23: a map of 100 000 cells started silently. cell_seconds grows with N, with slide
+    runs and their length; the CLI's estimate counts only the cells not yet on disk."""
+    from diskfriction.cli.map_cmd import estimate
+    from diskfriction.dynamics.maps import cell_seconds
+
+    sweep, slide = MapParams(0.0, 0.12, "J"), MapParams(0.0, 0.12, "J", SlideParams())
+    longer = MapParams(0.0, 0.12, "J", SlideParams(t_end=1e4))
+    small, large = Scene(N=10, eps=1e-4), Scene(N=100, eps=1e-4)
+    assert cell_seconds(small, sweep) < cell_seconds(small, slide) < cell_seconds(small, longer)
+    assert cell_seconds(small, slide) < cell_seconds(large, slide)
+    cells = map_cells(Scene(), [Axis("contacts.mu", grid_values(5.0, 10.0, 100_000))], "x")
+    assert estimate(cells, slide, tmp_path, 2, False).endswith("h on 2 workers (a rough estimate)")
