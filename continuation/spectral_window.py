@@ -9,11 +9,16 @@ nearest eigenvalues include every eigenvalue within the distance of the farthest
 distance does not exceed the reach of the guard band (|lambda - sigma| = (hi - lo) / 2 + g,
 plus the largest |Im| seen), some eigenvalue of the band may be missing and WindowCrowded is
 raised (choose a narrower window). The k eigenvalues keep their labels along the branch like a
-full spectrum's; those beyond the guard band are `excluded` (their labels may jump between
-samples), those in the guard band are `guard`: the detection certifies pairs of eigenvalues
-inside W and the guard band, and lets an eigenvalue join or leave the tracked set only through
-the guard band (verdicts._enters_past_guard). A collision is reported when its double
-eigenvalue lies in W (sweep.py); the certificate covers exactly the window.
+full spectrum's; those beyond the guard band are `excluded`, those in the guard band are
+`guard`: the detection certifies pairs of eigenvalues inside W and the guard band, and lets an
+eigenvalue join or leave the tracked set only through the guard band
+(verdicts._enters_past_guard). A collision is reported when its double eigenvalue lies in W
+(sweep.py); the certificate covers exactly the window.
+
+The set of the k nearest changes along the branch: an eigenvalue beyond the guard band leaves
+the disc and another enters it. Labels are matched so that every eigenvalue present at both
+samples keeps its label and the label of one that left takes one that entered
+(samples.window_match).
 """
 from __future__ import annotations
 
@@ -68,6 +73,10 @@ class Window:
     def inside(self, values: Array) -> Array:
         return (values.real >= self.lo) & (values.real <= self.hi)
 
+    def tracked(self, values: Array) -> Array:
+        """The window and its guard bands: lo - guard <= Re lambda <= hi + guard."""
+        return (values.real >= self.lo - self.guard) & (values.real <= self.hi + self.guard)
+
 
 def sized(window: Window, A: Matrix) -> Window:
     """The window with its k: MARGIN times the eigenvalues within reach at A, plus EXTRA."""
@@ -100,7 +109,7 @@ def _classified(system: Eigensystem, window: Window) -> Eigensystem:
         raise WindowCrowded(f"the {window.k} eigenvalues nearest {window.sigma:.6g} all lie within "
                             f"{far:.3g} of it: the window [{window.lo:.6g}, {window.hi:.6g}] and its "
                             "guard bands may hold more; choose a narrower window")
-    re, g = values.real, window.guard
-    excluded = (re < window.lo - g) | (re > window.hi + g)
+    excluded = ~window.tracked(values)
     guard = ~excluded & ~window.inside(values)
-    return Eigensystem(values, system.right, system.left, excluded, guard)
+    return Eigensystem(values, system.right, system.left, excluded, guard, disc=(window.sigma, float(far)))
+
