@@ -24,7 +24,7 @@ from typing import Optional
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from .certify import nearest_gaps
+from .certify import inconsistent_labels, nearest_gaps
 from .linalg import work
 from .nearest import ShiftInvertFailed, nearest_eigensystem
 from .problem import Problem
@@ -198,6 +198,33 @@ def continuation_perm(left: Sample, right: Sample) -> Array:
     perm[rest_l] = rest_r[predicted_match(left.eigvals[rest_l], left.dlam[rest_l], right.eigvals[rest_r],
                                           right.dlam[rest_r], ds_left, ds_right)]
     return perm
+
+
+def certified_labels(a: Sample, b: Sample, rho: float) -> Array:
+    """Mask of the labels whose eigenvalue at b is certified to continue theirs at a over the
+    straight step a -> b, by the label test of the fast detection (certify.inconsistent_labels:
+    trapezoid defect |lambda_b - lambda_a - (d_a + d_b) / 2| <= rho min(gap_a, gap_b) + 2 thr,
+    d = dlam |x_b - x_a|^2 / ((x_b - x_a) . t) the slope per unit of the step, as
+    Sample.slopes on the step's segment). None certified where a tangent does not point along
+    the step."""
+    step = b.x - a.x
+    along = [float(step @ smp.tangent) for smp in (a, b)]
+    if min(along) <= 0.0:
+        return np.zeros(a.eigvals.size, bool)
+    d_a, d_b = (smp.dlam * (float(step @ step) / t) for smp, t in zip((a, b), along))
+    return ~inconsistent_labels(a.eigvals, b.eigvals, d_a, d_b, a.gaps, b.gaps, rho,
+                                2.0 * max(a.thr, b.thr))
+
+
+def continued_labels(last: Optional[Sample], sample: Sample, tracked: Optional[Array],
+                     rho: float) -> Array:
+    """Branch.continued at the accepted point `sample` after the point `last` (None: the
+    first): the labels the step's scan kept in the tracked set (ScanResult.tracked; None: not
+    known) that are not excluded at `sample`, and those certified_labels certifies."""
+    if last is None:
+        return np.zeros(sample.eigvals.size, bool)
+    continued = certified_labels(last, sample, rho)
+    return continued if tracked is None else continued | (tracked & ~sample.excluded)
 
 
 def order_match(a: Array, b: Array) -> tuple[Array, Array]:
