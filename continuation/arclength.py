@@ -37,7 +37,7 @@ from .collisions import DetectionParams
 from .linalg import SingularMatrix, blas_threads
 from .newton import NewtonResult, bordered_newton, fixed_p_newton, residual_norm, tangent
 from .problem import Problem
-from .samples import Sample, make_sample, matrix_derivative, sample_at
+from .samples import Sample, continued_labels, make_sample, matrix_derivative, sample_at
 from .scans import ScanJob, default_workers, pending_full, scans_for
 from .segment import Segment, SegmentSolveError, refine_sign_change
 from .spectra import Eigensystem, count_complex_pairs, eigenvalue_slopes
@@ -200,7 +200,7 @@ def _continuation(problem, u0, p0, params, detection, workers, callback) -> Bran
     except np.linalg.LinAlgError as err:
         raise ContinuationError(f"tangent undefined at p0={p0} (fold or singular point)") from err
     sample = _sorted(_sample(problem, 0.0, x, t, detection, None, side=+1))
-    rec = _Recorder(detection.rel_tol, callback)
+    rec = _Recorder(detection, callback)
     rec.add(sample, 0.0, start, t, 0)
     with scans_for(problem, workers) as scans:
         status = _follow(problem, scans, workers, _Start(x, t, sample, 0.0), rec, params, detection)
@@ -270,12 +270,14 @@ def _follow(problem: Problem, scans, workers: int, here: _Start, rec: "_Recorder
             previous = None if scan.collisions or detection.slopes else item.start.sample
             if item.end is None:
                 continue
+            tracked = None if scan.tracked is None else scan.tracked[labels]
             if ahead:
                 end, labels = item.end, scan.end_perm[labels]
             else:
                 end = item.end.relabel(scan.end_perm)
                 here = replace(here, sample=end)
-            _record(problem, rec, item, end.relabel(labels), scan.solves, pending[0].state if ahead else None)
+            _record(problem, rec, item, end.relabel(labels), scan.solves, pending[0].state if ahead else None,
+                    tracked)
         if stopped and not pending:
             return status
         if stopped:
@@ -332,14 +334,14 @@ def _end_status(p: float, params: ContinuationParams) -> str:
 
 
 def _record(problem: Problem, rec: "_Recorder", item: _Pending, end: Sample, solves: int,
-            after: Optional[object]) -> None:
+            after: Optional[object], tracked: Optional[Array]) -> None:
     """rec.add for a scanned step; the callback sees the problem in the state committed at the
     step's end: `after`, restored for it while the continuation is ahead (else None: the
-    problem is in that state)."""
+    problem is in that state). tracked: ScanResult.tracked in the labels of `end`."""
     now = problem.state() if after is not None and rec.callback is not None else None
     if now is not None:
         problem.restore(after)
-    rec.add(end, item.start.ds, item.step.newton, item.step.tangent, solves)
+    rec.add(end, item.start.ds, item.step.newton, item.step.tangent, solves, tracked)
     if now is not None:
         problem.restore(now)
 
@@ -386,21 +388,28 @@ def _commit(problem: Problem, x: Array, step: _Step, end: Sample, par: Continuat
 class _Recorder:
     """Accumulates the accepted points of a run and builds the Branch."""
 
-    def __init__(self, rel_tol: float, callback: Optional[Callback]):
-        self.rel_tol, self.callback = rel_tol, callback
+    def __init__(self, detection: DetectionParams, callback: Optional[Callback]):
+        self.rel_tol, self.rho, self.callback = detection.rel_tol, detection.rho, callback
         self.rows: list[tuple] = []
         self.collisions: list = []
         self.warnings: list = []
         self.events = 0
+        self.continued: list[Array] = []
+        self.last: Optional[Sample] = None
 
     @property
     def steps(self) -> int:
         return len(self.rows) - 1
 
-    def add(self, sample: Sample, ds: float, newton: NewtonResult, t: Array, solves: int) -> None:
+    def add(self, sample: Sample, ds: float, newton: NewtonResult, t: Array, solves: int,
+            tracked: Optional[Array] = None) -> None:
+        """Record an accepted point (with a spectral window, Branch.continued too)."""
         u, p = sample.x[:-1].copy(), float(sample.x[-1])
         self.rows.append((p, u, sample.eigvals, count_complex_pairs(sample.eigvals, self.rel_tol),
                           ds, newton.iterations, newton.residual, t, solves))
+        if sample.disc is not None:
+            self.continued.append(continued_labels(self.last, sample, tracked, self.rho))
+            self.last = sample.without_vectors()
         if self.callback is not None:
             self.callback(len(self.rows) - 1, p, u, sample.eigvals)
 
@@ -411,4 +420,4 @@ class _Recorder:
                       newton_iterations=np.array(cols[5]), residual=np.array(cols[6]),
                       tangent=np.array(cols[7]), detection_solves=np.array(cols[8]),
                       collisions=tuple(self.collisions), status=status, warnings=tuple(self.warnings),
-                      events=self.events)
+                      events=self.events, continued=np.array(self.continued) if self.continued else None)

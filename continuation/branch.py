@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from typing import Optional
 
 import numpy as np
 
@@ -22,7 +23,10 @@ class Branch:
     tangent in x = (u, p); detection_solves (m,): corrector solves spent on collision detection
     in the step ending at the point; collisions: located births and deaths in branch order;
     status: why the run stopped ("p_end", "turned back: ...", "max_steps", "ds_min: ...");
-    warnings; events: steps cut at an event (problem.event_functions).
+    warnings; events: steps cut at an event (problem.event_functions); continued (m, n) bool,
+    with a spectral window only (else None): label i at point k is certified to hold the
+    eigenvalue it held at point k - 1 (False at k = 0): it stayed in the tracked set throughout
+    the step (the detection certified it), or samples.certified_labels certifies the step.
     """
 
     p: Array
@@ -38,6 +42,7 @@ class Branch:
     status: str
     warnings: tuple[str, ...] = ()
     events: int = 0
+    continued: Optional[Array] = None
 
     def __len__(self) -> int:
         return self.p.size

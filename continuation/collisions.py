@@ -484,12 +484,16 @@ class StepScan:
 class ScanResult:
     """What the scan of one step found: its collisions in branch order (pair: labels of the
     step's start sample); end_perm: the labels of x_b's sample after the scan (it continues
-    the samples inserted), end.relabel(end_perm); samples solved; warnings."""
+    the samples inserted), end.relabel(end_perm); samples solved; warnings; tracked: with a
+    spectral window, the mask of the labels (of end.relabel(end_perm)) that no sample of the
+    step excluded, whose continuity over the step the detection certified (None without a
+    window)."""
 
     collisions: list
     end_perm: Array
     solves: int
     warnings: list
+    tracked: Optional[Array] = None
 
 
 def scan_step(problem: Problem, segment: Segment, start: Sample, end: Sample,
@@ -511,4 +515,7 @@ def scan_step(problem: Problem, segment: Segment, start: Sample, end: Sample,
             samples.insert(0, previous.at(s_prev))
     scan = StepScan(problem, segment, samples, params, step, ends_at_event)
     found = scan.run()
-    return ScanResult(found, scan.end_perm, scan.solves, scan.warnings)
+    tracked = None
+    if b.disc is not None:
+        tracked = ~np.any([smp.excluded for smp in scan.samples[scan._start:]], axis=0)
+    return ScanResult(found, scan.end_perm, scan.solves, scan.warnings, tracked)

@@ -11,7 +11,9 @@ from finite differences of the stability matrix along t (matrix_derivative). On 
 length L with unit normal sigma, x'(s) = t L / (sigma . t), so d lambda / ds follows (slopes).
 Matching the labels of a new sample uses these slopes: label i goes to the eigenvalue nearest to
 the trapezoid prediction lambda_i + (slope_i + slope_new) ds / 2 (spectra.match_eigenvalues on
-the predicted values), which follows a fast eigenvalue through a cluster.
+the predicted values), which follows a fast eigenvalue through a cluster. A spectral window's
+samples hold the k eigenvalues nearest its centre, a set that changes along the branch: an
+eigenvalue beyond the guard bands may leave it and another join it (window_match).
 """
 from __future__ import annotations
 
@@ -22,7 +24,7 @@ from typing import Optional
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from .certify import nearest_gaps
+from .certify import inconsistent_labels, nearest_gaps
 from .linalg import work
 from .nearest import ShiftInvertFailed, nearest_eigensystem
 from .problem import Problem
@@ -41,7 +43,8 @@ class Sample:
     eigensystem (vectors in label order) that seeds the collision locator, and gaps: each
     eigenvalue's distance to the nearest other one (a lower bound where not all are known).
     known: None for a full sample; for a partial one (partial_sample_at) the mask of labels
-    computed, the others holding nan (status: the left neighbour's)."""
+    computed, the others holding nan (status: the left neighbour's). disc: a spectral window's
+    (sigma, radius), Eigensystem.disc (None: every eigenvalue computed, or a partial sample)."""
 
     s: float
     x: Array
@@ -55,6 +58,7 @@ class Sample:
     guard: Optional[Array] = None
     gaps: Optional[Array] = None
     known: Optional[Array] = None
+    disc: Optional[tuple[float, float]] = None
     uid: int = field(default_factory=lambda: next(_uid), init=False, repr=False, compare=False)
 
     @property
@@ -109,16 +113,60 @@ def matrix_derivative(problem: Problem, x: Array, t: Array, side: int = 0):
     return (A(x + d * t) * 4.0 - A(x) * 3.0 - A(x + 2.0 * d * t)) * (0.5 / d)
 
 
+def prediction_cost(ref_values: Array, ref_dlam: Array, values: Array, dlam: Array,
+                    ds_ref: float, ds_new: float) -> Array:
+    """|ref_i + ds_ref ref_dlam_i / 2 - (values_j - ds_new dlam_j / 2)|: how far eigenvalue j
+    lies from the trapezoid prediction of reference i (ds_* = the step projected on each end's
+    unit tangent)."""
+    return np.abs((ref_values + 0.5 * ds_ref * ref_dlam)[:, None] - (values - 0.5 * ds_new * dlam)[None, :])
+
+
 def predicted_match(ref_values: Array, ref_dlam: Array, values: Array, dlam: Array,
                     ds_ref: float, ds_new: float) -> Array:
-    """Labels of `values` continuing `ref_values`: perm minimising sum_i |ref_i + ds_ref
-    ref_dlam_i / 2 + ds_new dlam_perm(i) / 2 - values_perm(i)| (trapezoid prediction; ds_* =
-    the step projected on each end's unit tangent)."""
-    cost = np.abs((ref_values + 0.5 * ds_ref * ref_dlam)[:, None] - (values - 0.5 * ds_new * dlam)[None, :])
+    """Labels of `values` continuing `ref_values`: perm minimising sum_i of the
+    prediction_cost of (i, perm(i))."""
+    cost = prediction_cost(ref_values, ref_dlam, values, dlam, ds_ref, ds_new)
     nearest = np.argmin(cost, axis=1)
     if np.unique(nearest).size == nearest.size:
         return nearest
     return linear_sum_assignment(cost)[1]
+
+
+def window_match(left: "Sample", right: "Sample", ds_left: float, ds_right: float) -> Array:
+    """Labels of the full window sample `right` continuing `left` (both hold the k eigenvalues
+    nearest the window's centre sigma, Eigensystem.disc). An eigenvalue of `left` beyond the
+    guard bands may have left the disc |lambda - sigma| < radius_right, and one of `right` may
+    have entered it; the pairs (i, j) cost their prediction_cost, and label i leaving costs
+    max(0, radius_right - |lambda_i + ds_left slope_i - sigma|) (how far its prediction at
+    `right` would have to be off for it to lie outside that disc), eigenvalue j entering
+    max(0, radius_left - |lambda_j - ds_right slope_j - sigma|) alike; a tracked eigenvalue
+    (not excluded: in the window or its guard bands) never leaves or enters (the disc reaches
+    beyond the guard bands, spectral_window.py). The assignment of least total cost (leaving
+    and entering as dummy partners) keeps every eigenvalue present at both ends on its label;
+    the labels left free take the entered eigenvalues (in the order of least prediction_cost):
+    new eigenvalues on them, not continuations. A plain assignment over the pairs alone has
+    no such choice: where the set changes it shifts a chain of labels along the real axis (on
+    the line, all such chains cost about the same), relabelling eigenvalues in the window."""
+    cost = prediction_cost(left.eigvals, left.dlam, right.eigvals, right.dlam, ds_left, ds_right)
+    nearest = np.argmin(cost, axis=1)
+    if np.unique(nearest).size == nearest.size:
+        return nearest
+    (sigma, radius_left), (_, radius_right) = left.disc, right.disc
+    k = cost.shape[0]
+    leave = np.where(left.excluded, np.maximum(
+        0.0, radius_right - np.abs(left.eigvals + ds_left * left.dlam - sigma)), np.inf)
+    enter = np.where(right.excluded, np.maximum(
+        0.0, radius_left - np.abs(right.eigvals - ds_right * right.dlam - sigma)), np.inf)
+    full = np.full((2 * k, 2 * k), np.inf)
+    full[:k, :k] = cost
+    full[np.arange(k), k + np.arange(k)] = leave
+    full[k + np.arange(k), np.arange(k)] = enter
+    full[k:, k:] = 0.0
+    cols = linear_sum_assignment(full)[1][:k]
+    perm = cols.copy()
+    gone, new = np.flatnonzero(cols >= k), np.setdiff1d(np.arange(k), cols)
+    perm[gone] = new[linear_sum_assignment(cost[np.ix_(gone, new)])[1]]
+    return perm
 
 
 def continuation_perm(left: Sample, right: Sample) -> Array:
@@ -143,11 +191,40 @@ def continuation_perm(left: Sample, right: Sample) -> Array:
         # a disk that joined the chain (or left it): its modes go with the chain's
         rest_l = np.union1d(np.flatnonzero(common & ~left.excluded), np.delete(by_l, i_l))
         rest_r = np.union1d(np.flatnonzero(common & ~right.excluded), np.delete(by_r, i_r))
+    elif left.disc is not None and right.disc is not None and left.known is None and right.known is None:
+        return window_match(left, right, ds_left, ds_right)
     else:
         rest_l = rest_r = np.flatnonzero(common)
     perm[rest_l] = rest_r[predicted_match(left.eigvals[rest_l], left.dlam[rest_l], right.eigvals[rest_r],
                                           right.dlam[rest_r], ds_left, ds_right)]
     return perm
+
+
+def certified_labels(a: Sample, b: Sample, rho: float) -> Array:
+    """Mask of the labels whose eigenvalue at b is certified to continue theirs at a over the
+    straight step a -> b, by the label test of the fast detection (certify.inconsistent_labels:
+    trapezoid defect |lambda_b - lambda_a - (d_a + d_b) / 2| <= rho min(gap_a, gap_b) + 2 thr,
+    d = dlam |x_b - x_a|^2 / ((x_b - x_a) . t) the slope per unit of the step, as
+    Sample.slopes on the step's segment). None certified where a tangent does not point along
+    the step."""
+    step = b.x - a.x
+    along = [float(step @ smp.tangent) for smp in (a, b)]
+    if min(along) <= 0.0:
+        return np.zeros(a.eigvals.size, bool)
+    d_a, d_b = (smp.dlam * (float(step @ step) / t) for smp, t in zip((a, b), along))
+    return ~inconsistent_labels(a.eigvals, b.eigvals, d_a, d_b, a.gaps, b.gaps, rho,
+                                2.0 * max(a.thr, b.thr))
+
+
+def continued_labels(last: Optional[Sample], sample: Sample, tracked: Optional[Array],
+                     rho: float) -> Array:
+    """Branch.continued at the accepted point `sample` after the point `last` (None: the
+    first): the labels the step's scan kept in the tracked set (ScanResult.tracked; None: not
+    known) that are not excluded at `sample`, and those certified_labels certifies."""
+    if last is None:
+        return np.zeros(sample.eigvals.size, bool)
+    continued = certified_labels(last, sample, rho)
+    return continued if tracked is None else continued | (tracked & ~sample.excluded)
 
 
 def order_match(a: Array, b: Array) -> tuple[Array, Array]:
@@ -193,11 +270,17 @@ def known(sample: Sample) -> Array:
     return np.ones(sample.eigvals.size, bool) if sample.known is None else sample.known
 
 
-def label_gaps(values: Array, excluded: Array, guard: Optional[Array]) -> Array:
+def label_gaps(values: Array, excluded: Array, guard: Optional[Array],
+               disc: Optional[tuple[float, float]] = None) -> Array:
     """Each eigenvalue's distance to the nearest one its label could be confused with: among
     the free disks' modes and among the others apart (continuation_perm matches them apart, and
     a free disk's block is exactly decoupled, so a chain eigenvalue passing a free one is no
-    encounter), else among all (nearest_gaps)."""
+    encounter), else among all (nearest_gaps). With a spectral window's disc (sigma, radius)
+    the eigenvalues beyond it are unknown: the gap is at most radius - |lambda - sigma|, a lower
+    bound of the distance to any of them."""
+    if disc is not None:
+        sigma, radius = disc
+        return np.minimum(nearest_gaps(values), radius - np.abs(values - sigma))
     if guard is not None or not excluded.any():
         return nearest_gaps(values)
     gaps = np.empty(values.size)
@@ -213,10 +296,11 @@ def make_sample(s: float, x: Array, system: Eigensystem, rel_tol: float,
     slopes, else by nearest eigenvalue: spectra.match_eigenvalues)."""
     values = np.asarray(system.values, dtype=complex)
     excluded = system.excluded if system.excluded is not None else np.zeros(values.size, bool)
-    system = Eigensystem(values, system.right, system.left, excluded, system.guard, system.columns)
+    system = replace(system, values=values, excluded=excluded)
+    gaps = None if dlam is None else label_gaps(values, excluded, system.guard, system.disc)
     sample = Sample(s, x, values, eigen_status(values, rel_tol), imag_threshold(values, rel_tol),
                     excluded, tangent, dlam, system if system.right is not None else None,
-                    system.guard, None if dlam is None else label_gaps(values, excluded, system.guard))
+                    system.guard, gaps, disc=system.disc)
     return sample if reference is None else sample.relabel(continuation_perm(reference, sample))
 
 

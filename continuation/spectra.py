@@ -137,7 +137,9 @@ class Eigensystem:
     tracked set between two samples; `columns`, when only some eigenvalues have vectors (a
     partial sample, samples.partial_sample_at; the free disks' modes, DiskEquilibria.eigensystem),
     the column of `right` and row of `left` of each eigenvalue (-1: none), else None
-    (eigenvalue i has column i)."""
+    (eigenvalue i has column i); `disc`, when only the eigenvalues nearest a shift were computed
+    (a spectral window), (sigma, radius): every eigenvalue with |lambda - sigma| < radius is
+    among `values`, and radius is the largest |lambda_i - sigma| of them; None: all computed."""
 
     values: Array
     right: Optional[Array] = None
@@ -145,6 +147,7 @@ class Eigensystem:
     excluded: Optional[Array] = None
     guard: Optional[Array] = None
     columns: Optional[Array] = None
+    disc: Optional[tuple[float, float]] = None
 
     def vectors(self, i: int) -> tuple[Array, Array]:
         """(right vector, left vector) of eigenvalue i."""
@@ -160,7 +163,7 @@ class Eigensystem:
         pick = lambda a: None if a is None else a[perm]  # noqa: E731
         columns = None if self.right is None else (perm if self.columns is None else self.columns[perm])
         return Eigensystem(self.values[perm], self.right, self.left, pick(self.excluded), pick(self.guard),
-                           columns)
+                           columns, self.disc)
 
 
 def eigensystem(A: Array, vectors: bool) -> Eigensystem:

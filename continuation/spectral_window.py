@@ -9,11 +9,22 @@ nearest eigenvalues include every eigenvalue within the distance of the farthest
 distance does not exceed the reach of the guard band (|lambda - sigma| = (hi - lo) / 2 + g,
 plus the largest |Im| seen), some eigenvalue of the band may be missing and WindowCrowded is
 raised (choose a narrower window). The k eigenvalues keep their labels along the branch like a
-full spectrum's; those beyond the guard band are `excluded` (their labels may jump between
-samples), those in the guard band are `guard`: the detection certifies pairs of eigenvalues
-inside W and the guard band, and lets an eigenvalue join or leave the tracked set only through
-the guard band (verdicts._enters_past_guard). A collision is reported when its double
-eigenvalue lies in W (sweep.py); the certificate covers exactly the window.
+full spectrum's; those beyond the guard band are `excluded`, those in the guard band are
+`guard`: the detection certifies pairs of eigenvalues inside W and the guard band, and lets an
+eigenvalue join or leave the tracked set only through the guard band
+(verdicts._enters_past_guard). A collision is reported when its double eigenvalue lies in W
+(sweep.py); the certificate covers exactly the window.
+
+The set of the k nearest changes along the branch: an eigenvalue beyond the guard band leaves
+the disc and another enters it. Labels are matched so that every eigenvalue present at both
+samples keeps its label and the label of one that left takes one that entered
+(samples.window_match). Such a label then holds another eigenvalue, so the stored spectrum
+is not the labels but columns (window_columns): a label continues its column from one
+accepted point to the next only where it is certified to hold the same eigenvalue (it stayed
+in the tracked set throughout the step, where the detection certified its continuity, or
+the label test certifies the step: samples.certified_labels, with gaps no larger than the
+distance to the edge of the disc, beyond which eigenvalues are unknown); else it starts a new
+column. A column holds its eigenvalue while it is in W or its guard bands, nan elsewhere.
 """
 from __future__ import annotations
 
@@ -68,6 +79,10 @@ class Window:
     def inside(self, values: Array) -> Array:
         return (values.real >= self.lo) & (values.real <= self.hi)
 
+    def tracked(self, values: Array) -> Array:
+        """The window and its guard bands: lo - guard <= Re lambda <= hi + guard."""
+        return (values.real >= self.lo - self.guard) & (values.real <= self.hi + self.guard)
+
 
 def sized(window: Window, A: Matrix) -> Window:
     """The window with its k: MARGIN times the eigenvalues within reach at A, plus EXTRA."""
@@ -100,7 +115,32 @@ def _classified(system: Eigensystem, window: Window) -> Eigensystem:
         raise WindowCrowded(f"the {window.k} eigenvalues nearest {window.sigma:.6g} all lie within "
                             f"{far:.3g} of it: the window [{window.lo:.6g}, {window.hi:.6g}] and its "
                             "guard bands may hold more; choose a narrower window")
-    re, g = values.real, window.guard
-    excluded = (re < window.lo - g) | (re > window.hi + g)
+    excluded = ~window.tracked(values)
     guard = ~excluded & ~window.inside(values)
-    return Eigensystem(values, system.right, system.left, excluded, guard)
+    return Eigensystem(values, system.right, system.left, excluded, guard, disc=(window.sigma, float(far)))
+
+
+def window_columns(values: Array, continued: Array, shown: Array) -> Array:
+    """The stored spectrum of a windowed branch: values (m, k) hold the k eigenvalues of each
+    point under labels continued[r, i] (Branch.continued) certifies from point r - 1 to r;
+    label i starts a new column wherever it is not certified (a label that left the disc
+    holds a new eigenvalue then). Returns (m, C) with each column one eigenvalue: its value
+    where `shown` (the window and its guard bands, Window.tracked), nan elsewhere (not
+    tracked there, or not yet or no more this column's eigenvalue); the columns in order of
+    first appearance (point, then label), those never shown left out."""
+    m, k = values.shape
+    ids = np.empty((m, k), dtype=np.int64)
+    ids[0] = np.arange(k)
+    start = k
+    for r in range(1, m):
+        fresh = np.flatnonzero(~continued[r])
+        ids[r] = ids[r - 1]
+        ids[r, fresh] = start + np.arange(fresh.size)
+        start += fresh.size
+    rows, labels = np.nonzero(shown)  # row-major: in order of appearance
+    used, first = np.unique(ids[rows, labels], return_index=True)
+    rank = np.empty(used.size, dtype=np.int64)
+    rank[np.argsort(first)] = np.arange(used.size)
+    out = np.full((m, used.size), np.nan, dtype=complex)
+    out[rows, rank[np.searchsorted(used, ids[rows, labels])]] = values[rows, labels]
+    return out

@@ -24,8 +24,9 @@ import numpy as np
 from diskfriction.continuation.arclength import ContinuationParams, continuation
 from diskfriction.continuation.collisions import Collision, DetectionParams
 from diskfriction.continuation.disks import DiskEquilibria, relax
-from diskfriction.continuation.spectral_window import Window
-from diskfriction.continuation.spectra import count_complex_pairs
+from diskfriction.continuation.branch import Branch
+from diskfriction.continuation.spectral_window import Window, window_columns
+from diskfriction.continuation.spectra import count_complex_pairs, match_eigenvalues
 from diskfriction.symbolic import System
 
 START_FRACTION = 1e-4
@@ -59,10 +60,12 @@ class DiskBranch:
     continuation/disks.py), excluded from the collisions; collisions of the requested leg, in
     branch order; status per leg run (a leg that did not reach its end is the last run);
     events: contact events (opening, closing, Coulomb cap, a free disk joining) the steps were
-    cut at; window: (lo, hi) of Re lambda tracked, or None
-    (then every eigenvalue); with a window, eigenvalues holds the k tracked eigenvalues, of
-    which those with Re lambda in [lo, hi] are certified, n_complex counts the pairs there and
-    only collisions there are listed.
+    cut at; window: (lo, hi) of Re lambda tracked, or None (then every eigenvalue); with a
+    window, eigenvalues holds one column per eigenvalue that passed through the window or its
+    guard bands (spectral_window.window_columns: its value where lo - g <= Re lambda <= hi + g,
+    nan elsewhere and before and after it is this column's), of which those with Re lambda in
+    [lo, hi] are certified, n_complex counts the pairs there and only collisions there are
+    listed.
     """
 
     F_x: np.ndarray
@@ -101,9 +104,10 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
     q, xi = relax(system, *system.rest_state(), F_1)
     window = None if params.window is None else Window(*params.window)
     problem = DiskEquilibria(system, q, xi, F_1, matrix, params.newton_tol, window=window)
-    rows, collisions, status, events = [], (), [], 0
+    rows, collisions, status, events, continued = [], (), [], 0, []
     F_start = F_1
     for leg, a, b in legs:
+        first = len(rows)
         direction = 1 if b > a else -1
         b = max(b, F_1)  # unloading ends where loading started: F_x = 0 is the singular rest state
         ds = min(F_1, ds_max) if leg == legs[0][0] else ds_max / 2  # graded away from rest
@@ -122,6 +126,8 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
                 progress(F_x)
 
         branch = continuation(problem, problem.q_c, F_start, core, params.detection, callback=record)
+        if window is not None:
+            continued += _continue_leg(rows, first, branch)
         status.append(branch.status)
         events += branch.events
         if leg == 1:
@@ -136,6 +142,21 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
     else:  # the pairs in the window; collisions with their double eigenvalue there
         n_complex = np.array([count_complex_pairs(e[window.inside(e)], rel_tol) for e in eig])
         collisions = tuple(c for c in collisions if window.lo <= c.eigenvalue <= window.hi)
+        eig = window_columns(eig, np.array(continued), window.tracked(eig))
     return DiskBranch(F_x, q, xi, eig, n_complex, res, leg, free, tuple(collisions), matrix,
                       tuple(status), events, params.window)
+
+
+def _continue_leg(rows: list, first: int, branch: Branch) -> list:
+    """A spectral window's Branch.continued for the rows rows[first:] of a leg. A leg after
+    another starts at that one's last point, its labels in order of value (arclength._sorted)
+    and its first point not recorded again: its rows are relabelled (in place) to continue
+    the last point's labels, the same eigenvalues at the same point, matched by value
+    (spectra.match_eigenvalues)."""
+    if first == 0:
+        return list(branch.continued)
+    perm = match_eigenvalues(rows[first - 1][3], branch.eigenvalues[0])
+    for r in range(first, len(rows)):
+        rows[r] = rows[r][:3] + (rows[r][3][perm],) + rows[r][4:]
+    return [c[perm] for c in branch.continued[1:]]
 

@@ -1,0 +1,133 @@
+"""A spectral window's stored columns: each one eigenvalue, continued across entries and exits
+(docs/continuation.md, A spectral window), checked against the full spectrum of the same
+sweep and on the rule's parts."""
+import numpy as np
+import pytest
+
+from diskfriction.continuation.samples import Sample, continuation_perm
+from diskfriction.continuation.spectral_window import Window, window_columns
+from diskfriction.continuation.sweep import SweepParams, sweep
+from diskfriction.scenes import Scene
+from diskfriction.symbolic import System
+
+SCENES = {"paper": Scene(), "N20-eps1e-4": Scene(N=20, eps=1e-4)}
+MATCH = 1e-8
+"""Windowed (shift-invert) and full (dense) eigenvalues agree to this fraction of max|lambda|."""
+
+_full: dict = {}
+
+
+def full_sweep(name: str, F_from: float = 0.0, F_to: float = 0.12):
+    key = (name, F_from, F_to)
+    if key not in _full:
+        _full[key] = sweep(System.from_scene(SCENES[name]), F_from, F_to, "J")
+    return _full[key]
+
+
+def windowed_sweep(name: str, lo: float, hi: float, F_from: float = 0.0, F_to: float = 0.12):
+    k_n = SCENES[name].k_n
+    return sweep(System.from_scene(SCENES[name]), F_from, F_to, "J", SweepParams(window=(lo * k_n, hi * k_n)))
+
+
+def tracks(value: complex, row: np.ndarray, tol: float) -> set:
+    """The full spectrum's columns holding `value` (a conjugate pair's members alike: which
+    label takes the upper one at a birth is a convention)."""
+    distance = np.abs(value.real - row.real) + np.abs(np.abs(value.imag) - np.abs(row.imag))
+    return set(np.flatnonzero(distance <= tol).tolist())
+
+
+def joined(a: set, b: set, pairs: list) -> bool:
+    """Whether a column of `a` reaches one of `b` through the colliding pairs."""
+    seen, todo = set(a), list(a)
+    while todo:
+        i = todo.pop()
+        for j in [q for p, q in pairs if p == i] + [p for p, q in pairs if q == i]:
+            if j not in seen:
+                seen.add(j)
+                todo.append(j)
+    return bool(seen & b)
+
+
+def jumps(window, full, rows: np.ndarray) -> list:
+    """(column, F_x, F_x', lambda, lambda') for each windowed column and consecutive points of
+    `rows` where it lies inside the window whose values are not one eigenvalue of the full
+    sweep, nor two that meet at a collision the full detection located between them (there
+    the eigenvalues are not smooth and which continues which is not defined)."""
+    lo, hi = window.window
+    W, Fu, F = window.eigenvalues[rows], full.eigenvalues[rows], window.F_x[rows]
+    tol = MATCH * np.abs(Fu).max()
+    found = []
+    for c in range(W.shape[1]):
+        inside = np.flatnonzero((W[:, c].real >= lo) & (W[:, c].real <= hi))
+        for r0, r1 in zip(inside, inside[1:]):
+            a, b = tracks(W[r0, c], Fu[r0], tol), tracks(W[r1, c], Fu[r1], tol)
+            between = [tuple(x.pair) for x in full.collisions if F[r0] <= x.p <= F[r1] or F[r1] <= x.p <= F[r0]]
+            if not (a and b and (a & b or joined(a, b, between))):
+                found.append((c, F[r0], F[r1], W[r0, c], W[r1, c]))
+    return found
+
+
+@pytest.mark.parametrize("name, lo, hi", [("paper", 0.05, 0.08), ("paper", 0.055, 0.06),
+                                          ("N20-eps1e-4", 0.05, 0.08)])
+def test_windowed_columns_follow_the_full_spectrum(name, lo, hi):
+    """Where a column lies inside the window, from one point to the next it holds one
+    eigenvalue of the full sweep (same F_x), or passes through a collision located between
+    them; it holds values in the window and its guard bands only; and every eigenvalue of the
+    full spectrum in the window is in some column. Before columns were continued across
+    entries and exits, at the paper's F_x = 0.0537 -> 0.0557 (window 0.05:0.08) one
+    eigenvalue left the k nearest the centre and another joined, and the assignment shifted a
+    chain of labels: 0.0695 -> 0.0599, 0.0584 -> 0.0554 inside the window."""
+    full, window = full_sweep(name), windowed_sweep(name, lo, hi)
+    assert np.max(np.abs(window.F_x - full.F_x)) <= 1e-12  # the same points
+    assert jumps(window, full, np.arange(len(window))) == []
+    W, band = window.eigenvalues, Window(*window.window)
+    assert np.all(band.tracked(W[~np.isnan(W)]))
+    tol = MATCH * np.abs(full.eigenvalues).max()
+    for r in range(len(full)):
+        inside = full.eigenvalues[r][(full.eigenvalues[r].real > band.lo + tol) & (full.eigenvalues[r].real < band.hi - tol)]
+        assert all(np.nanmin(np.abs(W[r] - v)) <= tol for v in inside)
+
+
+def test_windowed_columns_continue_across_the_legs():
+    """Loading to 0.06 and unloading to 0.03: the unloading leg starts with its labels in order
+    of value; its columns continue the loading leg's (each moves to the nearest value at the
+    first unloading point), and inside the unloading leg they follow the full spectrum."""
+    full, window = full_sweep("paper", 0.06, 0.03), windowed_sweep("paper", 0.05, 0.08, 0.06, 0.03)
+    W = window.eigenvalues
+    last = np.flatnonzero(window.leg == 0)[-1]
+    both = np.flatnonzero(~np.isnan(W[last]) & ~np.isnan(W[last + 1]))
+    assert both.size >= 8
+    nearest = np.nanargmin(np.abs(W[last + 1][None, :] - W[last][both][:, None]), axis=1)
+    assert nearest.tolist() == both.tolist()
+    assert jumps(window, full, np.flatnonzero(window.leg == 1)) == []
+
+
+def test_a_column_continues_only_where_its_label_is_certified():
+    """window_columns: label 1 leaves the band at point 1 and comes back at point 2, certified
+    throughout: one column with a gap; at point 3 it is not certified: a new column, and the
+    old one ends; label 0 (shown throughout) keeps its column."""
+    values = np.array([[1.0, 2.0], [1.1, 9.0], [1.2, 2.2], [1.3, 2.3]], dtype=complex)
+    continued = np.array([[False, False], [True, True], [True, True], [True, False]])
+    shown = np.array([[True, True], [True, False], [True, True], [True, True]])
+    columns = window_columns(values, continued, shown)
+    nan = np.nan
+    expected = np.array([[1.0, 2.0, nan], [1.1, nan, nan], [1.2, 2.2, nan], [1.3, nan, 2.3]])
+    assert np.array_equal(columns, expected, equal_nan=True)
+
+
+def _window_sample(values: list, excluded: list, p: float) -> Sample:
+    values = np.array(values, dtype=complex)
+    n = values.size
+    return Sample(0.0, np.array([p]), values, np.zeros(n, np.int8), 1e-12, np.array(excluded),
+                  tangent=np.array([1.0]), dlam=np.zeros(n, complex), guard=np.zeros(n, bool),
+                  gaps=np.ones(n), disc=(0.0, float(np.abs(values).max())))
+
+
+def test_an_eigenvalue_leaving_the_disc_frees_its_label_and_shifts_no_other():
+    """The k = 5 eigenvalues nearest 0: -1.0 (beyond the guard band) moves out of the disc and
+    1.02 comes in. The tracked -0.3, 0, 0.3 and the excluded 0.9 keep their labels; the label
+    of -1.0 takes 1.02 (a new eigenvalue). On the real line a plain assignment may as well
+    shift the chain -1.0 -> -0.3 -> 0 -> 0.3 -> 0.9 -> 1.02 (the same total distance)."""
+    a = _window_sample([-1.0, -0.3, 0.0, 0.3, 0.9], [True, False, False, False, True], 0.0)
+    b = _window_sample([-0.3, 0.0, 0.3, 0.9, 1.02], [False, False, False, True, True], 0.01)
+    assert continuation_perm(a, b).tolist() == [4, 0, 1, 2, 3]
