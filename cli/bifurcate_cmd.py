@@ -204,14 +204,14 @@ def check_window_covered(branch, given: str, matrix: str, unit: float) -> None:
     import numpy as np
 
     lo, hi = branch.window
-    lam = branch.eigenvalues.real
+    lam = branch.eigenvalues.real  # nan where a column holds no eigenvalue near the window
     if ((lam >= lo) & (lam <= hi)).any():
         return
-    span = lam[np.isfinite(lam)] / unit
+    near = lam[np.isfinite(lam)] / unit
+    seen = f"; the guard bands saw {near.min():.4g}:{near.max():.4g}" if near.size else ""
     raise CommandError(f"bifurcate error: --window: no eigenvalue of {matrix} has its real part in "
-                       f"the window anywhere on the branch; those tracked lie in "
-                       f"{span.min():.4g}:{span.max():.4g}: nothing to report (got {given!r})",
-                       EXIT_FAILED)
+                       f"the window anywhere on the branch{seen}: nothing to report (got "
+                       f"{given!r})", EXIT_FAILED)
 
 
 def leg_lines(branch, F_to: float) -> list[str]:
