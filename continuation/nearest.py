@@ -35,7 +35,7 @@ def krylov_size(k: int, n: int) -> int:
     restarts more: at n = 3000, k = 164 (the spectral window of N = 1000), both sides took
     0.90 s with ncv = 222 against 1.23 s with 329; for k = 8, 16 and 22 at n = 300 the default
     was the fastest Krylov size tried or within 5% of it (docs/continuation.md)."""
-    return min(n - 1, max(20, min(2 * k + 1, k + KRYLOV_EXTRA)))
+    return min(n, max(20, min(2 * k + 1, k + KRYLOV_EXTRA)))  # ARPACK: k + 1 < ncv <= n
 
 
 class ShiftInvertFailed(RuntimeError):

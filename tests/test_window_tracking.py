@@ -68,7 +68,7 @@ def jumps(window, full, rows: np.ndarray) -> list:
 
 
 @pytest.mark.parametrize("name, lo, hi", [("paper", 0.05, 0.08), ("paper", 0.055, 0.06),
-                                          ("N20-eps1e-4", 0.05, 0.08)])
+                                          ("N20-eps1e-4", 0.05, 0.08), ("paper", 0.0, 0.02)])
 def test_windowed_columns_follow_the_full_spectrum(name, lo, hi):
     """Where a column lies inside the window, from one point to the next it holds one
     eigenvalue of the full sweep (same F_x), or passes through a collision located between
@@ -86,6 +86,18 @@ def test_windowed_columns_follow_the_full_spectrum(name, lo, hi):
     for r in range(len(full)):
         inside = full.eigenvalues[r][(full.eigenvalues[r].real > band.lo + tol) & (full.eigenvalues[r].real < band.hi - tol)]
         assert all(np.nanmin(np.abs(W[r] - v)) <= tol for v in inside)
+
+
+def test_a_window_holding_all_but_two_eigenvalues_locates_the_full_sweeps_collisions():
+    """Window 0:0.02 of the paper's scene tracks k = n - 2 = 28 of its 30 eigenvalues, where
+    ARPACK's Krylov space may be no smaller than n (it was cut to n - 1, a traceback): the
+    collisions it locates are the full sweep's with Re lambda in the window, to 1e-10 in F_x."""
+    full, window = full_sweep("paper"), windowed_sweep("paper", 0.0, 0.02)
+    lo, hi = window.window
+    expected = [(c.kind, c.p) for c in full.collisions if lo <= c.eigenvalue <= hi]
+    found = [(c.kind, c.p) for c in window.collisions]
+    assert len(expected) == 6 and [k for k, _ in found] == [k for k, _ in expected]
+    assert np.max(np.abs(np.subtract([p for _, p in found], [p for _, p in expected]))) <= 1e-10
 
 
 def test_windowed_columns_continue_across_the_legs():
