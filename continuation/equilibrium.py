@@ -23,7 +23,7 @@ from diskfriction.continuation.arclength import ContinuationError
 from diskfriction.continuation.branch import stop_reason
 from diskfriction.continuation.collisions import DetectionParams
 from diskfriction.continuation.disks import EquilibriumError
-from diskfriction.continuation.sweep import SweepParams, sweep
+from diskfriction.continuation.sweep import DiskBranch, SweepParams, sweep
 from diskfriction.errors import OneLineError
 from diskfriction.symbolic import System
 
@@ -70,9 +70,16 @@ def equilibrium_at(system: System, F_x: float) -> Equilibrium:
     except (EquilibriumError, ContinuationError) as error:
         raise NoEquilibrium(f"no equilibrium beyond F_x = 0 (asked for {F_x:g}): the branch from "
                             f"rest cannot start: {error}", 0.0, F_x) from None
+    check_reached(system, branch, F_x)
+    return Equilibrium(float(branch.F_x[-1]), branch.q[-1], branch.xi[-1], float(branch.residual[-1]))
+
+
+def check_reached(system: System, branch: DiskBranch, F_x: float) -> None:
+    """Raise NoEquilibrium (where the branch ended, why, and its contacts there) unless the
+    branch's last point is F_x, reached (to REACHED * F_x)."""
     F_end = float(branch.F_x[-1])
     if branch.status[-1] == "p_end" and abs(F_end - F_x) <= REACHED * F_x:
-        return Equilibrium(F_end, branch.q[-1], branch.xi[-1], float(branch.residual[-1]))
+        return
     raise NoEquilibrium(f"no equilibrium beyond F_x = {F_end:.6g} (asked for {F_x:g}): "
                         f"{stop_reason(branch.status[-1], len(branch))}; there "
                         f"{contact_states(system, branch.q[-1], branch.xi[-1])}", F_end, F_x)

@@ -11,7 +11,7 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from diskfriction.continuation.equilibrium import equilibrium_at
+from diskfriction.continuation.equilibrium import check_reached, equilibrium_at
 from diskfriction.continuation.sweep import DiskBranch, sweep
 from diskfriction.continuation.windows import Window, complex_windows
 from diskfriction.dynamics.simulate import inaccuracy, simulate, summarize
@@ -54,12 +54,15 @@ def window_run(system: System, window: Window, index: int, t_end: float, amplitu
 
 def verify_windows(scene: Scene, matrix: str, t_end: float, amplitude: float,
                    progress: Optional[Callable[[str, Optional[float]], None]] = None) -> list[dict]:
-    """One row per window (window_run). progress(stage, fraction or None): the stage
-    "sweep ...", then "runs" with the fraction of windows done."""
+    """One row per window (window_run) of the branch from rest to the scene's F_x range end;
+    raises NoEquilibrium when the branch ends short of it. progress(stage, fraction or None):
+    the stage "sweep ...", then "runs" with the fraction of windows done."""
     report = progress or (lambda stage, fraction=None: None)
     system = System.from_scene(scene)
     report(f"sweep F_x 0 -> {scene.F_x_range[1]:g} ({matrix})", None)
-    todo = windows(sweep(system, 0.0, scene.F_x_range[1], matrix))
+    branch = sweep(system, 0.0, scene.F_x_range[1], matrix)
+    check_reached(system, branch, scene.F_x_range[1])  # windows beyond its end were never seen
+    todo = windows(branch)
     stage = f"one run to t = {t_end:g} in each of {count(len(todo), 'window')}"
     report(stage, 0.0)
     rows = []

@@ -215,6 +215,17 @@ def test_simulate_beyond_the_end_of_the_branch_says_where_and_why(tmp_path):
     assert result.stdout == "" and not list(out.iterdir())
 
 
+def test_verify_of_a_branch_ending_short_of_the_scenes_range_says_where_and_why(tmp_path):
+    """verify's windows are those of the branch up to the scene's F_x range end: a branch that
+    ends before it is one line and exit 1, not a table of the windows it happened to reach."""
+    out = tmp_path / "out"
+    result = run_cli("verify", scene_file(tmp_path, SHORT), "--t-end", "10", "--out", str(out))
+    assert result.returncode == 1
+    line = error_line(result, "verify")
+    assert "no equilibrium beyond F_x = " in line and "(asked for 0.12)" in line
+    assert result.stdout == "" and not (out / "verify.json").exists()
+
+
 def test_equilibrium_at_ends_exactly_on_the_load_or_raises():
     from diskfriction.continuation.equilibrium import NoEquilibrium, equilibrium_at
     from diskfriction.scenes import Scene
