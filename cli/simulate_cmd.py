@@ -151,6 +151,23 @@ def single_run(scene, F_x: float, args, out: Path, progress: Progress) -> int:
     return 0
 
 
+def ensemble_estimate(scene, loads, K: int, args, out: Path) -> str:
+    """The realizations not on disk yet and their rough wall time (dynamics.simulate.run_seconds)
+    on the local cluster's workers, or per worker of a remote scheduler."""
+    from diskfriction.dynamics.cluster import local_workers
+    from diskfriction.dynamics.ensemble import RunSpec, pending
+    from diskfriction.dynamics.simulate import run_seconds
+
+    todo, _ = pending(scene, loads, K, RunSpec(args.t_end, args.amplitude, args.perturbation or
+                                               "random-velocity", args.seed), out)
+    if not todo:
+        return "all on disk"
+    at_once = 1 if args.scheduler else min(len(todo), local_workers())
+    where = "divided by the scheduler's workers" if args.scheduler else f"on {count(at_once, 'worker')}"
+    seconds = len(todo) * run_seconds(scene, args.t_end) / at_once
+    return f"{count(len(todo), 'run')} to do, about {duration(seconds)} {where} (a rough estimate)"
+
+
 def ensemble_run(scene, loads, args, out: Path, progress: Progress) -> int:
     from diskfriction.dynamics.ensemble import run_ensemble
     from diskfriction.dynamics.stepper import load_stepper
@@ -160,7 +177,8 @@ def ensemble_run(scene, loads, args, out: Path, progress: Progress) -> int:
     # compiled here once, so that the workers load it from the cache instead of compiling it
     load_stepper(System.from_scene(scene, progress.part("kernels")).kernels, progress.part("stepper"))
     K = int(args.realizations or 1)
-    progress.stage(f"ensemble: {K} realization(s) x {len(loads)} load(s) to t = {args.t_end:g}")
+    progress.stage(f"ensemble: {count(K, 'realization')} x {count(len(loads), 'load')} to "
+                   f"t = {args.t_end:g}: {ensemble_estimate(scene, loads, K, args, out)}")
     ens = run_ensemble(scene, loads, K, args.t_end, out, seed=args.seed, amplitude=args.amplitude,
                        kind=args.perturbation or "random-velocity", scheduler=args.scheduler,
                        progress=lambda done, total: progress(done / total, f"{done}/{total} realizations"))

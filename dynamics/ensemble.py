@@ -215,15 +215,7 @@ def run_ensemble(scene: Scene, F_values, realizations: int, t_end: float, out: P
         raise ValueError(f"duplicate loads in {loads}")
     record = parameters(scene, loads, realizations, RunSpec(t_end, amplitude, kind, seed), version)
     check_directory(out, json.loads(json.dumps(record)))
-    todo, summaries = [], {F: [] for F in loads}
-    for F in summaries:
-        for k in range(realizations):
-            spec = RunSpec(t_end, amplitude, kind, seed + k)
-            path = run_path(out, F, k, realization_key(scene, F, spec, version))
-            if path.exists():
-                summaries[F].append(json.loads(path.read_text()))
-            else:
-                todo.append((F, spec, path))
+    todo, summaries = pending(scene, loads, realizations, RunSpec(t_end, amplitude, kind, seed), out)
     total, done = len(todo) + sum(map(len, summaries.values())), sum(map(len, summaries.values()))
     if progress is not None:
         progress(done, total)
@@ -235,6 +227,22 @@ def run_ensemble(scene: Scene, F_values, realizations: int, t_end: float, out: P
     ensemble = aggregate(summaries)
     save_json(out / "ensemble.json", {"parameters": record, **ensemble.as_dict()})
     return ensemble
+
+
+def pending(scene: Scene, loads: list[float], realizations: int, first: RunSpec,
+            out: Path) -> tuple[list, dict]:
+    """(the realizations not on disk in `out`: (F_x, RunSpec, path) each, the summaries of those
+    that are, by load); the seeds are first.seed, first.seed + 1, ..."""
+    version, todo, summaries = code_version(), [], {F: [] for F in loads}
+    for F in summaries:
+        for k in range(realizations):
+            spec = replace(first, seed=first.seed + k)
+            path = run_path(Path(out), F, k, realization_key(scene, F, spec, version))
+            if path.exists():
+                summaries[F].append(json.loads(path.read_text()))
+            else:
+                todo.append((F, spec, path))
+    return todo, summaries
 
 
 def done_count(summaries: dict) -> int:

@@ -102,9 +102,6 @@ growing as N^0.9 (0.28 s at N = 100)."""
 WINDOWS_PER_DISK = 2.3
 """Windows between collisions per disk at eps > 0 (51, 91, 239 at N = 20, 40, 100); at eps = 0
 the same 24 collisions at every N, so 25 windows."""
-OMEGA_MAX_OVER_Y = 1.7
-"""omega_max of M^-1 J over the substrate's y-mode sqrt(3/2 k_n delta_w^(1/2) / m), which sets
-a run's step: 17.8 against 10.5 on the paper's branch at N = 10 .. 100."""
 
 
 def cell_seconds(scene: Scene, params: MapParams) -> float:
@@ -113,16 +110,14 @@ def cell_seconds(scene: Scene, params: MapParams) -> float:
     SECONDS_PER_DISK_STEP, dt = DT_FRACTION 2 / omega_max). Within a factor of 2 of the cells
     of N = 10 .. 40 timed for docs/maps.md; for the estimate `map` prints before it starts."""
     from diskfriction.continuation.cost import sweep_seconds
-    from diskfriction.dynamics.simulate import DT_FRACTION, SECONDS_PER_DISK_STEP
+    from diskfriction.dynamics.simulate import run_seconds
 
     dense = scene.eps > 0
     seconds = sweep_seconds(scene.N, dense)
     if params.slide is None:
         return seconds
     windows = WINDOWS_PER_DISK * scene.N + 1 if dense else 25
-    omega_max = OMEGA_MAX_OVER_Y * math.sqrt(1.5 * scene.k_n * math.sqrt(scene.delta_w0) / scene.m)
-    steps = params.slide.t_end * omega_max / (2 * DT_FRACTION)
-    run = SECONDS_PER_DISK_STEP * steps * scene.N
+    run = run_seconds(scene, params.slide.t_end)
     return seconds + windows * (EQUILIBRIUM_SECONDS_N10 * (scene.N / 10) ** 0.9 + run)
 
 

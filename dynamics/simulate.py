@@ -22,6 +22,7 @@ from diskfriction.dynamics.start import Perturbation, Spectrum, perturb, spectru
 from diskfriction.dynamics.stepper import Stepper
 from diskfriction.dynamics.trajectory import BUDGET_BOUND, Trajectory
 from diskfriction.memory import require_memory
+from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
 
 DT_FRACTION = 0.05
@@ -35,7 +36,13 @@ enough for the envelope of M (dynamics/growth.py) and the period mean of x (dyna
 
 SECONDS_PER_DISK_STEP = 3.5e-8
 """The stepper's cost, 0.032-0.036 us per disk and step at N = 10 .. 10 000 on one core
-(benchmarks/dynamics_speed.py): what run_seconds estimates a run with."""
+(benchmarks/dynamics_speed.py): what RunPlan.seconds and run_seconds estimate a run with."""
+SECONDS_PER_FRAME = 3.5e-6
+"""Summary, trajectory.npz and run.png per recorded frame at N = 10: 1.7, 1.9 and 1.7 s for the
+1.4e6 frames of a run to t = 40000 at F_x = 0.09 (2 busy cores)."""
+OMEGA_MAX_OVER_Y = 1.7
+"""omega_max of M^-1 J over the substrate's y-mode sqrt(3/2 k_n delta_w^(1/2) / m), which sets
+a run's step: 17.8 against 10.5 on the paper's branch at N = 10 .. 100."""
 
 CHUNK_STEPS = 200_000
 """Steps per call into numba between progress reports."""
@@ -83,12 +90,22 @@ class RunPlan:
         return self.n_steps // self.stride + 1
 
     def seconds(self, N: int) -> float:
-        """Estimated wall time of the steps [s] (SECONDS_PER_DISK_STEP)."""
-        return SECONDS_PER_DISK_STEP * self.n_steps * N
+        """Estimated wall time of the steps and of what `simulate` does with the frames [s]
+        (SECONDS_PER_DISK_STEP, SECONDS_PER_FRAME)."""
+        return SECONDS_PER_DISK_STEP * self.n_steps * N + SECONDS_PER_FRAME * self.frames
 
     def frame_bytes(self, ndof: int, N: int) -> float:
         """Memory of the recorded frames: t, q, v, 5 energy columns, N slips [bytes]."""
         return 8.0 * self.frames * (1 + 2 * ndof + 5 + N)
+
+
+def run_seconds(scene: Scene, t_end: float) -> float:
+    """Rough wall time of the steps of a run to t_end [time] on `scene` [s], before its start's
+    spectrum is known: dt = DT_FRACTION 2 / omega_max with omega_max = OMEGA_MAX_OVER_Y
+    sqrt(3/2 k_n delta_w0^(1/2) / m) (delta_w0 the rest overlap with the substrate), and
+    SECONDS_PER_DISK_STEP per disk and step."""
+    omega_max = OMEGA_MAX_OVER_Y * math.sqrt(1.5 * scene.k_n * math.sqrt(scene.delta_w0) / scene.m)
+    return SECONDS_PER_DISK_STEP * scene.N * t_end * omega_max / (2 * DT_FRACTION)
 
 
 def whole_strides(t_end: float, dt_max: float, stride: int) -> int:

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -9,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from diskfriction.dynamics.ensemble import (EnsembleMismatch, RunSpec, aggregate, breach_speed,
+from diskfriction.dynamics.ensemble import (EnsembleMismatch, RunSpec, pending, aggregate, breach_speed,
                                            check_directory, code_version, front_slope,
                                            parameters, run_ensemble, sliding_speed)
 from diskfriction.scenes import Scene
@@ -62,6 +63,8 @@ def test_resumed_ensemble_equals_an_uninterrupted_one(tmp_path):
     run_ensemble(scene, [0.087], 1, out=tmp_path / "resumed", **kw)
     first = sorted((tmp_path / "resumed" / "runs").rglob("*.json"))
     stamp = first[0].stat().st_mtime_ns
+    todo, done = pending(scene, [0.087], 3, RunSpec(150.0, 1e-5), tmp_path / "resumed")
+    assert [spec.seed for _, spec, _ in todo] == [1, 2] and len(done[0.087]) == 1
     resumed = run_ensemble(scene, [0.087], 3, out=tmp_path / "resumed", **kw)
     assert first[0].stat().st_mtime_ns == stamp
     assert resumed.as_dict() == whole.as_dict()
@@ -73,6 +76,22 @@ def test_resumed_ensemble_equals_an_uninterrupted_one(tmp_path):
     assert record["parameters"]["code"] == code_version()
     key = lambda s: json.dumps(s, sort_keys=True)
     assert sorted(map(key, resumed.summaries[0.087])) == sorted(map(key, whole.summaries[0.087]))
+
+
+def test_an_ensemble_says_how_long_its_missing_runs_take_before_it_starts(tmp_path):
+    """The estimate counts the runs not on disk, and grows with t_end (the paper's scene: a
+    run to t = 1e9 is 1.7e11 steps, hours on 2 workers even for one load)."""
+    from types import SimpleNamespace
+
+    from diskfriction.cli.simulate_cmd import ensemble_estimate
+
+    args = lambda t_end: SimpleNamespace(t_end=t_end, amplitude=1e-5, perturbation=None, seed=0,
+                                         scheduler=None)
+    short = ensemble_estimate(Scene(), [0.083, 0.09], 3, args(300.0), tmp_path)
+    assert re.fullmatch(r"6 runs to do, about [0-9.]+ s on \d+ workers? \(a rough estimate\)", short)
+    assert " h on 2 workers" in ensemble_estimate(Scene(), [0.083], 2, args(1e9), tmp_path)
+    remote = SimpleNamespace(**{**vars(args(300.0)), "scheduler": "tcp://host:8786"})
+    assert "divided by the scheduler's workers" in ensemble_estimate(Scene(), [0.09], 1, remote, tmp_path)
 
 
 def test_an_ensemble_folder_refuses_runs_with_other_parameters(tmp_path):
