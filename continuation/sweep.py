@@ -16,7 +16,7 @@ branch is still numerically singular.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Callable, Optional
 
 import numpy as np
@@ -126,8 +126,9 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
                 progress(F_x)
 
         branch = continuation(problem, problem.q_c, F_start, core, params.detection, callback=record)
+        branch = _continue_leg(rows, first, branch)
         if window is not None:
-            continued += _continue_leg(rows, first, branch)
+            continued += list(branch.continued if first == 0 else branch.continued[1:])
         status.append(branch.status)
         events += branch.events
         if leg == 1:
@@ -147,16 +148,19 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
                       tuple(status), events, params.window)
 
 
-def _continue_leg(rows: list, first: int, branch: Branch) -> list:
-    """A spectral window's Branch.continued for the rows rows[first:] of a leg. A leg after
-    another starts at that one's last point, its labels in order of value (arclength._sorted)
-    and its first point not recorded again: its rows are relabelled (in place) to continue
-    the last point's labels, the same eigenvalues at the same point, matched by value
-    (spectra.match_eigenvalues)."""
+def _continue_leg(rows: list, first: int, branch: Branch) -> Branch:
+    """A leg after another starts at that one's last point with its labels in order of value
+    (arclength._sorted), and its first point is not recorded again: its rows rows[first:] are
+    relabelled (in place) to continue the last point's labels, the same eigenvalues at the same
+    point matched by value (spectra.match_eigenvalues), and the branch's collision pairs and
+    window columns (Branch.continued) with them. The first leg is returned as it is."""
     if first == 0:
-        return list(branch.continued)
-    perm = match_eigenvalues(rows[first - 1][3], branch.eigenvalues[0])
+        return branch
+    perm = match_eigenvalues(rows[first - 1][3], branch.eigenvalues[0])  # new label i holds old perm[i]
+    of_label = np.argsort(perm)
     for r in range(first, len(rows)):
         rows[r] = rows[r][:3] + (rows[r][3][perm],) + rows[r][4:]
-    return [c[perm] for c in branch.continued[1:]]
-
+    pairs = tuple(replace(c, pair=(int(of_label[c.pair[0]]), int(of_label[c.pair[1]])))
+                  for c in branch.collisions)
+    continued = None if branch.continued is None else branch.continued[:, perm]
+    return replace(branch, collisions=pairs, continued=continued)

@@ -114,6 +114,23 @@ def test_windowed_columns_continue_across_the_legs():
     assert jumps(window, full, np.flatnonzero(window.leg == 1)) == []
 
 
+def test_full_columns_and_collision_pairs_continue_across_the_legs():
+    """The full spectrum of the same sweep: each column at the first unloading point is the
+    nearest to its value at the last loading point (the unloading leg's labels, sorted by
+    value at its start, used to jump by up to 14 raw there), and each collision's pair names
+    the two columns that meet: at the point nearest it they are each other's nearest."""
+    full = full_sweep("paper", 0.06, 0.03)
+    E, last = full.eigenvalues, np.flatnonzero(full.leg == 0)[-1]
+    nearest = np.argmin(np.abs(E[last + 1][None, :] - E[last][:, None]), axis=1)
+    assert nearest.tolist() == list(range(E.shape[1]))
+    assert len(full.collisions) >= 2
+    for c in full.collisions:
+        row = E[np.argmin(np.abs(full.F_x - c.p))]
+        distance = np.abs(row[:, None] - row[None, :].conj()) + np.diag(np.full(row.size, np.inf))
+        i, j = c.pair
+        assert np.argmin(distance[i]) == j and np.argmin(distance[j]) == i
+
+
 def test_a_column_continues_only_where_its_label_is_certified():
     """window_columns: label 1 leaves the band at point 1 and comes back at point 2, certified
     throughout: one column with a gap; at point 3 it is not certified: a new column, and the
