@@ -128,13 +128,13 @@ def grid_values(lo: float, hi: float, count: int, log: bool = False) -> tuple[fl
     if not (math.isfinite(lo) and math.isfinite(hi)):
         raise ValueError("LO and HI must be finite numbers")
     if count != int(count) or count < 1:
-        raise ValueError(f"COUNT must be an integer >= 1 (got {count})")
+        raise ValueError(f"COUNT must be an integer >= 1, not {count}")
     if log and lo <= 0:
-        raise ValueError(f"log spacing needs LO > 0 (got LO = {lo:g})")
+        raise ValueError(f"log spacing needs LO > 0, not {lo:g}")
     if count == 1 and lo != hi:
         raise ValueError("one value (COUNT = 1) needs LO = HI")
     if count > 1 and not lo < hi:
-        raise ValueError(f"LO must be below HI (got LO = {lo:g}, HI = {hi:g})")
+        raise ValueError(f"LO must be below HI, not {lo:g} >= {hi:g}")
     values = np.geomspace(lo, hi, int(count)) if log else np.linspace(lo, hi, int(count))
     return tuple(float(v) for v in values)
 
