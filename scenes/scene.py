@@ -55,13 +55,13 @@ def _check_fields(instance: Any, rules: dict) -> None:
 class Effects:
     """Which physics a scene simulates; the symbolic layer derives exactly these.
 
-    tangential      contact law for the tangential force (MODEL.md): "mindlin-smooth" (paper
+    tangential      contact law for the tangential force (docs/model.md#contacts): "mindlin-smooth" (paper
                     eq. 5), "mindlin-linear" (k_t delta^(1/2) xi, hard cap at mu F_n), "none".
     pair_friction   tangential force at disk-disk contacts.
     wall_friction   tangential force at disk-substrate contacts.
     rotation        disks rotate (3N degrees of freedom) or not (2N).
     conventions     how a disk-disk contact's torque and history increment are discretised
-                    (docs/physics.md, "Conventions"): "model" (MODEL.md: lever arm R, history
+                    (docs/physics.md, "Conventions"): "model" (docs/model.md#contacts: lever arm R, history
                     increment along the tangent at the middle of a step, a contact closing
                     during a step charges only the part after first contact) or "lammps"
                     (LAMMPS's granular package: lever arm R - delta/2, increment along the
