@@ -1,14 +1,14 @@
 """Equilibria of the disk chain as a continuation problem, with the tangential history carried.
 
-u = q (MODEL.md layout), p = F_x. The committed state (q_c, xi_c) is the last accepted point.
+u = q (docs/model.md#history layout), p = F_x. The committed state (q_c, xi_c) is the last accepted point.
 The residual of a trial q is the quasistatic step from it:
 
     G(q, F_x) = F(q, xi(q); F_x),  xi(q) = history rule from (q_c, xi_c) to q, Coulomb cap included,
 
 dG/dq = -J(q, xi(q)) (the total stiffness, history following q), dG/dF_x = e_(x_1).
-MODEL.md solves with the uncapped history and caps afterwards; the smoothed law beyond t* falls
+docs/model.md#history solves with the uncapped history and caps afterwards; the smoothed law beyond t* falls
 (phi(u) decreases for u > 1), so that problem has no equilibrium once a contact must slide.
-Capping inside the residual (return mapping) is the limit of MODEL.md's procedure for small steps
+Capping inside the residual (return mapping) is the limit of docs/model.md's procedure for small steps
 and equal to it while nothing slides. For the smoothed law J stays exact at the cap: there
 dF_t/dxi = 0 and dF_t/ddelta is the same at fixed xi and at fixed u = xi / t*. For the linear
 law J is the sticking tangent at a sliding contact, and Newton converges only linearly there.
@@ -21,7 +21,7 @@ events and accepted points, with the midpoint rule's O(|dq|^3) error per piece.
 
 Free disks (eps = 0). A disk held by the substrate alone is decoupled from the chain and its
 block of J is singular: the substrate contact's force depends on q only through delta_w = R - y
-and the history increment w . dq (d xi = dx + R dtheta, MODEL.md), so every direction
+and the history increment w . dq (d xi = dx + R dtheta, docs/model.md#contacts), so every direction
 orthogonal to e_y and w costs no force (rolling without slip, dx = -R dtheta: an exact zero
 mode), and the disk's generalized force lies in span(e_y, w), so its equations have the same
 exact redundancy (T_i - R F_x,i = 0). Physically the rolling position of such a disk is

@@ -47,7 +47,7 @@ class NoEquilibrium(OneLineError):
 
 @dataclass(frozen=True)
 class Equilibrium:
-    """The state on the branch from rest at F_x [force]: positions q (MODEL.md layout), the
+    """The state on the branch from rest at F_x [force]: positions q (docs/model.md#history layout), the
     committed history xi [length], residual max|F(q, xi; F_x)| [force]."""
 
     F_x: float

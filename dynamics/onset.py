@@ -1,7 +1,7 @@
 """Onset of sliding of each disk, from the recorded positions.
 
 What moves the chain. Past the instability the chain leaves its equilibrium by rolling as much
-as by slipping: a disk rolling on the substrate does not charge its substrate history (MODEL.md),
+as by slipping: a disk rolling on the substrate does not charge its substrate history (docs/model.md#contacts),
 so a disk can travel far with its substrate contact never capped, while its pair contacts slip
 or open. Substrate slip alone therefore misses the motion the paper calls sliding; the first
 Coulomb breach at the substrate (recorded separately, per step, by the stepper) is a different

@@ -6,7 +6,7 @@
                     perturbation=Perturbation("eigenvector", 1e-6))
     summary = summarize(traj)
 
-Raw units throughout (MODEL.md): time in sqrt(m / k_n ...) units of the scene, not tau.
+Raw units throughout (docs/model.md#units): time in sqrt(m / k_n ...) units of the scene, not tau.
 """
 from __future__ import annotations
 

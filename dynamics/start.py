@@ -1,7 +1,7 @@
 """Initial conditions for a run: an equilibrium (q, xi) at F_x plus a perturbation.
 
 Small oscillations about an equilibrium obey M dq'' = -J dq with J = -dF/dq the total stiffness
-(history following q, MODEL.md), so the spectrum that governs the dynamics is that of M^-1 J,
+(history following q, docs/model.md#stability), so the spectrum that governs the dynamics is that of M^-1 J,
 whatever matrix a branch was diagonalised with. A complex pair lambda, conj(lambda) with
 sqrt(lambda) = omega + i sigma (principal root, sigma = |Im sqrt(lambda)|) gives the solutions
 dq = Re(V exp(s t)), s = +-(sigma - i omega): one grows at rate sigma, one decays.

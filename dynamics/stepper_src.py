@@ -7,7 +7,7 @@
 # header.
 #
 # One velocity-Verlet step (dynamics/stepper.py explains the scheme), for the layout of
-# MODEL.md: q = (x, y[, theta]) blocks of N, contacts c = pairs 0..N-1 then substrate N..2N-1.
+# docs/model.md#history: q = (x, y[, theta]) blocks of N, contacts c = pairs 0..N-1 then substrate N..2N-1.
 #
 #   kick   v += dt/2 M^-1 F(q0, xi0)
 #   drift  q1 = q0 + dt v

@@ -1,6 +1,6 @@
 """The result of a run: one object of arrays, frames every `stride` steps (raw units).
 
-Observables (MODEL.md):
+Observables (docs/model.md#targets):
   M(t)      = (1/N) sum_i |r_i(t) - r_i(0)|^2, disk centres only (no angles) [length^2];
   C(t)      = (1/N) sum_i r_i(t), the centre of mass (equal masses) [length];
   budget(t) = E_kin + U_n + U_load - W_t, constant up to O(dt^2) [energy], with
@@ -50,7 +50,7 @@ def _column(k: int, doc: str) -> property:
 class Trajectory:
     """One run from an equilibrium at load F_x plus a perturbation (raw units).
 
-    t (f,) [time]; q, v (f, ndof) positions and velocities in MODEL.md's layout; energy (f, 5)
+    t (f,) [time]; q, v (f, ndof) positions and velocities in docs/model.md's layout; energy (f, 5)
     columns E_kin, U_n, U_load, W_t, W_slip (see the module docstring); slip (f, N) signed
     distance each substrate contact has slid (sum over its capped steps of the excess the cap
     removed) [length]. breach_t, breach_x (N,): first time the Coulomb cap acts at the

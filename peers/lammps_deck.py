@@ -6,7 +6,7 @@ R_eff = R_i R_j / (R_i + R_j): R/2 for two disks, R for the flat wall,
 
     F_n = k a delta,    F_t = -k_t' a xi,    |F_t| <= mu F_n (the history rescaled to the cap).
 
-MODEL.md's F_n = k_n delta^(3/2) and linear Mindlin F_t = -k_t delta^(1/2) xi (the
+docs/model.md's F_n = k_n delta^(3/2) and linear Mindlin F_t = -k_t delta^(1/2) xi (the
 "mindlin-linear" effect; LAMMPS has no smoothed law) are these with
 
     hertz k = k_n / sqrt(R_eff),    tangential mindlin k_t' = k_t / sqrt(R_eff),
@@ -20,7 +20,7 @@ or `fix nve` without rotation (omega stays 0), `fix enforce2d`. Every number is 
 17 significant digits, so LAMMPS reads back the same doubles.
 
 What LAMMPS cannot represent is refused (Unrepresentable, one line): the smoothed Mindlin law,
-an inertia c other than 1/2 or 2/5 of rotating disks, and N = 2 (MODEL.md's two-disk ring has
+an inertia c other than 1/2 or 2/5 of rotating disks, and N = 2 (docs/model.md's two-disk ring has
 two contacts, left and right; LAMMPS's minimum image sees one). LAMMPS integrates with its own
 conventions, which a scene can ask of ours too ([effects] conventions = "lammps",
 docs/physics.md); the deck says which ones the scene uses.
@@ -107,7 +107,7 @@ class Contact:
 
     def comments(self, what: str, kind: str) -> list[str]:
         """Comment lines naming each correspondence."""
-        lines = [f"# {what}: R_eff = {kind} = {number(self.R_eff)}; MODEL.md F_n = k_n delta^(3/2) is "
+        lines = [f"# {what}: R_eff = {kind} = {number(self.R_eff)}; docs/model.md F_n = k_n delta^(3/2) is "
                  f"LAMMPS's k sqrt(R_eff delta) delta with hertz k = k_n / sqrt(R_eff)"]
         if self.friction:
             lines.append("#   linear Mindlin F_t = -k_t delta^(1/2) xi is LAMMPS's -k_t' sqrt(R_eff "
@@ -120,7 +120,7 @@ class Contact:
 
 @dataclass(frozen=True)
 class Start:
-    """The state handed to LAMMPS: positions q (MODEL.md layout), load F_x [force], kind
+    """The state handed to LAMMPS: positions q (docs/model.md layout), load F_x [force], kind
     ("rest" or "branch") and a sentence saying what it is. Velocities and histories are 0."""
 
     kind: str
@@ -130,7 +130,7 @@ class Start:
 
 
 def start_state(system: System, F_x: float, kind: str) -> Start:
-    """"rest": the F_x = 0 equilibrium (MODEL.md), the load F_x switched on at t = 0.
+    """"rest": the F_x = 0 equilibrium (docs/model.md#history), the load F_x switched on at t = 0.
     "branch": the equilibrium on the branch from rest at F_x (continuation.equilibrium_at,
     which raises NoEquilibrium past the branch's end) with zero histories: LAMMPS cannot be
     given tangential histories, so unless F_x = 0 it is not an equilibrium there."""
@@ -138,7 +138,7 @@ def start_state(system: System, F_x: float, kind: str) -> Start:
         raise ValueError(f"start must be one of {', '.join(STARTS)} (got {kind!r})")
     if kind == "rest" or F_x == 0:
         q, _ = system.rest_state()
-        return Start("rest", F_x, q, f"the rest state (F_x = 0 equilibrium, MODEL.md), at rest, "
+        return Start("rest", F_x, q, f"the rest state (F_x = 0 equilibrium, docs/model.md), at rest, "
                                     f"with the load F_x = {F_x:g} switched on at t = 0")
     from diskfriction.continuation.equilibrium import equilibrium_at
 
@@ -173,7 +173,7 @@ def data_file(scene: Scene, q: np.ndarray) -> str:
     N, R = scene.N, scene.R
     density = 3.0 * scene.m / (4.0 * math.pi * R**3)
     image = np.floor(q[:N] / scene.L).astype(int)
-    lines = [f"LAMMPS data file: diskfriction scene {scene.name!r}, {N} disks (raw units, MODEL.md)",
+    lines = [f"LAMMPS data file: diskfriction scene {scene.name!r}, {N} disks (raw units, docs/model.md)",
              "", f"{N} atoms", "1 atom types", "",
              f"0 {number(scene.L)} xlo xhi", f"{number(Y_BOX[0] * R)} {number(Y_BOX[1] * R)} ylo yhi",
              f"{number(-R)} {number(R)} zlo zhi", "", "Atoms # sphere", ""]
@@ -190,7 +190,7 @@ def _conventions_note(scene: Scene) -> str:
         return ("# The scene's [effects] conventions = \"lammps\": diskfriction integrates it with LAMMPS's "
                 "conventions\n# (lever arm R - delta/2, end-of-step history increment, whole "
                 "increment on first contact).")
-    return ("# The scene uses conventions = \"model\" (MODEL.md); LAMMPS integrates with its own: "
+    return ("# The scene uses conventions = \"model\" (docs/model.md); LAMMPS integrates with its own: "
             "lever arm R - delta/2,\n# end-of-step history increment, whole increment on first "
             "contact. Expect O(delta) differences\n# (docs/physics.md, Conventions); "
             "conventions = \"lammps\" removes them.")
@@ -228,7 +228,7 @@ def input_deck(scene: Scene, start: Start, dt: float, steps: int, every: int, ve
         f"# LAMMPS input deck of the diskfriction scene {scene.name!r} ({scene.source}), "
         f"diskfriction {version}.",
         f"# Start: {start.note}.",
-        "# Units: the scene's raw units (MODEL.md: lengths, masses, stiffnesses and forces as "
+        "# Units: the scene's raw units (docs/model.md: lengths, masses, stiffnesses and forces as "
         "the scene gives them), in LAMMPS's units lj.",
         _conventions_note(scene),
         "# Run: lmp -in in.scene [-var steps N] [-var dt DT]" + (" [-var every K]" if record else ""),

@@ -84,9 +84,7 @@ def key_label(axis: Axis) -> str:
     """Axis label of a varied key: its dotted name and its unit from the scene schema."""
     from diskfriction.scenes.load import SCHEMA
 
-    comment = SCHEMA[axis.key].comment
-    unit = comment[comment.index("["):comment.index("]") + 1] if "[" in comment else ""
-    return f"{axis.key} {unit}".strip() + (" (log grid)" if axis.log else "")
+    return f"{axis.key} {SCHEMA[axis.key].unit}".strip() + (" (log grid)" if axis.log else "")
 
 
 def headline(reason: str, width: int = 150) -> str:

@@ -1,11 +1,12 @@
-"""Scenes: the Scene dataclass, TOML loading and validation."""
+"""Scenes: the Scene dataclass, the rules its values obey, TOML loading."""
 from diskfriction.scenes.load import SceneError, default_scene_path, format_scene, load_scene
 from diskfriction.scenes.scene import (CONVENTIONS, FRICTION_KINDS, MATRICES, TANGENTIAL_LAWS,
-                                       Effects, Scene)
+                                       Effects, Scene, SceneValueError)
 
 __all__ = [
     "Effects",
     "Scene",
+    "SceneValueError",
     "TANGENTIAL_LAWS",
     "FRICTION_KINDS",
     "MATRICES",

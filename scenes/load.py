@@ -7,7 +7,6 @@ Every problem raises one SceneError whose str() is a single line naming the file
 """
 from __future__ import annotations
 
-import math
 import os
 import tomllib
 from dataclasses import dataclass, replace
@@ -15,11 +14,11 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Callable, Iterator
 
-from diskfriction.scenes.scene import (CONVENTIONS, FRICTION_KINDS, MATRICES, NEGATIVE_LOAD,
-                                       TANGENTIAL_LAWS, Effects, Scene)
+from diskfriction.scenes.rules import (EFFECTS_RULES, FRICTION, SCENE_RULES, Invalid, Rule,
+                                       kind)
+from diskfriction.scenes.scene import Effects, Scene, SceneValueError
 
 FILE_KEY = "<file>"
-INT64 = (-(2**63), 2**63 - 1)
 COMMENT_COLUMN = 36
 
 # Scene field -> dotted key, for the fields a file sets one to one.
@@ -37,6 +36,12 @@ _FIELDS = {
     "F_x_range": "load.F_x",
     "matrix": "stability.matrix",
 }
+# Effects field -> dotted key, for the effects a file sets one to one.
+_EFFECT_FIELDS = {
+    "tangential": "effects.tangential",
+    "rotation": "effects.rotation",
+    "conventions": "effects.conventions",
+}
 # Friction kind in a file -> the Effects switch it turns on.
 _FRICTION_SWITCHES = {"disk-disk": "pair_friction", "substrate": "wall_friction"}
 
@@ -51,14 +56,6 @@ class SceneError(Exception):
         self.file, self.key, self.what, self.value = file, key, what, value
         shown = file if file.isprintable() else repr(file)[1:-1]  # one line, whatever the path
         super().__init__(f"scene error: {shown}: {key}: {what} (got {_show(value)})")
-
-
-class _Invalid(Exception):
-    """A value breaking a rule; ``what`` says which. The loader adds the file and the key."""
-
-    def __init__(self, what: str) -> None:
-        super().__init__(what)
-        self.what = what
 
 
 # ---------------------------------------------------------------- writing values as TOML
@@ -97,141 +94,51 @@ def _show(value: Any) -> str:
     return _toml(value, quote=repr)
 
 
-def _kind(value: Any) -> str:
-    """The TOML kind of a parsed value, for "expected X, not Y" messages."""
-    kinds = ((bool, "a boolean"), (int, "an integer"), (float, "a float"), (str, "a string"),
-             (list, "an array"), (dict, "a table"))
-    return next((name for kind, name in kinds if isinstance(value, kind)), "a date/time")
-
-
-# ---------------------------------------------------------------- checking one value
-
-
-def _expect(value: Any, kinds: tuple[type, ...], expected: str) -> Any:
-    """``value`` if it is one of ``kinds`` (a boolean only if bool is listed), else _Invalid."""
-    if not isinstance(value, kinds) or (isinstance(value, bool) and bool not in kinds):
-        raise _Invalid(f"expected {expected}, not {_kind(value)}")
-    if isinstance(value, int) and not isinstance(value, bool) and not INT64[0] <= value <= INT64[1]:
-        raise _Invalid("integer outside TOML's 64-bit range")
-    return value
-
-
-def _number(value: Any) -> float:
-    """A finite float from a TOML integer or float; never a boolean or a string."""
-    number = float(_expect(value, (int, float), "a number"))
-    if not math.isfinite(number):
-        raise _Invalid("must be a finite number")
-    return number
-
-
-def _number_where(holds: Callable[[float], bool], rule: str) -> Callable[[Any], float]:
-    """A check for a finite number for which ``holds``; ``rule`` says what is wrong otherwise."""
-
-    def check(value: Any) -> float:
-        number = _number(value)
-        if not holds(number):
-            raise _Invalid(rule)
-        return number
-
-    return check
-
-
-_positive = _number_where(lambda x: x > 0.0, "must be > 0")
-_non_negative = _number_where(lambda x: x >= 0.0, "must be >= 0")
-_pre_compression = _number_where(lambda x: 0.0 <= x < 0.1, "must be in [0, 0.1)")
-
-
-def _disk_count(value: Any) -> int:
-    """N: an integer (not a boolean or a float) of at least 2."""
-    count = _expect(value, (int,), "an integer")
-    if count < 2:
-        raise _Invalid("must be >= 2")
-    return count
-
-
-def _load_range(value: Any) -> tuple[float, float]:
-    """F_x: an array [start, stop] of two finite numbers with 0 <= start < stop (NEGATIVE_LOAD
-    says why not below 0)."""
-    if len(_expect(value, (list,), "an array [start, stop]")) != 2:
-        raise _Invalid(f"expected exactly two numbers [start, stop], not {len(value)}")
-    start, stop = map(_number, value)
-    if start < 0:
-        raise _Invalid(f"must be >= 0: {NEGATIVE_LOAD}")
-    if start == stop:
-        raise _Invalid("empty range: start == stop")
-    if start > stop:
-        raise _Invalid("reversed range: start > stop")
-    return (start, stop)
-
-
-def _string(value: Any) -> str:
-    """A string."""
-    return _expect(value, (str,), "a string")
-
-
-def _flag(value: Any) -> bool:
-    """A boolean."""
-    return _expect(value, (bool,), "a boolean (true or false)")
-
-
-def _effect_choice(options: tuple[str, ...], effect: str) -> Callable[[Any], str]:
-    """A check for a string naming one of ``options``; anything else is an unknown effect."""
-
-    def check(value: Any) -> str:
-        if _string(value) not in options:
-            raise _Invalid(f"unknown effect: {effect} must be one of {' | '.join(options)}")
-        return value
-
-    return check
-
-
-def _friction_kinds(value: Any) -> tuple[str, ...]:
-    """friction: an array of distinct strings from FRICTION_KINDS (may be empty)."""
-    kinds = _expect(value, (list,), "an array of strings")
-    if not all(isinstance(kind, str) for kind in kinds):
-        raise _Invalid("expected an array of strings")
-    unknown = [kind for kind in kinds if kind not in FRICTION_KINDS]
-    if unknown:
-        raise _Invalid(f"unknown effect: friction kind {unknown[0]!r}, "
-                       f"expected a subset of {', '.join(FRICTION_KINDS)}")
-    if len(set(kinds)) != len(kinds):
-        raise _Invalid("duplicated friction kind")
-    return tuple(kinds)
+# ---------------------------------------------------------------- the schema
 
 
 @dataclass(frozen=True)
 class _Key:
-    """One key of the schema: its check (parsed value -> Scene value) and its comment."""
+    """One key of the schema: the rule of the field it sets (scenes/rules.py), what it means and
+    its unit ("[length]"; "" for a pure number)."""
 
-    check: Callable[[Any], Any]
-    comment: str
+    rule: Rule
+    meaning: str
+    unit: str = ""
+
+    @property
+    def comment(self) -> str:
+        """What format_scene writes beside the key: meaning, unit and the rule's bound."""
+        text = f"{self.meaning} {self.unit}".strip()
+        return f"{text}; {self.rule.bound}" if self.rule.bound else text
 
 
-# Dotted key -> its check and comment, in the order format_scene writes them.
+STIFFNESS = "[force / length^(3/2)]"
+# Dotted key -> its rule, meaning and unit, in the order format_scene writes them.
 SCHEMA: dict[str, _Key] = {
-    "name": _Key(_string, "label"),
-    "disks.N": _Key(_disk_count, "number of disks (integer >= 2)"),
-    "disks.R": _Key(_positive, "disk radius [length]"),
-    "disks.m": _Key(_positive, "disk mass [mass]"),
-    "disks.inertia": _Key(_positive, "c in I = c m R^2 (0.5: uniform disk)"),
-    "disks.eps": _Key(_pre_compression, "pre-compression in [0, 0.1): L = 2 N R (1 - eps)"),
-    "contacts.k_n": _Key(_positive, "Hertz normal stiffness [force / length^(3/2)]"),
-    "contacts.k_t": _Key(_positive, "Mindlin tangential stiffness [force / length^(3/2)]"),
-    "contacts.mu": _Key(_non_negative, "friction coefficient (0 turns friction off)"),
-    "load.F_y": _Key(_positive, "downward force on every disk [force]"),
-    "load.F_x": _Key(_load_range, "quasistatic range [start, stop], 0 <= start < stop, of the "
-                                  "force on disk 1"),
-    "effects.tangential": _Key(_effect_choice(TANGENTIAL_LAWS, "tangential law"),
-                               " | ".join(TANGENTIAL_LAWS)),
-    "effects.friction": _Key(_friction_kinds,
-                             "where the tangential law acts (subset, may be empty)"),
-    "effects.rotation": _Key(_flag, "disks rotate (3 dof per disk) or not (2)"),
-    "effects.conventions": _Key(_effect_choice(CONVENTIONS, "conventions"),
-                                " | ".join(CONVENTIONS) + " (disk-disk lever arm and history "
-                                "increment, docs/physics.md)"),
-    "stability.matrix": _Key(_effect_choice(MATRICES, "stability matrix"), " | ".join(MATRICES)),
+    "name": _Key(SCENE_RULES["name"], "label"),
+    "disks.N": _Key(SCENE_RULES["N"], "number of disks"),
+    "disks.R": _Key(SCENE_RULES["R"], "disk radius", "[length]"),
+    "disks.m": _Key(SCENE_RULES["m"], "disk mass", "[mass]"),
+    "disks.inertia": _Key(SCENE_RULES["inertia"], "c in I = c m R^2 (0.5: uniform disk)"),
+    "disks.eps": _Key(SCENE_RULES["eps"], "pre-compression, L = 2 N R (1 - eps)"),
+    "contacts.k_n": _Key(SCENE_RULES["k_n"], "Hertz normal stiffness", STIFFNESS),
+    "contacts.k_t": _Key(SCENE_RULES["k_t"], "Mindlin tangential stiffness", STIFFNESS),
+    "contacts.mu": _Key(SCENE_RULES["mu"], "friction coefficient (0 turns friction off)"),
+    "load.F_y": _Key(SCENE_RULES["F_y"], "downward force on every disk", "[force]"),
+    "load.F_x": _Key(SCENE_RULES["F_x_range"], "quasistatic range [start, stop] of the force on "
+                                               "disk 1", "[force]"),
+    "effects.tangential": _Key(EFFECTS_RULES["tangential"], "tangential contact law"),
+    "effects.friction": _Key(FRICTION, "where the tangential law acts"),
+    "effects.rotation": _Key(EFFECTS_RULES["rotation"],
+                             "disks rotate (3 dof per disk) or not (2)"),
+    "effects.conventions": _Key(EFFECTS_RULES["conventions"], "disk-disk lever arm and history "
+                                                              "increment (docs/physics.md)"),
+    "stability.matrix": _Key(SCENE_RULES["matrix"], "stability matrix"),
 }
 TABLES = tuple(dict.fromkeys(key.partition(".")[0] for key in SCHEMA if "." in key))
+KEYS = {**_FIELDS, **_EFFECT_FIELDS}
+"""Scene or Effects field -> the dotted key that sets it (effects.friction sets two switches)."""
 
 
 # ---------------------------------------------------------------- Scene <-> dotted values
@@ -239,13 +146,10 @@ TABLES = tuple(dict.fromkeys(key.partition(".")[0] for key in SCHEMA if "." in k
 
 def _effect_values(effects: Effects) -> dict[str, Any]:
     """The [effects] keys of ``effects``."""
-    return {
-        "effects.tangential": effects.tangential,
-        "effects.friction": [kind for kind, switch in _FRICTION_SWITCHES.items()
-                             if getattr(effects, switch)],
-        "effects.rotation": effects.rotation,
-        "effects.conventions": effects.conventions,
-    }
+    values = {key: getattr(effects, field) for field, key in _EFFECT_FIELDS.items()}
+    values["effects.friction"] = [each for each, switch in _FRICTION_SWITCHES.items()
+                                  if getattr(effects, switch)]
+    return values
 
 
 def _values(scene: Scene) -> dict[str, Any]:
@@ -255,17 +159,23 @@ def _values(scene: Scene) -> dict[str, Any]:
     return {key: values[key] for key in SCHEMA}
 
 
-def _scene(values: dict[str, Any], source: str) -> Scene:
-    """The Scene holding the checked ``values`` of every dotted key."""
+def _scene(values: dict[str, Any], given: dict[str, Any], origin: str, source: str) -> Scene:
+    """The Scene holding the checked ``values`` of every dotted key, ``given`` those set by the
+    file ``origin``. Values its derived quantities cannot be made of (R = 1e308: I = c m R^2
+    overflows) raise SceneError naming the first of them that ``given`` sets."""
     friction = values["effects.friction"]
-    effects = Effects(
-        tangential=values["effects.tangential"],
-        rotation=values["effects.rotation"],
-        conventions=values["effects.conventions"],
-        **{switch: kind in friction for kind, switch in _FRICTION_SWITCHES.items()},
-    )
-    plain = {field: values[key] for field, key in _FIELDS.items()}
-    return Scene(**plain, effects=effects, source=source)
+    try:
+        effects = Effects(**{field: values[key] for field, key in _EFFECT_FIELDS.items()},
+                          **{switch: each in friction
+                             for each, switch in _FRICTION_SWITCHES.items()})
+        return Scene(**{field: values[key] for field, key in _FIELDS.items()}, effects=effects,
+                     source=source)
+    except SceneValueError as error:
+        keys = [KEYS[field] for field in error.fields]
+        key = next((each for each in given if each in keys), keys[0])
+        made_of = ", ".join(f"{each} = {_show(values[each])}" for each in keys)
+        what = error.what if len(keys) == 1 else f"{error.what}, from {made_of}"
+        raise SceneError(origin, key, what, values[key]) from None
 
 
 # ---------------------------------------------------------------- reading a file
@@ -311,22 +221,23 @@ def _entries(document: dict[str, Any], file: str) -> Iterator[tuple[str, Any]]:
         if name not in TABLES:
             yield _entry(file, "", name, value)
         elif not isinstance(value, dict):
-            raise SceneError(file, name, f"expected a table, not {_kind(value)}", value)
+            raise SceneError(file, name, f"expected a table, not {kind(value)}", value)
         else:
             yield from (_entry(file, name, inner, item) for inner, item in value.items())
 
 
 def _check(file: str, key: str, value: Any) -> Any:
-    """The Scene value of ``value`` at the known dotted ``key``; a bad value raises."""
+    """The Scene value of ``value`` at the known dotted ``key``, by the rule of the field it
+    sets; a bad value raises."""
     try:
-        return SCHEMA[key].check(value)
-    except _Invalid as invalid:
+        return SCHEMA[key].rule.check(value)
+    except Invalid as invalid:
         raise SceneError(file, key, invalid.what, value) from None
 
 
-def _checked(document: dict[str, Any], file: str) -> dict[str, Any]:
-    """The Scene value of every key set in ``document``; the first bad key raises."""
-    return {key: _check(file, key, value) for key, value in _entries(document, file)}
+def _checked(entries: Iterator[tuple[str, Any]], file: str) -> dict[str, Any]:
+    """The Scene value of every (dotted key, value) of ``entries``; the first bad key raises."""
+    return {key: _check(file, key, value) for key, value in entries}
 
 
 def load_scene(path: str | os.PathLike[str]) -> Scene:
@@ -334,7 +245,8 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
     to the file's stem, ``source`` is the path as given. Raises SceneError on any problem."""
     file = os.fspath(path)
     defaults = _values(replace(Scene(), name=Path(file).stem))
-    return _scene(defaults | _checked(_read_document(file), file), source=file)
+    given = _checked(_entries(_read_document(file), file), file)
+    return _scene(defaults | given, given, origin=file, source=file)
 
 
 def number_keys() -> dict[str, type]:
@@ -348,9 +260,9 @@ def with_values(scene: Scene, values: dict[str, Any], origin: str) -> Scene:
     """``scene`` with the dotted keys of ``values`` set, each checked by the schema as if a
     file ``origin`` held it. Raises SceneError, as load_scene does, for an unknown key or a
     value the key does not take (``disks.N = 2.5``: expected an integer)."""
-    entries = (_entry(origin, *key.rpartition(".")[::2], value) for key, value in values.items())
-    return _scene(_values(scene) | {key: _check(origin, key, value) for key, value in entries},
-                  source=scene.source)
+    given = _checked((_entry(origin, *key.rpartition(".")[::2], value)
+                      for key, value in values.items()), origin)
+    return _scene(_values(scene) | given, given, origin=origin, source=scene.source)
 
 
 def default_scene_path() -> Path:

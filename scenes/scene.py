@@ -1,34 +1,67 @@
 """The Scene: one frozen description of a disk chain, its loads and the effects simulated.
 
-Units are the scene's raw units (MODEL.md): lengths in units where the disk diameter is 2R,
-masses in units of m, stiffnesses k_n [force / length^(3/2)], forces [force].
+Units are the scene's raw units (docs/model.md, Units): lengths in units where the disk
+diameter is 2R, masses in units of m, stiffnesses k_n [force / length^(3/2)], forces
+[force]. Scene and Effects check every field with its rule (scenes/rules.py) when constructed,
+and a Scene checks that its derived quantities (L, I, delta_w0, tau) are finite: a bad value is a
+SceneValueError, one line naming the field and the value.
 """
 from __future__ import annotations
 
 import dataclasses
 import math
 from dataclasses import dataclass
+from typing import Any
 
-TANGENTIAL_LAWS = ("mindlin-smooth", "mindlin-linear", "none")
-NEGATIVE_LOAD = ("a negative load is the mirror image of a positive one (x -> -x, theta -> "
-                 "-theta, disk i -> disk 2 - i mod N), so use |F_x| (docs/physics.md)")
-"""Why F_x < 0 is refused, by the scene loader and by every command."""
-FRICTION_KINDS = ("disk-disk", "substrate")
-CONVENTIONS = ("model", "lammps")
-MATRICES = ("J", "M^-1 J")
+from diskfriction.scenes.rules import (CONVENTIONS, EFFECTS_RULES, FRICTION_KINDS, MATRICES,
+                                       NEGATIVE_LOAD, SCENE_RULES, TANGENTIAL_LAWS, Invalid,
+                                       normal_positive)
+
+__all__ = ["CONVENTIONS", "FRICTION_KINDS", "MATRICES", "NEGATIVE_LOAD", "TANGENTIAL_LAWS",
+           "Effects", "Scene", "SceneValueError"]
+
+
+class SceneValueError(ValueError):
+    """A Scene or Effects given a value it does not take, in one line: ``Scene.R: must be > 0
+    (got -1)``, or for a derived quantity ``Scene: I = c m R^2 = inf, not a finite normal number
+    (got inertia = 0.5, m = 1.0, R = 1e+308)``.
+
+    ``owner`` is "Scene" or "Effects"; ``fields`` the fields to blame (one, or those a derived
+    quantity is made of), ``values`` their values, ``what`` what is wrong.
+    """
+
+    def __init__(self, owner: str, fields: tuple[str, ...], values: tuple[Any, ...],
+                 what: str) -> None:
+        self.owner, self.fields, self.values, self.what = owner, fields, values, what
+        given = repr(values[0]) if len(fields) == 1 else ", ".join(
+            f"{field} = {value!r}" for field, value in zip(fields, values))
+        where = f"{owner}.{fields[0]}" if len(fields) == 1 else owner
+        super().__init__(f"{where}: {what} (got {given})")
+
+
+def _check_fields(instance: Any, rules: dict) -> None:
+    """Check every field of the frozen ``instance`` with its rule and store what the rule
+    returns (floats for numbers given as integers, a tuple for F_x_range)."""
+    owner = type(instance).__name__
+    for field, rule in rules.items():
+        value = getattr(instance, field)
+        try:
+            object.__setattr__(instance, field, rule.check(value))
+        except Invalid as invalid:
+            raise SceneValueError(owner, (field,), (value,), invalid.what) from None
 
 
 @dataclass(frozen=True)
 class Effects:
     """Which physics a scene simulates; the symbolic layer derives exactly these.
 
-    tangential      contact law for the tangential force (MODEL.md): "mindlin-smooth" (paper
+    tangential      contact law for the tangential force (docs/model.md#contacts): "mindlin-smooth" (paper
                     eq. 5), "mindlin-linear" (k_t delta^(1/2) xi, hard cap at mu F_n), "none".
     pair_friction   tangential force at disk-disk contacts.
     wall_friction   tangential force at disk-substrate contacts.
     rotation        disks rotate (3N degrees of freedom) or not (2N).
     conventions     how a disk-disk contact's torque and history increment are discretised
-                    (docs/physics.md, "Conventions"): "model" (MODEL.md: lever arm R, history
+                    (docs/physics.md, "Conventions"): "model" (docs/model.md#contacts: lever arm R, history
                     increment along the tangent at the middle of a step, a contact closing
                     during a step charges only the part after first contact) or "lammps"
                     (LAMMPS's granular package: lever arm R - delta/2, increment along the
@@ -40,6 +73,9 @@ class Effects:
     wall_friction: bool = True
     rotation: bool = True
     conventions: str = "model"
+
+    def __post_init__(self) -> None:
+        _check_fields(self, EFFECTS_RULES)
 
     @property
     def pair_law(self) -> str:
@@ -61,6 +97,18 @@ class Effects:
     @property
     def dof_per_disk(self) -> int:
         return 3 if self.rotation else 2
+
+
+DERIVED = (
+    ("L", "2 N R (1 - eps)", ("N", "R", "eps")),
+    ("I", "c m R^2", ("inertia", "m", "R")),
+    ("delta_w0", "(F_y / k_n)^(2/3)", ("F_y", "k_n")),
+    ("tau", "sqrt(m / (k_n (2R)^(1/2)))", ("m", "k_n", "R")),
+)
+"""The derived quantities a Scene checks at construction (name, formula, the fields it is made
+of): each must be a finite normal number (rules.normal_positive), so that neither it nor its
+reciprocal overflows to inf or underflows to 0 where the mass matrix, the stiffnesses and the
+time unit use it."""
 
 
 @dataclass(frozen=True)
@@ -85,6 +133,19 @@ class Scene:
     effects: Effects = Effects()
     name: str = "paper"
     source: str = "<defaults>"
+
+    def __post_init__(self) -> None:
+        _check_fields(self, SCENE_RULES)
+        if not isinstance(self.effects, Effects):
+            raise SceneValueError("Scene", ("effects",), (self.effects,), "expected an Effects")
+        for name, formula, fields in DERIVED:
+            try:
+                value = getattr(self, name)
+            except OverflowError:
+                value = math.inf
+            if not normal_positive(value):
+                raise SceneValueError("Scene", fields, tuple(getattr(self, f) for f in fields),
+                                      f"{name} = {formula} = {value!r}, not a finite normal number")
 
     @property
     def L(self) -> float:

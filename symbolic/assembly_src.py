@@ -8,7 +8,7 @@
 # Every function uses error_model="numpy" (no zero-division checks: a fifth of a dynamics step
 # at N = 10): each division is by a quantity kept positive (2R + rho, delta > 0, k_t).
 #
-# Layout (MODEL.md): q = (x_1..x_N, y_1..y_N[, theta_1..theta_N]); dof (c, i) -> c * N + i.
+# Layout (docs/model.md#history): q = (x_1..x_N, y_1..y_N[, theta_1..theta_N]); dof (c, i) -> c * N + i.
 # History xi has 2N entries: pairs k = 0..N-1 (disk k with disk k+1, the last one with disk 0
 # across the periodic boundary), then substrate contacts k = 0..N-1. Entries of a frictionless
 # contact kind stay 0. params = (R, k_n, k_t, mu, F_y, L).
@@ -199,7 +199,7 @@ def history_increment(q0, q1, params, dxi):
 
 @numba.njit(cache=True, error_model="numpy")
 def commit_history(xi0, dxi, delta0, delta1, params, cap, xi1, slid):
-    """MODEL.md's history rule for one step with increment dxi, into xi1 [length].
+    """docs/model.md's history rule for one step with increment dxi, into xi1 [length].
 
     Open at the end (delta1 <= 0): xi1 = 0. Closed during the step (delta0 <= 0 < delta1): the
     contact starts from zero at first contact ("t = 0 upon first contact", paper) and charges the

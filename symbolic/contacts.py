@@ -3,7 +3,7 @@
 Disk-disk pair (i, j): inputs dx, dy = r_i - r_j (image already applied) and the history xi.
     rho = |r_ij|, n = r_ij / rho, s = (-n_y, n_x), delta = 2R - rho.
     Force on i: F_n n + F_t s, on j the opposite; torques T_i = T_j = -a F_t with the lever arm
-    a = R (conventions "model", MODEL.md) or a = R - delta/2, the distance from each centre to
+    a = R (conventions "model", docs/model.md#contacts) or a = R - delta/2, the distance from each centre to
     the middle of the overlap (conventions "lammps", LAMMPS's granular package).
     History increment: d xi = s . d r_ij - R (d theta_i + d theta_j).
 Disk-substrate (i): inputs y_i and xi.  delta = R - y_i.
@@ -11,7 +11,7 @@ Disk-substrate (i): inputs y_i and xi.  delta = R - y_i.
 
 For each kernel we derive, symbolically, the generalized force vector f over the contact's local
 degrees of freedom (x_i, y_i[, theta_i][, x_j, y_j, theta_j]), the increment coefficients w with
-d xi = w . dq, and the total stiffness block J = -(df/dq + df/dxi w^T) (MODEL.md: the history
+d xi = w . dq, and the total stiffness block J = -(df/dq + df/dxi w^T) (docs/model.md#stability: the history
 follows q). rho and delta are carried as symbols with explicit chain rules
 d rho / d dx = dx / rho, d delta / d dx = -dx / rho, so that powers of delta stay symbolic and
 combine (see laws.py).

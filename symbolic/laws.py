@@ -1,6 +1,6 @@
 """Contact laws in the contact frame: normal force F_n(delta) and tangential force F_t(delta, xi).
 
-All expressions are sympy, in raw units (MODEL.md): delta [length] overlap, xi [length] tangential
+All expressions are sympy, in raw units (docs/model.md#units): delta [length] overlap, xi [length] tangential
 history, k_n [force / length^(3/2)], k_t [force / length^(3/2)], mu [1]. Signs: F_n > 0 pushes the
 bodies apart; F_t is the component along the contact tangent s acting on the first body.
 

@@ -1,6 +1,6 @@
 """The disk chain of a scene, evaluated through its generated kernels, for any N.
 
-State (MODEL.md): q = (x_1..x_N, y_1..y_N[, theta_1..theta_N]) [length, rad] and the history
+State (docs/model.md#history): q = (x_1..x_N, y_1..y_N[, theta_1..theta_N]) [length, rad] and the history
 xi = (xi_pair_1..xi_pair_N, xi_wall_1..xi_wall_N) [length]; pair k joins disk k and disk k+1,
 pair N joins disk N and disk 1 across the periodic boundary (ring length L).
 """
@@ -46,7 +46,7 @@ class System:
 
     def rest_state(self) -> tuple[np.ndarray, np.ndarray]:
         """The analytic F_x = 0 equilibrium: equal spacing L / N, every disk sunk by
-        delta_w = (F_y / k_n)^(2/3) into the substrate, all xi = 0 (MODEL.md)."""
+        delta_w = (F_y / k_n)^(2/3) into the substrate, all xi = 0 (docs/model.md#history)."""
         s, N = self.scene, self.scene.N
         q = np.zeros(self.ndof)
         q[:N] = (np.arange(N) + 0.5) * (s.L / N)
@@ -100,7 +100,7 @@ class System:
         """xi after the straight step q0 -> q1 (commit_history: midpoint increment, contacts
         opening reset, contacts closing charge only after first contact, and with `cap` the
         Coulomb cap |xi| <= t*). Returns (xi1, slid), slid[c] True where the cap acted.
-        cap=False gives the trial history of a quasistatic step before the cap (MODEL.md)."""
+        cap=False gives the trial history of a quasistatic step before the cap (docs/model.md#history)."""
         dxi = np.empty_like(xi0)
         self.kernels.history_increment(q0, q1, self.params, dxi)
         xi1 = np.empty_like(xi0)

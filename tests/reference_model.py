@@ -1,8 +1,8 @@
-"""An independent, plain transcription of MODEL.md in mpmath, for high-precision references.
+"""An independent, plain transcription of docs/model.md in mpmath, for high-precision references.
 
 Nothing here shares code with symbolic/: forces are written straight from the equations, and
 the total stiffness is obtained by central finite differences in 50-digit arithmetic with the
-history following q along each step (midpoint rule, MODEL.md's increments).
+history following q along each step (midpoint rule, docs/model.md's increments).
 
 conventions "lammps" (docs/physics.md): the disk-disk torque lever arm is R - delta/2 and a
 step's pair increment takes the tangent at the end of the step.
@@ -102,7 +102,7 @@ def forces(m: Ref, q, xi, F_x, contacts=None):
 
 
 def increment(m: Ref, q0, q1):
-    """Delta xi along q0 -> q1 by the midpoint rule of MODEL.md's increments (the pair tangent
+    """Delta xi along q0 -> q1 by the midpoint rule of docs/model.md's increments (the pair tangent
     at q1 with conventions "lammps")."""
     N = m.N
     qm = list(q1) if m.conventions == "lammps" else [(a + b) / 2 for a, b in zip(q0, q1)]

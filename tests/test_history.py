@@ -1,4 +1,4 @@
-"""The history rule of one step: MODEL.md's increments (midpoint), reset, first contact, cap."""
+"""The history rule of one step: docs/model.md's increments (midpoint), reset, first contact, cap."""
 from __future__ import annotations
 
 import mpmath as mp
@@ -26,7 +26,7 @@ def test_increment_matches_reference_midpoint_rule(effects):
 
 
 def test_rolling_without_slip_does_not_charge_the_substrate():
-    """dx = -R dtheta: xi_w = dx + R dtheta = 0 (theta counter-clockwise, MODEL.md)."""
+    """dx = -R dtheta: xi_w = dx + R dtheta = 0 (theta counter-clockwise, docs/model.md#contacts)."""
     s = System.from_scene(Scene())
     q0, xi0 = s.rest_state()
     q1 = q0.copy()

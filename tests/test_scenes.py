@@ -8,11 +8,13 @@ import sys
 import tomllib
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from diskfriction.cli.main import main
-from diskfriction.scenes.load import SceneError, default_scene_path, format_scene, load_scene
-from diskfriction.scenes.scene import Effects, Scene
+from diskfriction.scenes.load import (KEYS, SCHEMA, SceneError, default_scene_path, format_scene,
+                                      load_scene)
+from diskfriction.scenes.scene import Effects, Scene, SceneValueError
 
 REPO = Path(__file__).resolve().parents[1]
 MISSING, DIRECTORY = object(), object()  # bad-scene contents that are not file text
@@ -125,60 +127,72 @@ def test_format_scene_shows_that_mu_zero_turns_friction_off():
 
 # ---------------------------------------------------------------- bad scenes
 
+BAD_VALUES = [
+    # id, dotted key, TOML value, expected fragment of the message
+    ("name-not-string", "name", "3", "expected a string"),
+    ("bool-as-number", "disks.R", "true", "not a boolean"),
+    ("string-as-number", "contacts.k_n", '"2000"', "not a string"),
+    ("float-N", "disks.N", "10.0", "expected an integer"),
+    ("bool-N", "disks.N", "true", "expected an integer"),
+    ("huge-N", "disks.N", "9223372036854775808", "64-bit"),
+    ("inf", "load.F_y", "inf", "finite"),
+    ("nan", "contacts.mu", "nan", "finite"),
+    ("N-below-2", "disks.N", "1", ">= 2"),
+    ("R-zero", "disks.R", "0", "> 0"),
+    ("R-negative", "disks.R", "-0.5", "> 0"),
+    ("m-zero", "disks.m", "0.0", "> 0"),
+    ("inertia-zero", "disks.inertia", "0", "> 0"),
+    ("k_n-zero", "contacts.k_n", "0", "> 0"),
+    ("k_t-negative", "contacts.k_t", "-1.0", "> 0"),
+    ("mu-negative", "contacts.mu", "-0.1", ">= 0"),
+    ("F_y-zero", "load.F_y", "0", "> 0"),
+    ("eps-negative", "disks.eps", "-0.01", "[0, 0.1)"),
+    ("eps-too-large", "disks.eps", "0.1", "[0, 0.1)"),
+    ("F_x-empty", "load.F_x", "[0.1, 0.1]", "empty range"),
+    ("F_x-negative", "load.F_x", "[-0.1, 0.1]", "mirror image"),
+    ("F_x-reversed", "load.F_x", "[0.12, 0.0]", "reversed range"),
+    ("F_x-three", "load.F_x", "[0.0, 0.1, 0.2]", "exactly two"),
+    ("F_x-number", "load.F_x", "0.12", "expected an array"),
+    ("F_x-string-entry", "load.F_x", '["0", 0.1]', "expected a number"),
+    ("F_x-inf-entry", "load.F_x", "[0.0, inf]", "finite"),
+    ("tangential-unknown", "effects.tangential", '"coulomb"', "unknown effect"),
+    ("tangential-number", "effects.tangential", "1", "expected a string"),
+    ("friction-unknown", "effects.friction", '["wall"]', "unknown effect"),
+    ("friction-duplicated", "effects.friction", '["substrate", "substrate"]', "duplicated"),
+    ("friction-not-strings", "effects.friction", "[1]", "array of strings"),
+    ("friction-string", "effects.friction", '"substrate"', "expected an array"),
+    ("rotation-string", "effects.rotation", '"yes"', "expected a boolean"),
+    ("rotation-int", "effects.rotation", "1", "expected a boolean"),
+    ("matrix-unknown", "stability.matrix", '"M"', "unknown effect"),
+    ("conventions-unknown", "effects.conventions", '"LAMMPS"',
+     "conventions must be one of model | lammps"),
+    ("conventions-bool", "effects.conventions", "true", "expected a string"),
+    # values each fine alone whose derived quantities are not finite normal numbers
+    ("R-overflows-L", "disks.R", "1e308", "L = 2 N R (1 - eps) = inf"),
+    ("R-overflows-I", "disks.R", "1e200", "I = c m R^2 = inf"),
+    ("R-underflows-I", "disks.R", "1e-200", "I = c m R^2 = 0.0"),
+]
+
+
+def toml_line(key: str, literal: str) -> str:
+    """A scene file setting the dotted ``key`` to the TOML ``literal``."""
+    table, _, name = key.rpartition(".")
+    return (f"[{table}]\n" if table else "") + f"{name} = {literal}\n"
+
+
 BAD_SCENES = [
     # id, file content, expected key, expected fragment of the message
+    *((case, toml_line(key, literal), key, fragment)
+      for case, key, literal, fragment in BAD_VALUES),
     ("unknown-key", "[disks]\nradius = 0.5\n", "disks.radius", "unknown key"),
     ("unknown-top-key", 'colour = "red"\n', "colour", "unknown key"),
     ("unknown-table", "[disk]\nN = 10\n", "disk", "unknown table"),
     ("unknown-subtable", "[disks.extra]\nN = 10\n", "disks.extra", "unknown table"),
     ("quoted-dotted-key", '"disks.N" = 3\n', "disks.N", "unknown key"),
     ("table-not-a-table", "disks = 3\n", "disks", "expected a table"),
-    ("name-not-string", "name = 3\n", "name", "expected a string"),
-    ("bool-as-number", "[disks]\nR = true\n", "disks.R", "not a boolean"),
-    ("string-as-number", '[contacts]\nk_n = "2000"\n', "contacts.k_n", "not a string"),
-    ("float-N", "[disks]\nN = 10.0\n", "disks.N", "expected an integer"),
-    ("bool-N", "[disks]\nN = true\n", "disks.N", "expected an integer"),
-    ("huge-N", "[disks]\nN = 99999999999999999999\n", "disks.N", "64-bit"),
-    ("inf", "[load]\nF_y = inf\n", "load.F_y", "finite"),
-    ("nan", "[contacts]\nmu = nan\n", "contacts.mu", "finite"),
-    ("N-below-2", "[disks]\nN = 1\n", "disks.N", ">= 2"),
-    ("R-zero", "[disks]\nR = 0\n", "disks.R", "> 0"),
-    ("R-negative", "[disks]\nR = -0.5\n", "disks.R", "> 0"),
-    ("m-zero", "[disks]\nm = 0.0\n", "disks.m", "> 0"),
-    ("inertia-zero", "[disks]\ninertia = 0\n", "disks.inertia", "> 0"),
-    ("k_n-zero", "[contacts]\nk_n = 0\n", "contacts.k_n", "> 0"),
-    ("k_t-negative", "[contacts]\nk_t = -1.0\n", "contacts.k_t", "> 0"),
-    ("mu-negative", "[contacts]\nmu = -0.1\n", "contacts.mu", ">= 0"),
-    ("F_y-zero", "[load]\nF_y = 0\n", "load.F_y", "> 0"),
-    ("eps-negative", "[disks]\neps = -0.01\n", "disks.eps", "[0, 0.1)"),
-    ("eps-too-large", "[disks]\neps = 0.1\n", "disks.eps", "[0, 0.1)"),
-    ("F_x-empty", "[load]\nF_x = [0.1, 0.1]\n", "load.F_x", "empty range"),
-    ("F_x-negative", "[load]\nF_x = [-0.1, 0.1]\n", "load.F_x", "mirror image"),
-    ("F_x-reversed", "[load]\nF_x = [0.12, 0.0]\n", "load.F_x", "reversed range"),
-    ("F_x-three", "[load]\nF_x = [0.0, 0.1, 0.2]\n", "load.F_x", "exactly two"),
-    ("F_x-number", "[load]\nF_x = 0.12\n", "load.F_x", "expected an array"),
-    ("F_x-string-entry", '[load]\nF_x = ["0", 0.1]\n', "load.F_x", "expected a number"),
-    ("F_x-inf-entry", "[load]\nF_x = [0.0, inf]\n", "load.F_x", "finite"),
-    ("tangential-unknown", '[effects]\ntangential = "coulomb"\n', "effects.tangential",
-     "unknown effect"),
-    ("tangential-number", "[effects]\ntangential = 1\n", "effects.tangential",
-     "expected a string"),
-    ("friction-unknown", '[effects]\nfriction = ["wall"]\n', "effects.friction",
-     "unknown effect"),
-    ("friction-duplicated", '[effects]\nfriction = ["substrate", "substrate"]\n',
-     "effects.friction", "duplicated"),
-    ("friction-not-strings", "[effects]\nfriction = [1]\n", "effects.friction",
-     "array of strings"),
-    ("friction-string", '[effects]\nfriction = "substrate"\n', "effects.friction",
-     "expected an array"),
-    ("rotation-string", '[effects]\nrotation = "yes"\n', "effects.rotation",
-     "expected a boolean"),
-    ("rotation-int", "[effects]\nrotation = 1\n", "effects.rotation", "expected a boolean"),
-    ("matrix-unknown", '[stability]\nmatrix = "M"\n', "stability.matrix", "unknown effect"),
-    ("conventions-unknown", '[effects]\nconventions = "LAMMPS"\n', "effects.conventions",
-     "conventions must be one of model | lammps"),
-    ("conventions-bool", "[effects]\nconventions = true\n", "effects.conventions",
-     "expected a string"),
+    ("derived-from-two-keys", "[disks]\nm = 1e300\n[contacts]\nk_n = 1e-300\n", "disks.m",
+     "tau = sqrt(m / (k_n (2R)^(1/2))) = inf, not a finite normal number, from disks.m = "
+     "1e+300, contacts.k_n = 1e-300, disks.R = 0.5"),
     ("malformed-toml", "[disks\nN = 10\n", "<file>", "line 1"),
     ("missing-file", MISSING, "<file>", "cannot read"),
     ("directory", DIRECTORY, "<file>", "cannot read"),
@@ -214,6 +228,67 @@ def test_bad_scene_on_the_command_line_is_one_line_and_exit_2(bad_scene):
     assert result.stderr.startswith(f"scene error: {path}: {key}: ")
     assert fragment in result.stderr
     assert "Traceback" not in result.stdout + result.stderr
+
+
+def test_every_schema_key_has_bad_values():
+    assert {key for _, key, _, _ in BAD_VALUES} == set(SCHEMA)
+
+
+@pytest.mark.parametrize(("key", "literal", "fragment"), [case[1:] for case in BAD_VALUES
+                                                           if case[1] != "effects.friction"],
+                         ids=[case[0] for case in BAD_VALUES if case[1] != "effects.friction"])
+def test_bad_value_is_refused_by_the_dataclass_itself(key, literal, fragment):
+    """The value a file gives, given to Scene or Effects directly: one line naming the field
+    and the value (effects.friction is a file's spelling of two switches, tested below)."""
+    value = tomllib.loads(f"x = {literal}")["x"]
+    field = next(field for field, each in KEYS.items() if each == key)
+    owner = Effects if key.startswith("effects.") else Scene
+    with pytest.raises(SceneValueError) as raised:
+        owner(**{field: value})
+    message = str(raised.value)
+    assert "\n" not in message and fragment in message and repr(value) in message
+    assert field in raised.value.fields
+    if len(raised.value.fields) == 1:
+        assert message.startswith(f"{owner.__name__}.{field}: ")
+    with pytest.raises(SceneValueError):  # a changed copy is checked as a new one
+        dataclasses.replace(owner(), **{field: value})
+
+
+@pytest.mark.parametrize("switch", ["pair_friction", "wall_friction"])
+def test_friction_switches_are_booleans(switch):
+    with pytest.raises(SceneValueError, match=f"^Effects.{switch}: expected a boolean"):
+        Effects(**{switch: "yes"})
+
+
+@pytest.mark.parametrize(("fields", "fragment"), [
+    (dict(m=1e300, k_n=1e-300), "tau = sqrt(m / (k_n (2R)^(1/2))) = inf"),
+    (dict(F_y=1e-320, k_n=1e10), "delta_w0 = (F_y / k_n)^(2/3) = 0.0"),
+    (dict(N=2**62, R=1e300), "L = 2 N R (1 - eps) = inf"),
+])
+def test_derived_quantities_that_are_not_finite_normal_numbers_are_refused(fields, fragment):
+    with pytest.raises(SceneValueError) as raised:
+        Scene(**fields)
+    assert str(raised.value).startswith(f"Scene: {fragment}, not a finite normal number (got ")
+    assert set(fields) <= set(raised.value.fields)
+
+
+def test_scene_stores_numbers_as_floats_and_N_as_an_int():
+    scene = Scene(N=np.int64(5), R=1, F_x_range=[0, 1])
+    assert type(scene.N) is int and type(scene.R) is float
+    assert scene.F_x_range == (0.0, 1.0) and type(scene.F_x_range) is tuple
+    assert scene == Scene(N=5, R=1.0, F_x_range=(0.0, 1.0))
+
+
+def test_effects_must_be_an_effects():
+    with pytest.raises(SceneValueError, match="^Scene.effects: expected an Effects"):
+        Scene(effects="mindlin-smooth")
+
+
+def test_paper_scene_file_holds_what_the_scene_command_prints_for_it():
+    """scenes/paper.toml's keys, values and comments (the rules' bounds) are format_scene's."""
+    printed = format_scene(load_scene(default_scene_path()))
+    keys = printed[printed.index("\n") + 1:printed.index("\n# derived")]
+    assert default_scene_path().read_text(encoding="utf-8").endswith(keys)
 
 
 def test_scene_error_message_format(tmp_path):

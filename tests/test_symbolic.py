@@ -1,7 +1,7 @@
-"""Generated kernels against the independent mpmath transcription of MODEL.md.
+"""Generated kernels against the independent mpmath transcription of docs/model.md.
 
 Stiffness reference (jacobian_check.py): central differences of the reference forces in 50-digit
-arithmetic, with the history following q by MODEL.md's increments (midpoint rule). Step h = 1e-8 min(delta) over
+arithmetic, with the history following q by docs/model.md's increments (midpoint rule). Step h = 1e-8 min(delta) over
 the active contacts: it keeps every contact's open/closed state and stays in the analytic
 region of each law (truncation error ~ (h / delta)^2 ~ 1e-16, and ~ h / t* ~ 3e-10 at the
 xi = 0 kink of xi |xi|), while 50 digits make the rounding error (1e-50 / h) irrelevant.
@@ -79,14 +79,14 @@ def test_frictionless_jacobian_is_symmetric_and_force_is_minus_gradient(rotation
 
 @pytest.mark.parametrize("eps", [0.0, 1e-3, 1e-5])
 def test_rest_state_is_an_equilibrium(eps):
-    """MODEL.md: the analytic F_x = 0 state (also pre-compressed, eps > 0) has |F| <= 1e-12."""
+    """docs/model.md#history: the analytic F_x = 0 state (also pre-compressed, eps > 0) has |F| <= 1e-12."""
     system = System.from_scene(Scene(eps=eps))
     q, xi = system.rest_state()
     assert np.abs(system.forces(q, xi, 0.0)).max() <= 1e-12
 
 
 def test_rest_state_y_modes_sit_at_hertz_stiffness():
-    """MODEL.md, eps = 0: N eigenvalues of J at lambda = 1.5 k_n delta_w^(1/2) = 110.52."""
+    """docs/model.md#units, eps = 0: N eigenvalues of J at lambda = 1.5 k_n delta_w^(1/2) = 110.52."""
     system = System.from_scene(Scene())
     q, xi = system.rest_state()
     lam_y = 1.5 * system.scene.k_n * np.sqrt(system.scene.delta_w0)

@@ -1,0 +1,175 @@
+"""The rules a scene's values obey: one Rule per field of Scene and Effects, the only place a
+bound is written.
+
+Scene and Effects check every field with its rule when constructed (scenes/scene.py); the scene
+loader checks each key of a file with the rule of the field it sets and states the rule's bound
+in the comments it writes (scenes/load.py). A rule takes the value as a TOML file or a caller
+gives it (a boolean is never a number, an integer is a number) and returns the value stored
+(numbers as float, N as int, F_x as a tuple), or raises Invalid saying what is wrong.
+"""
+from __future__ import annotations
+
+import datetime
+import math
+import numbers
+from dataclasses import dataclass
+from typing import Any, Callable
+
+TANGENTIAL_LAWS = ("mindlin-smooth", "mindlin-linear", "none")
+FRICTION_KINDS = ("disk-disk", "substrate")
+CONVENTIONS = ("model", "lammps")
+MATRICES = ("J", "M^-1 J")
+NEGATIVE_LOAD = ("a negative load is the mirror image of a positive one (x -> -x, theta -> "
+                 "-theta, disk i -> disk 2 - i mod N), so use |F_x| (docs/physics.md)")
+"""Why F_x < 0 is refused, by the scene loader and by every command."""
+INT64 = (-(2**63), 2**63 - 1)
+"""The integers TOML can write; N beyond them is refused from a caller too."""
+
+
+class Invalid(ValueError):
+    """A value breaking a rule; ``what`` says which. Whoever checks adds the field or key."""
+
+    def __init__(self, what: str) -> None:
+        super().__init__(what)
+        self.what = what
+
+
+@dataclass(frozen=True)
+class Rule:
+    """The values one field takes.
+
+    check   value -> the value stored; raises Invalid for a value the field does not take.
+    bound   the rule in words, as comments state it ("> 0", "in [0, 0.1)"); "" for a plain kind.
+    """
+
+    check: Callable[[Any], Any]
+    bound: str
+
+
+def kind(value: Any) -> str:
+    """The kind of a value, as TOML names it, for "expected X, not Y" messages."""
+    kinds = ((bool, "a boolean"), (numbers.Integral, "an integer"), (numbers.Real, "a float"),
+             (str, "a string"), ((list, tuple), "an array"), (dict, "a table"),
+             ((datetime.date, datetime.time), "a date/time"))
+    return next((name for cls, name in kinds if isinstance(value, cls)), type(value).__name__)
+
+
+def expect(value: Any, cls: type | tuple[type, ...], expected: str) -> Any:
+    """``value`` if it is an instance of ``cls`` (a boolean only if ``cls`` is bool), else
+    Invalid; an integer beyond TOML's 64 bits is Invalid too."""
+    is_bool = isinstance(value, bool)
+    if not isinstance(value, cls) or (is_bool and cls is not bool):
+        raise Invalid(f"expected {expected}, not {kind(value)}")
+    if isinstance(value, numbers.Integral) and not is_bool and not INT64[0] <= value <= INT64[1]:
+        raise Invalid("integer outside TOML's 64-bit range")
+    return value
+
+
+def number(value: Any) -> float:
+    """A finite float from an integer or a float; never a boolean or a string."""
+    real = float(expect(value, numbers.Real, "a number"))
+    if not math.isfinite(real):
+        raise Invalid("must be a finite number")
+    return real
+
+
+def _number_rule(holds: Callable[[float], bool], bound: str) -> Rule:
+    """A finite number for which ``holds``: "must be BOUND" otherwise."""
+
+    def check(value: Any) -> float:
+        real = number(value)
+        if not holds(real):
+            raise Invalid(f"must be {bound}")
+        return real
+
+    return Rule(check, bound)
+
+
+def _count(value: Any) -> int:
+    """N: an integer (not a boolean or a float) of at least 2."""
+    count = int(expect(value, numbers.Integral, "an integer"))
+    if count < 2:
+        raise Invalid("must be >= 2")
+    return count
+
+
+def _load_range(value: Any) -> tuple[float, float]:
+    """F_x: an array [start, stop] of two finite numbers with 0 <= start < stop (NEGATIVE_LOAD
+    says why not below 0)."""
+    if len(expect(value, (list, tuple), "an array [start, stop]")) != 2:
+        raise Invalid(f"expected exactly two numbers [start, stop], not {len(value)}")
+    start, stop = map(number, value)
+    if start < 0:
+        raise Invalid(f"must be >= 0: {NEGATIVE_LOAD}")
+    if start == stop:
+        raise Invalid("empty range: start == stop")
+    if start > stop:
+        raise Invalid("reversed range: start > stop")
+    return (start, stop)
+
+
+def _one_of(options: tuple[str, ...], effect: str) -> Rule:
+    """A string naming one of ``options``; anything else is an unknown effect."""
+
+    def check(value: Any) -> str:
+        if expect(value, str, "a string") not in options:
+            raise Invalid(f"unknown effect: {effect} must be one of {' | '.join(options)}")
+        return value
+
+    return Rule(check, " | ".join(options))
+
+
+TEXT = Rule(lambda value: expect(value, str, "a string"), "")
+FLAG = Rule(lambda value: expect(value, bool, "a boolean (true or false)"), "")
+POSITIVE = _number_rule(lambda x: x > 0.0, "> 0")
+
+SCENE_RULES: dict[str, Rule] = {
+    "N": Rule(_count, "an integer >= 2"),
+    "R": POSITIVE,
+    "m": POSITIVE,
+    "inertia": POSITIVE,
+    "eps": _number_rule(lambda x: 0.0 <= x < 0.1, "in [0, 0.1)"),
+    "k_n": POSITIVE,
+    "k_t": POSITIVE,
+    "mu": _number_rule(lambda x: x >= 0.0, ">= 0"),
+    "F_y": POSITIVE,
+    "F_x_range": Rule(_load_range, "0 <= start < stop"),
+    "matrix": _one_of(MATRICES, "stability matrix"),
+    "name": TEXT,
+    "source": TEXT,
+}
+"""Scene field -> its rule (``effects`` is an Effects, which checks its own fields)."""
+
+EFFECTS_RULES: dict[str, Rule] = {
+    "tangential": _one_of(TANGENTIAL_LAWS, "tangential law"),
+    "pair_friction": FLAG,
+    "wall_friction": FLAG,
+    "rotation": FLAG,
+    "conventions": _one_of(CONVENTIONS, "conventions"),
+}
+"""Effects field -> its rule."""
+
+
+def friction_kinds(value: Any) -> tuple[str, ...]:
+    """A scene file's effects.friction: an array of distinct strings from FRICTION_KINDS (may be
+    empty), each turning on one of Effects' switches pair_friction and wall_friction."""
+    kinds = expect(value, list, "an array of strings")
+    if not all(isinstance(each, str) for each in kinds):
+        raise Invalid("expected an array of strings")
+    unknown = [each for each in kinds if each not in FRICTION_KINDS]
+    if unknown:
+        raise Invalid(f"unknown effect: friction kind {unknown[0]!r}, "
+                      f"expected a subset of {', '.join(FRICTION_KINDS)}")
+    if len(set(kinds)) != len(kinds):
+        raise Invalid("duplicated friction kind")
+    return tuple(kinds)
+
+
+FRICTION = Rule(friction_kinds, "a subset of " + ", ".join(FRICTION_KINDS) + ", may be empty")
+
+
+def normal_positive(value: float) -> bool:
+    """Whether ``value`` is a finite number no smaller than the smallest normal double: one
+    whose powers and reciprocal a derived quantity may take without overflowing to inf or
+    underflowing to 0."""
+    return math.isfinite(value) and value >= 2.2250738585072014e-308
