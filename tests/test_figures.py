@@ -1,0 +1,105 @@
+"""The figures: what is drawn matches the data and the legend (issue 23 items 2, 9, 15)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+
+@pytest.fixture
+def axes():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (top, bottom) = plt.subplots(2, 1)
+    yield top, bottom
+    plt.close(fig)
+
+
+def windowed_spectrum():
+    """A windowed branch as branch.npz holds it: column 0 and 1 a pair with Im up to 6.9e-4
+    between the collisions at 0.3 and 0.7, column 2 real, column 3 nan (outside the window and
+    its guard bands) but for three points, column 4 nan throughout."""
+    F = np.linspace(0.0, 1.0, 21)
+    im = np.where((F > 0.3) & (F < 0.7), 6.9e-4 * np.sin(np.pi * (F - 0.3) / 0.4), 0.0)
+    re = 0.06 + 0.01 * F
+    known = np.where(F < 0.15, 0.051 + 0j, np.nan)
+    lam = np.column_stack([re + 1j * im, re - 1j * im, np.full(F.size, 0.055 + 0j), known,
+                           np.full(F.size, np.nan + 0j)])
+    return F, lam, [(0.3, "birth", 0.063), (0.7, "death", 0.067)]
+
+
+def test_windowed_diagram_draws_the_pairs_and_scales_im_to_them(axes):
+    """Item 2: nan columns must not hide the pairs; the Im axis fits their largest Im."""
+    from matplotlib.collections import LineCollection
+
+    from diskfriction.reports.bifurcation import draw_spectrum
+
+    top, bottom = axes
+    F, lam, collisions = windowed_spectrum()
+    draw_spectrum(top, bottom, F, lam, np.ones(F.size, int), np.zeros(F.size, int), collisions,
+                  "J", re_axis="linear")
+    (pair,) = [c for c in top.collections if isinstance(c, LineCollection)]
+    drawn = np.vstack(pair.get_segments())
+    assert np.nanmax(drawn[:, 1]) == pytest.approx(lam.imag.max())
+    low, high = top.get_ylim()
+    assert low <= 0.0 and lam.imag.max() <= high <= 1.2 * lam.imag.max()
+
+
+def test_nan_entries_do_not_change_which_eigenvalues_are_complex():
+    from diskfriction.reports.analysis import eigen_status_rows, max_imag
+
+    _, lam, _ = windowed_spectrum()
+    status = eigen_status_rows(lam)
+    assert (status[:, 0] == 1).sum() == (lam.imag[:, 0] > 1e-12).sum() > 0
+    assert (status[:, 2:] == 0).all()
+    assert max_imag(lam).max() == pytest.approx(lam.imag.max())
+
+
+def test_legend_line_entries_are_the_drawn_line_kinds(axes):
+    """Item 9: each legend line shows colours and the style of lines actually drawn (no black
+    "loading" line where every line is coloured)."""
+    from matplotlib.collections import LineCollection
+    from matplotlib.colors import to_hex
+
+    from diskfriction.reports.bifurcation import draw_spectrum
+
+    top, bottom = axes
+    F, lam, collisions = windowed_spectrum()
+    handles = draw_spectrum(top, bottom, F, lam, np.ones(F.size, int), np.zeros(F.size, int), collisions, "J")
+    drawn = {(to_hex(c, keep_alpha=True), "solid") for ax in (top, bottom)
+             for coll in ax.collections if isinstance(coll, LineCollection)
+             for c in coll.get_colors()}
+    keys = [h for h in handles if isinstance(h, tuple)]
+    assert keys, "the line kinds are keyed"
+    for key in keys:
+        for line in key:
+            assert (to_hex(line.get_color(), keep_alpha=True), "solid") in drawn
+            assert line.get_linestyle() == "-"
+    assert all(to_hex(line.get_color()) != "#000000" for key in keys for line in key)
+
+
+@pytest.mark.parametrize("values, scale", [
+    (np.array([1e-5, 3e-4, 0.1, 0.16, 0.0, 1e-12]), "log"),  # the paper's J: decades, >= 0
+    (np.array([-2e-8, -1e-4, -0.08]), "-log"),
+    (np.array([3.3, 0.7, -0.7, -2.3]), "linear"),  # Ziegler: both signs
+    (np.array([0.055, 0.08, np.nan]), "linear"),  # a window: under two decades
+])
+def test_the_re_axis_scale_follows_the_data(values, scale):
+    from diskfriction.reports.figures import re_scale
+
+    assert re_scale(values) == scale
+
+
+def test_the_re_panel_is_never_symlog(axes):
+    """Item 9: a symlog axis bends every line where its linear core meets its log part."""
+    from diskfriction.reports.bifurcation import draw_spectrum
+
+    top, bottom = axes
+    F = np.linspace(0.0, 0.12, 13)
+    lam = np.column_stack([1e-5 + F * 5e-3 + 0j, 0.05 + F + 0j])
+    draw_spectrum(top, bottom, F, lam, np.ones(F.size, int), np.zeros(F.size, int), [], "J")
+    assert bottom.get_yscale() == "log"
+    low, high = bottom.get_ylim()
+    assert low <= lam.real.min() and high >= lam.real.max()
