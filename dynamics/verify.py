@@ -53,17 +53,20 @@ def window_run(system: System, window: Window, index: int, t_end: float, amplitu
 
 
 def verify_windows(scene: Scene, matrix: str, t_end: float, amplitude: float,
-                   progress: Optional[Callable[[str, Optional[float]], None]] = None) -> list[dict]:
-    """One row per window (window_run). progress(stage, fraction or None): the stage
-    "sweep ...", then "runs" with the fraction of windows done."""
+                   progress: Optional[Callable[[str, Optional[float]], None]] = None
+                   ) -> tuple[DiskBranch, list[dict]]:
+    """The branch whose windows were run, and one row per window (window_run), in order.
+    progress(stage, fraction or None): the stage "sweep ...", then "runs" with the fraction of
+    windows done."""
     report = progress or (lambda stage, fraction=None: None)
     system = System.from_scene(scene)
     report(f"sweep F_x 0 -> {scene.F_x_range[1]:g} ({matrix})", None)
-    todo = windows(sweep(system, 0.0, scene.F_x_range[1], matrix))
+    branch = sweep(system, 0.0, scene.F_x_range[1], matrix)
+    todo = windows(branch)
     stage = f"one run to t = {t_end:g} in each of {count(len(todo), 'window')}"
     report(stage, 0.0)
     rows = []
     for k, window in enumerate(todo):
         rows.append(window_run(system, window, k, t_end, amplitude))
         report(stage, (k + 1) / len(todo))
-    return rows
+    return branch, rows

@@ -109,17 +109,17 @@ def leg_label(leg_id: int, F: np.ndarray) -> str:
 def draw_spectrum(top, bottom, F_x: np.ndarray, lam: np.ndarray, leg: np.ndarray,
                   n_complex: np.ndarray, collisions: list[tuple[float, str, float]],
                   matrix: str, x_label: str = F_X_LABEL, eig_unit: Optional[str] = None,
-                  re_axis: Optional[str] = None) -> list:
+                  re_axis: Optional[str] = None, shade: bool = True) -> list:
     """Im (top) and Re (bottom) of every eigenvalue `lam` (rows: points at F_x, already in the
     paper's unit of `matrix`; columns tracked along the branch; nan where an eigenvalue is not
     known, e.g. outside a spectral window) against F_x. The Re axis is re_axis ("linear",
     "log", "-log": figures.re_scale), by default chosen from the data: log where Re spans
-    decades with one sign, else linear.
+    decades with one sign, else linear. bottom None: the Im panel alone (x_label on it).
 
     Each tracked eigenvalue is a line in its own colour, on the top panel while it is the upper
     member of a complex pair; the requested leg (1) in colour, a preparation leg (0) in grey;
-    loading legs solid, unloading dashed. Complex windows of the requested leg are shaded,
-    from its located collisions (F_x, "birth" | "death", double eigenvalue in the same unit):
+    loading legs solid, unloading dashed. Complex windows of the requested leg are shaded
+    (unless not `shade`: the caller shades them), from its located collisions (F_x, "birth" | "death", double eigenvalue in the same unit):
     births ^, deaths v, and a bubble narrower than a pixel as one diamond. Returns the legend
     handles that key all of it (the caller places the legend). Axis labels: x_label, and
     Re / Im of `matrix` in eig_unit (default the paper's unit of `matrix`). Plots only: no
@@ -148,31 +148,36 @@ def draw_spectrum(top, bottom, F_x: np.ndarray, lam: np.ndarray, leg: np.ndarray
                  for k in range(lam.shape[1]) if upper[rows, k].any()]
         draw_lines(top, [np.column_stack(xy) for _, xy in pairs], [colors[k] for k, _ in pairs],
                    style, 1.0, marker_size=2.5)
-        drawn = [k for k in range(lam.shape[1]) if np.isfinite(lam.real[rows, k]).any()]
-        draw_lines(bottom, [np.column_stack([F, re_values(lam.real[rows, k], scale)])
-                            for k in drawn], [colors[k] for k in drawn], style, 0.7)
+        drawn = ([k for k in range(lam.shape[1]) if np.isfinite(lam.real[rows, k]).any()]
+                 if bottom is not None else [k for k, _ in pairs])
+        if bottom is not None:
+            draw_lines(bottom, [np.column_stack([F, re_values(lam.real[rows, k], scale)])
+                                for k in drawn], [colors[k] for k in drawn], style, 0.7)
         handles.append(line_key([colors[k] for k in drawn],
                                 style, leg_label(leg_id, F) + ("" if leg_id == 0 else
                                                                "\n(one colour per eigenvalue)")))
     rows = np.flatnonzero(leg == 1)  # none when the preparation leg ended short
     windows = complex_windows(F_x[rows[0]], F_x[rows[-1]], n_complex[rows[0]],
                               [(p, kind) for p, kind, _ in collisions]) if rows.size else []
-    for a, b in complex_spans(windows):
-        top.axvspan(min(a, b), max(a, b), color="C1", alpha=0.12, lw=0)
-    handles.append(Patch(color="C1", alpha=0.25, label="a complex pair (located windows)"))
+    if shade:
+        for a, b in complex_spans(windows):
+            top.axvspan(min(a, b), max(a, b), color="C1", alpha=0.12, lw=0)
+        handles.append(Patch(color="C1", alpha=0.25, label="a complex pair (located windows)"))
     bubbles = narrow_bubbles(collisions, pixel)
     in_bubble = {i for b in bubbles for i in (b, b + 1)}
     for i, (p, kind, value) in enumerate(collisions):
         if i not in in_bubble:
             marker, color = BIRTH if kind == "birth" else DEATH
             top.plot(p, 0.0, marker, color=color, ms=5)
-            bottom.plot(p, re_values(value, scale), marker, color=color, ms=5)
+            if bottom is not None:
+                bottom.plot(p, re_values(value, scale), marker, color=color, ms=5)
     for i in bubbles:
         (a, _, value), (b, _, _) = collisions[i], collisions[i + 1]
         inside = (F_x >= min(a, b)) & (F_x <= max(a, b)) & (leg == 1)
         height = float(np.max(np.where(upper[inside], lam.imag[inside], 0.0), initial=0.0))
         top.plot(0.5 * (a + b), height, BUBBLE[0], color=BUBBLE[1], ms=5)
-        bottom.plot(0.5 * (a + b), re_values(value, scale), BUBBLE[0], color=BUBBLE[1], ms=5)
+        if bottom is not None:
+            bottom.plot(0.5 * (a + b), re_values(value, scale), BUBBLE[0], color=BUBBLE[1], ms=5)
     counts = {kind: sum(c[1] == kind for c in collisions) for kind in ("birth", "death")}
     handles += [Line2D([], [], ls="", marker=BIRTH[0], color=BIRTH[1],
                        label=f"birth of a pair ({counts['birth']})"),
@@ -182,6 +187,9 @@ def draw_spectrum(top, bottom, F_x: np.ndarray, lam: np.ndarray, leg: np.ndarray
         handles.append(Line2D([], [], ls="", marker=BUBBLE[0], color=BUBBLE[1],
                               label=f"bubble narrower than a pixel ({len(bubbles)})"))
     top.set_ylabel(eig_label("Im", matrix, eig_unit))
+    if bottom is None:
+        top.set_xlabel(x_label)
+        return handles
     set_re_axis(bottom, lam.real, scale, eig_label("Re", matrix, eig_unit)
                 + (" (log axis)" if scale != "linear" else ""))
     bottom.set_xlabel(x_label)

@@ -5,21 +5,12 @@ import dataclasses
 
 import numpy as np
 
+from diskfriction.reports.figures import new_figure  # noqa: F401 (the sections' import)
 from diskfriction.reports.registry import Need
 from diskfriction.reports.settings import Settings
 from diskfriction.scenes import Scene
 
 MATRICES = ("J", "M^-1 J")
-
-
-def new_figure(*args, **kwargs):
-    """matplotlib.pyplot.subplots on the Agg backend."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt.subplots(*args, **kwargs)
 
 
 def branch_need(scene: Scene, settings: Settings, matrix: str, label: str | None = None) -> Need:

@@ -5,6 +5,7 @@ import numpy as np
 
 from diskfriction.continuation.windows import complex_spans, complex_windows
 from diskfriction.reports.bifurcation import draw_spectrum
+from diskfriction.reports.figures import legend
 from diskfriction.reports.registry import Section
 from diskfriction.reports.sections.common import MATRICES, branch_need, failures, new_figure, table
 from diskfriction.words import count
@@ -32,7 +33,7 @@ def plot(ctx):
         for F in ctx.settings.loads:
             top.axvline(F, color="k", ls=":", lw=0.7)
         top.set_title(f"{matrix}; dotted: the paper's loads", fontsize=8)
-        top.legend(handles=handles, fontsize=6, loc="best", framealpha=0.85)
+        legend(top, handles, fontsize=6, loc="best", framealpha=0.85)
     fig.suptitle(f"Fig. 2, {ctx.scene.name}: spectrum against F_x", fontsize=10)
     fig.tight_layout()
     return fig
