@@ -29,42 +29,32 @@ def save_run(out: Path, traj: Trajectory, summary: dict) -> None:
 
 
 def plot_run(traj: Trajectory, summary: dict, scene: Scene, path: Path, disk: int = 4) -> None:
-    """run.png, paper units (time in tau, lengths in 2R), four panels: M(t) on a log axis with
-    the window of the growth-rate fit shaded and the fitted exp(2 sigma t) dashed; C_x(t); C_y(t);
-    and disk `disk`'s spiral in the x-y plane (draw_spiral, the paper's Fig. 4). The first breach and first onset of sliding of any disk are
-    vertical lines on the time panels; the title says the scene, load, perturbation and
-    outcome (summary: dynamics.simulate.summarize)."""
+    """run.png, paper units (time in tau, lengths in 2R), four panels: M(t) with the growth-rate
+    fit (draw_growth); C_x(t); C_y(t); disk `disk`'s spiral in the x-y plane (draw_spiral, the
+    paper's Fig. 4). The first breach and first onset of sliding of any disk are vertical lines
+    on the time panels, keyed on the C_x panel; the title says the scene, load, perturbation
+    and outcome (summary: dynamics.simulate.summarize)."""
     units = PaperUnits.of(scene)
     tau, d = units.time, units.length
     t = traj.t / tau
     fig, ((m_ax, cx_ax), (cy_ax, xy_ax)) = new_figure(2, 2, figsize=(12, 8))
-    grown = traj.M > 0
-    m_ax.semilogy(t[grown], traj.M[grown] / d**2, lw=0.6, color="C0", label="M(t)")
-    fit = summary["fit"]
-    if fit["sigma"] is not None:
-        window = (traj.t >= fit["t_start"]) & (traj.t <= fit["t_start"] + fit["period"])
-        start = traj.M[window].max() / d**2  # the fit's first envelope point
-        span = np.array([fit["t_start"], fit["t_end"]])
-        m_ax.axvspan(*span / tau, color="C1", alpha=0.2, lw=0,
-                     label=f"growth-rate fit window ({fit['blocks']} periods)")
-        m_ax.semilogy(span / tau, start * np.exp(2 * fit["sigma"] * (span - span[0])), "k--",
-                      lw=1.5, label=rf"$e^{{2\sigma t}}$: $\sigma$ = {fit['sigma'] * tau:.4g} / $\tau$ "
-                      rf"(predicted {summary['sigma_predicted'] * tau:.4g})")
-    else:
-        m_ax.plot([], [], " ", label=f"no growth-rate fit: {fit['reason']}")
+    draw_growth(m_ax, traj.t, traj.M, summary, units)
     events = {event: first_event(summary, event) for event in EVENTS}
-    marks = [mark_events(ax, events, tau) for ax in (m_ax, cx_ax, cy_ax)][0]
+    marks = mark_events(cx_ax, events, tau)
+    for ax in (m_ax, cy_ax):
+        mark_events(ax, events, tau)
     m_ax.set(xlabel=TIME_LABEL, ylabel=r"$M(t)$ [$(2R)^2$]",
              title="mean-square displacement of the disks from their start")
     m_ax.legend(fontsize=7, loc="lower right")
     cx_ax.plot(t, (traj.C_x - traj.C_x[0]) / d, lw=0.8, color="C0")
     cx_ax.set(xlabel=TIME_LABEL, ylabel=r"$C_x - C_x(0)$ [2R]", title="centre of mass along the load")
-    legend(cx_ax, marks, fontsize=7, loc="upper left")
+    if marks:
+        legend(cx_ax, marks, fontsize=7, loc="upper left")
     cy_ax.plot(t, (traj.C_y - traj.C_y[0]) / d, lw=0.5, color="C0")
     cy_ax.set(xlabel=TIME_LABEL, ylabel=r"$C_y - C_y(0)$ [2R]", title="centre of mass across the load")
     i = min(disk, scene.N) - 1
     draw_spiral(fig, xy_ax, traj.t, traj.x[:, i] - traj.x[0, i], traj.y[:, i] - traj.y[0, i],
-                fit["period"], events["first_breach"], units, i + 1)
+                summary["fit"]["period"], events["first_breach"], units, i + 1)
     p = traj.perturbation
     fig.suptitle(f"{scene.name}: N = {scene.N}, F_x = {traj.F_x:g}, {p.kind} perturbation "
                  f"{p.amplitude:g} (raw), to t = {t[-1]:.4g} tau; slid: {slid_word(summary['slid'])}",
@@ -103,3 +93,24 @@ def draw_spiral(fig, ax, t: np.ndarray, dx: np.ndarray, dy: np.ndarray, period: 
     ax.set_title(f"disk {disk}: its path over {what} "
                  + ("the first breach" if breach is not None else "the end (no breach)"), fontsize=9)
     return points
+
+
+def draw_growth(ax, t: np.ndarray, M: np.ndarray, summary: dict, units: PaperUnits) -> None:
+    """M(t) on a log axis (t, M raw), with the window of the growth-rate fit (summary["fit"]:
+    dynamics/growth.py) shaded and the fitted envelope exp(2 sigma t) dashed from its first
+    point (the largest M in the window's first period), labelled with sigma measured and
+    predicted in 1/tau; without a fit, the legend says why."""
+    tau, d = units.time, units.length
+    grown = M > 0
+    ax.semilogy(t[grown] / tau, M[grown] / d**2, lw=0.6, color="C0", label="M(t)")
+    fit = summary["fit"]
+    if fit["sigma"] is None:
+        ax.plot([], [], " ", label=f"no growth-rate fit: {fit['reason']}")
+        return
+    first = (t >= fit["t_start"]) & (t <= fit["t_start"] + fit["period"])
+    span = np.array([fit["t_start"], fit["t_end"]])
+    ax.axvspan(*span / tau, color="C1", alpha=0.2, lw=0,
+               label=f"growth-rate fit window ({fit['blocks']} periods)")
+    ax.semilogy(span / tau, M[first].max() / d**2 * np.exp(2 * fit["sigma"] * (span - span[0])),
+                "k--", lw=1.5, label=rf"$e^{{2\sigma t}}$: $\sigma$ = {fit['sigma'] * tau:.4g} / $\tau$ "
+                rf"(predicted {summary['sigma_predicted'] * tau:.4g})")

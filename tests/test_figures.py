@@ -103,3 +103,67 @@ def test_the_re_panel_is_never_symlog(axes):
     assert bottom.get_yscale() == "log"
     low, high = bottom.get_ylim()
     assert low <= lam.real.min() and high >= lam.real.max()
+
+
+def verify_rows():
+    """Four windows: slid, stayed, not resolved (slid None, accurate false), and an all-real
+    interval that slid."""
+    def row(a, b, pairs, slid, measured):
+        return {"window": [a, b], "complex_pairs": pairs, "F_x": 0.5 * (a + b),
+                "sigma_predicted": 0.1 * pairs, "sigma_measured": measured,
+                "M_max": 1e-3 if slid else 1e-9, "accurate": slid is not None, "slid": slid}
+    return [row(0.0, 0.2, 1, False, 0.1), row(0.2, 0.5, 2, True, 0.21),
+            row(0.5, 0.7, 1, None, None), row(0.7, 1.0, 0, True, None)]
+
+
+def test_verify_figure_shades_each_window_by_its_runs_outcome(axes):
+    """Item 15: the shading of each window follows the table's slid column, and a run with slid
+    None is shown as not resolved, not as stayed."""
+    from matplotlib.colors import to_rgb
+
+    from diskfriction.reports.figures import OUTCOME_STYLE, key_label
+    from diskfriction.reports.verify import draw_verify, shade_outcomes
+
+    top, bottom = axes
+    F, lam, collisions = windowed_spectrum()
+    rows = verify_rows()
+    handles = draw_verify(top, bottom, F, lam, np.ones(F.size, int), np.zeros(F.size, int),
+                          collisions, rows, "J", 1.0)
+    patches = shade_outcomes(top, rows)
+    for patch, r in zip(patches, rows):
+        style = OUTCOME_STYLE[r["slid"]]
+        assert to_rgb(patch.get_facecolor()) == to_rgb(style["color"])
+        assert patch.get_hatch() == (style["hatch"] or ("//" if r["complex_pairs"] == 0 else None))
+        assert (patch.get_x(), patch.get_x() + patch.get_width()) == pytest.approx(r["window"])
+    assert OUTCOME_STYLE[None]["color"] not in (OUTCOME_STYLE[True]["color"], OUTCOME_STYLE[False]["color"])
+    assert any("not resolved" in key_label(h) for h in handles)
+    measured = [line for line in bottom.get_lines() if line.get_marker() == "o"]
+    assert sorted(x for line in measured for x in line.get_xdata()) == [0.1, 0.35]
+
+
+def test_slid_none_reads_not_resolved():
+    from diskfriction.cli.verify_cmd import format_table
+    from diskfriction.reports.figures import slid_word
+
+    assert [slid_word(s) for s in (True, False, None)] == ["yes", "no", "not resolved"]
+    lines = format_table(verify_rows(), "J").splitlines()
+    assert [line.rsplit("|", 2)[1].strip() for line in lines[4:]] == ["no", "yes", "not resolved", "yes"]
+
+
+def test_run_figure_shows_the_growth_fit_window(axes):
+    """Item 9: the window of the sigma fit is on the M(t) panel, with sigma in 1/tau."""
+    from diskfriction.reports.simulation import draw_growth
+    from diskfriction.reports.units import PaperUnits
+    from diskfriction.scenes import Scene
+
+    top, _ = axes
+    units = PaperUnits.of(Scene())
+    t = np.linspace(0.0, 100.0, 2001)
+    M = 1e-20 * np.exp(0.2 * t) * (1.5 + np.sin(3 * t))
+    fit = {"sigma": 0.1, "t_start": 20.0, "t_end": 60.0, "period": 2.1, "blocks": 19, "reason": "ok"}
+    draw_growth(top, t, M, {"fit": fit, "sigma_predicted": 0.1}, units)
+    (span,) = top.patches
+    assert (span.get_x(), span.get_x() + span.get_width()) == pytest.approx((20.0 / units.time, 60.0 / units.time))
+    labels = [line.get_label() for line in top.get_lines()] + [span.get_label()]
+    assert any("fit window" in label for label in labels)
+    assert any(f"{0.1 * units.time:.4g}" in label for label in labels)
