@@ -33,6 +33,11 @@ def slid_word(slid: Optional[bool]) -> str:
     return SLID_WORDS[None if slid is None else bool(slid)]
 
 
+def outcome_word(slid: Optional[bool]) -> str:
+    """'slid', 'stayed' or 'not resolved' (slid None)."""
+    return {True: "slid", False: "stayed", None: "not resolved"}[None if slid is None else bool(slid)]
+
+
 def new_figure(*args, **kwargs):
     """matplotlib.pyplot.subplots on the Agg backend."""
     import matplotlib

@@ -82,14 +82,15 @@ def draw_spiral(fig, ax, t: np.ndarray, dx: np.ndarray, dy: np.ndarray, period: 
         start, what = t[0], "from the start to"
     shown = (t >= start) & (t <= end)
     x, y, when = dx[shown] / units.length, dy[shown] / units.length, t[shown] / units.time
+    x_power, y_power = (power_of_ten(v) for v in (x, y))
+    x, y = x / 10.0**x_power, y / 10.0**y_power
     ax.plot(x, y, lw=0.3, color="0.6", zorder=1)
     points = ax.scatter(x, y, c=when, s=2.0, cmap="viridis", zorder=2)
     fig.colorbar(points, ax=ax, label=TIME_LABEL)
     if breach is not None:
         ax.plot(x[-1], y[-1], "r*", ms=10, zorder=3, label="first Coulomb breach (any disk)")
         ax.legend(fontsize=7, loc="best")
-    ax.set(xlabel=r"$x - x(0)$ [2R]", ylabel=r"$y - y(0)$ [2R]")
-    ax.ticklabel_format(style="sci", scilimits=(-2, 3))
+    ax.set(xlabel=rf"$x - x(0)$ [$10^{{{x_power}}}$ 2R]", ylabel=rf"$y - y(0)$ [$10^{{{y_power}}}$ 2R]")
     ax.set_title(f"disk {disk}: its path over {what} "
                  + ("the first breach" if breach is not None else "the end (no breach)"), fontsize=9)
     return points
@@ -114,3 +115,10 @@ def draw_growth(ax, t: np.ndarray, M: np.ndarray, summary: dict, units: PaperUni
     ax.semilogy(span / tau, M[first].max() / d**2 * np.exp(2 * fit["sigma"] * (span - span[0])),
                 "k--", lw=1.5, label=rf"$e^{{2\sigma t}}$: $\sigma$ = {fit['sigma'] * tau:.4g} / $\tau$ "
                 rf"(predicted {summary['sigma_predicted'] * tau:.4g})")
+
+
+def power_of_ten(values: np.ndarray) -> int:
+    """The power of ten of the largest |value| (0 for none or all zero): the unit an axis of
+    these values is labelled in, so that its ticks read 0.5, 1, 2 rather than 0.00005."""
+    big = float(np.max(np.abs(values), initial=0.0))
+    return int(np.floor(np.log10(big))) if big > 0 else 0

@@ -5,7 +5,8 @@ import numpy as np
 
 from diskfriction.reports.compute.runs import missing
 from diskfriction.reports.registry import Need, Section
-from diskfriction.reports.sections.common import failures, fmt, new_figure, table
+from diskfriction.reports.figures import new_figure
+from diskfriction.reports.sections.common import failures, fmt, table
 
 
 def needs(scene, settings):

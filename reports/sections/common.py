@@ -5,7 +5,6 @@ import dataclasses
 
 import numpy as np
 
-from diskfriction.reports.figures import new_figure  # noqa: F401 (the sections' import)
 from diskfriction.reports.registry import Need
 from diskfriction.reports.settings import Settings
 from diskfriction.scenes import Scene

@@ -5,9 +5,9 @@ import numpy as np
 
 from diskfriction.continuation.windows import complex_spans, complex_windows
 from diskfriction.reports.bifurcation import draw_spectrum
-from diskfriction.reports.figures import legend
+from diskfriction.reports.figures import legend, new_figure
 from diskfriction.reports.registry import Section
-from diskfriction.reports.sections.common import MATRICES, branch_need, failures, new_figure, table
+from diskfriction.reports.sections.common import MATRICES, branch_need, failures, table
 from diskfriction.words import count
 
 

@@ -6,7 +6,8 @@ import dataclasses
 
 from diskfriction.reports import analysis as A
 from diskfriction.reports.registry import Section
-from diskfriction.reports.sections.common import branch_need, failures, new_figure, spectra_need, table
+from diskfriction.reports.figures import new_figure
+from diskfriction.reports.sections.common import branch_need, failures, spectra_need, table
 from diskfriction.reports.units import F_X_LABEL
 
 

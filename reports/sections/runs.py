@@ -4,18 +4,14 @@ from __future__ import annotations
 import numpy as np
 
 from diskfriction.reports.compute.runs import missing
+from diskfriction.reports.figures import first_event, new_figure, slid_word
 from diskfriction.reports.registry import Section
-from diskfriction.reports.sections.common import ensemble_need, failures, fmt, new_figure, run_need, table
+from diskfriction.reports.simulation import SPIRAL_PERIODS, draw_spiral
+from diskfriction.reports.sections.common import ensemble_need, failures, fmt, run_need, table
 from diskfriction.reports.units import TIME_LABEL
 
 NEEDS_SIMULATE = lambda: missing("diskfriction.dynamics.simulate")  # noqa: E731
 NEEDS_ENSEMBLE = lambda: missing("diskfriction.dynamics.ensemble")  # noqa: E731
-
-
-def first_event(summary: dict, event: str) -> float | None:
-    """Earliest time any disk had `event` ("first_breach" or "onset") [raw time], or None."""
-    times = [t for t in summary[event]["t"] if t is not None]
-    return min(times) if times else None
 
 
 def protocol(ctx) -> str:
@@ -47,7 +43,7 @@ def fig3_render(ctx):
         ax.loglog(r["t"][ok] / u.time, r["M"][ok] / u.length**2, lw=0.7, label=f"F_x = {F:g}")
         breach = first_event(sm, "first_breach")
         rows.append([f"{F:g}", fmt(sm["M_max"] / u.length**2), fmt(r["M"][-1] / u.length**2),
-                     "no" if breach is None else fmt(breach / u.time, 4), "yes" if sm["slid"] else "no",
+                     "no" if breach is None else fmt(breach / u.time, 4), slid_word(sm["slid"]),
                      fmt(None if sm["sigma_measured"] is None else sm["sigma_measured"] * u.time),
                      fmt(sm["sigma_predicted"] * u.time)])
     ax.set_xlabel(TIME_LABEL)
@@ -75,23 +71,16 @@ def fig4_render(ctx):
     r = ctx.get(need.label)
     if r is None:
         return failures(ctx)
-    x = (r["disk_x"] - r["disk_x"][0]) / u.length
-    y = (r["disk_y"] - r["disk_y"][0]) / u.length
-    fig, ax = new_figure(figsize=(6, 5))
-    points = ax.scatter(x, y, c=r["disk_t"] / u.time, s=0.3, cmap="viridis")
-    fig.colorbar(points, ax=ax, label=TIME_LABEL)
-    breach = r["summary"]["first_breach"]["t"][s.fig4_disk - 1]
-    if breach is not None and breach <= r["disk_t"][-1]:
-        k = np.searchsorted(r["disk_t"], breach)
-        ax.plot(x[k], y[k], "r*", ms=10, label="first Coulomb breach of this disk")
-        ax.legend(fontsize=8)
-    ax.set_xlabel(r"$x - x(0)$ [$2R$]")
-    ax.set_ylabel(r"$y - y(0)$ [$2R$]")
-    ax.set_title(f"Fig. 4, {ctx.scene.name}: disk {s.fig4_disk} at F_x = {s.fig4_F_x:g}", fontsize=9)
+    fig, ax = new_figure(figsize=(6.5, 5))
+    sm = r["summary"]
+    draw_spiral(fig, ax, r["disk_t"], r["disk_x"] - r["disk_x"][0], r["disk_y"] - r["disk_y"][0],
+                sm["fit"]["period"], first_event(sm, "first_breach"), u, s.fig4_disk)
+    fig.suptitle(f"Fig. 4, {ctx.scene.name}: disk {s.fig4_disk} at F_x = {s.fig4_F_x:g}", fontsize=10)
     fig.tight_layout()
-    return "\n".join([ctx.figure(fig, "fig4", f"Fig. 4: the x-y trajectory of disk {s.fig4_disk} "
-                                 f"until 10% past its first breach or onset of sliding, coloured by "
-                                 f"time"), protocol(ctx)]) + failures(ctx)
+    return "\n".join([ctx.figure(fig, "fig4", f"Fig. 4: the x-y path of disk {s.fig4_disk}'s centre "
+                                 f"over the {SPIRAL_PERIODS} oscillation periods before the first "
+                                 f"Coulomb breach of any disk, coloured by time: the spiral of "
+                                 f"growing amplitude that ends in the breach"), protocol(ctx)]) + failures(ctx)
 
 
 # ---------------------------------------------------------------- Fig. 7
