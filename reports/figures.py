@@ -159,3 +159,29 @@ def outcome_patches() -> list:
     return [Patch(facecolor=OUTCOME_STYLE[k]["color"], alpha=OUTCOME_STYLE[k]["alpha"] + 0.15,
                   hatch=OUTCOME_STYLE[k]["hatch"], label=OUTCOME_LABELS[k])
             for k in (True, False, None)]
+
+
+LABEL_OFFSETS = ((4, 3), (4, -9), (-4, 3), (-4, -9))
+"""Where a point's label may go, in points from it (right-up, right-down, left-up, left-down)."""
+
+
+def label_points(ax, xs, ys, texts, fontsize: float = 6) -> int:
+    """Label each point (x, y) with its text at the first of LABEL_OFFSETS where the label
+    overlaps no label placed before it; a label that fits nowhere is left out (the caller's
+    table lists every value). Call once the axes' limits are final. Returns how many were
+    left out."""
+    ax.autoscale_view()  # the limits are otherwise settled only when drawn
+    renderer = ax.figure.canvas.get_renderer()
+    placed, left_out = [], 0
+    for x, y, text in zip(xs, ys, texts):
+        for dx, dy in LABEL_OFFSETS:
+            label = ax.annotate(text, (x, y), xytext=(dx, dy), textcoords="offset points",
+                                fontsize=fontsize, ha="left" if dx > 0 else "right")
+            box = label.get_window_extent(renderer)
+            if not any(box.overlaps(other) for other in placed):
+                placed.append(box)
+                break
+            label.remove()
+        else:
+            left_out += 1
+    return left_out
