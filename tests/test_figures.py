@@ -167,3 +167,14 @@ def test_run_figure_shows_the_growth_fit_window(axes):
     labels = [line.get_label() for line in top.get_lines()] + [span.get_label()]
     assert any("fit window" in label for label in labels)
     assert any(f"{0.1 * units.time:.4g}" in label for label in labels)
+
+
+@pytest.mark.parametrize("ran, slid, says", [(True, True, "slid"), (True, False, "stayed"),
+                                             (True, None, "not resolved"), (False, None, "n/a")])
+def test_lammps_section_says_not_resolved_for_slid_none(ran, slid, says):
+    """A run whose energy budget did not close (slid None) is neither "stayed" nor "n/a"."""
+    from diskfriction.reports.sections.lammps import Reading, outcome
+
+    reading = Reading({}, None, None, None, {}, {"J": 1, "M^-1 J": 2}, ran, slid)
+    assert outcome(reading).endswith(f"; {says}")
+    assert reading.claims_held() is (None if slid is None else reading.claims_held())
