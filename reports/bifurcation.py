@@ -38,11 +38,15 @@ BIRTH, DEATH, BUBBLE = ("^", "C3"), ("v", "C2"), ("D", "C4")
 """Marker and colour of a located birth, death, and of a bubble narrower than a pixel."""
 
 
+COLUMN_COLORS = tuple(k for k in range(20) if k not in (14, 15))
+"""tab20 without its two greys: grey is the preparation leg's."""
+
+
 def column_color(k: int):
     """The colour of tracked eigenvalue column k (the same in both panels)."""
     import matplotlib
 
-    return matplotlib.colormaps["tab20"](k % 20)
+    return matplotlib.colormaps["tab20"](COLUMN_COLORS[k % len(COLUMN_COLORS)])
 
 
 def narrow_bubbles(collisions: list[tuple[float, str, float]], pixel: float) -> list[int]:

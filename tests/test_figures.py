@@ -178,3 +178,12 @@ def test_lammps_section_says_not_resolved_for_slid_none(ran, slid, says):
     reading = Reading({}, None, None, None, {}, {"J": 1, "M^-1 J": 2}, ran, slid)
     assert outcome(reading).endswith(f"; {says}")
     assert reading.claims_held() is (None if slid is None else reading.claims_held())
+
+
+def test_no_eigenvalue_is_drawn_in_the_preparation_legs_grey():
+    from matplotlib.colors import to_rgb
+
+    from diskfriction.reports.bifurcation import column_color
+
+    colors = {to_rgb(column_color(k)) for k in range(40)}
+    assert all(not (r == g == b) for r, g, b in colors)
