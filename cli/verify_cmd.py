@@ -18,7 +18,6 @@ from diskfriction.cli.common import (EXIT_FAILED, CommandError, add_scene_argume
                                      check_memory, number, output_dir, scene_from_args)
 from diskfriction.cli.progress import Progress
 from diskfriction.cli.simulate_cmd import SINGLE_AMPLITUDE
-from diskfriction.reports.figures import slid_word
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -77,7 +76,9 @@ def run(args: argparse.Namespace) -> int:
 
 
 def format_table(rows: list[dict], matrix: str) -> str:
-    """Markdown table of the verify rows (raw units)."""
+    """Markdown table of the verify rows (raw units); slid reads yes, no or not resolved."""
+    from diskfriction.reports.figures import slid_word
+
     fmt = lambda v: "-" if v is None else f"{v:.4g}"
     lines = [f"Windows of {matrix}; sigma from M^-1 J (raw 1/time); M in raw length^2.", "",
              "| window F_x | pairs | F_x | sigma predicted | sigma measured | max M | slid |",

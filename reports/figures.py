@@ -61,7 +61,7 @@ def legend(ax, handles: list, **kwargs):
     line kind drawn in several colours shows several of them)."""
     from matplotlib.legend_handler import HandlerTuple
 
-    return ax.legend(handles=handles, labels=[key_label(h) for h in handles],
+    return ax.legend(handles=handles, labels=[handle_label(h) for h in handles],
                      handler_map={tuple: HandlerTuple(ndivide=None, pad=0.0)}, **kwargs)
 
 
@@ -78,7 +78,7 @@ def line_key(colors: list, style: str, label: str, width: float = 1.0) -> tuple:
     return lines
 
 
-def key_label(handle) -> str:
+def handle_label(handle) -> str:
     """The label of a legend handle (a tuple's first member's)."""
     return (handle[0] if isinstance(handle, tuple) else handle).get_label()
 

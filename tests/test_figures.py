@@ -121,7 +121,7 @@ def test_verify_figure_shades_each_window_by_its_runs_outcome(axes):
     None is shown as not resolved, not as stayed."""
     from matplotlib.colors import to_rgb
 
-    from diskfriction.reports.figures import OUTCOME_STYLE, key_label
+    from diskfriction.reports.figures import OUTCOME_STYLE, handle_label
     from diskfriction.reports.verify import draw_verify, shade_outcomes
 
     top, bottom = axes
@@ -136,7 +136,7 @@ def test_verify_figure_shades_each_window_by_its_runs_outcome(axes):
         assert patch.get_hatch() == (style["hatch"] or ("//" if r["complex_pairs"] == 0 else None))
         assert (patch.get_x(), patch.get_x() + patch.get_width()) == pytest.approx(r["window"])
     assert OUTCOME_STYLE[None]["color"] not in (OUTCOME_STYLE[True]["color"], OUTCOME_STYLE[False]["color"])
-    assert any("not resolved" in key_label(h) for h in handles)
+    assert any("not resolved" in handle_label(h) for h in handles)
     measured = [line for line in bottom.get_lines() if line.get_marker() == "o"]
     assert sorted(x for line in measured for x in line.get_xdata()) == [0.1, 0.35]
 
