@@ -134,7 +134,7 @@ def single_run(scene, F_x: float, args, out: Path, progress: Progress) -> int:
     progress.stage(f"writing {out}/trajectory.npz, summary.json")
     save_run(out, traj, summary)
     progress.stage(f"plotting {out}/run.png")
-    plot_run(traj, scene, out / "run.png")
+    plot_run(traj, summary, scene, out / "run.png")
     progress.close()
     sm, sp = summary["sigma_measured"], summary["sigma_predicted"]
     print(f"F_x = {F_x:g}, t_end = {args.t_end:g}, dt = {traj.dt:.4g}, {traj.steps} steps, "

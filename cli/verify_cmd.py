@@ -3,7 +3,10 @@
 From the branch (0 .. the scene's F_x range end, the scene's or --matrix's stability matrix),
 run the dynamics at the midpoint of every complex window and every all-real interval between
 collisions (dynamics/verify.py) and tabulate: window, F_x, sigma predicted (M^-1 J), sigma
-measured, max M, slid. Writes DIR/verify.json and DIR/verify.md.
+measured, max M, slid ("not resolved" where the run's energy budget did not close). Writes
+DIR/verify.json, DIR/verify.md and DIR/verify.png (the Im lambda diagram with each window
+shaded by whether its run slid, stayed or is not resolved, over the growth rate measured
+against the predicted one per window).
 """
 from __future__ import annotations
 
@@ -48,6 +51,7 @@ def run(args: argparse.Namespace) -> int:
     from diskfriction.dynamics.stepper import load_stepper
     from diskfriction.dynamics.verify import verify_windows
     from diskfriction.files import save_json, save_text
+    from diskfriction.reports.verify import plot_verify
     from diskfriction.symbolic import System
 
     progress = Progress("verify")
@@ -55,26 +59,26 @@ def run(args: argparse.Namespace) -> int:
         load_stepper(System.from_scene(scene, progress.part("kernels")).kernels,
                      progress.part("stepper"))
         try:
-            rows = verify_windows(scene, matrix, args.t_end, args.amplitude, progress.part("windows"))
+            branch, rows = verify_windows(scene, matrix, args.t_end, args.amplitude,
+                                          progress.part("windows"))
         except (EquilibriumError, ContinuationError) as error:  # the branch cannot start
             raise CommandError(f"verify error: {scene.source}: {error}", EXIT_FAILED) from None
         table = format_table(rows, matrix)
-        progress.stage(f"writing {out}/verify.json, verify.md")
+        progress.stage(f"writing {out}/verify.json, verify.md, verify.png")
         save_json(out / "verify.json", rows)
         save_text(out / "verify.md", table)
+        plot_verify(branch, rows, scene, args.t_end, out / "verify.png")
     finally:
         progress.close()
     print(table, end="")
-    print(f"wrote {out}/verify.json, verify.md")
+    print(f"wrote {out}/verify.json, verify.md, verify.png")
     return 0
 
 
-SLID = {True: "yes", False: "no", None: "not resolved"}
-"""The slid column: None where the run's energy budget did not close (dynamics/trajectory.py)."""
-
-
 def format_table(rows: list[dict], matrix: str) -> str:
-    """Markdown table of the verify rows (raw units)."""
+    """Markdown table of the verify rows (raw units); slid reads yes, no or not resolved."""
+    from diskfriction.reports.figures import slid_word
+
     fmt = lambda v: "-" if v is None else f"{v:.4g}"
     lines = [f"Windows of {matrix}; sigma from M^-1 J (raw 1/time); M in raw length^2.", "",
              "| window F_x | pairs | F_x | sigma predicted | sigma measured | max M | slid |",
@@ -83,5 +87,5 @@ def format_table(rows: list[dict], matrix: str) -> str:
         a, b = r["window"]
         lines.append(f"| {a:.5f} .. {b:.5f} | {r['complex_pairs']} | {r['F_x']:.5f} | "
                      f"{fmt(r['sigma_predicted'])} | {fmt(r['sigma_measured'])} | {fmt(r['M_max'])} | "
-                     f"{SLID[r['slid']]} |")
+                     f"{slid_word(r['slid'])} |")
     return "\n".join(lines) + "\n"

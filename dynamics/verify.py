@@ -53,10 +53,12 @@ def window_run(system: System, window: Window, index: int, t_end: float, amplitu
 
 
 def verify_windows(scene: Scene, matrix: str, t_end: float, amplitude: float,
-                   progress: Optional[Callable[[str, Optional[float]], None]] = None) -> list[dict]:
-    """One row per window (window_run) of the branch from rest to the scene's F_x range end;
-    raises NoEquilibrium when the branch ends short of it. progress(stage, fraction or None):
-    the stage "sweep ...", then "runs" with the fraction of windows done."""
+                   progress: Optional[Callable[[str, Optional[float]], None]] = None
+                   ) -> tuple[DiskBranch, list[dict]]:
+    """The branch whose windows were run (from rest to the scene's F_x range end), and one row
+    per window (window_run), in order; raises NoEquilibrium when the branch ends short of the
+    range end. progress(stage, fraction or None): the stage "sweep ...", then "runs" with the
+    fraction of windows done."""
     report = progress or (lambda stage, fraction=None: None)
     system = System.from_scene(scene)
     report(f"sweep F_x 0 -> {scene.F_x_range[1]:g} ({matrix})", None)
@@ -69,4 +71,4 @@ def verify_windows(scene: Scene, matrix: str, t_end: float, amplitude: float,
     for k, window in enumerate(todo):
         rows.append(window_run(system, window, k, t_end, amplitude))
         report(stage, (k + 1) / len(todo))
-    return rows
+    return branch, rows

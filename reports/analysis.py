@@ -35,9 +35,15 @@ def max_imag(eigenvalues: np.ndarray) -> np.ndarray:
 
 
 def eigen_status_rows(eigenvalues: np.ndarray) -> np.ndarray:
-    """continuation.spectra.eigen_status of every row (+1 upper member of a pair, -1, 0 real)."""
+    """continuation.spectra.eigen_status of every row (+1 upper member of a pair, -1, 0 real),
+    over the row's finite entries: a nan entry (a windowed branch's eigenvalue outside the
+    window and its guard bands) is 0 and does not enter the threshold."""
     eigenvalues = np.atleast_2d(eigenvalues)
-    return np.array([eigen_status(row) for row in eigenvalues])
+    status = np.zeros(eigenvalues.shape, dtype=np.int8)
+    for row, values in zip(status, eigenvalues):
+        known = np.isfinite(values)
+        row[known] = eigen_status(values[known])
+    return status
 
 
 def births_of_pairs_at(branch: dict, F: float) -> list[float]:

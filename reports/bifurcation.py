@@ -12,11 +12,11 @@ import numpy as np
 
 from diskfriction.continuation.records import collision_records
 from diskfriction.continuation.sweep import DiskBranch
-from diskfriction.files import save_json, save_npz, write_atomic
+from diskfriction.files import save_json, save_npz
+from diskfriction.reports.figures import (DPI, legend, line_key, new_figure, re_scale, re_values,
+                                          save_figure, set_re_axis)
 from diskfriction.reports.units import F_X_LABEL, PaperUnits, eig_label
 from diskfriction.scenes import Scene
-
-DPI = 110
 
 
 def save_branch(out: Path, branch: DiskBranch, scene: Scene) -> None:
@@ -38,11 +38,15 @@ BIRTH, DEATH, BUBBLE = ("^", "C3"), ("v", "C2"), ("D", "C4")
 """Marker and colour of a located birth, death, and of a bubble narrower than a pixel."""
 
 
+COLUMN_COLORS = tuple(k for k in range(20) if k not in (14, 15))
+"""tab20 without its two greys: grey is the preparation leg's."""
+
+
 def column_color(k: int):
     """The colour of tracked eigenvalue column k (the same in both panels)."""
     import matplotlib
 
-    return matplotlib.colormaps["tab20"](k % 20)
+    return matplotlib.colormaps["tab20"](COLUMN_COLORS[k % len(COLUMN_COLORS)])
 
 
 def narrow_bubbles(collisions: list[tuple[float, str, float]], pixel: float) -> list[int]:
@@ -108,14 +112,18 @@ def leg_label(leg_id: int, F: np.ndarray) -> str:
 
 def draw_spectrum(top, bottom, F_x: np.ndarray, lam: np.ndarray, leg: np.ndarray,
                   n_complex: np.ndarray, collisions: list[tuple[float, str, float]],
-                  matrix: str, x_label: str = F_X_LABEL, eig_unit: Optional[str] = None) -> list:
-    """Im (top) and Re (bottom, symlog) of every eigenvalue `lam` (rows: points at F_x, already
-    in the paper's unit of `matrix`; columns tracked along the branch) against F_x.
+                  matrix: str, x_label: str = F_X_LABEL, eig_unit: Optional[str] = None,
+                  re_axis: Optional[str] = None, shade: bool = True) -> list:
+    """Im (top) and Re (bottom) of every eigenvalue `lam` (rows: points at F_x, already in the
+    paper's unit of `matrix`; columns tracked along the branch; nan where an eigenvalue is not
+    known, e.g. outside a spectral window) against F_x. The Re axis is re_axis ("linear",
+    "log", "-log": figures.re_scale), by default chosen from the data: log where Re spans
+    decades with one sign, else linear. bottom None: the Im panel alone (x_label on it).
 
     Each tracked eigenvalue is a line in its own colour, on the top panel while it is the upper
     member of a complex pair; the requested leg (1) in colour, a preparation leg (0) in grey;
-    loading legs solid, unloading dashed. Complex windows of the requested leg are shaded,
-    from its located collisions (F_x, "birth" | "death", double eigenvalue in the same unit):
+    loading legs solid, unloading dashed. Complex windows of the requested leg are shaded
+    (unless not `shade`: the caller shades them), from its located collisions (F_x, "birth" | "death", double eigenvalue in the same unit):
     births ^, deaths v, and a bubble narrower than a pixel as one diamond. Returns the legend
     handles that key all of it (the caller places the legend). Axis labels: x_label, and
     Re / Im of `matrix` in eig_unit (default the paper's unit of `matrix`). Plots only: no
@@ -127,6 +135,7 @@ def draw_spectrum(top, bottom, F_x: np.ndarray, lam: np.ndarray, leg: np.ndarray
     from diskfriction.reports.analysis import eigen_status_rows
 
     upper = eigen_status_rows(lam) == 1
+    scale = re_axis or re_scale(lam.real)
     pixel = np.ptp(F_x) / max(top.get_window_extent().width, 1.0)
     handles = []
     for leg_id in (0, 1):
@@ -143,29 +152,36 @@ def draw_spectrum(top, bottom, F_x: np.ndarray, lam: np.ndarray, leg: np.ndarray
                  for k in range(lam.shape[1]) if upper[rows, k].any()]
         draw_lines(top, [np.column_stack(xy) for _, xy in pairs], [colors[k] for k, _ in pairs],
                    style, 1.0, marker_size=2.5)
-        draw_lines(bottom, [np.column_stack([F, lam.real[rows, k]]) for k in range(lam.shape[1])],
-                   colors, style, 0.7)
-        handles.append(Line2D([], [], color="0.7" if leg_id == 0 else "k", ls=style,
-                              label=leg_label(leg_id, F)))
+        drawn = ([k for k in range(lam.shape[1]) if np.isfinite(lam.real[rows, k]).any()]
+                 if bottom is not None else [k for k, _ in pairs])
+        if bottom is not None:
+            draw_lines(bottom, [np.column_stack([F, re_values(lam.real[rows, k], scale)])
+                                for k in drawn], [colors[k] for k in drawn], style, 0.7)
+        handles.append(line_key([colors[k] for k in drawn],
+                                style, leg_label(leg_id, F) + ("" if leg_id == 0 else
+                                                               "\n(one colour per eigenvalue)")))
     rows = np.flatnonzero(leg == 1)  # none when the preparation leg ended short
     windows = complex_windows(F_x[rows[0]], F_x[rows[-1]], n_complex[rows[0]],
                               [(p, kind) for p, kind, _ in collisions]) if rows.size else []
-    for a, b in complex_spans(windows):
-        top.axvspan(min(a, b), max(a, b), color="C1", alpha=0.12, lw=0)
-    handles.append(Patch(color="C1", alpha=0.25, label="a complex pair (located windows)"))
+    if shade:
+        for a, b in complex_spans(windows):
+            top.axvspan(min(a, b), max(a, b), color="C1", alpha=0.12, lw=0)
+        handles.append(Patch(color="C1", alpha=0.25, label="a complex pair (located windows)"))
     bubbles = narrow_bubbles(collisions, pixel)
     in_bubble = {i for b in bubbles for i in (b, b + 1)}
     for i, (p, kind, value) in enumerate(collisions):
         if i not in in_bubble:
             marker, color = BIRTH if kind == "birth" else DEATH
             top.plot(p, 0.0, marker, color=color, ms=5)
-            bottom.plot(p, value, marker, color=color, ms=5)
+            if bottom is not None:
+                bottom.plot(p, re_values(value, scale), marker, color=color, ms=5)
     for i in bubbles:
         (a, _, value), (b, _, _) = collisions[i], collisions[i + 1]
         inside = (F_x >= min(a, b)) & (F_x <= max(a, b)) & (leg == 1)
         height = float(np.max(np.where(upper[inside], lam.imag[inside], 0.0), initial=0.0))
         top.plot(0.5 * (a + b), height, BUBBLE[0], color=BUBBLE[1], ms=5)
-        bottom.plot(0.5 * (a + b), value, BUBBLE[0], color=BUBBLE[1], ms=5)
+        if bottom is not None:
+            bottom.plot(0.5 * (a + b), re_values(value, scale), BUBBLE[0], color=BUBBLE[1], ms=5)
     counts = {kind: sum(c[1] == kind for c in collisions) for kind in ("birth", "death")}
     handles += [Line2D([], [], ls="", marker=BIRTH[0], color=BIRTH[1],
                        label=f"birth of a pair ({counts['birth']})"),
@@ -175,33 +191,28 @@ def draw_spectrum(top, bottom, F_x: np.ndarray, lam: np.ndarray, leg: np.ndarray
         handles.append(Line2D([], [], ls="", marker=BUBBLE[0], color=BUBBLE[1],
                               label=f"bubble narrower than a pixel ({len(bubbles)})"))
     top.set_ylabel(eig_label("Im", matrix, eig_unit))
-    bottom.set_ylabel(eig_label("Re", matrix, eig_unit))
-    bottom.set_yscale("symlog", linthresh=1e-4)
+    if bottom is None:
+        top.set_xlabel(x_label)
+        return handles
+    set_re_axis(bottom, lam.real, scale, eig_label("Re", matrix, eig_unit)
+                + (" (log axis)" if scale != "linear" else ""))
     bottom.set_xlabel(x_label)
     return handles
 
 
 def diagram_axes():
     """A new figure of a bifurcation diagram: (figure, Im panel on top, Re panel below)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(10, 7), dpi=DPI)
+    fig, (top, bottom) = new_figure(2, 1, sharex=True, figsize=(10, 7), dpi=DPI)
     return fig, top, bottom
 
 
 def save_diagram(fig, top, handles: list, title: str, path: Path) -> None:
     """Title, the legend right of the panels, written atomically as PNG, figure closed."""
-    import matplotlib.pyplot as plt
-
     top.set_title(title, fontsize=9)
-    top.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    legend(top, handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     fig.subplots_adjust(left=0.095, right=0.76, bottom=0.08, top=0.95, hspace=0.06)  # fixed:
     # tight_layout would measure every label first, a third of the plot's time
-    write_atomic(Path(path), lambda tmp: fig.savefig(tmp, dpi=DPI, format="png"))
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def plot_diagram(branch: DiskBranch, scene: Scene, path: Path) -> None:
@@ -216,8 +227,7 @@ def plot_diagram(branch: DiskBranch, scene: Scene, path: Path) -> None:
         title += f", window {lo:.5g} <= Re <= {hi:.5g} (the rest of the spectrum not tracked)"
     handles = draw_spectrum(top, bottom, branch.F_x, lam, branch.leg, branch.n_complex,
                             [(c.p, c.kind, c.eigenvalue / unit) for c in branch.collisions],
-                            branch.matrix)
+                            branch.matrix, re_axis=None if branch.window is None else "linear")
     if branch.window is not None:
-        bottom.set_yscale("linear")
         bottom.set_ylim(lo, hi)
     save_diagram(fig, top, handles, title, path)

@@ -17,7 +17,8 @@ from pathlib import Path
 from typing import Callable, Optional
 
 from diskfriction.reports.cache import ResultCache, cache_key, default_cache_dir
-from diskfriction.files import save_text, write_atomic
+from diskfriction.files import save_text
+from diskfriction.reports.figures import save_figure
 from diskfriction.reports.registry import COMPUTATIONS, ComputationFailed, Need, Section
 from diskfriction.reports.sections import SECTIONS
 from diskfriction.reports.settings import Settings
@@ -64,11 +65,7 @@ class SectionContext:
 
     def figure(self, fig, name: str, caption: str) -> str:
         """Save a matplotlib figure as FIGURE_DIR/name.png; the Markdown that shows it."""
-        import matplotlib.pyplot as plt
-
-        path = self.figure_dir / f"{name}.png"
-        write_atomic(path, lambda tmp: fig.savefig(tmp, dpi=90, format="png"))
-        plt.close(fig)
+        save_figure(fig, self.figure_dir / f"{name}.png", dpi=90)
         return f"![{caption}]({self.link_prefix}{name}.png)\n\n*{caption}*\n"
 
 

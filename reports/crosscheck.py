@@ -5,7 +5,7 @@ from pathlib import Path
 
 import numpy as np
 
-from diskfriction.files import write_atomic
+from diskfriction.reports.figures import new_figure, save_figure
 from diskfriction.reports.units import TIME_LABEL, PaperUnits
 from diskfriction.scenes import Scene
 
@@ -16,23 +16,17 @@ FLOOR = 1e-18
 def plot_deviation(result, scene: Scene, path: Path) -> None:
     """The largest deviation over the disks of x, y (in 2R) and theta (rad) against t (tau),
     log scale."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     units = PaperUnits.of(scene)
     scale = {"x": units.length, "y": units.length, "theta": 1.0}
-    fig, ax = plt.subplots(figsize=(6.5, 4))
+    fig, ax = new_figure(figsize=(6.5, 4))
     for name, deviation in result.deviations().items():
         unit = "2R" if name != "theta" else "rad"
         ax.semilogy(result.t / units.time, np.maximum(deviation / scale[name], FLOOR), lw=0.9,
                     label=f"{name} [{unit}]")
     ax.set_xlabel(TIME_LABEL)
-    ax.set_ylabel("max over disks |ours - LAMMPS|")
+    ax.set_ylabel(f"max over disks |ours - LAMMPS| (equal: at {FLOOR:g})")
     ax.set_title(f"{scene.name}: F_x = {result.start.F_x:g} from {result.start.kind}, conventions "
                  f"{scene.effects.conventions}, LAMMPS {result.lammps_version}", fontsize=8)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    write_atomic(Path(path), lambda tmp: fig.savefig(tmp, dpi=100, format="png"))
-    plt.close(fig)
+    save_figure(fig, path, dpi=100)

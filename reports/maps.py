@@ -27,11 +27,10 @@ import numpy as np
 
 from diskfriction.dynamics.maps import COLUMNS, Axis, Cell, MapParams
 from diskfriction.continuation.windows import Window, complex_spans
-from diskfriction.files import save_json, save_text, write_atomic
+from diskfriction.files import save_json, save_text
+from diskfriction.reports.figures import DPI, OUTCOME_STYLE, new_figure, save_figure
 from diskfriction.reports.units import F_X_LABEL, PaperUnits
 from diskfriction.scenes import Scene
-
-DPI = 110
 STATUS_MARK = {"failed": "F", "ended": "E"}
 """How the plane shows a cell without a value: failed (no branch) and ended (branch stopped)."""
 
@@ -72,14 +71,6 @@ def save_map(out: Path, scene: Scene, axes: list[Axis], params: MapParams, versi
 
 # ---- figures (plots only: every number comes from the records) --------------------------------
 
-def save_figure(fig, path: Path) -> None:
-    """The figure as a PNG, written atomically, then closed."""
-    import matplotlib.pyplot as plt
-
-    write_atomic(Path(path), lambda tmp: fig.savefig(tmp, dpi=DPI, format="png"))
-    plt.close(fig)
-
-
 def key_label(axis: Axis) -> str:
     """Axis label of a varied key: its dotted name and its unit from the scene schema."""
     from diskfriction.scenes.load import SCHEMA
@@ -97,8 +88,8 @@ def headline(reason: str, width: int = 150) -> str:
 def draw_bands(ax, y: float, record: dict, params: MapParams) -> None:
     """One cell's row at height y: its branch's extent (grey line, x where it ended), complex
     windows (orange), windows whose run slid (red, thinner; adjacent ones merged as complex
-    windows are, continuation.windows.complex_spans), F_slide (black triangle); a failed or
-    ended cell says why."""
+    windows are, continuation.windows.complex_spans) and those whose run is not resolved
+    (slid None: grey, hatched), F_slide (black triangle); a failed or ended cell says why."""
     s = record["summary"]
     if s["status"] == "failed":
         ax.text(params.F_from, y, f"  failed: {headline(s['reason'])}", va="center", fontsize=6,
@@ -111,9 +102,12 @@ def draw_bands(ax, y: float, record: dict, params: MapParams) -> None:
     for a, b in complex_spans(Window(*w) for w in record["windows"]):
         ax.broken_barh([(a, b - a)], (y - 0.3, 0.6), facecolors="C1", edgecolors="C1",
                        linewidth=0.6, alpha=0.6, zorder=2)
-    for a, b in complex_spans(Window(*r["window"], int(bool(r["slid"]))) for r in record["runs"]):
-        ax.broken_barh([(a, b - a)], (y - 0.12, 0.24), facecolors="C3", edgecolors="C3",
-                       linewidth=0.6, zorder=3)
+    for outcome in (True, None):
+        style = OUTCOME_STYLE[outcome]
+        for a, b in complex_spans(Window(*r["window"], int(r["slid"] is outcome))
+                                  for r in record["runs"]):
+            ax.broken_barh([(a, b - a)], (y - 0.12, 0.24), facecolors=style["color"],
+                           edgecolors=style["color"], hatch=style["hatch"], linewidth=0.6, zorder=3)
     if s["F_slide"] is not None:
         ax.plot(s["F_slide"], y + 0.42, "v", color="k", ms=5, zorder=4)
 
@@ -142,8 +136,6 @@ def plot_bands(axis: Axis, cells: list[Cell], records: list[dict], params: MapPa
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    from diskfriction.reports.sections.common import new_figure
-
     fig, (bands, right) = new_figure(1, 2, figsize=(12, 1.6 + 0.32 * len(cells)), dpi=DPI,
                                      gridspec_kw={"width_ratios": [2.2, 1]})
     for y, record in enumerate(records):
@@ -154,7 +146,9 @@ def plot_bands(axis: Axis, cells: list[Cell], records: list[dict], params: MapPa
     handles = [Patch(color="C1", alpha=0.6, label=f"complex pair(s) of {params.matrix}"),
                Line2D([], [], color="0.6", label="branch (x: ended before the range's end)")]
     if params.slide is not None:
-        handles += [Patch(color="C3", label="window whose run slid"),
+        handles += [Patch(color=OUTCOME_STYLE[True]["color"], label="window whose run slid"),
+                    Patch(facecolor=OUTCOME_STYLE[None]["color"], hatch=OUTCOME_STYLE[None]["hatch"],
+                          label="run not resolved (energy budget did not close)"),
                     Line2D([], [], ls="", marker="v", color="k", label="F_slide")]
     bands.legend(handles=handles, fontsize=7, loc="lower left", bbox_to_anchor=(0.0, 1.01),
                  ncol=len(handles), frameon=False)
@@ -181,8 +175,6 @@ def plot_plane(axes: list[Axis], cells: list[Cell], records: list[dict], params:
     """The two-key figure (module docstring): the first key along x, the second along y, one
     square per cell (evenly, whatever the spacing of the values) with its value, failed and
     ended cells marked F and E."""
-    from diskfriction.reports.sections.common import new_figure
-
     what = "F_slide" if params.slide is not None else "F_complex"
     shape = tuple(len(axis.values) for axis in axes)
     value = np.full(shape, np.nan)

@@ -18,6 +18,7 @@ from diskfriction.continuation.bifurcations import SpecialPoint
 from diskfriction.files import save_json, save_npz
 from diskfriction.continuation.records import RECORD_KEYS, collision_record
 from diskfriction.reports.bifurcation import diagram_axes, draw_spectrum, save_diagram
+from diskfriction.reports.figures import relabel
 
 BRANCH_KEYS = ("u", "eigenvalues", "n_complex", "residual", "parameter", "units", "matrix")
 """The arrays of branch.npz besides the parameter's values."""
@@ -64,17 +65,14 @@ def plot_problem_diagram(result: BranchResult, spec: BifurcationProblem, title: 
     handles = draw_spectrum(top, bottom, b.p, b.eigenvalues, np.ones(len(b), int), b.n_complex,
                             [(c.p, c.kind, c.eigenvalue) for c in result.collisions], spec.matrix,
                             x_label=parameter_label(spec), eig_unit=spec.eigenvalue_units)
-    handles[0].set_label(f"branch {b.p[0]:.3g} -> {b.p[-1]:.3g}")  # not a load: no (un)loading
-    scale = float(np.max(np.abs(b.eigenvalues.real), initial=0.0))
-    if scale > 0:  # the linear core of the symlog axis: 1e-3 of this problem's spectrum
-        bottom.set_yscale("symlog", linthresh=1e-3 * scale)
+    relabel(handles[0], f"branch {b.p[0]:.3g} -> {b.p[-1]:.3g}\n(one colour per eigenvalue)")
     for points, (marker, color), what in ((result.folds, FOLD, "fold"), (result.hopf, HOPF, "Hopf point")):
         for s in points:
             bottom.plot(s.p, 0.0, marker, color=color, ms=7, mfc="none")
             top.axvline(s.p, color=color, ls=":", lw=0.8)
             if s.kind == "hopf":
-                top.plot(s.p, abs(np.imag(s.value)), marker, color=color, ms=7)
+                top.plot(s.p, abs(np.imag(s.value)), marker, color=color, ms=7, mfc="none")
         if points:
             handles.append(Line2D([], [], ls="", marker=marker, color=color, mfc="none",
-                                  label=f"{what} ({len(points)})"))
+                                  label=f"{what} ({len(points)}), dotted line above"))
     save_diagram(fig, top, handles, title, path)

@@ -58,6 +58,7 @@ def test_the_diagram_draws_lines_windows_bubbles_and_a_key():
     from matplotlib.collections import LineCollection
 
     from diskfriction.reports.bifurcation import draw_spectrum, narrow_bubbles, pair_line
+    from diskfriction.reports.figures import handle_label
 
     F = np.linspace(0.0, 1.0, 11)
     im = np.where((F > 0.2) & (F < 0.6), 1e-3, 0.0)
@@ -70,8 +71,8 @@ def test_the_diagram_draws_lines_windows_bubbles_and_a_key():
     fig, (top, bottom) = plt.subplots(2, 1)
     handles = draw_spectrum(top, bottom, F, lam, np.ones(F.size, int), np.zeros(F.size, int),
                             collisions, "J")
-    labels = [h.get_label() for h in handles]
-    assert labels == ["loading 0 -> 1", "a complex pair (located windows)", "birth of a pair (2)",
+    labels = [handle_label(h) for h in handles]
+    assert labels == ["loading 0 -> 1\n(one colour per eigenvalue)", "a complex pair (located windows)", "birth of a pair (2)",
                       "death of a pair (2)", "bubble narrower than a pixel (1)"]
     assert [line.get_xdata()[0] for line in top.get_lines() if line.get_marker() == "D"] == [0.8 + 5e-10]
     (pair,), re_lines = (c.get_segments() for ax in (top, bottom) for c in ax.collections

@@ -198,3 +198,5 @@ def test_verify_runs_every_window_and_writes_its_table(tmp_path):
             assert r["sigma_measured"] == pytest.approx(r["sigma_predicted"], rel=0.05)
     assert any(r["sigma_measured"] is not None for r in rows)
     assert "| window F_x |" in (tmp_path / "out" / "verify.md").read_text()
+    assert (tmp_path / "out" / "verify.png").read_bytes()[:4] == b"\x89PNG"
+    assert "verify.png" in result.stdout

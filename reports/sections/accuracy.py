@@ -5,7 +5,8 @@ import numpy as np
 
 from diskfriction.reports.compute.runs import missing
 from diskfriction.reports.registry import Need, Section
-from diskfriction.reports.sections.common import failures, fmt, new_figure, table
+from diskfriction.reports.figures import label_points, new_figure
+from diskfriction.reports.sections.common import failures, fmt, table
 
 
 def needs(scene, settings):
@@ -31,25 +32,25 @@ def _floor(values: np.ndarray) -> np.ndarray:
 def _continuation(ax, c, s):
     for name, fmt_, marker in (("ds", "span/{:g}", "o-"), ("tol", "tol_p {:g}", "s-")):
         ax.loglog(c[f"{name}_seconds"], _floor(c[f"{name}_error"]), marker, ms=4,
-                  label="ds_max = span/d" if name == "ds" else "bracket tol_p")
-        for x, y, v in zip(c[f"{name}_seconds"], _floor(c[f"{name}_error"]), c[f"{name}_values"]):
-            ax.annotate(fmt_.format(v), (x, y), fontsize=6)
+                  label="ds_max = span/d (tol_p default)" if name == "ds"
+                  else "bracket tol_p (ds_max default)")
     ax.set_xlabel("wall time of the sweep [s]")
     ax.set_ylabel("max collision-location error [raw force]")
     ax.set_title(f"continuation (J): reference ds = span/{s.reference_divisions}, "
                  f"tol_p = {s.reference_tol_p:g}", fontsize=8)
     ax.legend(fontsize=7)
+    for name, fmt_ in (("ds", "span/{:g}"), ("tol", "tol_p {:g}")):
+        label_points(ax, c[f"{name}_seconds"], _floor(c[f"{name}_error"]),
+                     [fmt_.format(v) for v in c[f"{name}_values"]])
 
 
 def _jacobian(ax, j):
     for order in (2, 4):
-        sec = j[f"fd{order}_seconds"]
-        ax.loglog(sec, _floor(j[f"fd{order}_error"]), "o-", ms=4,
-                  label=f"central differences, order {order}")
-        for x, y, h in zip(sec, _floor(j[f"fd{order}_error"]), j["steps"]):
-            ax.annotate(f"h={h:.0e}", (x, y), fontsize=5)
-    ax.axvline(j["exact_seconds"], color="k", ls="--", lw=0.8, label="generated J (the reference)")
-    ax.set_xlabel("wall time of one Jacobian [s]")
+        ax.loglog(j["steps"], _floor(j[f"fd{order}_error"]), "o-", ms=4,
+                  label=f"central differences, order {order} "
+                        f"({np.median(j[f'fd{order}_seconds']) * 1e3:.2g} ms each)")
+    ax.plot([], [], " ", label=f"reference: the generated J ({j['exact_seconds'] * 1e6:.2g} us each)")
+    ax.set_xlabel("difference step h [raw length]")
     ax.set_ylabel("row-relative max error")
     ax.set_title("Jacobian: FD of the generated F vs the generated J", fontsize=8)
     ax.legend(fontsize=6)
@@ -63,12 +64,11 @@ def _dynamics(ax, d):
     if ref["V_cm"]:
         ax.loglog(d["seconds"], _floor(np.abs(d["V_cm"] - ref["V_cm"]) / abs(ref["V_cm"])), "^-",
                   ms=4, label=f"V_cm vs dt fraction {ref['fraction']:g} (rel.)")
-    for x, f in zip(d["seconds"], d["fraction"]):
-        ax.annotate(f"{f:g}", (x, ax.get_ylim()[0]), fontsize=6)
     ax.set_xlabel("wall time of the run [s]")
     ax.set_ylabel("error")
-    ax.set_title("dynamics: dt = fraction x 2 / omega_max", fontsize=8)
+    ax.set_title("dynamics: dt = fraction x 2 / omega_max (fraction at each point)", fontsize=8)
     ax.legend(fontsize=6)
+    label_points(ax, d["seconds"], _floor(d["budget_error"]), [f"{f:g}" for f in d["fraction"]])
 
 
 def render(ctx):
@@ -79,6 +79,7 @@ def render(ctx):
     text = []
     if panels:
         fig, axes = new_figure(1, len(panels), figsize=(4.6 * len(panels), 4.2), squeeze=False)
+        fig.tight_layout()  # first, so that the point labels are placed on the final axes
         for ax, (label, draw) in zip(axes[0], panels):
             draw(ax, ctx.get(label))
         fig.tight_layout()

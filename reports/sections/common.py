@@ -12,16 +12,6 @@ from diskfriction.scenes import Scene
 MATRICES = ("J", "M^-1 J")
 
 
-def new_figure(*args, **kwargs):
-    """matplotlib.pyplot.subplots on the Agg backend."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt.subplots(*args, **kwargs)
-
-
 def branch_need(scene: Scene, settings: Settings, matrix: str, label: str | None = None) -> Need:
     return Need(label or f"branch[{matrix}]", "branch", scene,
                 {"matrix": matrix, "ds_divisions": settings.ds_divisions})

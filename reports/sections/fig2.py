@@ -5,8 +5,9 @@ import numpy as np
 
 from diskfriction.continuation.windows import complex_spans, complex_windows
 from diskfriction.reports.bifurcation import draw_spectrum
+from diskfriction.reports.figures import legend, new_figure
 from diskfriction.reports.registry import Section
-from diskfriction.reports.sections.common import MATRICES, branch_need, failures, new_figure, table
+from diskfriction.reports.sections.common import MATRICES, branch_need, failures, table
 from diskfriction.words import count
 
 
@@ -14,9 +15,15 @@ def needs(scene, settings):
     return [branch_need(scene, settings, m) for m in MATRICES]
 
 
+LEGEND_ROOM = 1.75
+"""Height of the Im panels over the extent of their lines: the top part holds the legend."""
+
+
 def plot(ctx):
     """Two columns (J, M^-1 J), rows Im and Re (reports.bifurcation.draw_spectrum), the
     paper's loads dotted."""
+    from matplotlib.lines import Line2D
+
     fig, axes = new_figure(2, 2, sharex=True, figsize=(11, 7.5))
     for col, matrix in enumerate(MATRICES):
         b = ctx.get(f"branch[{matrix}]")
@@ -31,8 +38,11 @@ def plot(ctx):
                                 b["n_complex"], collisions, matrix)
         for F in ctx.settings.loads:
             top.axvline(F, color="k", ls=":", lw=0.7)
-        top.set_title(f"{matrix}; dotted: the paper's loads", fontsize=8)
-        top.legend(handles=handles, fontsize=6, loc="best", framealpha=0.85)
+        handles.append(Line2D([], [], color="k", ls=":", lw=0.7, label="the paper's loads"))
+        top.set_title(matrix, fontsize=9)
+        low, high = top.get_ylim()
+        top.set_ylim(low, low + LEGEND_ROOM * (high - low))  # the legend above the lines
+        legend(top, handles, fontsize=6, loc="upper left", ncol=2, framealpha=0.9)
     fig.suptitle(f"Fig. 2, {ctx.scene.name}: spectrum against F_x", fontsize=10)
     fig.tight_layout()
     return fig

@@ -7,7 +7,8 @@ import numpy as np
 
 from diskfriction.reports.analysis import PAPER_V1, PAPER_V2
 from diskfriction.reports.registry import Section
-from diskfriction.reports.sections.common import ensemble_need, failures, new_figure, table
+from diskfriction.reports.figures import new_figure
+from diskfriction.reports.sections.common import ensemble_need, failures, table
 from diskfriction.reports.sections.runs import NEEDS_ENSEMBLE
 
 

@@ -4,7 +4,8 @@ from __future__ import annotations
 import numpy as np
 
 from diskfriction.reports.registry import Section
-from diskfriction.reports.sections.common import failures, mode_needs, new_figure, table
+from diskfriction.reports.figures import new_figure
+from diskfriction.reports.sections.common import failures, mode_needs, table
 
 
 def needs(scene, settings):

@@ -18,7 +18,8 @@ import numpy as np
 
 from diskfriction.reports import analysis as A
 from diskfriction.reports.registry import Need, Section
-from diskfriction.reports.sections.common import ensemble_need, failures, fmt, new_figure, run_need, table
+from diskfriction.reports.figures import new_figure, outcome_word
+from diskfriction.reports.sections.common import ensemble_need, failures, fmt, run_need, table
 from diskfriction.reports.sections.runs import NEEDS_ENSEMBLE
 from diskfriction.scenes import Scene
 
@@ -75,7 +76,8 @@ def scaled(estimate: dict | None, unit: float) -> dict | None:
 class Reading:
     """One variant's numbers in the paper's units (None where missing or failed): V1 by load,
     V2, the V_cm fit (intercept, slope) [2R/tau]; at 0.062 the complex pairs of J and
-    M^-1 J (None: no equilibrium) and whether the run slid (None: no run)."""
+    M^-1 J (None: no equilibrium), whether a run was made (ran) and whether it slid (None: no
+    run, or a run whose energy budget did not close: not resolved)."""
 
     V1: dict
     V2: dict | None
@@ -83,6 +85,7 @@ class Reading:
     slope: dict | None
     V_cm: dict
     pairs: dict
+    ran: bool
     slid: bool | None
 
     @classmethod
@@ -99,7 +102,7 @@ class Reading:
                    None if fit is None else scaled(fit["intercept"], v),
                    None if fit is None else scaled(fit["slope"], v),
                    {} if vcm is None else {float(F): scaled(e, v) for F, e in vcm["V_cm"].items()},
-                   pairs, None if run is None else bool(run["summary"]["slid"]))
+                   pairs, run is not None, None if run is None else run["summary"]["slid"])
 
     def claims_held(self) -> int | None:
         """How many of the paper's two 0.062 claims hold: J all real, the chain stays put."""
@@ -116,7 +119,7 @@ def estimate(e: dict | None) -> str:
 
 def outcome(r: Reading) -> str:
     J, MJ = (("n/a" if r.pairs[m] is None else str(r.pairs[m])) for m in MATRICES)
-    run = "n/a" if r.slid is None else ("slid" if r.slid else "stayed")
+    run = outcome_word(r.slid) if r.ran else "n/a"
     return f"pairs J {J}, M^-1 J {MJ}; {run}"
 
 

@@ -4,11 +4,12 @@ from __future__ import annotations
 import numpy as np
 
 from diskfriction.reports import analysis as A
+from diskfriction.reports.figures import first_event, outcome_word
 from diskfriction.reports.registry import Section
 from diskfriction.reports.sections.common import (branch_need, ensemble_need, failures, fmt, mode_needs,
                                      run_need, spectra_need, table)
 from diskfriction.reports.sections.fig6 import mode_numbers
-from diskfriction.reports.sections.runs import NEEDS_ENSEMBLE, NEEDS_SIMULATE, first_event
+from diskfriction.reports.sections.runs import NEEDS_ENSEMBLE, NEEDS_SIMULATE
 
 
 def needs(scene, settings):
@@ -77,7 +78,7 @@ def _run_rows(ctx):
         rows.append(["Fig. 3: M at the first breach, 0.083", "~1e-2 R (units as printed)",
                      fmt(M_b) + " (2R)^2", "", reading])
         rows.append(["Fig. 3: then sliding (M linear in t), 0.083", "yes",
-                     "slid" if r["summary"]["slid"] else "did not slide", "", reading])
+                     outcome_word(r["summary"]["slid"]), "", reading])
     r = run(s.fig4_F_x)
     if r is not None:
         d = np.hypot(r["disk_x"] - r["disk_x"][0], r["disk_y"] - r["disk_y"][0]) / u.length

@@ -4,9 +4,12 @@ from __future__ import annotations
 
 import dataclasses
 
+import numpy as np
+
 from diskfriction.reports import analysis as A
 from diskfriction.reports.registry import Section
-from diskfriction.reports.sections.common import branch_need, failures, new_figure, spectra_need, table
+from diskfriction.reports.figures import new_figure
+from diskfriction.reports.sections.common import branch_need, failures, spectra_need, table
 from diskfriction.reports.units import F_X_LABEL
 
 
@@ -31,26 +34,38 @@ def needs(scene, settings):
 
 
 def plot(ctx, found):
+    """Per eps, the largest Im lambda of each reading against F_x on a log axis (all real: a
+    gap), J dashed over the M^-1 J lines (with c = 4 they coincide), the paper's values and
+    loads; the legend right of the panels."""
+    from matplotlib.lines import Line2D
+
     eps_values = ctx.settings.eps_values
-    fig, axes = new_figure(1, len(eps_values), figsize=(4.2 * len(eps_values), 4), sharey=True,
-                           squeeze=False)
+    fig, axes = new_figure(1, len(eps_values), figsize=(4.2 * len(eps_values) + 2.2, 4),
+                           sharey=True, squeeze=False)
     for ax, eps in zip(axes[0], eps_values):
-        for k, (name, matrix, variant, b) in enumerate(f for f in found if f[2].eps == eps):
+        colors = iter(f"C{k}" for k in range(10) if k != 3)  # red: the paper's values
+        for name, matrix, variant, b in (f for f in found if f[2].eps == eps):
             leg = b["leg"] == 1
             im = A.max_imag(b["eigenvalues"][leg]) / ctx.units.eigenvalue(matrix)
-            ax.plot(b["F_x"][leg], im, lw=1.4 if matrix == "J" else 0.8,
-                    color="k" if matrix == "J" else f"C{k}", label=name.split(", eps")[0])
-        ax.plot(list(A.PAPER_IM), list(A.PAPER_IM.values()), "rx", ms=8, label="paper (J)")
+            J = matrix == "J"
+            ax.plot(b["F_x"][leg], np.where(im > 0, im, np.nan), lw=1.2 if J else 0.9,
+                    ls="--" if J else "-", color="k" if J else next(colors), zorder=3 if J else 2,
+                    label=name.split(", eps")[0])
+        ax.plot(list(A.PAPER_IM), list(A.PAPER_IM.values()), "rx", ms=8, zorder=4, label="paper (J)")
         for F in A.PAPER_COMPLEX_LOADS:
-            ax.axvline(F, color="C2", ls=":", lw=0.8)
-        ax.axvline(A.PAPER_REAL_LOAD, color="C3", ls=":", lw=0.8)
-        ax.set_yscale("symlog", linthresh=1e-5)
+            ax.axvline(F, color="0.4", ls=":", lw=0.9)
+        ax.axvline(A.PAPER_REAL_LOAD, color="0.4", ls="-.", lw=0.9)
+        ax.set_yscale("log")
         ax.set_title(f"eps = {eps:g}", fontsize=9)
         ax.set_xlabel(F_X_LABEL, fontsize=8)
-    axes[0, 0].set_ylabel("largest Im lambda [k_n (2R)^1/2 for J, 1/tau^2 for M^-1 J]", fontsize=8)
-    axes[0, -1].legend(fontsize=6)
-    fig.suptitle("Readings: largest Im lambda against F_x (dotted: the paper's complex loads, "
-                 "green, and its all-real load, red)", fontsize=9)
+    axes[0, 0].set_ylabel(r"largest Im $\lambda$ [$k_n (2R)^{1/2}$ for J, $1/\tau^2$ for M^-1 J]",
+                          fontsize=8)
+    handles, _ = axes[0, -1].get_legend_handles_labels()
+    handles += [Line2D([], [], color="0.4", ls=":", lw=0.9, label="paper: complex at these loads"),
+                Line2D([], [], color="0.4", ls="-.", lw=0.9, label="paper: all real at this load"),
+                Line2D([], [], ls="", label="a gap: all eigenvalues real")]
+    axes[0, -1].legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0))
+    fig.suptitle("Readings: the largest Im lambda against F_x per reading of the model", fontsize=9)
     fig.tight_layout()
     return fig
 

@@ -4,18 +4,15 @@ from __future__ import annotations
 import numpy as np
 
 from diskfriction.reports.compute.runs import missing
+from diskfriction.reports.analysis import PAPER_VCM
+from diskfriction.reports.figures import EVENTS, first_event, legend, mark_events, new_figure, slid_word
 from diskfriction.reports.registry import Section
-from diskfriction.reports.sections.common import ensemble_need, failures, fmt, new_figure, run_need, table
+from diskfriction.reports.simulation import SPIRAL_PERIODS, draw_spiral
+from diskfriction.reports.sections.common import ensemble_need, failures, fmt, run_need, table
 from diskfriction.reports.units import TIME_LABEL
 
 NEEDS_SIMULATE = lambda: missing("diskfriction.dynamics.simulate")  # noqa: E731
 NEEDS_ENSEMBLE = lambda: missing("diskfriction.dynamics.ensemble")  # noqa: E731
-
-
-def first_event(summary: dict, event: str) -> float | None:
-    """Earliest time any disk had `event` ("first_breach" or "onset") [raw time], or None."""
-    times = [t for t in summary[event]["t"] if t is not None]
-    return min(times) if times else None
 
 
 def protocol(ctx) -> str:
@@ -47,7 +44,7 @@ def fig3_render(ctx):
         ax.loglog(r["t"][ok] / u.time, r["M"][ok] / u.length**2, lw=0.7, label=f"F_x = {F:g}")
         breach = first_event(sm, "first_breach")
         rows.append([f"{F:g}", fmt(sm["M_max"] / u.length**2), fmt(r["M"][-1] / u.length**2),
-                     "no" if breach is None else fmt(breach / u.time, 4), "yes" if sm["slid"] else "no",
+                     "no" if breach is None else fmt(breach / u.time, 4), slid_word(sm["slid"]),
                      fmt(None if sm["sigma_measured"] is None else sm["sigma_measured"] * u.time),
                      fmt(sm["sigma_predicted"] * u.time)])
     ax.set_xlabel(TIME_LABEL)
@@ -75,23 +72,16 @@ def fig4_render(ctx):
     r = ctx.get(need.label)
     if r is None:
         return failures(ctx)
-    x = (r["disk_x"] - r["disk_x"][0]) / u.length
-    y = (r["disk_y"] - r["disk_y"][0]) / u.length
-    fig, ax = new_figure(figsize=(6, 5))
-    points = ax.scatter(x, y, c=r["disk_t"] / u.time, s=0.3, cmap="viridis")
-    fig.colorbar(points, ax=ax, label=TIME_LABEL)
-    breach = r["summary"]["first_breach"]["t"][s.fig4_disk - 1]
-    if breach is not None and breach <= r["disk_t"][-1]:
-        k = np.searchsorted(r["disk_t"], breach)
-        ax.plot(x[k], y[k], "r*", ms=10, label="first Coulomb breach of this disk")
-        ax.legend(fontsize=8)
-    ax.set_xlabel(r"$x - x(0)$ [$2R$]")
-    ax.set_ylabel(r"$y - y(0)$ [$2R$]")
-    ax.set_title(f"Fig. 4, {ctx.scene.name}: disk {s.fig4_disk} at F_x = {s.fig4_F_x:g}", fontsize=9)
+    fig, ax = new_figure(figsize=(6.5, 5))
+    sm = r["summary"]
+    draw_spiral(fig, ax, r["disk_t"], r["disk_x"] - r["disk_x"][0], r["disk_y"] - r["disk_y"][0],
+                sm["fit"]["period"], first_event(sm, "first_breach"), u, s.fig4_disk)
+    fig.suptitle(f"Fig. 4, {ctx.scene.name}: disk {s.fig4_disk} at F_x = {s.fig4_F_x:g}", fontsize=10)
     fig.tight_layout()
-    return "\n".join([ctx.figure(fig, "fig4", f"Fig. 4: the x-y trajectory of disk {s.fig4_disk} "
-                                 f"until 10% past its first breach or onset of sliding, coloured by "
-                                 f"time"), protocol(ctx)]) + failures(ctx)
+    return "\n".join([ctx.figure(fig, "fig4", f"Fig. 4: the x-y path of disk {s.fig4_disk}'s centre "
+                                 f"over the {SPIRAL_PERIODS} oscillation periods before the first "
+                                 f"Coulomb breach of any disk, coloured by time: the spiral of "
+                                 f"growing amplitude that ends in the breach"), protocol(ctx)]) + failures(ctx)
 
 
 # ---------------------------------------------------------------- Fig. 7
@@ -105,57 +95,61 @@ def fig7_needs(scene, settings):
 
 def fig7_render(ctx):
     u, s = ctx.units, ctx.settings
-    fig, (upper, lower) = new_figure(2, 1, figsize=(7, 7.5))
+    fig, ((cx_ax, cy_ax), (loads_ax, vcm_ax)) = new_figure(2, 2, figsize=(11, 7.5))
     main = ctx.get(run_need(ctx.scene, s, s.fig7_F_x).label)
     text = []
     if main is not None:
         t = main["t"] / u.time
-        upper.plot(t, (main["C_x"] - main["C_x"][0]) / u.length, lw=0.8)
-        for event, color, name in (("first_breach", "C3", "first Coulomb breach"),
-                                   ("onset", "C2", "first onset of sliding")):
-            when = first_event(main["summary"], event)
-            if when is not None:
-                upper.axvline(when / u.time, color=color, ls="--", lw=0.8, label=name)
-        upper.legend(fontsize=7, loc="upper left")
-        upper.set_xlabel(TIME_LABEL)
-        upper.set_ylabel(r"$C_x - C_x(0)$ [$2R$]")
-        upper.set_title(f"F_x = {s.fig7_F_x:g}; inset: C_y", fontsize=9)
-        inset = upper.inset_axes([0.6, 0.15, 0.37, 0.3])
-        inset.plot(t, (main["C_y"] - main["C_y"][0]) / u.length, lw=0.4, color="C1")
-        inset.set_ylabel(r"$C_y - C_y(0)$ [$2R$]", fontsize=6)
-        inset.tick_params(labelsize=6)
+        cx_ax.plot(t, (main["C_x"] - main["C_x"][0]) / u.length, lw=0.8)
+        events = {event: first_event(main["summary"], event) for event in EVENTS}
+        marks = mark_events(cx_ax, events, u.time)
+        mark_events(cy_ax, events, u.time)
+        if marks:
+            legend(cx_ax, marks, fontsize=7, loc="upper left")
+        cy_ax.plot(t, (main["C_y"] - main["C_y"][0]) / u.length, lw=0.4, color="C1")
         text.append(f"At F_x = {s.fig7_F_x:g}: C_y ranges over "
                     f"{main['summary']['C_y_range'] / u.length:.3g} (2R) in the whole run; "
                     f"V_cm over the last half = {main['summary']['V_cm'] / u.velocity:.3g} 2R/tau.\n")
+    cx_ax.set(xlabel=TIME_LABEL, ylabel=r"$C_x - C_x(0)$ [$2R$]")
+    cx_ax.set_title(f"centre of mass along the load, F_x = {s.fig7_F_x:g}", fontsize=9)
+    cy_ax.set(xlabel=TIME_LABEL, ylabel=r"$C_y - C_y(0)$ [$2R$]")
+    cy_ax.set_title(f"centre of mass across the load, F_x = {s.fig7_F_x:g}", fontsize=9)
     for F in s.vcm_loads:
         r = ctx.get(run_need(ctx.scene, s, F).label)
         if r is not None:
-            lower.plot(r["t"] / u.time, (r["C_x"] - r["C_x"][0]) / u.length, lw=0.7, label=f"{F:g}")
-    lower.set_xlabel(TIME_LABEL)
-    lower.set_ylabel(r"$C_x - C_x(0)$ [$2R$]")
-    lower.legend(fontsize=7, title="F_x", title_fontsize=7, loc="upper left")
+            loads_ax.plot(r["t"] / u.time, (r["C_x"] - r["C_x"][0]) / u.length, lw=0.7, label=f"{F:g}")
+    loads_ax.set(xlabel=TIME_LABEL, ylabel=r"$C_x - C_x(0)$ [$2R$]")
+    loads_ax.set_title("centre of mass along the load, one run per F_x", fontsize=9)
+    loads_ax.legend(fontsize=7, title="F_x", title_fontsize=7, loc="upper left")
     ens = ctx.get("ensemble[vcm]")
     if ens is not None:
-        inset = lower.inset_axes([0.62, 0.12, 0.35, 0.35])
         loads = np.array(s.vcm_loads)
-        V = np.array([np.nan if ens["V_cm"][str(F)]["value"] is None else ens["V_cm"][str(F)]["value"]
-                      for F in loads]) / u.velocity
-        inset.plot(loads, V, "o", ms=3)
+        V = [ens["V_cm"][str(F)] for F in loads]
+        vcm_ax.errorbar(loads, [np.nan if e["value"] is None else e["value"] / u.velocity for e in V],
+                        yerr=[0.0 if e["error"] is None else e["error"] / u.velocity for e in V],
+                        fmt="o", ms=4, capsize=2,
+                        label=f"mean of {s.vcm_realizations} runs (standard error)")
         fit = ens["V_cm_fit"]
         if fit is not None:
             a, b = fit["intercept"]["value"] / u.velocity, fit["slope"]["value"] / u.velocity
-            inset.plot(loads, a + b * loads, "-", lw=0.8)
+            vcm_ax.plot(loads, a + b * loads, "-", lw=0.8, label=f"fit {a:.2g} + {b:.2g} F_x")
             text.append(f"Fit over {fit['slope']['n']} loads: V_cm = {a:.3g} + {b:.3g} F_x (2R/tau); "
                         f"paper: -1.3e-5 + 4.5e-4 F_x.\n")
-        inset.set_xlabel("F_x", fontsize=6)
-        inset.set_ylabel(r"$V_{cm}$ [$2R/\tau$]", fontsize=6)
-        inset.tick_params(labelsize=6)
+        paper_a, paper_b = PAPER_VCM
+        vcm_ax.plot(loads, paper_a + paper_b * loads, "k:", lw=0.8,
+                    label=f"paper: {paper_a:.2g} + {paper_b:.2g} F_x")
+        vcm_ax.legend(fontsize=7, loc="upper left")
     else:
-        text.append(f"V_cm(F_x) inset: not built: {NEEDS_ENSEMBLE() or 'the ensemble failed'}.\n")
+        vcm_ax.text(0.5, 0.5, "V_cm(F_x): not built", ha="center", transform=vcm_ax.transAxes)
+        text.append(f"V_cm(F_x): not built: {NEEDS_ENSEMBLE() or 'the ensemble failed'}.\n")
+    vcm_ax.set(xlabel="$F_x$ [raw force]", ylabel=r"$V_{cm}$ [$2R/\tau$]")
+    vcm_ax.set_title("centre-of-mass velocity over the last half of each run", fontsize=9)
+    fig.suptitle(f"Fig. 7, {ctx.scene.name}: the centre of mass", fontsize=10)
     fig.tight_layout()
-    text.insert(0, ctx.figure(fig, "fig7", "Fig. 7: the centre of mass; upper: C_x(t) with the "
-                              "first breach and onset of sliding, inset C_y(t); lower: C_x(t) for "
-                              "several F_x, inset V_cm against F_x with the linear fit"))
+    text.insert(0, ctx.figure(fig, "fig7", "Fig. 7: the centre of mass; C_x(t) and C_y(t) at "
+                              f"F_x = {s.fig7_F_x:g} with the first breach and onset of sliding, "
+                              "C_x(t) for several F_x, and V_cm against F_x with the linear fit "
+                              "(the paper's insets as panels of their own)"))
     text.append(protocol(ctx))
     return "\n".join(text) + failures(ctx)
 
