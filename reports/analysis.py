@@ -1,4 +1,4 @@
-"""Readings of cached results against the paper's claims (MODEL.md, "What the paper reports").
+"""Readings of cached results against the paper's claims (docs/model.md#targets).
 
 Pure functions of the computations' result dicts (raw units in, paper units out where said);
 no physics is computed here beyond counting and comparing.
@@ -11,7 +11,7 @@ import numpy as np
 
 from diskfriction.continuation.spectra import eigen_status
 
-# The paper's numbers (MODEL.md), paper units.
+# The paper's numbers (docs/model.md#targets), paper units.
 PAPER_COMPLEX_LOADS = (0.03, 0.04)
 PAPER_REAL_LOAD = 0.062
 PAPER_SECOND_PAIR_BY = 0.083
@@ -84,7 +84,7 @@ def _at(spectra: dict, F: float) -> int | None:
 
 
 def fig2_claims(branch: dict | None, spectra: dict | None, eig_unit: float) -> list[Claim]:
-    """The paper's Fig. 2 claims (MODEL.md) read on one branch and its spectra at the loads:
+    """The paper's Fig. 2 claims (docs/model.md#targets) read on one branch and its spectra at the loads:
     complex at 0.03 and 0.04, all real at 0.062, a pair at 0.083 born after the first window
     (after 0.04), Im lambda at 0.083/0.087/0.090 within a factor FACTOR of the paper's."""
     claims = []

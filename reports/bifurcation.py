@@ -1,6 +1,6 @@
 """Bifurcation outputs: branch.npz, collisions.json and the diagram (the paper's Fig. 2).
 
-Files hold raw units (MODEL.md: m = 1, 2R = 1, k_n = 2000); the diagram shows the paper's units
+Files hold raw units (docs/model.md#units: m = 1, 2R = 1, k_n = 2000); the diagram shows the paper's units
 (reports/units.py: eigenvalues / k_n for the paper's scene) and F_x as the paper quotes it.
 """
 from __future__ import annotations

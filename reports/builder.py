@@ -185,7 +185,7 @@ def build_report(scenes: list[Scene], out: Path, only: Optional[tuple[str, ...]]
 def _title(scenes: list[Scene], sections: list[Section]) -> str:
     return ("# diskfriction report\n\n"
             "Charan, Chattoraj, Pica Ciamarra, Procaccia, PRL 124, 030602 (2020), recomputed from "
-            "the model in MODEL.md. Paper units on every axis: lengths in 2R, time in "
+            "the model in docs/model.md. Paper units on every axis: lengths in 2R, time in "
             "tau = sqrt(m / (k_n (2R)^(1/2))), velocities in 2R/tau, eigenvalues of J in "
             "k_n (2R)^(1/2) and of M^-1 J in 1/tau^2 (both lambda / k_n for the paper's scene), "
             "F_x in raw force units as the paper quotes it. How the report is built and what "

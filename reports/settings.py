@@ -1,6 +1,6 @@
 """The report's parameters (loads, step sizes, run lengths), one frozen dataclass.
 
-Raw units (MODEL.md) for every value; `--set KEY=VALUE` on the command line changes one
+Raw units (docs/model.md#units) for every value; `--set KEY=VALUE` on the command line changes one
 (tuples as comma-separated lists). A changed setting changes the cache key of exactly the
 computations that take it.
 """
@@ -13,13 +13,13 @@ from dataclasses import dataclass
 
 @dataclass(frozen=True)
 class Settings:
-    # the paper's loads (MODEL.md, Fig. 2 and 5): spectra at exactly these F_x
+    # the paper's loads (docs/model.md#targets, Fig. 2 and 5): spectra at exactly these F_x
     loads: tuple[float, ...] = (0.03, 0.04, 0.062, 0.083, 0.087, 0.090)
     ds_divisions: int = 60  # sweeps: ds_max = span / ds_divisions (continuation's default)
     # Fig. 6: the state the shear mode is taken at, and the pre-compressed reading shown beside it
     mode_F_x: float = 0.087
     mode_eps: float = 1e-5
-    # readings (MODEL.md's ambiguous ones)
+    # readings (the ambiguous ones of docs/model.md#stability)
     inertias: tuple[float, ...] = (0.4, 0.5, 1.0, 4.0)
     eps_values: tuple[float, ...] = (0.0, 1e-5, 1e-4)
     # accuracy against cost

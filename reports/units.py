@@ -1,10 +1,10 @@
-"""The paper's units (MODEL.md), and axis labels that say them.
+"""The paper's units (docs/model.md#units), and axis labels that say them.
 
 Raw units are the scene's (m, 2R, k_n as given). The paper reports
   lengths in 2R,  time in tau = sqrt(m / (k_n (2R)^(1/2))),  velocities in 2R / tau,
   eigenvalues of J in k_n (2R)^(1/2) [force / length], eigenvalues of M^-1 J in 1 / tau^2,
   frequencies and growth rates in 1 / tau,  F_x as quoted (raw force; m = 1, 2R = 1).
-For the paper's scene (m = 1, 2R = 1) both eigenvalue units are k_n: lambda / k_n, as MODEL.md
+For the paper's scene (m = 1, 2R = 1) both eigenvalue units are k_n: lambda / k_n, as docs/model.md#units
 says, and tau = 0.02236 raw time units.
 """
 from __future__ import annotations

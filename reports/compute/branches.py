@@ -1,5 +1,5 @@
 """Continuation-derived computations: the branch with its collisions, spectra at given loads,
-the pure y shear-wave eigenmode. Raw units in every result (MODEL.md)."""
+the pure y shear-wave eigenmode. Raw units in every result (docs/model.md#units)."""
 from __future__ import annotations
 
 import numpy as np

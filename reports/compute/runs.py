@@ -1,5 +1,5 @@
 """Dynamics-derived computations: single runs (Figs. 3, 4, 7 upper) and ensembles (Fig. 5,
-Fig. 7 lower). Raw units in every result (MODEL.md)."""
+Fig. 7 lower). Raw units in every result (docs/model.md#units)."""
 from __future__ import annotations
 
 import importlib.util

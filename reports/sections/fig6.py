@@ -67,7 +67,7 @@ def render(ctx):
         "a ring with uniform pre-compression (second row) has the exact pure-y mode of "
         "wavelength 2 (alternating disks; pair and substrate shear decouple from theta at "
         f"k = pi). At eps = 0, F_x = 0 all y-modes are degenerate at omega tau = "
-        f"(1.5 k_n delta_w^(1/2) / m)^(1/2) tau = {omega0:.4f} (MODEL.md), the eps -> 0 limit "
+        f"(1.5 k_n delta_w^(1/2) / m)^(1/2) tau = {omega0:.4f} (docs/model.md#units), the eps -> 0 limit "
         f"of the second row; wavelength 2 then gives V2 = {omega0:.4f}/pi = {omega0 / np.pi:.4f}.\n")
     return "\n".join(text) + failures(ctx)
 

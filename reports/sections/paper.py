@@ -1,4 +1,4 @@
-"""Paper vs ours: every number MODEL.md lists, ours beside it, the deviation, the reading."""
+"""Paper vs ours: every number docs/model.md#targets lists, ours beside it, the deviation, the reading."""
 from __future__ import annotations
 
 import numpy as np

@@ -1,4 +1,4 @@
-"""Readings: the Fig. 2 claims under the readings MODEL.md calls ambiguous (inertia c, matrix,
+"""Readings: the Fig. 2 claims under the readings docs/model.md#stability calls ambiguous (inertia c, matrix,
 pre-compression eps)."""
 from __future__ import annotations
 
