@@ -165,19 +165,38 @@ LABEL_OFFSETS = ((4, 3), (4, -9), (-4, 3), (-4, -9))
 """Where a point's label may go, in points from it (right-up, right-down, left-up, left-down)."""
 
 
+def readable_log_axis(axis) -> None:
+    """A log axis (wall times) labelled in plain numbers at 1, 2 and 5 x 10^k where its data
+    span less than two decades, at the decades otherwise, its minor ticks unlabelled:
+    matplotlib's default labels every minor tick of an axis within a decade in 'a x 10^k'
+    form, and the labels run into each other. Call once the data are plotted."""
+    from matplotlib.ticker import LogLocator, NullFormatter, StrMethodFormatter
+
+    lo, hi = sorted(axis.get_data_interval())
+    decades = np.log10(hi / lo) if lo > 0 else np.inf
+    axis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0) if decades < 2 else (1.0,)))
+    axis.set_major_formatter(StrMethodFormatter("{x:g}"))
+    axis.set_minor_formatter(NullFormatter())
+
+
+LABEL_GAP = 2.0
+"""Display pixels kept free around a point label, so that two labels never touch."""
+
+
 def label_points(ax, xs, ys, texts, fontsize: float = 6) -> int:
     """Label each point (x, y) with its text at the first of LABEL_OFFSETS where the label
-    overlaps no label placed before it; a label that fits nowhere is left out (the caller's
-    table lists every value). Call once the axes' limits are final. Returns how many were
-    left out."""
+    (padded by LABEL_GAP) overlaps no text already on the axes, this call's labels or an
+    earlier call's (another series); a label that fits nowhere is left out (the caller's table lists every value). Call once the axes' limits are final. Returns
+    how many were left out."""
     ax.autoscale_view()  # the limits are otherwise settled only when drawn
     renderer = ax.figure.canvas.get_renderer()
-    placed, left_out = [], 0
+    placed = [text.get_window_extent(renderer).padded(LABEL_GAP) for text in ax.texts]
+    left_out = 0
     for x, y, text in zip(xs, ys, texts):
         for dx, dy in LABEL_OFFSETS:
             label = ax.annotate(text, (x, y), xytext=(dx, dy), textcoords="offset points",
                                 fontsize=fontsize, ha="left" if dx > 0 else "right")
-            box = label.get_window_extent(renderer)
+            box = label.get_window_extent(renderer).padded(LABEL_GAP)
             if not any(box.overlaps(other) for other in placed):
                 placed.append(box)
                 break

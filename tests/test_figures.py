@@ -187,3 +187,42 @@ def test_no_eigenvalue_is_drawn_in_the_preparation_legs_grey():
 
     colors = {to_rgb(column_color(k)) for k in range(40)}
     assert all(not (r == g == b) for r, g, b in colors)
+
+
+def test_point_labels_keep_a_gap_or_are_left_out(axes):
+    """accuracy.png: labels of coinciding points ('span/60' and 'tol_p 1e-08' at the default
+    run, one series each) were placed over each other, reading 'span/601e-08'. Every two
+    placed labels, of one call or two, are at least LABEL_GAP display pixels apart; a label
+    with no free place is counted as left out."""
+    from diskfriction.reports.figures import LABEL_GAP, label_points
+
+    top, _ = axes
+    top.plot([1.0, 2.0, 3.0], [1.0, 2.0, 3.0], "o")
+    xs, ys = [2.0] * 6, [2.0] * 6  # two series, labelled by two calls, as accuracy.png does
+    left_out = label_points(top, xs, ys, [f"span/{k}" for k in range(6)])
+    left_out += label_points(top, xs, ys, [f"tol_p 1e-{k:02d}" for k in range(6)])
+    renderer = top.figure.canvas.get_renderer()
+    boxes = [text.get_window_extent(renderer) for text in top.texts]
+    assert len(boxes) + left_out == 12 and len(boxes) >= 2
+    for i, a in enumerate(boxes):
+        for b in boxes[:i]:
+            gap = max(b.x0 - a.x1, a.x0 - b.x1, b.y0 - a.y1, a.y0 - b.y1)
+            assert gap >= LABEL_GAP - 1e-9
+
+
+@pytest.mark.parametrize("lo, hi", [(0.155, 0.28), (5.5e-3, 2.3e-2), (1e-3, 10.0)])
+def test_wall_time_log_axes_have_tick_labels_that_do_not_overlap(axes, lo, hi):
+    """accuracy.png: a log axis of wall times within one decade got matplotlib's labels on
+    every minor tick ('1.6 x 10^-1 1.8 x 10^-1 ...'), running into each other."""
+    from diskfriction.reports.figures import readable_log_axis
+
+    top, _ = axes
+    top.loglog([lo, hi], [1.0, 2.0])
+    readable_log_axis(top.xaxis)
+    top.figure.canvas.draw()
+    renderer = top.figure.canvas.get_renderer()
+    labels = [t for t in top.xaxis.get_ticklabels(which="both") if t.get_visible() and t.get_text()
+              and lo <= t.get_position()[0] <= hi]
+    boxes = [t.get_window_extent(renderer) for t in labels]
+    assert len(boxes) >= 1
+    assert not any(a.overlaps(b) for i, a in enumerate(boxes) for b in boxes[:i])

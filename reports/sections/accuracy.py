@@ -5,7 +5,7 @@ import numpy as np
 
 from diskfriction.reports.compute.runs import missing
 from diskfriction.reports.registry import Need, Section
-from diskfriction.reports.figures import label_points, new_figure
+from diskfriction.reports.figures import label_points, new_figure, readable_log_axis
 from diskfriction.reports.sections.common import failures, fmt, table
 
 
@@ -35,6 +35,7 @@ def _continuation(ax, c, s):
                   label="ds_max = span/d (tol_p default)" if name == "ds"
                   else "bracket tol_p (ds_max default)")
     ax.set_xlabel("wall time of the sweep [s]")
+    readable_log_axis(ax.xaxis)
     ax.set_ylabel("max collision-location error [raw force]")
     ax.set_title(f"continuation (J): reference ds = span/{s.reference_divisions}, "
                  f"tol_p = {s.reference_tol_p:g}", fontsize=8)
@@ -65,6 +66,7 @@ def _dynamics(ax, d):
         ax.loglog(d["seconds"], _floor(np.abs(d["V_cm"] - ref["V_cm"]) / abs(ref["V_cm"])), "^-",
                   ms=4, label=f"V_cm vs dt fraction {ref['fraction']:g} (rel.)")
     ax.set_xlabel("wall time of the run [s]")
+    readable_log_axis(ax.xaxis)
     ax.set_ylabel("error")
     ax.set_title("dynamics: dt = fraction x 2 / omega_max (fraction at each point)", fontsize=8)
     ax.legend(fontsize=6)
