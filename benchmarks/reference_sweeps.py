@@ -1,0 +1,111 @@
+"""The reference sweeps a restructuring must leave unchanged: run, save, compare.
+
+Run: python benchmarks/reference_sweeps.py --save FILE   (before a change)
+     python benchmarks/reference_sweeps.py --compare FILE (after it)
+Each case is the installed `diskfriction bifurcate` as a user runs it (so that moving modules
+does not move the harness), with scans inline (--workers 0: bit-for-bit reproducible). Saved per
+case: every collision (F_x or p, kind, lambda) and the branch's F_x, n_complex and eigenvalue
+arrays. --compare prints, per case, whether the counts are equal and the largest differences of
+the collision locations and of the eigenvalues relative to max|lambda|, then a verdict: bit
+for bit, within 1e-12, or changed (exit 1).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+COMMAND = Path(sys.executable).with_name("diskfriction")
+TOLERANCE = 1e-12
+SCENES = {"N20-eps1e-4": "[disks]\nN = 20\neps = 1e-4\n",
+          "N100": "[disks]\nN = 100\n",
+          "N100-eps1e-4": "[disks]\nN = 100\neps = 1e-4\n"}
+CASES = {
+    "paper J": ["scenes/paper.toml"],
+    "paper M^-1J": ["scenes/paper.toml", "--matrix", "M^-1J"],
+    "paper unloading 0.06:0.03": ["scenes/paper.toml", "--fx", "0.06:0.03"],
+    "paper window 0.05:0.08": ["scenes/paper.toml", "--window", "0.05:0.08"],
+    "paper exhaustive": ["scenes/paper.toml", "--detection", "exhaustive"],
+    "N = 20, eps = 1e-4": ["@N20-eps1e-4"],
+    "N = 20, eps = 1e-4, window 0.05:0.08": ["@N20-eps1e-4", "--window", "0.05:0.08"],
+    "N = 100, eps = 0": ["@N100"],
+    "N = 100, eps = 1e-4": ["@N100-eps1e-4"],
+    "Ziegler": ["--problem", "examples/ziegler.py"],
+    "Beck": ["--problem", "examples/beck.py"],
+}
+
+
+def run_case(args: list[str], scenes: Path, out: Path) -> dict:
+    """One bifurcate run; its collisions and branch arrays as plain lists."""
+    argv = [str(scenes / f"{a[1:]}.toml") if a.startswith("@") else a for a in args]
+    workers = [] if "--problem" in argv else ["--workers", "0"]
+    subprocess.run([str(COMMAND), "bifurcate", *argv, *workers, "--out", str(out)], cwd=ROOT,
+                   check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    found = json.loads((out / "collisions.json").read_text())
+    found = found["collisions"] if isinstance(found, dict) else found
+    with np.load(out / "branch.npz") as branch:
+        name = str(branch["parameter"]) if "parameter" in branch else "F_x"  # --problem: its own
+        p, lam = branch[name], branch["eigenvalues"]
+        collisions = [[c[name], c["kind"], c["lambda_re"], c.get("lambda_im", 0.0)] for c in found]
+        return {"collisions": collisions, "p": p.tolist(), "n_complex": branch["n_complex"].tolist(),
+                "re": np.nan_to_num(lam.real, nan=0.0).tolist(), "im": np.nan_to_num(lam.imag, nan=0.0).tolist()}
+
+
+def compare(old: dict, new: dict) -> tuple[str, bool]:
+    """One line for a case, and whether it is within TOLERANCE."""
+    if len(old["collisions"]) != len(new["collisions"]) or old["n_complex"] != new["n_complex"] \
+            or len(old["p"]) != len(new["p"]):
+        return (f"counts differ: {len(old['collisions'])} -> {len(new['collisions'])} collisions, "
+                f"{len(old['p'])} -> {len(new['p'])} points"), False
+    kinds = [c[1] for c in old["collisions"]] == [c[1] for c in new["collisions"]]
+    dp = max((abs(a[0] - b[0]) for a, b in zip(old["collisions"], new["collisions"])), default=0.0)
+    lam_old = np.array(old["re"]) + 1j * np.array(old["im"])
+    lam_new = np.array(new["re"]) + 1j * np.array(new["im"])
+    scale = max(np.abs(lam_old).max(), 1e-300)
+    dlam = float(np.abs(lam_new - lam_old).max() / scale) if lam_old.shape == lam_new.shape else np.inf
+    dpts = float(np.abs(np.subtract(old["p"], new["p"])).max())
+    same = old == new
+    ok = kinds and dp <= TOLERANCE and dlam <= TOLERANCE and dpts <= TOLERANCE
+    verdict = "bit for bit" if same else ("within 1e-12" if ok else "CHANGED")
+    return (f"{len(new['collisions'])} collisions, {verdict}: max |d location| {dp:.2g}, "
+            f"max |d lambda| / max|lambda| {dlam:.2g}, max |d point| {dpts:.2g}"), ok
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    group = parser.add_mutually_exclusive_group(required=True)
+    group.add_argument("--save", type=Path)
+    group.add_argument("--compare", type=Path)
+    args = parser.parse_args()
+    results, ok = {}, True
+    reference = json.loads(args.compare.read_text()) if args.compare else None
+    with tempfile.TemporaryDirectory() as tmp:
+        scenes = Path(tmp)
+        for name, text in SCENES.items():
+            (scenes / f"{name}.toml").write_text(text)
+        for k, (name, case) in enumerate(CASES.items()):
+            t0 = time.perf_counter()
+            results[name] = run_case(case, scenes, scenes / f"out{k}")
+            line = f"{time.perf_counter() - t0:5.1f} s"
+            if reference is not None:
+                text, good = compare(reference[name], results[name])
+                ok &= good
+                line += f"  {text}"
+            print(f"{name:40s} {line}", flush=True)
+    if args.save:
+        args.save.write_text(json.dumps(results))
+        print(f"saved {args.save}")
+    else:
+        print("all within 1e-12" if ok else "CHANGED: see above")
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
