@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from typing import Iterable, NamedTuple
 
+import numpy as np
+
 
 class Window(NamedTuple):
     """F_x from `start` to `stop` [force] with `pairs` complex pairs throughout."""
@@ -26,6 +28,20 @@ def complex_windows(F_start: float, F_stop: float, pairs_at_start: int,
         if k < len(collisions):
             count += 1 if collisions[k][1] == "birth" else -1
     return out
+
+
+def leg_windows(F_x: np.ndarray, n_complex: np.ndarray, leg: np.ndarray,
+                collisions: Iterable[tuple[float, str]]) -> list[Window]:
+    """The windows of a branch's requested leg (leg 1) from its points' F_x, n_complex and leg
+    (0 for a preparation leg) and its collisions ((F_x, kind) in branch order). Leg 1 starts
+    at the last point of leg 0 (which it does not record again), so its windows start there,
+    with the pair count there: from its first recorded point instead, a collision in its first
+    step would be missed. None if the branch has no point on leg 1 (the preparation ended short)."""
+    rows = np.flatnonzero(np.asarray(leg) == 1)
+    if not rows.size:
+        return []
+    start = rows[0] - 1 if rows[0] > 0 else rows[0]
+    return complex_windows(F_x[start], F_x[rows[-1]], n_complex[start], collisions)
 
 
 def complex_spans(windows: Iterable[Window]) -> list[tuple[float, float]]:

@@ -9,11 +9,10 @@ from __future__ import annotations
 
 from typing import Callable, Optional
 
-import numpy as np
 
 from diskfriction.continuation.equilibrium import check_reached, equilibrium_at
 from diskfriction.continuation.sweep import DiskBranch, sweep
-from diskfriction.continuation.windows import Window, complex_windows
+from diskfriction.continuation.windows import Window, leg_windows
 from diskfriction.dynamics.simulate import inaccuracy, simulate, summarize
 from diskfriction.dynamics.start import Perturbation, spectrum
 from diskfriction.scenes import Scene
@@ -22,15 +21,8 @@ from diskfriction.words import count
 
 
 def windows(branch: DiskBranch) -> list[Window]:
-    """The complex windows of a branch's requested leg (leg 1, which starts where a
-    preparation leg 0 ends) between its collisions (continuation/windows.py); none if the
-    branch has no point on leg 1."""
-    rows = np.flatnonzero(branch.leg == 1)
-    if not rows.size:
-        return []
-    start = rows[0] - 1 if rows[0] > 0 else rows[0]
-    return complex_windows(branch.F_x[start], branch.F_x[rows[-1]], branch.n_complex[start],
-                           [(c.p, c.kind) for c in branch.collisions])
+    """The windows of a swept branch's requested leg (continuation.windows.leg_windows)."""
+    return leg_windows(branch.F_x, branch.n_complex, branch.leg, [(c.p, c.kind) for c in branch.collisions])
 
 
 def window_run(system: System, window: Window, index: int, t_end: float, amplitude: float) -> dict:

@@ -13,7 +13,7 @@ import numpy as np
 from diskfriction.continuation.records import collision_records
 from diskfriction.continuation.sweep import DiskBranch
 from diskfriction.files import save_json, save_npz
-from diskfriction.reports.figures import (DPI, legend, line_key, new_figure, re_scale, re_values,
+from diskfriction.reports.figures import (legend, line_key, new_figure, re_scale, re_values,
                                           save_figure, set_re_axis)
 from diskfriction.reports.units import F_X_LABEL, PaperUnits, eig_label
 from diskfriction.scenes import Scene
@@ -131,7 +131,7 @@ def draw_spectrum(top, bottom, F_x: np.ndarray, lam: np.ndarray, leg: np.ndarray
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    from diskfriction.continuation.windows import complex_spans, complex_windows
+    from diskfriction.continuation.windows import complex_spans, leg_windows
     from diskfriction.reports.analysis import eigen_status_rows
 
     upper = eigen_status_rows(lam) == 1
@@ -160,9 +160,7 @@ def draw_spectrum(top, bottom, F_x: np.ndarray, lam: np.ndarray, leg: np.ndarray
         handles.append(line_key([colors[k] for k in drawn],
                                 style, leg_label(leg_id, F) + ("" if leg_id == 0 else
                                                                "\n(one colour per eigenvalue)")))
-    rows = np.flatnonzero(leg == 1)  # none when the preparation leg ended short
-    windows = complex_windows(F_x[rows[0]], F_x[rows[-1]], n_complex[rows[0]],
-                              [(p, kind) for p, kind, _ in collisions]) if rows.size else []
+    windows = leg_windows(F_x, n_complex, leg, [(p, kind) for p, kind, _ in collisions])
     if shade:
         for a, b in complex_spans(windows):
             top.axvspan(min(a, b), max(a, b), color="C1", alpha=0.12, lw=0)
@@ -202,7 +200,7 @@ def draw_spectrum(top, bottom, F_x: np.ndarray, lam: np.ndarray, leg: np.ndarray
 
 def diagram_axes():
     """A new figure of a bifurcation diagram: (figure, Im panel on top, Re panel below)."""
-    fig, (top, bottom) = new_figure(2, 1, sharex=True, figsize=(10, 7), dpi=DPI)
+    fig, (top, bottom) = new_figure(2, 1, sharex=True, figsize=(10, 7))
     return fig, top, bottom
 
 

@@ -19,7 +19,8 @@ from typing import Callable, Optional
 from diskfriction.reports.cache import ResultCache, cache_key, default_cache_dir
 from diskfriction.files import save_text
 from diskfriction.reports.figures import save_figure
-from diskfriction.reports.registry import COMPUTATIONS, ComputationFailed, Need, Section
+from diskfriction.reports.compute import COMPUTATIONS
+from diskfriction.reports.registry import ComputationFailed, Need, Section
 from diskfriction.reports.sections import SECTIONS
 from diskfriction.reports.settings import Settings
 from diskfriction.reports.units import PaperUnits
@@ -65,7 +66,7 @@ class SectionContext:
 
     def figure(self, fig, name: str, caption: str) -> str:
         """Save a matplotlib figure as FIGURE_DIR/name.png; the Markdown that shows it."""
-        save_figure(fig, self.figure_dir / f"{name}.png", dpi=90)
+        save_figure(fig, self.figure_dir / f"{name}.png")
         return f"![{caption}]({self.link_prefix}{name}.png)\n\n*{caption}*\n"
 
 

@@ -29,4 +29,4 @@ def plot_deviation(result, scene: Scene, path: Path) -> None:
                  f"{scene.effects.conventions}, LAMMPS {result.lammps_version}", fontsize=8)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    save_figure(fig, path, dpi=100)
+    save_figure(fig, path)

@@ -39,20 +39,20 @@ def outcome_word(slid: Optional[bool]) -> str:
 
 
 def new_figure(*args, **kwargs):
-    """matplotlib.pyplot.subplots on the Agg backend."""
+    """matplotlib.pyplot.subplots on the Agg backend, at DPI: the one place a figure starts."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    return plt.subplots(*args, **kwargs)
+    return plt.subplots(*args, dpi=DPI, **kwargs)
 
 
-def save_figure(fig, path: Path, dpi: int = DPI) -> None:
-    """Write `fig` atomically as PNG and close it."""
+def save_figure(fig, path: Path) -> None:
+    """Write `fig` atomically as PNG at DPI and close it: the one place a figure is saved."""
     import matplotlib.pyplot as plt
 
-    write_atomic(Path(path), lambda tmp: fig.savefig(tmp, dpi=dpi, format="png"))
+    write_atomic(Path(path), lambda tmp: fig.savefig(tmp, dpi=DPI, format="png"))
     plt.close(fig)
 
 

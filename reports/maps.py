@@ -28,7 +28,7 @@ import numpy as np
 from diskfriction.dynamics.maps import COLUMNS, Axis, Cell, MapParams
 from diskfriction.continuation.windows import Window, complex_spans
 from diskfriction.files import save_json, save_text
-from diskfriction.reports.figures import DPI, OUTCOME_STYLE, new_figure, save_figure
+from diskfriction.reports.figures import OUTCOME_STYLE, new_figure, save_figure
 from diskfriction.reports.units import F_X_LABEL, PaperUnits
 from diskfriction.scenes import Scene
 STATUS_MARK = {"failed": "F", "ended": "E"}
@@ -136,7 +136,7 @@ def plot_bands(axis: Axis, cells: list[Cell], records: list[dict], params: MapPa
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    fig, (bands, right) = new_figure(1, 2, figsize=(12, 1.6 + 0.32 * len(cells)), dpi=DPI,
+    fig, (bands, right) = new_figure(1, 2, figsize=(12, 1.6 + 0.32 * len(cells)),
                                      gridspec_kw={"width_ratios": [2.2, 1]})
     for y, record in enumerate(records):
         draw_bands(bands, y, record, params)
@@ -178,8 +178,7 @@ def plot_plane(axes: list[Axis], cells: list[Cell], records: list[dict], params:
     what = "F_slide" if params.slide is not None else "F_complex"
     shape = tuple(len(axis.values) for axis in axes)
     value = np.full(shape, np.nan)
-    fig, ax = new_figure(figsize=(max(6.0, 2.8 + 0.8 * shape[0]), max(4.0, 2.0 + 0.45 * shape[1])),
-                         dpi=DPI)
+    fig, ax = new_figure(figsize=(max(6.0, 2.8 + 0.8 * shape[0]), max(4.0, 2.0 + 0.45 * shape[1])))
     for cell, record in zip(cells, records):
         s = record["summary"]
         if s[what] is not None:

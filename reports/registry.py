@@ -43,19 +43,30 @@ class Computation:
         return source_digest((self.function.__module__, "diskfriction.reports.cache") + self.depends)
 
 
-COMPUTATIONS: dict[str, Computation] = {}
-
-
 def computation(name: str, depends: tuple[str, ...] = SWEEP_DEPS):
-    """Decorator registering `function` as the computation `name`."""
+    """Decorator marking `function` as the computation `name` (its `computation` attribute);
+    the report's table of them is built from the modules that define them (collect), not by
+    the side effect of importing them."""
 
-    def register(function: Callable[..., dict]) -> Callable[..., dict]:
-        if name in COMPUTATIONS:
-            raise ValueError(f"computation {name!r} registered twice")
-        COMPUTATIONS[name] = Computation(name, function, tuple(depends))
+    def mark(function: Callable[..., dict]) -> Callable[..., dict]:
+        function.computation = Computation(name, function, tuple(depends))
         return function
 
-    return register
+    return mark
+
+
+def collect(*modules) -> dict[str, Computation]:
+    """{name: Computation} of the functions the modules mark (computation); ValueError for a
+    name marked twice."""
+    found: dict[str, Computation] = {}
+    for module in modules:
+        for value in vars(module).values():
+            each = getattr(value, "computation", None)
+            if isinstance(each, Computation) and each.function is value:
+                if each.name in found:
+                    raise ValueError(f"computation {each.name!r} defined twice")
+                found[each.name] = each
+    return found
 
 
 @dataclass(frozen=True)

@@ -60,7 +60,7 @@ def plot_run(traj: Trajectory, summary: dict, scene: Scene, path: Path, disk: in
                  f"{p.amplitude:g} (raw), to t = {t[-1]:.4g} tau; slid: {slid_word(summary['slid'])}",
                  fontsize=10)
     fig.tight_layout()
-    save_figure(fig, path, dpi=100)
+    save_figure(fig, path)
 
 
 SPIRAL_PERIODS = 20

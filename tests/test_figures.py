@@ -226,3 +226,28 @@ def test_wall_time_log_axes_have_tick_labels_that_do_not_overlap(axes, lo, hi):
     boxes = [t.get_window_extent(renderer) for t in labels]
     assert len(boxes) >= 1
     assert not any(a.overlaps(b) for i, a in enumerate(boxes) for b in boxes[:i])
+
+
+def test_the_diagram_shades_the_windows_of_the_requested_leg_from_its_start(axes):
+    """A sweep 0.5 -> 0.4 after loading to 0.5 (leg 0), its one pair dying at 0.48, inside the
+    first unloading step: the shaded span is 0.48 .. 0.5, the windows verify runs in
+    (continuation.windows.leg_windows). The diagram counted the pairs from the first unloading
+    point, after the death, and shaded nothing."""
+    from matplotlib.patches import Polygon, Rectangle
+
+    from diskfriction.continuation.windows import leg_windows
+    from diskfriction.reports.bifurcation import draw_spectrum
+
+    F = np.array([0.0, 0.25, 0.5, 0.45, 0.4])
+    leg, n_complex = np.array([0, 0, 0, 1, 1]), np.array([0, 1, 1, 0, 0])
+    im = np.array([0.0, 1e-4, 2e-4, 0.0, 0.0])
+    lam = np.column_stack([0.06 + 1j * im, 0.06 - 1j * im, np.full(F.size, 0.07 + 0j)])
+    collisions = [(0.48, "death", 0.06)]
+    assert leg_windows(F, n_complex, leg, [(0.48, "death")]) == [(0.5, 0.48, 1), (0.48, 0.4, 0)]
+    top, bottom = axes
+    draw_spectrum(top, bottom, F, lam, leg, n_complex, collisions, "J", re_axis="linear")
+    ends = lambda p: ([p.get_x(), p.get_x() + p.get_width()] if isinstance(p, Rectangle)
+                      else np.asarray(p.get_xy())[:, 0])
+    xs = [sorted({round(float(x), 12) for x in ends(p)}) for p in top.patches
+          if isinstance(p, (Polygon, Rectangle))]
+    assert xs == [[0.48, 0.5]]

@@ -1,5 +1,4 @@
 """The report's sections in order; `--only KEY` picks some of them."""
-import diskfriction.reports.compute  # noqa: F401  (registers the computations)
 from diskfriction.reports.sections import accuracy, fig2, fig5, fig6, lammps, paper, readings, runs
 
 SECTIONS = (fig2.SECTION, runs.FIG3, runs.FIG4, fig5.SECTION, fig6.SECTION, runs.FIG7,

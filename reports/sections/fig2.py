@@ -1,9 +1,8 @@
 """Fig. 2: the spectrum against F_x for J and M^-1 J, complex windows and collisions marked."""
 from __future__ import annotations
 
-import numpy as np
 
-from diskfriction.continuation.windows import complex_spans, complex_windows
+from diskfriction.continuation.windows import complex_spans, leg_windows
 from diskfriction.reports.bifurcation import draw_spectrum
 from diskfriction.reports.figures import legend, new_figure
 from diskfriction.reports.registry import Section
@@ -57,10 +56,8 @@ def render(ctx):
         if b is None:
             continue
         unit = ctx.units.eigenvalue(matrix)
-        leg = np.flatnonzero(b["leg"] == 1)
-        spans = complex_spans(complex_windows(b["F_x"][leg[0]], b["F_x"][leg[-1]],
-                                              b["n_complex"][leg[0]],
-                                              zip(b["collision_F_x"], b["collision_kind"])))
+        spans = complex_spans(leg_windows(b["F_x"], b["n_complex"], b["leg"],
+                                          zip(b["collision_F_x"], b["collision_kind"])))
         win = ", ".join(f"{lo:.4f}-{hi:.4f}" for lo, hi in spans)
         text.append(f"{matrix}: {b['points']} points, status {', '.join(b['status'])}, "
                     f"{count(len(b['collision_kind']), 'collision')}; complex windows: {win or 'none'}.\n")
