@@ -17,6 +17,7 @@ from diskfriction.continuation.scans import (InlineScans, ScanJob, ScanOutcome, 
 from diskfriction.continuation.sweep import SweepParams, sweep
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
+from invariants import unaccounted_pair_changes
 
 
 def run(system, workers):
@@ -44,7 +45,8 @@ def test_two_workers_give_the_inline_branch(eps):
     give the inline branch, and the work they did is booked in this process."""
     system = System.from_scene(Scene(N=20, eps=eps))
     (inline, spent_inline), (parallel, spent_parallel) = run(system, 0), run(system, 2)
-    assert len(inline.collisions) == (50 if eps else 24)
+    assert len(inline.collisions) >= 20  # births and deaths enough to compare
+    assert unaccounted_pair_changes(inline.F_x, inline.n_complex, [(c.p, c.kind) for c in inline.collisions]) == []
     assert_same_branch(inline, parallel)
     assert spent_parallel[0] >= len(parallel) and spent_parallel[2] >= 0.9 * spent_inline[2]
 
@@ -89,7 +91,8 @@ def test_a_failed_scan_rejects_its_step_after_the_branch_went_on(monkeypatch):
         branches.append(sweep(system, 0.0, 0.12, "J"))
         assert scans.failed == 1 and not scans._done
     inline, deferred = branches
-    assert len(inline.collisions) == 22
+    assert inline.collisions
+    assert unaccounted_pair_changes(inline.F_x, inline.n_complex, [(c.p, c.kind) for c in inline.collisions]) == []
     assert_same_branch(inline, deferred)
     monkeypatch.undo()
     plain = sweep(system, 0.0, 0.12, "J")
