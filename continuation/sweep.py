@@ -21,8 +21,8 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from diskfriction.continuation.arclength import ContinuationParams, continuation
-from diskfriction.continuation.collisions import Collision, DetectionParams
+from diskfriction.continuation.api import Options, solve_branch
+from diskfriction.continuation.collisions import Collision
 from diskfriction.continuation.disks import DiskEquilibria, relax
 from diskfriction.continuation.branch import Branch
 from diskfriction.continuation.spectral_window import Window, window_columns
@@ -30,23 +30,31 @@ from diskfriction.continuation.spectra import count_complex_pairs, match_eigenva
 from diskfriction.symbolic import System
 
 START_FRACTION = 1e-4
+SWEEP_STEPS_PER_SPAN = 60
+"""A sweep's largest step is its span over this (api.STEPS_PER_SPAN is 50 for other problems):
+version 0.1's choice, kept so that every disk sweep and its timings stay as documented."""
 
 
 @dataclass(frozen=True)
-class SweepParams:
-    """Step control of a sweep, in the arclength of x = (q, F_x), raw units.
-
-    ds_max = None takes span / 60; ds starts at ds_max / 2. newton_tol bounds max|F| at every
-    stored point [force]. detection: the collision detector's parameters (continuation core).
-    window: (lo, hi) of Re lambda [the matrix's raw units] to track instead of the whole
-    spectrum (spectral_window.py); None: every eigenvalue.
+class SweepParams(Options):
+    """The options of a disk sweep: solve_branch's Options (api.py), one set of parameters for
+    every continuation, plus a spectral window. Steps in the arclength of x = (q, F_x), raw
+    units. Where the disk problem takes other defaults than Options', they are set here:
+    ds_max = None takes span / SWEEP_STEPS_PER_SPAN (60) of the whole sweep (not of a leg; Options: span / 50 of its
+    span), the first step ds_max / 2 (graded from rest on the first leg; Options: ds_max / 4),
+    ds_min 1e-10 raw force units (Options: 1e-8 ds_max), newton_tol 1e-11: max|F| at every
+    stored point [force], a tenth of Options' (the history follows q, so the corrector must
+    hold the contacts' forces well below the Coulomb limit's resolution), max_steps 20 000 (N =
+    1000 takes up to 6000 points), and no special points (the disk problem carries history:
+    its folds cannot be located after the run). window: (lo, hi) of Re lambda [the matrix's
+    raw units] to track instead of the whole spectrum (spectral_window.py); None: every
+    eigenvalue.
     """
 
-    ds_max: Optional[float] = None
-    ds_min: float = 1e-10
+    ds_min: Optional[float] = 1e-10
     newton_tol: float = 1e-11
     max_steps: int = 20_000
-    detection: DetectionParams = DetectionParams()
+    special_points: tuple[str, ...] = ()
     window: Optional[tuple[float, float]] = None
 
 
@@ -99,22 +107,18 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
     matrix = matrix or system.scene.matrix
     legs = [(0, 0.0, F_from), (1, F_from, F_to)] if F_from != 0 else [(1, 0.0, F_to)]
     span = max(abs(F_to - F_from), F_from)
-    ds_max = params.ds_max or span / 60
+    ds_max = params.ds_max or span / SWEEP_STEPS_PER_SPAN
     F_1 = min(START_FRACTION * system.scene.F_y, 0.5 * legs[0][2])
     q, xi = relax(system, *system.rest_state(), F_1)
     window = None if params.window is None else Window(*params.window)
     problem = DiskEquilibria(system, q, xi, F_1, matrix, params.newton_tol, window=window)
     rows, collisions, status, events, continued = [], (), [], 0, []
     F_start = F_1
-    for leg, a, b in legs:
+    for leg, _, b in legs:
         first = len(rows)
-        direction = 1 if b > a else -1
         b = max(b, F_1)  # unloading ends where loading started: F_x = 0 is the singular rest state
         ds = min(F_1, ds_max) if leg == legs[0][0] else ds_max / 2  # graded away from rest
-        core = ContinuationParams(ds=ds, ds_min=min(params.ds_min, ds), ds_max=ds_max,
-                                  newton_tol=params.newton_tol, p_min=min(F_start, b),
-                                  p_max=max(F_start, b), max_steps=params.max_steps,
-                                  direction=direction)
+        options = replace(params, ds_max=ds_max, ds=ds, ds_min=min(params.ds_min, ds))
 
         def record(k, F_x, q_k, eigvals, leg=leg):
             if leg == 1 and k == 0 and rows:
@@ -125,7 +129,7 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
             if progress is not None:
                 progress(F_x)
 
-        branch = continuation(problem, problem.q_c, F_start, core, params.detection, callback=record)
+        branch = solve_branch(problem, problem.q_c, (F_start, b), options, callback=record).branch
         branch = _continue_leg(rows, first, branch)
         if window is not None:
             continued += list(branch.continued if first == 0 else branch.continued[1:])
