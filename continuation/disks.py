@@ -127,6 +127,8 @@ class DiskEquilibria(Problem):
         self._free_template = free_modes(self._wall_w, bool(system.kernels.WALL_FRICTION), 0,
                                          np.arange(D), self._kappa)
         self._set_committed(q, xi, F_x)
+        if window is not None and window.k == 0:  # sized once, here, at the start state
+            self.window = sized(window, self.stability_matrix(q, F_x))
 
     # -- the committed state
     def _set_committed(self, q: np.ndarray, xi: np.ndarray, F_x: float) -> None:
@@ -230,12 +232,9 @@ class DiskEquilibria(Problem):
         return Eigensystem(values, right, left, excluded, columns=columns)
 
     def _window_eigensystem(self, q, F_x, vectors: bool) -> Eigensystem:
-        """The spectral window's eigenvalues (spectral_window.py), k fixed at the first call; the
-        modes of free disks (right vectors on their dofs alone) also excluded."""
-        A = self.stability_matrix(q, F_x)
-        if self.window.k == 0:
-            self.window = sized(self.window, A)
-        found = window_eigensystem(A, self.window, vectors)
+        """The spectral window's eigenvalues (spectral_window.py; its k fixed at the start state,
+        __init__); the modes of free disks (right vectors on their dofs alone) also excluded."""
+        found = window_eigensystem(self.stability_matrix(q, F_x), self.window, vectors)
         if not self.free or found.right is None:
             return found
         free_dofs = np.concatenate([d.dofs for d in self.free])
@@ -262,13 +261,11 @@ class DiskEquilibria(Problem):
         return np.concatenate([g, delta[joins] - self.delta_join])
 
     def state(self) -> tuple:
-        """(q, xi, F_x) committed and the spectral window (its size is fixed at the first
-        spectrum)."""
-        return self.q_c.copy(), self.xi_c.copy(), self.F_c, self.window
+        """(q, xi, F_x) committed."""
+        return self.q_c.copy(), self.xi_c.copy(), self.F_c
 
     def restore(self, snapshot: tuple) -> None:
-        q, xi, F_x, self.window = snapshot
-        self._set_committed(q, xi, F_x)
+        self._set_committed(*snapshot)
 
     def commit(self, q_old, F_old, q_new, F_new) -> bool:
         """Commit the state at (q_new, F_new). True asks the core to re-solve there: when the
