@@ -109,7 +109,8 @@ def test_format_scene_writes_every_key_and_the_derived_quantities():
     assert set(document["disks"]) == {"N", "R", "m", "inertia", "eps"}
     assert set(document["contacts"]) == {"k_n", "k_t", "mu"}
     assert set(document["load"]) == {"F_y", "F_x"}
-    assert set(document["effects"]) == {"tangential", "friction", "rotation", "conventions"}
+    assert set(document["effects"]) == {"normal", "tangential", "friction", "rotation",
+                                        "conventions"}
     assert set(document["stability"]) == {"matrix"}
     scene = Scene()
     for name, value in [("L", scene.L), ("I", scene.I), ("delta_w0", scene.delta_w0),
