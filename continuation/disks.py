@@ -122,7 +122,7 @@ class DiskEquilibria(Problem):
         w = np.empty(2 * system.kernels.D)
         system.kernels.wall_increment_coeffs(s.R, w)
         self._wall_w = w[:system.kernels.D].copy()
-        self._kappa = 1.5 * s.k_n * s.delta_w0 ** 0.5  # the substrate's normal stiffness
+        self._kappa = system.kernels.normal_stiffness(s.delta_w0, s.k_n)  # the substrate's, at rest
         D = system.kernels.D  # every free disk has the same null directions and gauge rows:
         self._free_template = free_modes(self._wall_w, bool(system.kernels.WALL_FRICTION), 0,
                                          np.arange(D), self._kappa)
@@ -253,8 +253,7 @@ class DiskEquilibria(Problem):
         joins belong to the committed free disks, so the array keeps its length over a step."""
         delta = self.system.overlaps(q)
         xi = self.trial(q, cap=False)[0]
-        s = self.system.scene
-        margin = s.mu * s.k_n * delta / s.k_t - np.abs(xi)
+        margin = self.system.coulomb_limit(delta) - np.abs(xi)
         g = np.concatenate([delta, np.where(delta > 0, margin, 1.0)])
         N = self.system.N
         joins = [k % N for d in self.free for k in (d.disk - 1, d.disk)]

@@ -6,7 +6,7 @@ one reached quasistatically from rest (F_x = 0, xi = 0) by loading: continuation
 to F_x, which ends exactly on F_x when the branch reaches it. When it does not, the branch has
 ended short of F_x, and NoEquilibrium says where and why, in one line, from the branch itself:
 the sweep's status, and the contacts of its last point that are open (delta <= 0) or at their
-Coulomb limit (|xi| = t* = mu k_n delta / k_t, where the smoothed law has no tangential
+Coulomb limit (|xi| = t*, System.coulomb_limit, where the smoothed law has no tangential
 stiffness left; when too many hold there the branch folds over), e.g.
 
     no equilibrium beyond F_x = 5.09975 (asked for 20): corrector failed (residual 1.6e-11);
@@ -106,7 +106,7 @@ def contact_states(system: System, q: np.ndarray, xi: np.ndarray) -> str:
     disks k and k+1 (pair N: disks N and 1), the substrate contact of disk i is named by i."""
     s, N = system.scene, system.N
     delta = system.overlaps(q)
-    t_star = s.mu * s.k_n * np.maximum(delta, 0.0) / s.k_t
+    t_star = system.coulomb_limit(delta)
     at_limit = (delta > 0) & (t_star > 0) & (np.abs(xi) >= (1 - AT_LIMIT) * t_star)
     pairs = lambda where: [f"{k + 1}-{(k + 1) % N + 1}" for k in np.flatnonzero(where)]
     disks = lambda where: [int(k) + 1 for k in np.flatnonzero(where)]

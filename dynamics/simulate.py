@@ -102,9 +102,9 @@ class RunPlan:
 def run_seconds(scene: Scene, t_end: float) -> float:
     """Rough wall time of the steps of a run to t_end [time] on `scene` [s], before its start's
     spectrum is known: dt = DT_FRACTION 2 / omega_max with omega_max = OMEGA_MAX_OVER_Y
-    sqrt(3/2 k_n delta_w0^(1/2) / m) (delta_w0 the rest overlap with the substrate), and
-    SECONDS_PER_DISK_STEP per disk and step."""
-    omega_max = OMEGA_MAX_OVER_Y * math.sqrt(1.5 * scene.k_n * math.sqrt(scene.delta_w0) / scene.m)
+    sqrt(kappa_w0 / m) (kappa_w0 the substrate's normal stiffness at rest, Scene.kappa_w0;
+    Hertz: 3/2 k_n delta_w0^(1/2)), and SECONDS_PER_DISK_STEP per disk and step."""
+    omega_max = OMEGA_MAX_OVER_Y * math.sqrt(scene.kappa_w0 / scene.m)
     return SECONDS_PER_DISK_STEP * scene.N * t_end * omega_max / (2 * DT_FRACTION)
 
 

@@ -59,7 +59,7 @@ _GENERATOR = ("diskfriction.dynamics.stepper", "diskfriction.dynamics.stepper_sr
 _CONSTANTS = ("D", "PAIR_FRICTION", "WALL_FRICTION")
 _FUNCTIONS = ("pair_separation", "pair_overlap", "pair_force", "pair_increment_coeffs",
               "pair_dofs", "wall_force", "wall_increment_coeffs", "wall_dofs", "add_loads",
-              "commit_history", "ring_of_two")
+              "commit_history", "normal_energy", "ring_of_two")
 
 _HEADER = '''"""diskfriction dynamics stepper over {kernels}. Do not edit: regenerated from dynamics/.
 

@@ -3,8 +3,8 @@
 # module's forces, history_increment and commit_history are made of, for the scene's
 # conventions. Not importable on its own: numba, np, D, PAIR_FRICTION, WALL_FRICTION and the kernel module's
 # pair_separation, pair_overlap, pair_force, pair_increment_coeffs, pair_dofs, wall_force,
-# wall_increment_coeffs, wall_dofs, add_loads, commit_history and ring_of_two are bound by the
-# header.
+# wall_increment_coeffs, wall_dofs, add_loads, commit_history, normal_energy and ring_of_two are
+# bound by the header.
 #
 # One velocity-Verlet step (dynamics/stepper.py explains the scheme), for the layout of
 # docs/model.md#history: q = (x, y[, theta]) blocks of N, contacts c = pairs 0..N-1 then substrate N..2N-1.
@@ -36,7 +36,8 @@ E_KIN, E_NORMAL, E_LOAD, E_W_T, E_W_SLIP = 0, 1, 2, 3, 4
 def record(q, v, mass, delta, F_x, params, scal, slip, frame, t, frames_q, frames_v, energy,
            frames_slip):
     """Frame `frame`: time, q, v, the substrate slip of every disk, and the energy budget
-    (E_kin, U_n = sum 2/5 k_n delta^(5/2), U_load = -F_x x_1 + F_y sum y_i, W_t, W_slip)."""
+    (E_kin, U_n = sum of normal_energy(delta) over active contacts (Hertz: 2/5 k_n delta^(5/2)),
+    U_load = -F_x x_1 + F_y sum y_i, W_t, W_slip)."""
     N = q.shape[0] // D
     k_n, F_y = params[1], params[4]
     t[frame] = scal[SCAL_T]
@@ -48,7 +49,7 @@ def record(q, v, mass, delta, F_x, params, scal, slip, frame, t, frames_q, frame
     u_n = 0.0
     for c in range(2 * N):
         if delta[c] > 0.0:
-            u_n += 0.4 * k_n * delta[c] * delta[c] * np.sqrt(delta[c])
+            u_n += normal_energy(delta[c], k_n)
     u_load = -F_x * q[0]
     for i in range(N):
         u_load += F_y * q[N + i]

@@ -69,7 +69,10 @@ def check_representable(scene: Scene) -> None:
     """Raise Unrepresentable if LAMMPS's granular package cannot reproduce `scene`."""
     effects = scene.resolved_effects
     why = None
-    if "mindlin-smooth" in (effects.pair_law, effects.wall_law):
+    if effects.normal != "hertz":
+        why = (f'normal = "{effects.normal}": the deck writes LAMMPS\'s hertz normal model only '
+               f'(normal = "hertz")')
+    elif "mindlin-smooth" in (effects.pair_law, effects.wall_law):
         why = ('tangential = "mindlin-smooth" (paper eq. 5) has no LAMMPS counterpart; LAMMPS\'s '
                'mindlin is the linear law with a hard cap, tangential = "mindlin-linear"')
     elif effects.rotation and scene.inertia not in INTEGRATORS:

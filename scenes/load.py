@@ -38,6 +38,7 @@ _FIELDS = {
 }
 # Effects field -> dotted key, for the effects a file sets one to one.
 _EFFECT_FIELDS = {
+    "normal": "effects.normal",
     "tangential": "effects.tangential",
     "rotation": "effects.rotation",
     "conventions": "effects.conventions",
@@ -122,12 +123,15 @@ SCHEMA: dict[str, _Key] = {
     "disks.m": _Key(SCENE_RULES["m"], "disk mass", "[mass]"),
     "disks.inertia": _Key(SCENE_RULES["inertia"], "c in I = c m R^2 (0.5: uniform disk)"),
     "disks.eps": _Key(SCENE_RULES["eps"], "pre-compression, L = 2 N R (1 - eps)"),
-    "contacts.k_n": _Key(SCENE_RULES["k_n"], "Hertz normal stiffness", STIFFNESS),
+    "contacts.k_n": _Key(SCENE_RULES["k_n"], "normal stiffness, F_n = k_n delta^p",
+                         "[force / length^p]"),
     "contacts.k_t": _Key(SCENE_RULES["k_t"], "Mindlin tangential stiffness", STIFFNESS),
     "contacts.mu": _Key(SCENE_RULES["mu"], "friction coefficient (0 turns friction off)"),
     "load.F_y": _Key(SCENE_RULES["F_y"], "downward force on every disk", "[force]"),
     "load.F_x": _Key(SCENE_RULES["F_x_range"], "quasistatic range [start, stop] of the force on "
                                                "disk 1", "[force]"),
+    "effects.normal": _Key(EFFECTS_RULES["normal"], "normal contact law, F_n = k_n delta^p "
+                                                    "(hertz: p = 3/2, hooke: p = 1)"),
     "effects.tangential": _Key(EFFECTS_RULES["tangential"], "tangential contact law"),
     "effects.friction": _Key(FRICTION, "where the tangential law acts"),
     "effects.rotation": _Key(EFFECTS_RULES["rotation"],
@@ -298,7 +302,7 @@ def _derived_lines(scene: Scene) -> list[str]:
     derived = (
         ("L", scene.L, "ring length 2 N R (1 - eps)"),
         ("I", scene.I, "moment of inertia c m R^2"),
-        ("delta_w0", scene.delta_w0, "substrate overlap at F_x = 0, (F_y / k_n)^(2/3)"),
+        ("delta_w0", scene.delta_w0, "substrate overlap at F_x = 0, (F_y / k_n)^(1/p)"),
         ("tau", scene.tau, "time unit sqrt(m / (k_n (2R)^(1/2)))"),
         ("ndof", scene.ndof, "degrees of freedom, N x (3 with rotation, else 2)"),
     )

@@ -13,8 +13,15 @@ import datetime
 import math
 import numbers
 from dataclasses import dataclass
+from fractions import Fraction
 from typing import Any, Callable
 
+NORMAL_LAWS = {"hertz": Fraction(3, 2), "hooke": Fraction(1)}
+"""Normal contact laws F_n = k_n delta^p [force] by name, each with its exponent p (k_n in
+force / length^p): the one place a normal law is added. symbolic/laws.py derives from it, with
+sympy, the kernels' forces and stiffness and the generated normal_force, normal_stiffness,
+normal_energy and coulomb_limit; Scene the rest overlap delta_w0 = (F_y / k_n)^(1/p)
+(docs/physics.md, "Where to add a law")."""
 TANGENTIAL_LAWS = ("mindlin-smooth", "mindlin-linear", "none")
 FRICTION_KINDS = ("disk-disk", "substrate")
 CONVENTIONS = ("model", "lammps")
@@ -141,6 +148,7 @@ SCENE_RULES: dict[str, Rule] = {
 """Scene field -> its rule (``effects`` is an Effects, which checks its own fields)."""
 
 EFFECTS_RULES: dict[str, Rule] = {
+    "normal": _one_of(tuple(NORMAL_LAWS), "normal law"),
     "tangential": _one_of(TANGENTIAL_LAWS, "tangential law"),
     "pair_friction": FLAG,
     "wall_friction": FLAG,

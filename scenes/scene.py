@@ -1,7 +1,7 @@
 """The Scene: one frozen description of a disk chain, its loads and the effects simulated.
 
 Units are the scene's raw units (docs/model.md, Units): lengths in units where the disk
-diameter is 2R, masses in units of m, stiffnesses k_n [force / length^(3/2)], forces
+diameter is 2R, masses in units of m, stiffnesses k_n [force / length^p] (p = 3/2, Hertz), forces
 [force]. Scene and Effects check every field with its rule (scenes/rules.py) when constructed,
 and a Scene checks that its derived quantities (L, I, delta_w0, tau) are finite: a bad value is a
 SceneValueError, one line naming the field and the value.
@@ -14,11 +14,11 @@ from dataclasses import dataclass
 from typing import Any
 
 from diskfriction.scenes.rules import (CONVENTIONS, EFFECTS_RULES, FRICTION_KINDS, MATRICES,
-                                       NEGATIVE_LOAD, SCENE_RULES, TANGENTIAL_LAWS, Invalid,
-                                       normal_positive)
+                                       NEGATIVE_LOAD, NORMAL_LAWS, SCENE_RULES, TANGENTIAL_LAWS,
+                                       Invalid, normal_positive)
 
-__all__ = ["CONVENTIONS", "FRICTION_KINDS", "MATRICES", "NEGATIVE_LOAD", "TANGENTIAL_LAWS",
-           "Effects", "Scene", "SceneValueError"]
+__all__ = ["CONVENTIONS", "FRICTION_KINDS", "MATRICES", "NEGATIVE_LOAD", "NORMAL_LAWS",
+           "TANGENTIAL_LAWS", "Effects", "Scene", "SceneValueError"]
 
 
 class SceneValueError(ValueError):
@@ -55,6 +55,8 @@ def _check_fields(instance: Any, rules: dict) -> None:
 class Effects:
     """Which physics a scene simulates; the symbolic layer derives exactly these.
 
+    normal          contact law for the normal force F_n = k_n delta^p (rules.NORMAL_LAWS):
+                    "hertz" (p = 3/2, the paper) or "hooke" (p = 1, a linear spring).
     tangential      contact law for the tangential force (docs/model.md#contacts): "mindlin-smooth" (paper
                     eq. 5), "mindlin-linear" (k_t delta^(1/2) xi, hard cap at mu F_n), "none".
     pair_friction   tangential force at disk-disk contacts.
@@ -73,6 +75,7 @@ class Effects:
     wall_friction: bool = True
     rotation: bool = True
     conventions: str = "model"
+    normal: str = "hertz"
 
     def __post_init__(self) -> None:
         _check_fields(self, EFFECTS_RULES)
@@ -102,7 +105,7 @@ class Effects:
 DERIVED = (
     ("L", "2 N R (1 - eps)", ("N", "R", "eps")),
     ("I", "c m R^2", ("inertia", "m", "R")),
-    ("delta_w0", "(F_y / k_n)^(2/3)", ("F_y", "k_n")),
+    ("delta_w0", "(F_y / k_n)^(1/p)", ("F_y", "k_n")),
     ("tau", "sqrt(m / (k_n (2R)^(1/2)))", ("m", "k_n", "R")),
 )
 """The derived quantities a Scene checks at construction (name, formula, the fields it is made
@@ -159,8 +162,17 @@ class Scene:
 
     @property
     def delta_w0(self) -> float:
-        """Substrate overlap of the F_x = 0 equilibrium, delta_w = (F_y / k_n)^(2/3)."""
-        return (self.F_y / self.k_n) ** (2.0 / 3.0)
+        """Substrate overlap of the F_x = 0 equilibrium, F_n(delta_w) = F_y: delta_w =
+        (F_y / k_n)^(1/p), p the normal law's exponent (2/3 for Hertz) [length]."""
+        return (self.F_y / self.k_n) ** float(1 / NORMAL_LAWS[self.effects.normal])
+
+    @property
+    def kappa_w0(self) -> float:
+        """Normal stiffness of a substrate contact at rest, dF_n/ddelta at delta_w0 = p F_y /
+        delta_w0 (p k_n delta^(p - 1) with k_n delta_w0^p = F_y) [force / length]: what the
+        y modes of the rest state sit at (docs/model.md#units), for estimates before any kernel
+        is loaded; the kernels' own is kernels.normal_stiffness."""
+        return float(NORMAL_LAWS[self.effects.normal]) * self.F_y / self.delta_w0
 
     @property
     def tau(self) -> float:
@@ -171,7 +183,8 @@ class Scene:
     def resolved_effects(self) -> Effects:
         """Effects actually simulated: mu = 0 carries no tangential force, so friction is off."""
         if self.mu == 0.0 and self.effects.tangential != "none":
-            return Effects("none", False, False, self.effects.rotation, self.effects.conventions)
+            return dataclasses.replace(self.effects, tangential="none", pair_friction=False,
+                                       wall_friction=False)
         return self.effects
 
     @property

@@ -1,9 +1,9 @@
 # Assembly source of every generated kernel module (see codegen.py), rendered by
 # symbolic/template.py: each "...  # @fragment NAME" line becomes the per-contact code the dynamics
 # stepper pastes too, for the scene's conventions.
-# Not importable on its own: math, numba, np, D, pair_contact, pair_force, pair_increment_coeffs, wall_contact,
-# wall_force, wall_increment_coeffs, PAIR_FRICTION, WALL_FRICTION and CONVENTIONS are defined
-# by the generated part above it.
+# Not importable on its own: math, numba, np, D, coulomb_limit, pair_contact, pair_force,
+# pair_increment_coeffs, wall_contact, wall_force, wall_increment_coeffs, PAIR_FRICTION,
+# WALL_FRICTION and CONVENTIONS are defined by the generated part above it.
 #
 # Every function uses error_model="numpy" (no zero-division checks: a fifth of a dynamics step
 # at N = 10): each division is by a quantity kept positive (2R + rho, delta > 0, k_t).
@@ -206,8 +206,9 @@ def commit_history(xi0, dxi, delta0, delta1, params, cap, xi1, slid):
     part of the increment after it, delta1 / (delta1 - delta0) of dxi with delta taken linear
     along the step (a contact touching at delta0 = 0 charges all of it); conventions "lammps"
     charge all of dxi (symbolic/template.py, first_contact). Otherwise
-    xi1 = xi0 + dxi. With `cap`, a history beyond its Coulomb limit t* = mu k_n delta1 / k_t is
-    set to sign(xi1) t* (the contact slides) and slid[c] is True. Returns the number capped."""
+    xi1 = xi0 + dxi. With `cap`, a history beyond its Coulomb limit t* = coulomb_limit(delta1)
+    (Hertz: mu k_n delta1 / k_t) is set to sign(xi1) t* (the contact slides) and slid[c] is
+    True. Returns the number capped."""
     k_n, k_t, mu = params[1], params[2], params[3]
     n_slid = 0
     for c in range(xi0.shape[0]):
@@ -219,7 +220,7 @@ def commit_history(xi0, dxi, delta0, delta1, params, cap, xi1, slid):
             ...  # @fragment first_contact
         else:
             xi1[c] = xi0[c] + dxi[c]
-        t_star = mu * k_n * delta1[c] / k_t
+        t_star = coulomb_limit(delta1[c], k_n, k_t, mu)
         if cap and abs(xi1[c]) > t_star:
             xi1[c] = t_star if xi1[c] > 0.0 else -t_star
             slid[c] = True
@@ -238,7 +239,8 @@ def ring_of_two():
 
 def warm_up(progress=None):
     """Call each compiled entry point of System once, on a 2-disk ring, with the argument types
-    System passes (C-contiguous float64 arrays, a float load, the int64 pattern, a bool cap):
+    System passes (C-contiguous float64 arrays, a float load, the int64 pattern, a bool cap; the
+    law functions on a float and on an array of delta, as System and the continuation call them):
     numba compiles each now, or loads it from its cache (symbolic/generated.py checks that this
     succeeds). progress(fraction) after each call."""
     N, n = 2, 2 * D
@@ -248,11 +250,14 @@ def warm_up(progress=None):
     delta0, delta1, dxi, xi1 = np.empty(2 * N), np.empty(2 * N), np.empty(2 * N), np.empty(2 * N)
     rows, cols = jacobian_pattern(N)
     Jvals = np.empty(rows.size)
+    k_n, k_t, mu = params[1], params[2], params[3]
     calls = [lambda: forces(q0, xi, 0.0, params, F),
              lambda: evaluate(q0, xi, 0.0, params, F, Jvals),
              lambda: evaluate_dense(q0, xi, 0.0, params, F, J, Jvals, rows, cols),
              lambda: overlaps(q0, params, delta0),
              lambda: overlaps(q1, params, delta1),
+             lambda: normal_stiffness(delta1[2], k_n),
+             lambda: coulomb_limit(np.maximum(delta1, 0.0), k_n, k_t, mu),
              lambda: history_increment(q0, q1, params, dxi),
              lambda: commit_history(xi, dxi, delta0, delta1, params, True, xi1, slid)]
     for k, call in enumerate(calls):

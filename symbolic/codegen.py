@@ -1,18 +1,24 @@
 """Print the derived contact kernels as a readable Python module of @numba.njit functions.
 
-Each kernel is printed after common-subexpression elimination (sympy.cse). The preamble that
-computes rho, sqrt(delta) and u = xi / t* is written by hand here, and delta itself is an input
+The module starts with the normal law's functions (law_functions: normal_force,
+normal_stiffness, normal_energy, coulomb_limit, printed from symbolic/laws.py), which the
+kernels, the assembly, the dynamics stepper and the continuation call: no other module writes
+a contact law. Each kernel is printed after common-subexpression elimination (sympy.cse). The
+preamble that computes rho, sqrt(delta) and u = xi / t* (t* by coulomb_limit) is written here,
+and delta itself is an input
 computed by the assembly (assembly_src.pair_overlap) with the care the symbols cannot express:
 - delta keeps its relative accuracy when delta << 2R (see pair_overlap);
 - one-sided contact rule: a contact is active iff delta > 0. At delta <= 0 the kernel writes
-  zero force and zero stiffness. This equals the limit delta -> 0+ for admissible histories
-  (|xi| <= t*): every force term carries delta^(3/2) and every stiffness term delta^(1/2).
+  zero force and zero stiffness. For Hertz this equals the limit delta -> 0+ for admissible
+  histories (|xi| <= t*): every force term carries delta^(3/2) and every stiffness term
+  delta^(1/2); a linear spring (Hooke) keeps its stiffness k_n up to contact.
 """
 from __future__ import annotations
 
 import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
+from diskfriction.symbolic import laws
 from diskfriction.symbolic.contacts import ContactExprs
 from diskfriction.symbolic.laws import delta
 from diskfriction.symbolic.template import Dialect, render
@@ -33,6 +39,29 @@ class _KernelPrinter(PythonCodePrinter):
 
     def _print_Abs(self, expr):
         return f"abs({self._print(expr.args[0])})"
+
+
+class _OrderedPrinter(_KernelPrinter):
+    """Products with their factors in one fixed order, numbers first, then ORDER, and small
+    whole powers written out (delta^2 -> delta*delta): t* prints as mu*k_n*delta/k_t, the
+    order the hand-written code had, so that printing the laws changed no result."""
+
+    ORDER = ("xi", "mu", "k_n", "delta", "sd", "k_t")
+
+    def __init__(self):
+        super().__init__({"order": "none"})
+
+    def _rank(self, factor: sp.Expr) -> int:
+        base = factor.base if factor.is_Pow else factor
+        return -1 if factor.is_number else (
+            self.ORDER.index(base.name) if base.is_Symbol and base.name in self.ORDER else len(self.ORDER))
+
+    def _print_Mul(self, expr):
+        factors = []
+        for factor in sp.Mul.make_args(expr):
+            whole = factor.is_Pow and factor.exp.is_Integer and 1 < factor.exp <= 4
+            factors += [factor.base] * int(factor.exp) if whole else [factor]
+        return super()._print_Mul(sp.Mul(*sorted(factors, key=self._rank), evaluate=False))
 
 
 def _printable(expr: sp.Expr) -> sp.Expr:
@@ -67,8 +96,11 @@ def _kernel(c: ContactExprs, with_J: bool) -> str:
     if with_J:
         outputs.update({f"J[{a}, {b}]": c.J[a, b] for a in range(n) for b in range(n)})
     body, used = _body(outputs)
+    u = _half_powers(laws.xi / laws.coulomb_limit(c.normal))
+    if "u" in used:
+        used |= {s.name for s in u.free_symbols}
     active = [line for line, sym in (("sd = math.sqrt(delta)", "sd"),
-                                      ("u = xi * k_t / (mu * k_n * delta)", "u")) if sym in used]
+                                      (f"u = {_OrderedPrinter().doprint(u)}", "u")) if sym in used]
     name = f"{c.kind}_{'contact' if with_J else 'force'}"
     outs = "f, J" if with_J else "f"
     what = "f and the total stiffness block J = -(df/dq + df/dxi w^T)" if with_J else "f"
@@ -76,7 +108,7 @@ def _kernel(c: ContactExprs, with_J: bool) -> str:
     lines = [
         NJIT,
         f"def {name}({_ARGS[c.kind]}, {outs}):",
-        f'    """{c.kind} contact, law {c.law!r}: writes {what}',
+        f'    """{c.kind} contact, law {c.law!r}, normal law {c.normal!r}: writes {what}',
         f"    over the local dofs {', '.join(c.dofs)}. Returns 1 if active (delta > 0), else 0.\"\"\"",
         *[f"    {line}" for line in _PREAMBLE[c.kind]],
         "    if not delta > 0.0:",
@@ -86,6 +118,45 @@ def _kernel(c: ContactExprs, with_J: bool) -> str:
         "    return 1",
     ]
     return "\n".join(lines) + "\n"
+
+
+LAWS = {
+    "normal_force": (laws.normal_force, "k_n", "F_n(delta) [force]"),
+    "normal_stiffness": (laws.normal_stiffness, "k_n", "dF_n / ddelta [force / length]"),
+    "normal_energy": (laws.normal_energy, "k_n",
+                      "U_n(delta), the integral of F_n from first contact [energy]"),
+    "coulomb_limit": (laws.coulomb_limit, "k_n, k_t, mu",
+                      "t*(delta), the Coulomb limit of the history, |F_t(t*)| = mu F_n [length]"),
+}
+"""The functions of the normal law printed into every kernel module: name -> (its expression
+in symbolic/laws.py, the parameters after delta, what it returns)."""
+
+
+def _half_powers(expr: sp.Expr) -> sp.Expr:
+    """delta^(n/2) with n odd -> delta^((n-1)/2) sd: one square root and integer powers, and
+    delta itself kept where the power is whole (so that t* = mu k_n delta / k_t is not
+    computed from sd^2)."""
+    return sp.sympify(expr).replace(
+        lambda e: e.is_Pow and e.base == delta and e.exp.is_Rational and e.exp.q == 2,
+        lambda e: delta ** (e.exp - sp.Rational(1, 2)) * sd)
+
+
+def law_functions(normal: str) -> str:
+    """Source of the functions of LAWS for the normal law `normal`, each (delta, parameters) ->
+    value for delta >= 0; numba compiles them for an array of delta too (np.sqrt), as
+    System.coulomb_limit calls coulomb_limit."""
+    printer = _OrderedPrinter()
+    parts = []
+    for name, (law, args, what) in LAWS.items():
+        expr = _half_powers(law(normal))
+        lines = [NJIT, f"def {name}(delta, {args}):",
+                 f'    """{what}:',
+                 f'    {law(normal)} ({normal}, symbolic/laws.py)."""']
+        if sd in expr.free_symbols:
+            lines.append("    sd = np.sqrt(delta)")
+        lines.append(f"    return {printer.doprint(expr)}")
+        parts.append("\n".join(lines) + "\n")
+    return "\n\n".join(parts)
 
 
 def _increment_coeffs(c: ContactExprs) -> str:
@@ -111,6 +182,7 @@ def module_source(pair: ContactExprs, wall: ContactExprs, dialect: Dialect, head
         f"PAIR_FRICTION = {pair.law != 'none'}",
         f"WALL_FRICTION = {wall.law != 'none'}",
         f"CONVENTIONS = {dialect.conventions!r}  # docs/physics.md, Conventions\n\n",
+        law_functions(pair.normal),
         _kernel(pair, True), _kernel(pair, False), _increment_coeffs(pair),
         _kernel(wall, True), _kernel(wall, False), _increment_coeffs(wall),
         render(assembly, dialect),

@@ -37,21 +37,22 @@ class ContactExprs:
     f      generalized forces on the local dofs [force, torque];
     J      total stiffness block -d f / d q (history following q) [force / length];
     w      history increment coefficients, d xi = w . dq [1, length for angles];
-    law    tangential law this kernel was derived for.
+    law    tangential law this kernel was derived for;  normal  its normal law.
     """
 
     kind: str
     law: str
+    normal: str
     dofs: tuple[str, ...]
     f: sp.Matrix
     J: sp.Matrix
     w: sp.Matrix
 
 
-def _stiffness(f: sp.Matrix, dfdq: sp.Matrix, w: sp.Matrix) -> sp.Matrix:
+def _stiffness(f: sp.Matrix, dfdq: sp.Matrix, w: sp.Matrix, normal: str) -> sp.Matrix:
     """J = -(df/dq + df/dxi w^T), then in Coulomb units (u = xi / t*)."""
     J = -(dfdq + f.diff(xi) * w.T)
-    return J.applyfunc(laws.in_coulomb_units)
+    return J.applyfunc(lambda e: laws.in_coulomb_units(e, normal))
 
 
 LEVER_ARMS = {"model": R, "lammps": R - delta / 2}
@@ -60,12 +61,13 @@ LEVER_ARMS = {"model": R, "lammps": R - delta / 2}
 relative velocity of the surface points at distance R from each centre."""
 
 
-def pair_contact(law: str, rotation: bool, conventions: str = "model") -> ContactExprs:
-    """Disk-disk kernel for a tangential law; local dofs of disk i then disk j; torque lever
-    arm LEVER_ARMS[conventions]."""
+def pair_contact(law: str, rotation: bool, conventions: str = "model", normal: str = "hertz"
+                 ) -> ContactExprs:
+    """Disk-disk kernel for a tangential and a normal law; local dofs of disk i then disk j;
+    torque lever arm LEVER_ARMS[conventions]."""
     n = sp.Matrix([dx / rho, dy / rho])
     s = sp.Matrix([-n[1], n[0]])
-    F_n, F_t = laws.normal_force(), laws.tangential_force(law)
+    F_n, F_t = laws.normal_force(normal), laws.tangential_force(law, normal)
     force_i = F_n * n + F_t * s
     torque = -LEVER_ARMS[conventions] * F_t
 
@@ -84,12 +86,19 @@ def pair_contact(law: str, rotation: bool, conventions: str = "model") -> Contac
         cols = [(dx, 1), (dy, 1), (dx, -1), (dy, -1)]
     dfdq = sp.Matrix(len(dofs), len(dofs),
                      lambda a, b: 0 if cols[b] is None else cols[b][1] * total(f[a], cols[b][0]))
-    return ContactExprs("pair", law, dofs, f.applyfunc(laws.in_coulomb_units), _stiffness(f, dfdq, w), w)
+    return _contact("pair", law, normal, dofs, f, dfdq, w)
 
 
-def wall_contact(law: str, rotation: bool) -> ContactExprs:
-    """Disk-substrate kernel for a tangential law; local dofs (x_i, y_i[, theta_i])."""
-    F_n, F_t = laws.normal_force(), laws.tangential_force(law)
+def _contact(kind: str, law: str, normal: str, dofs: tuple[str, ...], f: sp.Matrix,
+             dfdq: sp.Matrix, w: sp.Matrix) -> ContactExprs:
+    """The ContactExprs of forces f with derivative dfdq, both in Coulomb units."""
+    in_units = f.applyfunc(lambda e: laws.in_coulomb_units(e, normal))
+    return ContactExprs(kind, law, normal, dofs, in_units, _stiffness(f, dfdq, w, normal), w)
+
+
+def wall_contact(law: str, rotation: bool, normal: str = "hertz") -> ContactExprs:
+    """Disk-substrate kernel for a tangential and a normal law; local dofs (x_i, y_i[, theta_i])."""
+    F_n, F_t = laws.normal_force(normal), laws.tangential_force(law, normal)
     if rotation:
         dofs = ("x_i", "y_i", "theta_i")
         f = sp.Matrix([F_t, F_n, R * F_t])
@@ -101,4 +110,4 @@ def wall_contact(law: str, rotation: bool) -> ContactExprs:
     # f depends on y only through delta = R - y, so d/dy = -d/ddelta; x, theta enter via xi only.
     dfdq = sp.zeros(len(dofs), len(dofs))
     dfdq[:, 1] = -f.diff(delta)
-    return ContactExprs("wall", law, dofs, f.applyfunc(laws.in_coulomb_units), _stiffness(f, dfdq, w), w)
+    return _contact("wall", law, normal, dofs, f, dfdq, w)

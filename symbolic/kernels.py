@@ -37,11 +37,13 @@ def generator_version() -> str:
 
 
 def effects_key(effects: Effects) -> str:
-    """Only what changes the derivation: the law at each contact kind, rotation, and the
-    conventions where they change anything (Effects.contact_conventions)."""
+    """Only what changes the derivation: the law at each contact kind, rotation, the
+    conventions where they change anything (Effects.contact_conventions), and the normal law
+    where it is not the paper's Hertz."""
     key = f"pair={effects.pair_law};wall={effects.wall_law};rotation={effects.rotation}"
     conventions = effects.contact_conventions
-    return key if conventions == "model" else f"{key};conventions={conventions}"
+    key = key if conventions == "model" else f"{key};conventions={conventions}"
+    return key if effects.normal == "hertz" else f"{key};normal={effects.normal}"
 
 
 def dialect(effects: Effects) -> Dialect:
@@ -61,9 +63,10 @@ def generate_source(effects: Effects, digest: str, progress: Optional[Progress] 
 
     tick = (lambda fraction: progress("generating", fraction)) if progress else (lambda f: None)
     tick(0.0)
-    pair = contacts.pair_contact(effects.pair_law, effects.rotation, effects.contact_conventions)
+    pair = contacts.pair_contact(effects.pair_law, effects.rotation, effects.contact_conventions,
+                                 effects.normal)
     tick(0.4)
-    wall = contacts.wall_contact(effects.wall_law, effects.rotation)
+    wall = contacts.wall_contact(effects.wall_law, effects.rotation, effects.normal)
     tick(0.45)
     header = (f'"""diskfriction generated kernels. Do not edit: regenerated from symbolic/.\n\n'
               f"hash: {digest}\neffects: {effects_key(effects)}\n"

@@ -46,7 +46,8 @@ class System:
 
     def rest_state(self) -> tuple[np.ndarray, np.ndarray]:
         """The analytic F_x = 0 equilibrium: equal spacing L / N, every disk sunk by
-        delta_w = (F_y / k_n)^(2/3) into the substrate, all xi = 0 (docs/model.md#history)."""
+        delta_w0 (F_n(delta_w0) = F_y; Hertz: (F_y / k_n)^(2/3)) into the substrate, all xi = 0
+        (docs/model.md#history)."""
         s, N = self.scene, self.scene.N
         q = np.zeros(self.ndof)
         q[:N] = (np.arange(N) + 0.5) * (s.L / N)
@@ -94,6 +95,12 @@ class System:
         delta = np.empty(2 * self.N)
         self.kernels.overlaps(q, self.params, delta)
         return delta
+
+    def coulomb_limit(self, delta: np.ndarray) -> np.ndarray:
+        """t*(delta) of every contact, the Coulomb limit of its history (kernels.coulomb_limit;
+        Hertz: mu k_n delta / k_t), 0 where open (delta <= 0) [length]."""
+        s = self.scene
+        return self.kernels.coulomb_limit(np.maximum(delta, 0.0), s.k_n, s.k_t, s.mu)
 
     def history_step(self, q0: np.ndarray, q1: np.ndarray, xi0: np.ndarray, cap: bool = True
                      ) -> tuple[np.ndarray, np.ndarray]:

@@ -30,22 +30,28 @@ def all_effects() -> list[Effects]:
     lammps = [Effects(law, True, True, rot, "lammps")
               for law, rot in (("mindlin-smooth", True), ("mindlin-linear", True),
                                ("mindlin-linear", False))]
-    return combos + lammps + [Effects("none", False, False, rot) for rot in (True, False)]
+    hooke = [Effects(law, normal="hooke") for law in ("mindlin-smooth", "mindlin-linear")]
+    return combos + lammps + hooke + [Effects("none", False, False, rot) for rot in (True, False)]
 
 
 def effects_id(e: Effects) -> str:
     fr = "+".join(n for n, on in (("pair", e.pair_friction), ("wall", e.wall_friction)) if on)
     conventions = "" if e.conventions == "model" else f"-{e.conventions}"
-    return f"{e.tangential}[{fr or 'nofric'}]{'-rot' if e.rotation else '-norot'}{conventions}"
+    normal = "" if e.normal == "hertz" else f"-{e.normal}"
+    return (f"{e.tangential}[{fr or 'nofric'}]{'-rot' if e.rotation else '-norot'}{conventions}"
+            f"{normal}")
 
 
 def reference(effects: Effects, N: int, L: float) -> ref.Ref:
     return ref.Ref(N=N, L=L, pair_law=effects.pair_law, wall_law=effects.wall_law,
-                   rotation=effects.rotation, conventions=effects.contact_conventions, **PARAMS)
+                   rotation=effects.rotation, conventions=effects.contact_conventions,
+                   normal=effects.normal, **PARAMS)
 
 
-def random_state(rng: np.random.Generator, N: int, rotation: bool, case: int):
-    """(q, xi, L) of an N-disk chain with random overlaps in [1e-4, 1e-2].
+def random_state(rng: np.random.Generator, N: int, rotation: bool, case: int,
+                 normal: str = "hertz"):
+    """(q, xi, L) of an N-disk chain with random overlaps in [1e-4, 1e-2], histories in units
+    of the Coulomb limit t* of the normal law `normal`.
 
     `case` cycles through the hard cases: every 2nd state has one contact at delta ~ 1e-10,
     every 5th has one pair open (delta < 0); the histories cycle through XI_RATIOS and random
@@ -70,7 +76,8 @@ def random_state(rng: np.random.Generator, N: int, rotation: bool, case: int):
     ratios = np.where(np.arange(2 * N) % 2 == 0,
                       np.resize(XI_RATIOS, 2 * N)[np.roll(np.arange(2 * N), case)],
                       rng.uniform(0, 1, 2 * N))
-    t_star = PARAMS["mu"] * PARAMS["k_n"] * np.clip(delta, 0, None) / PARAMS["k_t"]
+    t_star = np.array([float(ref.coulomb_limit(normal, PARAMS["k_n"], PARAMS["k_t"], PARAMS["mu"],
+                                               mp.mpf(d))) if d > 0 else 0.0 for d in delta])
     xi = rng.choice((-1.0, 1.0), 2 * N) * ratios * t_star
     return q, xi, L
 
@@ -121,7 +128,7 @@ def worst_errors(effects: Effects, states: int, seed: int = 20200124) -> dict[st
     rng = np.random.default_rng(seed)
     worst = {"assembled": 0.0, "contact": 0.0, "tiny": 0.0, "tiny_contacts": 0}
     for case in range(states):
-        q, xi, L = random_state(rng, N, effects.rotation, case)
+        q, xi, L = random_state(rng, N, effects.rotation, case, effects.normal)
         m = reference(effects, N, L)
         delta = np.array([float(d) for d in ref.overlaps(m, q)])
         h = mp.mpf(1e-8) * mp.mpf(delta[delta > 0].min())

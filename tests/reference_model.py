@@ -5,7 +5,9 @@ the total stiffness is obtained by central finite differences in 50-digit arithm
 history following q along each step (midpoint rule, docs/model.md's increments).
 
 conventions "lammps" (docs/physics.md): the disk-disk torque lever arm is R - delta/2 and a
-step's pair increment takes the tangent at the end of the step.
+step's pair increment takes the tangent at the end of the step. Normal laws F_n = k_n delta^p:
+Hertz p = 3/2 (the paper), Hooke p = 1; the Coulomb limit t* is where the Mindlin force
+k_t delta^(1/2) |xi| reaches mu F_n.
 """
 from __future__ import annotations
 
@@ -29,19 +31,33 @@ class Ref:
     wall_law: str
     rotation: bool
     conventions: str = "model"
+    normal: str = "hertz"
 
     @property
     def D(self) -> int:
         return 3 if self.rotation else 2
 
 
-def tangential(law, k_n, k_t, mu, delta, xi):
+EXPONENTS = {"hertz": mp.mpf(3) / 2, "hooke": mp.mpf(1)}
+
+
+def normal_force(normal, k_n, delta):
+    """F_n = k_n delta^p."""
+    return k_n * delta ** EXPONENTS[normal]
+
+
+def coulomb_limit(normal, k_n, k_t, mu, delta):
+    """t* with k_t delta^(1/2) t* = mu F_n."""
+    return mu * normal_force(normal, k_n, delta) / (k_t * mp.sqrt(delta))
+
+
+def tangential(law, k_n, k_t, mu, delta, xi, normal="hertz"):
     """F_t along s on the first body: smoothed Mindlin (paper eq. 5), linear, or none."""
     if law == "none":
         return mp.mpf(0)
     if law == "mindlin-linear":
         return -k_t * mp.sqrt(delta) * xi
-    t_star = mu * k_n * delta / k_t
+    t_star = coulomb_limit(normal, k_n, k_t, mu, delta)
     x = xi / t_star
     return -k_t * mp.sqrt(delta) * (1 + abs(x) - x * x) * xi
 
@@ -70,8 +86,8 @@ def pair_force(m: Ref, q, xi, k, F):
         return
     nx, ny = dx / rho, dy / rho
     sx, sy = -ny, nx
-    Fn = m.k_n * delta ** mp.mpf(1.5)
-    Ft = tangential(m.pair_law, m.k_n, m.k_t, m.mu, delta, xi[k])
+    Fn = normal_force(m.normal, m.k_n, delta)
+    Ft = tangential(m.pair_law, m.k_n, m.k_t, m.mu, delta, xi[k], m.normal)
     fx, fy = Fn * nx + Ft * sx, Fn * ny + Ft * sy
     arm = m.R - delta / 2 if m.conventions == "lammps" else m.R
     add(F, m, i, fx, fy, -arm * Ft)
@@ -82,8 +98,8 @@ def wall_force(m: Ref, q, xi, k, F):
     delta = m.R - q[m.N + k]
     if delta <= 0:
         return
-    Ft = tangential(m.wall_law, m.k_n, m.k_t, m.mu, delta, xi[m.N + k])
-    add(F, m, k, Ft, m.k_n * delta ** mp.mpf(1.5), m.R * Ft)
+    Ft = tangential(m.wall_law, m.k_n, m.k_t, m.mu, delta, xi[m.N + k], m.normal)
+    add(F, m, k, Ft, normal_force(m.normal, m.k_n, delta), m.R * Ft)
 
 
 def forces(m: Ref, q, xi, F_x, contacts=None):
@@ -149,9 +165,11 @@ def overlaps(m: Ref, q):
 
 
 def hertz_energy(m: Ref, q, F_x):
-    """U = sum 2/5 k_n delta^(5/2) over active contacts + F_y sum y_i - F_x x_1."""
+    """U = sum k_n delta^(p+1) / (p+1) over active contacts (Hertz: 2/5 k_n delta^(5/2))
+    + F_y sum y_i - F_x x_1."""
+    p = EXPONENTS[m.normal]
     U = -F_x * mp.mpf(q[0]) + m.F_y * sum(mp.mpf(q[m.N + i]) for i in range(m.N))
     for d in overlaps(m, q):
         if d > 0:
-            U += mp.mpf(2) / 5 * m.k_n * d ** mp.mpf(2.5)
+            U += m.k_n * d ** (p + 1) / (p + 1)
     return U

@@ -16,7 +16,7 @@ def test_increment_matches_reference_midpoint_rule(effects):
     kernels = load_kernels(effects)
     rng = np.random.default_rng(11)
     for case in range(10):
-        q0, xi, L = random_state(rng, N, effects.rotation, case)
+        q0, xi, L = random_state(rng, N, effects.rotation, case, effects.normal)
         q1 = q0 + rng.normal(0, 1e-4, q0.size)
         params = np.array([0.5, 2000.0, 2000.0 * 2 / 7, 10.0, 0.1, L])
         dxi = np.empty(2 * N)

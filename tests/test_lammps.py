@@ -124,7 +124,8 @@ def test_exported_deck_round_trips_and_its_first_step_forces_are_ours(lammps, tm
     ("", 'tangential = "mindlin-smooth" (paper eq. 5) has no LAMMPS counterpart'),
     ('[disks]\ninertia = 1.0\n[effects]\ntangential = "mindlin-linear"\n', "disks.inertia = 1"),
     ('[disks]\nN = 2\n[effects]\ntangential = "mindlin-linear"\n', "disks.N = 2"),
-], ids=["smoothed-law", "c=1", "N=2"])
+    ('[effects]\nnormal = "hooke"\ntangential = "mindlin-linear"\n', 'normal = "hooke"'),
+], ids=["smoothed-law", "c=1", "N=2", "hooke"])
 @pytest.mark.parametrize("command", [["export", "lammps"],
                                      ["crosscheck", "lammps", "--fx", "0.03", "--t-end", "1"]])
 def test_what_lammps_cannot_represent_is_refused_with_one_line(tmp_path, toml, says, command):

@@ -109,7 +109,8 @@ def test_format_scene_writes_every_key_and_the_derived_quantities():
     assert set(document["disks"]) == {"N", "R", "m", "inertia", "eps"}
     assert set(document["contacts"]) == {"k_n", "k_t", "mu"}
     assert set(document["load"]) == {"F_y", "F_x"}
-    assert set(document["effects"]) == {"tangential", "friction", "rotation", "conventions"}
+    assert set(document["effects"]) == {"normal", "tangential", "friction", "rotation",
+                                        "conventions"}
     assert set(document["stability"]) == {"matrix"}
     scene = Scene()
     for name, value in [("L", scene.L), ("I", scene.I), ("delta_w0", scene.delta_w0),
@@ -155,6 +156,7 @@ BAD_VALUES = [
     ("F_x-number", "load.F_x", "0.12", "expected an array"),
     ("F_x-string-entry", "load.F_x", '["0", 0.1]', "expected a number"),
     ("F_x-inf-entry", "load.F_x", "[0.0, inf]", "finite"),
+    ("normal-unknown", "effects.normal", '"jkr"', "unknown effect"),
     ("tangential-unknown", "effects.tangential", '"coulomb"', "unknown effect"),
     ("tangential-number", "effects.tangential", "1", "expected a string"),
     ("friction-unknown", "effects.friction", '["wall"]', "unknown effect"),
@@ -262,7 +264,7 @@ def test_friction_switches_are_booleans(switch):
 
 @pytest.mark.parametrize(("fields", "fragment"), [
     (dict(m=1e300, k_n=1e-300), "tau = sqrt(m / (k_n (2R)^(1/2))) = inf"),
-    (dict(F_y=1e-320, k_n=1e10), "delta_w0 = (F_y / k_n)^(2/3) = 0.0"),
+    (dict(F_y=1e-320, k_n=1e10), "delta_w0 = (F_y / k_n)^(1/p) = 0.0"),
     (dict(N=2**62, R=1e300), "L = 2 N R (1 - eps) = inf"),
 ])
 def test_derived_quantities_that_are_not_finite_normal_numbers_are_refused(fields, fragment):

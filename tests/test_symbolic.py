@@ -44,7 +44,7 @@ def test_forces_match_reference_and_each_other(effects: Effects):
     kernels = load_kernels(effects)
     rng = np.random.default_rng(7)
     for case in range(20):
-        q, xi, L = random_state(rng, N, effects.rotation, case)
+        q, xi, L = random_state(rng, N, effects.rotation, case, effects.normal)
         m = reference(effects, N, L)
         F, _, _, _, _ = generated(kernels, q, xi, L)
         F_only = np.empty_like(F)

@@ -56,7 +56,7 @@ def render(ctx):
                            "V2 = omega/k [2R/tau]", "weight on y", "wave purity", "next best score",
                            "pair overlaps [raw length]"], rows))
     s = ctx.scene
-    omega0 = np.sqrt(1.5 * s.k_n * np.sqrt(s.delta_w0) / s.m) * ctx.units.time
+    omega0 = np.sqrt(s.kappa_w0 / s.m) * ctx.units.time
     text.append(
         "Selection (reports/compute/branches.py `shear_mode`): every real eigenvector of J, theta "
         "scaled by R and normalised, scored by (weight on y) x (fraction of its y pattern in one "
