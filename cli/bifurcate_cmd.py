@@ -16,7 +16,6 @@ from diskfriction.words import count
 from diskfriction.scenes.scene import NEGATIVE_LOAD
 
 MATRICES = {"J": "J", "M^-1J": "M^-1 J", "M^-1 J": "M^-1 J"}
-DETECTIONS = ("fast", "exhaustive")  # continuation.collisions.MODES, without importing scipy
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -92,10 +91,13 @@ def parse_window(text: str) -> tuple[float, float]:
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.detection not in DETECTIONS:
-        raise CommandError(f"bifurcate error: --detection: must be fast or exhaustive "
+    from diskfriction.continuation.detectors import DETECTORS
+
+    if args.detection not in DETECTORS:
+        raise CommandError(f"bifurcate error: --detection: must be {' or '.join(DETECTORS)} "
                            f"(got {args.detection!r})")
-    if args.workers is not None and args.workers > 0 and args.detection != "fast":
+    detector = DETECTORS[args.detection]
+    if args.workers is not None and args.workers > 0 and not detector.parallel:
         raise CommandError(f"bifurcate error: --workers: scan workers serve the fast detection; "
                            f"--detection {args.detection} scans each step inline (got {args.workers})")
     if args.problem is not None:
@@ -107,7 +109,7 @@ def run(args: argparse.Namespace) -> int:
     scene = scene_from_args(args)
     F_from, F_to = parse_range(args.fx) if args.fx is not None else scene.F_x_range
     window = parse_window(args.window) if args.window is not None else None
-    if window is not None and args.detection != "fast":
+    if window is not None and not detector.window:
         raise CommandError("bifurcate error: --window: needs the fast detection (eigenvalue "
                            f"slopes), not --detection {args.detection}")
     if args.matrix is not None and args.matrix not in MATRICES:

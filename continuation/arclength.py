@@ -245,7 +245,7 @@ def _follow(problem: Problem, scans, workers: int, here: _Start, rec: "_Recorder
     here = replace(here, ds=params.ds, g=problem.event_functions(here.x[:-1], here.x[-1]))
     labels = np.arange(here.sample.eigvals.size)
     pending: deque[_Pending] = deque()
-    previous: Optional[Sample] = None  # the exhaustive detection's stencil (scans inline)
+    previous: Optional[Sample] = None  # a stencil for the next scan (Detector.stencil_from_previous)
     status, stopped = "max_steps", False
     while True:
         while pending and (stopped or pending_full(workers, [item.end for item in pending])
@@ -267,7 +267,7 @@ def _follow(problem: Problem, scans, workers: int, here: _Start, rec: "_Recorder
                                for c in scan.collisions]
             rec.warnings += scan.warnings
             rec.events += item.step.event
-            previous = None if scan.collisions or detection.slopes else item.start.sample
+            previous = item.start.sample if detection.detector.stencil_from_previous and not scan.collisions else None
             if item.end is None:
                 continue
             tracked = None if scan.tracked is None else scan.tracked[labels]

@@ -106,11 +106,11 @@ def default_workers(problem: Problem, n: int, detection: DetectionParams) -> int
 
 
 def planned_workers(n: int, detection: DetectionParams) -> int:
-    """Scan workers for an n x n stability matrix: 0 (inline) unless the detection is fast
-    (the exhaustive one's stencil is a sample of the previous step, known only once that
-    step's scan is done); then detection.workers if set, else 2 from n = PARALLEL_FROM on, on
+    """Scan workers for an n x n stability matrix: 0 (inline) unless the detector's scans are
+    independent (Detector.parallel: the exhaustive one's stencil is a sample of the previous
+    step, known only once that step's scan is done); then detection.workers if set, else 2 from n = PARALLEL_FROM on, on
     Linux, when this process may use 2 cores or more and is not daemonic."""
-    if not detection.enabled or detection.mode != "fast":
+    if not (detection.enabled and detection.detector.parallel):
         return 0
     if detection.workers is not None:
         return detection.workers
