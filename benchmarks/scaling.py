@@ -58,8 +58,9 @@ def out_of_time(signum, frame):
     raise OutOfTime
 
 
-params = SweepParams(detection=DetectionParams(mode=mode, workers=workers), window=window)
-used = default_workers(DiskEquilibria(system, *system.rest_state(), 0.0), system.ndof, params.detection)
+params = SweepParams(detection=DetectionParams(mode=mode), workers=workers, window=window)
+used = default_workers(DiskEquilibria(system, *system.rest_state(), 0.0), system.ndof, params.detection,
+                       params.workers)
 # compile and warm up on at most N = 100 (n = 300: the sparse path too), not on the big chain
 sweep(System.from_scene(Scene(N=min(N, 100), eps=eps)), 0.0, 1e-3, "J",
       SweepParams(detection=DetectionParams(mode=mode)))

@@ -130,8 +130,8 @@ def run(args: argparse.Namespace) -> int:
     from diskfriction.reports.bifurcation import collision_records, plot_diagram, save_branch
     from diskfriction.symbolic import System
 
-    detection = DetectionParams(mode=args.detection, workers=args.workers)
-    check_memory("bifurcate", scene, 1 + planned_workers(scene.ndof, detection),
+    detection = DetectionParams(mode=args.detection)
+    check_memory("bifurcate", scene, 1 + planned_workers(scene.ndof, detection, args.workers),
                  dense=window is None and scene.eps > 0)
 
     progress = Progress("bifurcate")
@@ -153,8 +153,8 @@ def run(args: argparse.Namespace) -> int:
 
                 unit = PaperUnits.of(scene).eigenvalue(matrix)
                 window = (window[0] * unit, window[1] * unit)
-            params = SweepParams(ds_max=args.ds_max, window=window,
-                                 detection=detection)
+            params = SweepParams(ds_max=args.ds_max, window=window, detection=detection,
+                                 workers=args.workers)
             branch = sweep(system, F_from, F_to, matrix, params, on_point)
         except (EquilibriumError, ContinuationError, WindowCrowded) as error:
             raise CommandError(f"bifurcate error: {scene.source}: {error}", EXIT_FAILED) from None

@@ -126,9 +126,9 @@ def run_problem(args: argparse.Namespace) -> int:
                           f"keys ({', '.join(sorted(RESERVED))})")
     stem = path.stem if name == DEFAULT_NAME else f"{path.stem}-{name}"
     out = output_dir("bifurcate", args.out, Path("out") / "bifurcate" / stem)
-    workers = spec.options.detection.workers if args.workers is None else args.workers
-    detection = replace(spec.options.detection, mode=args.detection, workers=workers)
-    options = replace(spec.options, detection=detection, ds_max=args.ds_max or spec.options.ds_max)
+    options = replace(spec.options, detection=replace(spec.options.detection, mode=args.detection),
+                      workers=spec.options.workers if args.workers is None else args.workers,
+                      ds_max=args.ds_max or spec.options.ds_max)
     return _continue(spec, label, span, options, out, args.json)
 
 

@@ -174,15 +174,17 @@ def _validate_start(p0: float, par: ContinuationParams) -> None:
 def continuation(problem: Problem, u0: Array, p0: float,
                  params: ContinuationParams = ContinuationParams(),
                  detection: DetectionParams = DetectionParams(), *,
-                 callback: Optional[Callback] = None) -> Branch:
+                 workers: Optional[int] = None, callback: Optional[Callback] = None) -> Branch:
     """Follow G(u, p) = 0 from (u0, p0) (u0 is first corrected at fixed p0).
 
     Stores at every accepted point the tracked spectrum of problem.stability_matrix and locates
-    every birth/death of a complex pair (collisions.py). callback(k, p, u, eigenvalues) is called
-    for every accepted point k. Returns a Branch.
+    every birth/death of a complex pair (collisions.py). workers: processes that scan steps
+    while the continuation goes on (scans.py; 0: every scan inline; None: automatic,
+    scans.planned_workers). callback(k, p, u, eigenvalues) is called for every accepted point
+    k. Returns a Branch.
     """
     _validate_start(p0, params)
-    workers = default_workers(problem, np.size(u0), detection)
+    workers = default_workers(problem, np.size(u0), detection, workers)
     with blas_threads():
         return _continuation(problem, np.asarray(u0, dtype=float), float(p0), params, detection, workers,
                              callback)

@@ -75,10 +75,8 @@ class DetectionParams:
     partial_from: matrix size n from which a split sample of the fast detection is partial
     (only the eigenvalues near the labels in trouble, nearest.py; 0: always, a value above n:
     never); partial_max_k: the most eigenvalues a partial sample computes (beyond that, or
-    when they do not cover the labels, the sample is a full spectrum); workers: processes that
-    scan steps while the continuation goes on (scans.py; 0: every scan inline; None: 2 for the
-    fast detection from n = scans.PARALLEL_FROM on, on Linux with 2 cores, else 0:
-    scans.default_workers)."""
+    when they do not cover the labels, the sample is a full spectrum). Where the scans run
+    (inline or on workers) is not a tolerance: continuation(workers=...), scans.py."""
 
     mode: str = "fast"
     rel_tol: float = DEFAULT_REL_TOL
@@ -92,7 +90,6 @@ class DetectionParams:
     doubt: float = 0.25
     partial_from: int = 240
     partial_max_k: int = 16
-    workers: Optional[int] = None
 
     def __post_init__(self):
         if self.mode not in DETECTORS:
@@ -109,8 +106,6 @@ class DetectionParams:
             raise ValueError("max_solves and locator_iterations must be >= 1")
         if self.partial_from < 0 or self.partial_max_k < 1:
             raise ValueError("partial_from must be >= 0 and partial_max_k >= 1")
-        if self.workers is not None and self.workers < 0:
-            raise ValueError(f"workers must be >= 0 (or None: automatic), got {self.workers}")
 
     @property
     def detector(self) -> Detector:

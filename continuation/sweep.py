@@ -37,7 +37,9 @@ class SweepParams:
     """Step control of a sweep, in the arclength of x = (q, F_x), raw units.
 
     ds_max = None takes span / 60; ds starts at ds_max / 2. newton_tol bounds max|F| at every
-    stored point [force]. detection: the collision detector's parameters (continuation core).
+    stored point [force]. detection: the collision detector's parameters (continuation core);
+    workers: processes scanning steps while the sweep goes on (None: automatic; 0: inline;
+    arclength.continuation).
     window: (lo, hi) of Re lambda [the matrix's raw units] to track instead of the whole
     spectrum (spectral_window.py); None: every eigenvalue.
     """
@@ -47,6 +49,7 @@ class SweepParams:
     newton_tol: float = 1e-11
     max_steps: int = 20_000
     detection: DetectionParams = DetectionParams()
+    workers: Optional[int] = None
     window: Optional[tuple[float, float]] = None
 
 
@@ -125,7 +128,8 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
             if progress is not None:
                 progress(F_x)
 
-        branch = continuation(problem, problem.q_c, F_start, core, params.detection, callback=record)
+        branch = continuation(problem, problem.q_c, F_start, core, params.detection,
+                              workers=params.workers, callback=record)
         branch = _continue_leg(rows, first, branch)
         if window is not None:
             continued += list(branch.continued if first == 0 else branch.continued[1:])

@@ -231,7 +231,6 @@ def map_cell(scene: Scene, params: MapParams) -> dict:
     located collisions (as bifurcate's collisions.json), windows [start, stop, pairs] and,
     with slide runs, one row per window (dynamics.verify.window_run)."""
     from diskfriction.continuation.arclength import ContinuationError
-    from diskfriction.continuation.collisions import DetectionParams
     from diskfriction.continuation.disks import EquilibriumError
     from diskfriction.continuation.records import collision_records
     from diskfriction.continuation.sweep import SweepParams, sweep
@@ -246,7 +245,7 @@ def map_cell(scene: Scene, params: MapParams) -> dict:
     try:
         # the cells already run one per core: each sweep scans its steps inline
         branch = sweep(system, params.F_from, params.F_to, params.matrix,
-                       SweepParams(detection=DetectionParams(workers=0)))
+                       SweepParams(workers=0))
     except (EquilibriumError, ContinuationError, np.linalg.LinAlgError) as error:
         summary |= {"status": "failed", "reason": f"no branch: {error}"}
     else:

@@ -413,7 +413,6 @@ def test_settled_samples_drop_their_vectors_and_the_scan_finds_the_same(monkeypa
     from diskfriction.continuation.collisions import StepScan
 
     system = System.from_scene(Scene(N=20, eps=1e-4))
-    detection = DetectionParams(workers=0)
     released, inner = [], []
     run = StepScan.run
 
@@ -425,11 +424,11 @@ def test_settled_samples_drop_their_vectors_and_the_scan_finds_the_same(monkeypa
         return found
 
     monkeypatch.setattr(StepScan, "run", counting_run)
-    lean = sweep(system, 0.0, 0.12, "J", SweepParams(detection=detection))
+    lean = sweep(system, 0.0, 0.12, "J", SweepParams(workers=0))
     assert 0 < sum(released) < sum(inner)
     monkeypatch.setattr(StepScan, "_release_vectors", lambda self: None)
     released.clear()
-    kept = sweep(system, 0.0, 0.12, "J", SweepParams(detection=detection))
+    kept = sweep(system, 0.0, 0.12, "J", SweepParams(workers=0))
     assert sum(released) == 0
     assert np.array_equal(lean.F_x, kept.F_x) and np.array_equal(lean.eigenvalues, kept.eigenvalues)
     assert [(c.p, c.kind, c.pair) for c in lean.collisions] == [(c.p, c.kind, c.pair) for c in kept.collisions]
