@@ -71,7 +71,7 @@ t0 = time.perf_counter()
 out = {"N": N, "eps": eps, "mode": mode + ("" if window is None else " " + sys.argv[5]), "workers": used}
 try:
     branch = sweep(system, 0.0, 0.12, "J", params, progress)
-    out.update(done=branch.status[-1] == "p_end", points=len(branch),
+    out.update(done=branch.status[-1].reached, points=len(branch),
                collisions=[c.p for c in branch.collisions], free=int(branch.free[-1]))
 except OutOfTime:
     out.update(done=False, points=None, collisions=None)

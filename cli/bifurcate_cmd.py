@@ -187,13 +187,12 @@ def run(args: argparse.Namespace) -> int:
             print(f"  {r['kind']:5s}  F_x = {r['F_x']:.10f}  lambda = {r['lambda_re']:.6g}  "
                   f"(lambda/k_n = {r['lambda_re'] / scene.k_n:.5g})")
         print(f"wrote {out}/branch.npz, collisions.json, diagram.png")
-    if branch.status[-1] != "p_end":
-        from diskfriction.continuation.branch import stop_reason
+    if not branch.status[-1].reached:
         from diskfriction.continuation.equilibrium import contact_states
 
         raise CommandError(f"bifurcate error: {scene.source}: the sweep ended at F_x = "
                            f"{branch.F_x[-1]:.6g}, short of {F_to:g}: "
-                           f"{stop_reason(branch.status[-1], len(branch))}; there "
+                           f"{branch.status[-1].sentence(len(branch))}; there "
                            f"{contact_states(system, branch.q[-1], branch.xi[-1])}; what it "
                            f"reached is written", EXIT_FAILED)
     return 0
@@ -221,8 +220,6 @@ def leg_lines(branch, F_to: float) -> list[str]:
     (cli.common.path), its points and how it ended."""
     import numpy as np
 
-    from diskfriction.continuation.branch import stop_reason
-
     lines = []
     for leg, status in zip(sorted(set(branch.leg.tolist())), branch.status):
         rows = np.flatnonzero(branch.leg == leg)
@@ -230,7 +227,7 @@ def leg_lines(branch, F_to: float) -> list[str]:
         what = ("preparation: loading from rest" if leg == 0 else
                 ("loading" if F[-1] > F[0] else "unloading"))
         floor = (" (the rest state F_x = 0 is singular: unloading ends where loading started)"
-                 if leg == 1 and F_to == 0 and status == "p_end" else "")
+                 if leg == 1 and F_to == 0 and status.reached else "")
         lines.append(f"leg {leg}, {what}: F_x {path(F)}, {count(rows.size, 'equilibrium', 'equilibria')}, "
-                     f"{stop_reason(status, rows.size)}{floor}")
+                     f"{status.sentence(rows.size)}{floor}")
     return lines

@@ -179,10 +179,8 @@ def _continue(spec, label: str, span, options, out: Path, as_json: bool) -> int:
     else:
         _print_summary(result, spec, out)
     if not result.success:
-        from diskfriction.continuation.branch import stop_reason
-
         raise CommandError(f"bifurcate error: {label}: the branch did not reach {spec.parameter} = "
-                           f"{b:g}: {stop_reason(result.message, len(result.p))}; what it reached is "
+                           f"{b:g}: {result.branch.status.sentence(len(result.p))}; what it reached is "
                            f"written",
                            EXIT_FAILED)
     return 0

@@ -166,11 +166,12 @@ class BranchResult:
 
     @property
     def success(self) -> bool:
-        return self.branch.status == "p_end"
+        return self.branch.status.reached
 
     @property
     def message(self) -> str:
-        return self.branch.status
+        """The run's status line (str of branch.Stop)."""
+        return str(self.branch.status)
 
 
 def _span(p_span) -> tuple[float, float]:

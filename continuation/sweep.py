@@ -24,7 +24,7 @@ import numpy as np
 from diskfriction.continuation.arclength import ContinuationParams, continuation
 from diskfriction.continuation.collisions import Collision, DetectionParams
 from diskfriction.continuation.disks import DiskEquilibria, relax
-from diskfriction.continuation.branch import Branch
+from diskfriction.continuation.branch import Branch, Stop
 from diskfriction.continuation.spectral_window import Window, window_columns
 from diskfriction.continuation.spectra import count_complex_pairs, match_eigenvalues
 from diskfriction.symbolic import System
@@ -81,7 +81,7 @@ class DiskBranch:
     free: np.ndarray
     collisions: tuple[Collision, ...]
     matrix: str
-    status: tuple[str, ...]
+    status: tuple[Stop, ...]
     events: int
     window: Optional[tuple[float, float]] = None
 
@@ -138,7 +138,7 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
         if leg == 1:
             collisions = branch.collisions
         F_start = float(branch.p[-1])
-        if branch.status != "p_end":
+        if not branch.status.reached:
             break  # a leg that ended short: the next would start from a load never asked for
     F_x, q, xi, eig, res, leg, free = (np.array(c) for c in zip(*rows))
     rel_tol = params.detection.rel_tol

@@ -14,6 +14,7 @@ from scipy.optimize import brentq
 from diskfriction.continuation import (ContinuationParams, DetectionParams, FunctionProblem, continuation,
                           count_complex_pairs)
 from diskfriction.continuation.bifurcations import locate_folds, locate_hopf
+from diskfriction.continuation.branch import StopCode
 from diskfriction.continuation.spectra import sort_spectrum
 
 TOL_P = 1e-10
@@ -76,7 +77,7 @@ def test_fold_of_scalar_equation_is_passed_and_located():
     problem = FunctionProblem(G=lambda u, p: np.array([u[0] ** 2 + p]), G_u=lambda u, p: np.array([[2 * u[0]]]),
                               G_p=lambda u, p: np.array([1.0]))
     br = run(problem, 1, p_min=-1.0, p_max=1.0, ds=0.1, ds_max=0.2, u0=np.array([1.0]))
-    assert br.status.startswith("turned back") and br.status.endswith("at p=-1")
+    assert br.status.code == StopCode.TURNED_BACK and br.status.p == -1
     assert br.p[-1] == -1.0 and br.u[-1, 0] == pytest.approx(-1.0, abs=1e-10)
     assert np.all(np.abs(br.u[:, 0] ** 2 + br.p) <= 1e-12)
     folds = locate_folds(problem, br)
@@ -105,7 +106,7 @@ def test_brusselator_hopf_and_collisions_match_analytic():
     a = np.sqrt(2.0)
     problem = brusselator(a)
     br = run(problem, 2, p_min=0.0, p_max=7.0, ds=0.1, ds_max=0.5, u0=np.array([a, 0.0]))
-    assert br.status == "p_end" and br.p[-1] == 7.0
+    assert br.status.reached and br.p[-1] == 7.0
     assert np.allclose(br.u[:, 1], br.p / a, atol=1e-10)
     hopf = locate_hopf(problem, br)
     assert len(hopf) == 1
@@ -129,7 +130,7 @@ def test_2x2_collision_located_to_1e10_with_jordan_vectors(direction, kind):
     a = -0.7
     problem = blocks_family([(a, lambda p: p - P0, lambda p: 1.0)])
     br = run(problem, 2, ds=0.07, ds_max=0.1, direction=direction)
-    assert br.status == "p_end" and br.p[-1] == (1.0 if direction > 0 else 0.0)
+    assert br.status.reached and br.p[-1] == (1.0 if direction > 0 else 0.0)
     (c,) = br.collisions
     assert c.kind == kind and c.resolved
     assert abs(c.p - P0) <= TOL_P and c.bracket[0] <= c.p <= c.bracket[1]
@@ -171,7 +172,7 @@ def test_bubble_narrower_than_the_step_is_found(ds):
     p2 = p1 + 1e-3
     problem = bubble_problem(p1, p2)
     br = run(problem, 3, ds=ds, u0=np.array([0.0, 0.0, 0.0]))
-    assert br.status == "p_end" and np.max(np.diff(br.p)) >= 9 * (p2 - p1)
+    assert br.status.reached and np.max(np.diff(br.p)) >= 9 * (p2 - p1)
     assert located(br, "birth") == pytest.approx([p1], abs=TOL_P)
     assert located(br, "death") == pytest.approx([p2], abs=TOL_P)
     assert all(c.resolved and c.residual <= 1e-12 for c in br.collisions)
@@ -225,7 +226,7 @@ def test_collision_located_through_a_fold():
 
     problem = FunctionProblem(G, G_u, lambda u, p: np.array([1.0, 0, 0, 0, 0]), A=lambda u, p: A(u))
     br = run(problem, 5, p_min=-1.0, p_max=1.0, ds=0.1, u0=np.array([1.0, 0, 0, 0, 0]))
-    assert br.status.startswith("turned back") and br.u[-1, 0] == pytest.approx(-1.0)
+    assert br.status.code == StopCode.TURNED_BACK and br.u[-1, 0] == pytest.approx(-1.0)
     assert [c.kind for c in br.collisions] == ["birth", "birth"]
     assert [c.p for c in br.collisions] == pytest.approx([-0.09, -0.04], abs=TOL_P)
     assert [c.u[0] for c in br.collisions] == pytest.approx([0.3, -0.2], abs=1e-9)
