@@ -12,10 +12,10 @@ from diskfriction.cli.common import (EXIT_FAILED, CommandError, add_scene_argume
                                      check_memory, number, output_dir, path,
                                      scene_from_args)
 from diskfriction.cli.progress import Progress
+from diskfriction.matrices import MATRIX_OPTIONS
 from diskfriction.words import count
 from diskfriction.scenes.scene import NEGATIVE_LOAD
 
-MATRICES = {"J": "J", "M^-1J": "M^-1 J", "M^-1 J": "M^-1 J"}
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -112,13 +112,13 @@ def run(args: argparse.Namespace) -> int:
     if window is not None and not detector.window:
         raise CommandError("bifurcate error: --window: needs the fast detection (eigenvalue "
                            f"slopes), not --detection {args.detection}")
-    if args.matrix is not None and args.matrix not in MATRICES:
+    if args.matrix is not None and args.matrix not in MATRIX_OPTIONS:
         raise CommandError(f"bifurcate error: --matrix: must be J or M^-1J (got {args.matrix!r})")
     if args.ds_max is not None:
         number("bifurcate", "ds-max", args.ds_max)
     if args.workers is not None and args.workers < 0:
         raise CommandError(f"bifurcate error: --workers: must be >= 0 (got {args.workers})")
-    matrix = MATRICES[args.matrix] if args.matrix else scene.matrix
+    matrix = MATRIX_OPTIONS[args.matrix] if args.matrix else scene.matrix
     out = output_dir("bifurcate", args.out, Path("out") / "bifurcate" / scene.name)
 
     from diskfriction.continuation.arclength import ContinuationError

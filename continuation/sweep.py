@@ -27,6 +27,7 @@ from diskfriction.continuation.disks import DiskEquilibria, relax
 from diskfriction.continuation.branch import Branch, Stop
 from diskfriction.continuation.spectral_window import Window, window_columns
 from diskfriction.continuation.spectra import count_complex_pairs, match_eigenvalues
+from diskfriction.matrices import Matrix
 from diskfriction.symbolic import System
 
 START_FRACTION = 1e-4
@@ -80,7 +81,7 @@ class DiskBranch:
     leg: np.ndarray
     free: np.ndarray
     collisions: tuple[Collision, ...]
-    matrix: str
+    matrix: Matrix
     status: tuple[Stop, ...]
     events: int
     window: Optional[tuple[float, float]] = None
@@ -99,7 +100,7 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
         raise ValueError(f"empty sweep {F_from}:{F_to}")
     if F_from < 0 or F_to < 0:
         raise ValueError(f"F_x must be >= 0 (got {F_from}:{F_to}); the load pushes disk 1 along +x")
-    matrix = matrix or system.scene.matrix
+    matrix = Matrix(matrix or system.scene.matrix)
     legs = [(0, 0.0, F_from), (1, F_from, F_to)] if F_from != 0 else [(1, 0.0, F_to)]
     span = max(abs(F_to - F_from), F_from)
     ds_max = params.ds_max or span / 60

@@ -14,7 +14,7 @@ from scipy.optimize import brentq
 from diskfriction.continuation import (ContinuationParams, DetectionParams, FunctionProblem, continuation,
                           count_complex_pairs)
 from diskfriction.continuation.bifurcations import locate_folds, locate_hopf
-from diskfriction.continuation.branch import StopCode
+from diskfriction.continuation.branch import Stop, StopCode
 from diskfriction.continuation.spectra import sort_spectrum
 
 TOL_P = 1e-10
@@ -337,3 +337,25 @@ def test_bubble_of_a_fast_eigenvalue_passing_a_cluster_is_found(ds):
     assert located(branch, "birth") == pytest.approx([p1], abs=TOL_P)
     assert located(branch, "death") == pytest.approx([p2], abs=TOL_P)
     assert_count_changes_only_at_collisions(problem, branch, 0.0, 0.4)
+
+
+def test_a_stop_prints_its_status_line_and_says_its_reason_without_the_location():
+    """Branch.status is a Stop; its line (MESSAGES) is the text the status had as a string,
+    and sentence() is what stop_reason parsed back out of it by regex before."""
+    failed = Stop(StopCode.DS_MIN, "corrector failed (residual 1.63e-11)", 5.0997512345678)
+    assert str(failed) == "ds_min: corrector failed (residual 1.63e-11) at p=5.09975123457"
+    assert failed.sentence(7) == "corrector failed (residual 1.63e-11)" and not failed.reached
+    folded = Stop(StopCode.TURNED_BACK, "the branch folded and left the span on its starting side", -1.0)
+    assert str(folded) == "turned back: the branch folded and left the span on its starting side at p=-1"
+    assert str(Stop(StopCode.COMMIT, "no equilibrium after the commit", 0.5)) == \
+        "commit: no equilibrium after the commit at p=0.5"
+    assert str(Stop(StopCode.REACHED)) == "p_end" and Stop(StopCode.REACHED).sentence(3) == "reached"
+    assert Stop(StopCode.MAX_STEPS).sentence(12) == "the run stopped after 12 points"
+
+
+def test_a_run_cut_short_by_max_steps_says_so():
+    """The status of a run that used up its steps is MAX_STEPS, not REACHED."""
+    problem, _ = fast_eigenvalue_through_a_cluster()
+    branch = continuation(problem, np.zeros(4), 0.0, ContinuationParams(ds=0.01, ds_max=0.01, max_steps=3,
+                                                                      p_max=0.4))
+    assert branch.status == Stop(StopCode.MAX_STEPS) and len(branch) == 4 and str(branch.status) == "max_steps"

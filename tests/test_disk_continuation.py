@@ -5,8 +5,9 @@ import numpy as np
 import pytest
 
 from diskfriction.continuation.branch import Stop, StopCode
-from diskfriction.continuation.disks import relax
+from diskfriction.continuation.disks import DiskEquilibria, relax
 from diskfriction.continuation.sweep import SweepParams, sweep
+from diskfriction.matrices import Matrix
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
 
@@ -21,6 +22,14 @@ def paper_system():
 @pytest.fixture(scope="module", params=["J", "M^-1 J"])
 def paper_branch(request, paper_system):
     return sweep(paper_system, 0.0, 0.12, request.param)
+
+
+def test_a_matrix_name_other_than_J_or_M_inv_J_is_refused(paper_system):
+    """Before, any matrix name other than "J" meant M^-1 J silently."""
+    q, xi = paper_system.rest_state()
+    with pytest.raises(ValueError, match="'M J' is not a valid Matrix"):
+        DiskEquilibria(paper_system, q, xi, 1e-5, "M J")
+    assert DiskEquilibria(paper_system, q, xi, 1e-5, "M^-1 J").matrix is Matrix.M_INV_J
 
 
 def test_rest_state_is_singular_and_relaxation_starts_the_branch(paper_system):
