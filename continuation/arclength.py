@@ -32,15 +32,15 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from .branch import Branch, Stop, StopCode
+from .branch import Branch, BranchRecorder, Stop, StopCode
 from .collisions import DetectionParams
 from .linalg import SingularMatrix, blas_threads
 from .newton import NewtonResult, bordered_newton, fixed_p_newton, residual_norm, tangent
 from .problem import Problem
-from .samples import Sample, continued_labels, make_sample, matrix_derivative, sample_at
+from .samples import Sample, make_sample, matrix_derivative, sample_at
 from .scans import ScanJob, default_workers, pending_full, scans_for
 from .segment import Segment, SegmentSolveError, refine_sign_change
-from .spectra import Eigensystem, count_complex_pairs, eigenvalue_slopes
+from .spectra import Eigensystem, eigenvalue_slopes
 
 Array = np.ndarray
 
@@ -206,7 +206,7 @@ def _continuation(problem, u0, p0, params, detection, workers, callback) -> Bran
     except np.linalg.LinAlgError as err:
         raise ContinuationError(f"tangent undefined at p0={p0} (fold or singular point)") from err
     sample = _sorted(_sample(problem, 0.0, x, t, detection, None, side=+1))
-    rec = _Recorder(detection, callback)
+    rec = BranchRecorder(detection.rel_tol, detection.rho, callback)
     rec.add(sample, 0.0, start, t, 0)
     with scans_for(problem, workers) as scans:
         status = _follow(problem, scans, workers, _Start(x, t, sample, 0.0), rec, params, detection)
@@ -239,7 +239,7 @@ class _Pending:
     end: Optional[Sample]
 
 
-def _follow(problem: Problem, scans, workers: int, here: _Start, rec: "_Recorder",
+def _follow(problem: Problem, scans, workers: int, here: _Start, rec: "BranchRecorder",
             params: ContinuationParams, detection: DetectionParams) -> Stop:
     """Steps from `here` until the run ends; returns its status. Each accepted step is
     committed and its scan submitted; the scans are recorded in order as they come back (at
@@ -343,7 +343,7 @@ def _end_status(p: float, params: ContinuationParams) -> Stop:
     return Stop(StopCode.TURNED_BACK, "the branch folded and left the span on its starting side", float(p))
 
 
-def _record(problem: Problem, rec: "_Recorder", item: _Pending, end: Sample, solves: int,
+def _record(problem: Problem, rec: "BranchRecorder", item: _Pending, end: Sample, solves: int,
             after: Optional[object], tracked: Optional[Array]) -> None:
     """rec.add for a scanned step; the callback sees the problem in the state committed at the
     step's end: `after`, restored for it while the continuation is ahead (else None: the
@@ -393,41 +393,3 @@ def _commit(problem: Problem, x: Array, step: _Step, end: Sample, par: Continuat
     end = _sample(problem, 0.0, res.x, t_new, detection, end, side=+1)
     newton = replace(res, iterations=step.newton.iterations + res.iterations)
     return _Step(res.x, t_new, newton, step.last, step.event), end
-
-
-class _Recorder:
-    """Accumulates the accepted points of a run and builds the Branch."""
-
-    def __init__(self, detection: DetectionParams, callback: Optional[Callback]):
-        self.rel_tol, self.rho, self.callback = detection.rel_tol, detection.rho, callback
-        self.rows: list[tuple] = []
-        self.collisions: list = []
-        self.warnings: list = []
-        self.events = 0
-        self.continued: list[Array] = []
-        self.last: Optional[Sample] = None
-
-    @property
-    def steps(self) -> int:
-        return len(self.rows) - 1
-
-    def add(self, sample: Sample, ds: float, newton: NewtonResult, t: Array, solves: int,
-            tracked: Optional[Array] = None) -> None:
-        """Record an accepted point (with a spectral window, Branch.continued too)."""
-        u, p = sample.x[:-1].copy(), float(sample.x[-1])
-        self.rows.append((p, u, sample.eigvals, count_complex_pairs(sample.eigvals, self.rel_tol),
-                          ds, newton.iterations, newton.residual, t, solves))
-        if sample.disc is not None:
-            self.continued.append(continued_labels(self.last, sample, tracked, self.rho))
-            self.last = sample.without_vectors()
-        if self.callback is not None:
-            self.callback(len(self.rows) - 1, p, u, sample.eigvals)
-
-    def branch(self, status: Stop) -> Branch:
-        cols = list(zip(*self.rows))
-        return Branch(p=np.array(cols[0]), u=np.array(cols[1]), eigenvalues=np.array(cols[2]),
-                      n_complex=np.array(cols[3]), ds=np.array(cols[4]),
-                      newton_iterations=np.array(cols[5]), residual=np.array(cols[6]),
-                      tangent=np.array(cols[7]), detection_solves=np.array(cols[8]),
-                      collisions=tuple(self.collisions), status=status, warnings=tuple(self.warnings),
-                      events=self.events, continued=np.array(self.continued) if self.continued else None)

@@ -3,11 +3,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from enum import StrEnum
-from typing import Optional
+from typing import Callable, Optional
 
 import numpy as np
 
-from .collisions import Collision
+from .detectors import Collision
+from .newton import NewtonResult
+from .samples import Sample, continued_labels
+from .spectra import count_complex_pairs
 
 Array = np.ndarray
 
@@ -101,3 +104,44 @@ class Branch:
     def x(self) -> Array:
         """Rows (u, p), shape (m, n+1)."""
         return np.column_stack([self.u, self.p])
+
+
+class BranchRecorder:
+    """Accumulates the accepted points of a run (arclength.continuation) and builds the Branch:
+    rel_tol, the complex-pair threshold (spectra.count_complex_pairs); rho, the certification
+    margin of a spectral window's label continuity (samples.continued_labels); callback(k, p,
+    u, eigenvalues), called for every point recorded."""
+
+    def __init__(self, rel_tol: float, rho: float, callback: Optional[Callable]):
+        self.rel_tol, self.rho, self.callback = rel_tol, rho, callback
+        self.rows: list[tuple] = []
+        self.collisions: list = []
+        self.warnings: list = []
+        self.events = 0
+        self.continued: list[Array] = []
+        self.last: Optional[Sample] = None
+
+    @property
+    def steps(self) -> int:
+        return len(self.rows) - 1
+
+    def add(self, sample: Sample, ds: float, newton: NewtonResult, t: Array, solves: int,
+            tracked: Optional[Array] = None) -> None:
+        """Record an accepted point (with a spectral window, Branch.continued too)."""
+        u, p = sample.x[:-1].copy(), float(sample.x[-1])
+        self.rows.append((p, u, sample.eigvals, count_complex_pairs(sample.eigvals, self.rel_tol),
+                          ds, newton.iterations, newton.residual, t, solves))
+        if sample.disc is not None:
+            self.continued.append(continued_labels(self.last, sample, tracked, self.rho))
+            self.last = sample.without_vectors()
+        if self.callback is not None:
+            self.callback(len(self.rows) - 1, p, u, sample.eigvals)
+
+    def branch(self, status: Stop) -> Branch:
+        cols = list(zip(*self.rows))
+        return Branch(p=np.array(cols[0]), u=np.array(cols[1]), eigenvalues=np.array(cols[2]),
+                      n_complex=np.array(cols[3]), ds=np.array(cols[4]),
+                      newton_iterations=np.array(cols[5]), residual=np.array(cols[6]),
+                      tangent=np.array(cols[7]), detection_solves=np.array(cols[8]),
+                      collisions=tuple(self.collisions), status=status, warnings=tuple(self.warnings),
+                      events=self.events, continued=np.array(self.continued) if self.continued else None)
