@@ -15,6 +15,8 @@ from diskfriction.continuation import (ContinuationParams, DetectionParams, Func
                           count_complex_pairs)
 from diskfriction.continuation.bifurcations import locate_folds, locate_hopf
 from diskfriction.continuation.branch import Stop, StopCode
+from diskfriction.continuation.detectors import DETECTORS, Kind
+from diskfriction.continuation.detectors.fast import Fast
 from diskfriction.continuation.spectra import sort_spectrum
 
 TOL_P = 1e-10
@@ -359,3 +361,30 @@ def test_a_run_cut_short_by_max_steps_says_so():
     branch = continuation(problem, np.zeros(4), 0.0, ContinuationParams(ds=0.01, ds_max=0.01, max_steps=3,
                                                                       p_max=0.4))
     assert branch.status == Stop(StopCode.MAX_STEPS) and len(branch) == 4 and str(branch.status) == "max_steps"
+
+
+class Bisecting(Fast):
+    """An added detector: the fast verdicts, but each event bracketed by bisection down to
+    tol_p (no Newton locator), so its collisions come from StepScan.interpolated."""
+
+    name = "bisecting"
+
+    def resolve(self, scan, idx, verdict):
+        scan.split(idx, 0.5 * (scan.samples[idx].s + scan.samples[idx + 1].s))
+        return True
+
+
+def test_a_detector_added_by_one_registry_entry_finds_the_collisions(monkeypatch):
+    """Adding a detector is one class and one DETECTORS entry (docs/continuation.md): the
+    scan drives it, and it brackets the bubble of a fast eigenvalue passing a cluster (steps
+    250 times its width) to tol_p, where the fast detection's Newton locator puts it."""
+    monkeypatch.setitem(DETECTORS, Bisecting.name, Bisecting())
+    problem, (p1, p2) = fast_eigenvalue_through_a_cluster()
+    par = ContinuationParams(ds=0.1, ds_min=1e-9, ds_max=0.1, newton_tol=1e-12, p_min=0.0, p_max=0.4)
+    branch = continuation(problem, np.zeros(4), 0.0, par, DetectionParams(mode=Bisecting.name))
+    assert [c.kind for c in branch.collisions] == [Kind.BIRTH, Kind.DEATH]
+    assert located(branch, "birth") == pytest.approx([p1], abs=TOL_P)
+    assert located(branch, "death") == pytest.approx([p2], abs=TOL_P)
+    assert all(c.resolved and c.bracket[1] - c.bracket[0] <= TOL_P for c in branch.collisions)
+    with pytest.raises(ValueError, match="mode must be one of"):
+        DetectionParams(mode="bisect")
