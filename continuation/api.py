@@ -136,10 +136,10 @@ class BranchResult:
 
     branch: the core's Branch (branch.py): one row per accepted point, p (m,), u (m, n),
     eigenvalues (m, n_A) tracked (column i is one eigenvalue followed along the branch),
-    n_complex (m,), residual (m,), tangent, status, and the located collisions;
+    n_complex (m,), residual (m,), tangent, status (branch.Stop), and the located collisions;
     folds, hopf: bifurcations.SpecialPoint (p, u, bracket, step, value) in branch order;
     warnings: the detector's and the locators'.
-    Shortcuts: p, u, eigenvalues, collisions (collisions.Collision: p, kind "birth" | "death",
+    Shortcuts: p, u, eigenvalues, collisions (collisions.Collision: p, kind Kind.BIRTH | Kind.DEATH,
     the double eigenvalue, its Jordan chain, bracket), success (the branch reached the end
     of the span) and message (why it stopped)."""
 

@@ -292,7 +292,7 @@ class StepScan:
                 return True
         return False
 
-    def _release_vectors(self) -> None:
+    def release_vectors(self) -> None:
         """Drop the eigenvectors of the inner full samples that no locator can need any more:
         both neighbours full and both intervals clean or narrow. That is final: a clean or
         narrow interval is never split, and a relabelling permutes both its ends alike. (Next

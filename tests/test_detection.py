@@ -427,7 +427,7 @@ def test_settled_samples_drop_their_vectors_and_the_scan_finds_the_same(monkeypa
     monkeypatch.setattr(StepScan, "run", counting_run)
     lean = sweep(system, 0.0, 0.12, "J", SweepParams(workers=0))
     assert 0 < sum(released) < sum(inner)
-    monkeypatch.setattr(StepScan, "_release_vectors", lambda self: None)
+    monkeypatch.setattr(StepScan, "release_vectors", lambda self: None)
     released.clear()
     kept = sweep(system, 0.0, 0.12, "J", SweepParams(workers=0))
     assert sum(released) == 0

@@ -49,7 +49,7 @@ class Fast(Detector):
         return scan.narrow(a, b)
 
     def settle(self, scan) -> None:
-        scan._release_vectors()
+        scan.release_vectors()
 
 
 def locate(scan, idx: int, i: int, j: int, kind: Kind) -> Optional[Collision]:
