@@ -58,8 +58,9 @@ def out_of_time(signum, frame):
     raise OutOfTime
 
 
-params = SweepParams(detection=DetectionParams(mode=mode, workers=workers), window=window)
-used = default_workers(DiskEquilibria(system, *system.rest_state(), 0.0), system.ndof, params.detection)
+params = SweepParams(detection=DetectionParams(mode=mode), workers=workers, window=window)
+used = default_workers(DiskEquilibria(system, *system.rest_state(), 0.0), system.ndof, params.detection,
+                       params.workers)
 # compile and warm up on at most N = 100 (n = 300: the sparse path too), not on the big chain
 sweep(System.from_scene(Scene(N=min(N, 100), eps=eps)), 0.0, 1e-3, "J",
       SweepParams(detection=DetectionParams(mode=mode)))
@@ -70,7 +71,7 @@ t0 = time.perf_counter()
 out = {"N": N, "eps": eps, "mode": mode + ("" if window is None else " " + sys.argv[5]), "workers": used}
 try:
     branch = sweep(system, 0.0, 0.12, "J", params, progress)
-    out.update(done=branch.status[-1] == "p_end", points=len(branch),
+    out.update(done=branch.status[-1].reached, points=len(branch),
                collisions=[c.p for c in branch.collisions], free=int(branch.free[-1]))
 except OutOfTime:
     out.update(done=False, points=None, collisions=None)

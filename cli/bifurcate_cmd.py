@@ -12,11 +12,10 @@ from diskfriction.cli.common import (EXIT_FAILED, CommandError, add_scene_argume
                                      check_memory, number, output_dir, path,
                                      scene_from_args)
 from diskfriction.cli.progress import Progress
+from diskfriction.matrices import MATRIX_OPTIONS
 from diskfriction.words import count
 from diskfriction.scenes.scene import NEGATIVE_LOAD
 
-MATRICES = {"J": "J", "M^-1J": "M^-1 J", "M^-1 J": "M^-1 J"}
-DETECTIONS = ("fast", "exhaustive")  # continuation.collisions.MODES, without importing scipy
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -92,10 +91,13 @@ def parse_window(text: str) -> tuple[float, float]:
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.detection not in DETECTIONS:
-        raise CommandError(f"bifurcate error: --detection: must be fast or exhaustive "
+    from diskfriction.continuation.detectors import DETECTORS
+
+    if args.detection not in DETECTORS:
+        raise CommandError(f"bifurcate error: --detection: must be {' or '.join(DETECTORS)} "
                            f"(got {args.detection!r})")
-    if args.workers is not None and args.workers > 0 and args.detection != "fast":
+    detector = DETECTORS[args.detection]
+    if args.workers is not None and args.workers > 0 and not detector.parallel:
         raise CommandError(f"bifurcate error: --workers: scan workers serve the fast detection; "
                            f"--detection {args.detection} scans each step inline (got {args.workers})")
     if args.problem is not None:
@@ -107,16 +109,16 @@ def run(args: argparse.Namespace) -> int:
     scene = scene_from_args(args)
     F_from, F_to = parse_range(args.fx) if args.fx is not None else scene.F_x_range
     window = parse_window(args.window) if args.window is not None else None
-    if window is not None and args.detection != "fast":
+    if window is not None and not detector.window:
         raise CommandError("bifurcate error: --window: needs the fast detection (eigenvalue "
                            f"slopes), not --detection {args.detection}")
-    if args.matrix is not None and args.matrix not in MATRICES:
+    if args.matrix is not None and args.matrix not in MATRIX_OPTIONS:
         raise CommandError(f"bifurcate error: --matrix: must be J or M^-1J (got {args.matrix!r})")
     if args.ds_max is not None:
         number("bifurcate", "ds-max", args.ds_max)
     if args.workers is not None and args.workers < 0:
         raise CommandError(f"bifurcate error: --workers: must be >= 0 (got {args.workers})")
-    matrix = MATRICES[args.matrix] if args.matrix else scene.matrix
+    matrix = MATRIX_OPTIONS[args.matrix] if args.matrix else scene.matrix
     out = output_dir("bifurcate", args.out, Path("out") / "bifurcate" / scene.name)
 
     from diskfriction.continuation.arclength import ContinuationError
@@ -128,8 +130,8 @@ def run(args: argparse.Namespace) -> int:
     from diskfriction.reports.bifurcation import collision_records, plot_diagram, save_branch
     from diskfriction.symbolic import System
 
-    detection = DetectionParams(mode=args.detection, workers=args.workers)
-    check_memory("bifurcate", scene, 1 + planned_workers(scene.ndof, detection),
+    detection = DetectionParams(mode=args.detection)
+    check_memory("bifurcate", scene, 1 + planned_workers(scene.ndof, detection, args.workers),
                  dense=window is None and scene.eps > 0)
 
     progress = Progress("bifurcate")
@@ -151,8 +153,8 @@ def run(args: argparse.Namespace) -> int:
 
                 unit = PaperUnits.of(scene).eigenvalue(matrix)
                 window = (window[0] * unit, window[1] * unit)
-            params = SweepParams(ds_max=args.ds_max, window=window,
-                                 detection=detection)
+            params = SweepParams(ds_max=args.ds_max, window=window, detection=detection,
+                                 workers=args.workers)
             branch = sweep(system, F_from, F_to, matrix, params, on_point)
         except (EquilibriumError, ContinuationError, WindowCrowded) as error:
             raise CommandError(f"bifurcate error: {scene.source}: {error}", EXIT_FAILED) from None
@@ -185,13 +187,12 @@ def run(args: argparse.Namespace) -> int:
             print(f"  {r['kind']:5s}  F_x = {r['F_x']:.10f}  lambda = {r['lambda_re']:.6g}  "
                   f"(lambda/k_n = {r['lambda_re'] / scene.k_n:.5g})")
         print(f"wrote {out}/branch.npz, collisions.json, diagram.png")
-    if branch.status[-1] != "p_end":
-        from diskfriction.continuation.branch import stop_reason
+    if not branch.status[-1].reached:
         from diskfriction.continuation.equilibrium import contact_states
 
         raise CommandError(f"bifurcate error: {scene.source}: the sweep ended at F_x = "
                            f"{branch.F_x[-1]:.6g}, short of {F_to:g}: "
-                           f"{stop_reason(branch.status[-1], len(branch))}; there "
+                           f"{branch.status[-1].sentence(len(branch))}; there "
                            f"{contact_states(system, branch.q[-1], branch.xi[-1])}; what it "
                            f"reached is written", EXIT_FAILED)
     return 0
@@ -219,8 +220,6 @@ def leg_lines(branch, F_to: float) -> list[str]:
     (cli.common.path), its points and how it ended."""
     import numpy as np
 
-    from diskfriction.continuation.branch import stop_reason
-
     lines = []
     for leg, status in zip(sorted(set(branch.leg.tolist())), branch.status):
         rows = np.flatnonzero(branch.leg == leg)
@@ -228,7 +227,7 @@ def leg_lines(branch, F_to: float) -> list[str]:
         what = ("preparation: loading from rest" if leg == 0 else
                 ("loading" if F[-1] > F[0] else "unloading"))
         floor = (" (the rest state F_x = 0 is singular: unloading ends where loading started)"
-                 if leg == 1 and F_to == 0 and status == "p_end" else "")
+                 if leg == 1 and F_to == 0 and status.reached else "")
         lines.append(f"leg {leg}, {what}: F_x {path(F)}, {count(rows.size, 'equilibrium', 'equilibria')}, "
-                     f"{stop_reason(status, rows.size)}{floor}")
+                     f"{status.sentence(rows.size)}{floor}")
     return lines

@@ -14,7 +14,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from diskfriction.cli.bifurcate_cmd import MATRICES, parse_range
+from diskfriction.cli.bifurcate_cmd import parse_range
+from diskfriction.matrices import MATRIX_OPTIONS
 from diskfriction.cli.common import (CommandError, add_scene_argument, check_memory,
                                      number, output_dir, scene_from_args)
 from diskfriction.cli.progress import Progress
@@ -114,7 +115,7 @@ def run(args: argparse.Namespace) -> int:
     F_from, F_to = parse_range(args.fx, command="map") if args.fx is not None else scene.F_x_range
     if F_from > F_to:
         raise CommandError(f"map error: --fx: a map loads, A < B (got {args.fx!r})")
-    if args.matrix is not None and args.matrix not in MATRICES:
+    if args.matrix is not None and args.matrix not in MATRIX_OPTIONS:
         raise CommandError(f"map error: --matrix: must be J or M^-1J (got {args.matrix!r})")
     for option, value in (("t-end", args.t_end), ("amplitude", args.amplitude)):
         if value is not None and not args.slide:
@@ -144,7 +145,7 @@ def run(args: argparse.Namespace) -> int:
     from diskfriction.reports.maps import plot_map, save_map
     from diskfriction.symbolic import System
 
-    matrix = MATRICES[args.matrix] if args.matrix else scene.matrix
+    matrix = MATRIX_OPTIONS[args.matrix] if args.matrix else scene.matrix
     params = MapParams(F_from, F_to, matrix, SlideParams(t_end, amplitude) if args.slide else None)
     progress = Progress("map")
     try:

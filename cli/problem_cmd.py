@@ -126,9 +126,9 @@ def run_problem(args: argparse.Namespace) -> int:
                           f"keys ({', '.join(sorted(RESERVED))})")
     stem = path.stem if name == DEFAULT_NAME else f"{path.stem}-{name}"
     out = output_dir("bifurcate", args.out, Path("out") / "bifurcate" / stem)
-    workers = spec.options.detection.workers if args.workers is None else args.workers
-    detection = replace(spec.options.detection, mode=args.detection, workers=workers)
-    options = replace(spec.options, detection=detection, ds_max=args.ds_max or spec.options.ds_max)
+    options = replace(spec.options, detection=replace(spec.options.detection, mode=args.detection),
+                      workers=spec.options.workers if args.workers is None else args.workers,
+                      ds_max=args.ds_max or spec.options.ds_max)
     return _continue(spec, label, span, options, out, args.json)
 
 
@@ -179,10 +179,8 @@ def _continue(spec, label: str, span, options, out: Path, as_json: bool) -> int:
     else:
         _print_summary(result, spec, out)
     if not result.success:
-        from diskfriction.continuation.branch import stop_reason
-
         raise CommandError(f"bifurcate error: {label}: the branch did not reach {spec.parameter} = "
-                           f"{b:g}: {stop_reason(result.message, len(result.p))}; what it reached is "
+                           f"{b:g}: {result.branch.status.sentence(len(result.p))}; what it reached is "
                            f"written",
                            EXIT_FAILED)
     return 0

@@ -13,7 +13,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from diskfriction.cli.bifurcate_cmd import MATRICES
+from diskfriction.matrices import MATRIX_OPTIONS
 from diskfriction.cli.common import (EXIT_FAILED, CommandError, add_scene_argument,
                                      check_memory, number, output_dir, scene_from_args)
 from diskfriction.cli.progress import Progress
@@ -35,11 +35,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     scene = scene_from_args(args)
-    if args.matrix is not None and args.matrix not in MATRICES:
+    if args.matrix is not None and args.matrix not in MATRIX_OPTIONS:
         raise CommandError(f"verify error: --matrix: must be J or M^-1J (got {args.matrix!r})")
     number("verify", "t-end", args.t_end)
     number("verify", "amplitude", args.amplitude, zero=True)
-    matrix = MATRICES[args.matrix] if args.matrix else scene.matrix
+    matrix = MATRIX_OPTIONS[args.matrix] if args.matrix else scene.matrix
     out = output_dir("verify", args.out, Path("out") / "verify" / scene.name)
     from diskfriction.continuation.collisions import DetectionParams
     from diskfriction.continuation.scans import planned_workers

@@ -14,7 +14,7 @@ from .api import (BifurcationProblem, BranchResult, Options, ProblemError, check
                   problem_from_functions, problem_from_sympy, solve_branch)
 from .arclength import ContinuationError, ContinuationParams, continuation
 from .bifurcations import SpecialPoint
-from .branch import Branch
+from .branch import Branch, Stop, StopCode
 from .collisions import Collision, DetectionParams
 from .differences import DerivativeWarning
 from .problem import FunctionProblem, Problem
@@ -23,7 +23,7 @@ from .spectra import count_complex_pairs, eigen_status, match_eigenvalues, track
 __all__ = [
     "BifurcationProblem", "Branch", "BranchResult", "Collision", "ContinuationError",
     "ContinuationParams", "DerivativeWarning", "DetectionParams", "FunctionProblem", "Options",
-    "Problem", "ProblemError", "SpecialPoint", "check_problem", "continuation",
+    "Problem", "ProblemError", "SpecialPoint", "Stop", "StopCode", "check_problem", "continuation",
     "count_complex_pairs", "eigen_status", "match_eigenvalues", "problem_from_functions",
     "problem_from_sympy", "solve_branch", "track",
 ]

@@ -90,7 +90,9 @@ class Options:
     ds_min: the run stops when the step must shrink below it (None: 1e-8 ds_max);
     newton_tol: max|G| at every stored point [units of G]; max_newton: corrector iterations;
     max_steps: accepted points at most; detection: the collision detector's parameters
-    (collisions.DetectionParams: collisions located to |dp| <= tol_p = 1e-10);
+    (collisions.DetectionParams: collisions located to |dp| <= tol_p = 1e-10); workers:
+    processes scanning steps while the branch goes on (None: automatic; 0: inline;
+    arclength.continuation);
     special_points: what to locate after the run (bifurcations.py), "fold" and/or "hopf";
     a Hopf point is where a complex pair of the tracked matrix crosses Re = 0, a Hopf
     bifurcation when that matrix is the Jacobian of u' = G(u, p): leave "hopf" out for any
@@ -104,6 +106,7 @@ class Options:
     max_newton: int = 8
     max_steps: int = 10_000
     detection: DetectionParams = DetectionParams()
+    workers: Optional[int] = None
     special_points: tuple[str, ...] = ("fold", "hopf")
 
     def __post_init__(self):
@@ -133,10 +136,10 @@ class BranchResult:
 
     branch: the core's Branch (branch.py): one row per accepted point, p (m,), u (m, n),
     eigenvalues (m, n_A) tracked (column i is one eigenvalue followed along the branch),
-    n_complex (m,), residual (m,), tangent, status, and the located collisions;
+    n_complex (m,), residual (m,), tangent, status (branch.Stop), and the located collisions;
     folds, hopf: bifurcations.SpecialPoint (p, u, bracket, step, value) in branch order;
     warnings: the detector's and the locators'.
-    Shortcuts: p, u, eigenvalues, collisions (collisions.Collision: p, kind "birth" | "death",
+    Shortcuts: p, u, eigenvalues, collisions (collisions.Collision: p, kind Kind.BIRTH | Kind.DEATH,
     the double eigenvalue, its Jordan chain, bracket), success (the branch reached the end
     of the span) and message (why it stopped)."""
 
@@ -163,11 +166,12 @@ class BranchResult:
 
     @property
     def success(self) -> bool:
-        return self.branch.status == "p_end"
+        return self.branch.status.reached
 
     @property
     def message(self) -> str:
-        return self.branch.status
+        """The run's status line (str of branch.Stop)."""
+        return str(self.branch.status)
 
 
 def _span(p_span) -> tuple[float, float]:
@@ -268,7 +272,8 @@ def solve_branch(problem: Problem, u0, p_span, options: Options = Options(), *,
     p_start, p_stop = _span(p_span)
     params = options.params(p_start, p_stop)
     u0 = check_problem(problem, u0, p_start)
-    branch = continuation(problem, u0, p_start, params, options.detection, callback=callback)
+    branch = continuation(problem, u0, p_start, params, options.detection, workers=options.workers,
+                          callback=callback)
     folds, hopf, warnings = special_points(problem, branch, options)
     return BranchResult(branch, folds, hopf, branch.warnings + warnings)
 

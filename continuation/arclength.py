@@ -7,13 +7,13 @@ From a converged point x_k = (u_k, p_k) with unit tangent t_k:
 Step control (arclength ds in the Euclidean norm of x):
   * corrector failure (no convergence in max_newton updates)   -> ds / 2, retry;
   * angle(t_k, t_(k+1)) > max_angle                             -> ds / 2, retry;
-  * ds would drop below ds_min                                  -> stop, status "ds_min: ...";
+  * ds would drop below ds_min                                  -> stop, Stop DS_MIN;
   * accepted with <= fast_newton updates                        -> ds = min(growth ds, ds_max).
 End: when the corrected p leaves [p_min, p_max] the step is clipped: x is re-solved at the end
-value p_end (fixed-p Newton from the secant point at p_end), stored, and the run stops: "p_end"
-at the end the run heads for (p_max for direction +1, p_min for -1), "turned back: ..." at the
+value p_end (fixed-p Newton from the secant point at p_end), stored, and the run stops: REACHED
+at the end the run heads for (p_max for direction +1, p_min for -1), TURNED_BACK at the
 other (the branch passed a fold and came back, short of its goal); otherwise after max_steps
-accepted steps ("max_steps").
+accepted steps (MAX_STEPS). The status is a branch.Stop (code, reason, p).
 Events (problem.event_functions): if a component changes sign over the step, the step is cut at
 the first such change, located on the branch (the step's segment) by the Illinois method to
 |dp| <= event_tol max(1, |p|) (a relative tolerance: it terminates at any p), and ends on the
@@ -32,21 +32,25 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from .branch import Branch
+from .branch import Branch, BranchRecorder, Stop, StopCode
 from .collisions import DetectionParams
 from .linalg import SingularMatrix, blas_threads
 from .newton import NewtonResult, bordered_newton, fixed_p_newton, residual_norm, tangent
 from .problem import Problem
-from .samples import Sample, continued_labels, make_sample, matrix_derivative, sample_at
+from .samples import Sample, make_sample, matrix_derivative, sample_at
 from .scans import ScanJob, default_workers, pending_full, scans_for
 from .segment import Segment, SegmentSolveError, refine_sign_change
-from .spectra import Eigensystem, count_complex_pairs, eigenvalue_slopes
+from .spectra import Eigensystem, eigenvalue_slopes
 
 Array = np.ndarray
 
 
 class ContinuationError(RuntimeError):
     """The starting point could not be converged or the tangent is undefined there."""
+
+
+class StepRejected(Exception):
+    """A step that cannot be accepted (str: why, as words); its arclength is halved."""
 
 
 @dataclass(frozen=True)
@@ -140,27 +144,27 @@ def _angle(t0: Array, t1: Array) -> float:
     return math.acos(min(1.0, max(-1.0, float(t0 @ t1))))
 
 
-def _attempt(problem: Problem, x: Array, t: Array, ds: float, par: ContinuationParams):
-    """One predictor-corrector step of length ds; a _Step or the reason of failure (str)."""
+def _attempt(problem: Problem, x: Array, t: Array, ds: float, par: ContinuationParams) -> _Step:
+    """One predictor-corrector step of length ds; raises StepRejected."""
     res = bordered_newton(problem, x + ds * t, t, par.newton_tol, par.max_newton)
     if not res.converged:
-        return f"corrector failed (residual {res.residual:.3g})"
+        raise StepRejected(f"corrector failed (residual {res.residual:.3g})")
     x_new, last = res.x, False
     try:
         t_new = tangent(problem, x_new, t)
         if _angle(t, t_new) > par.max_angle:
-            return f"tangent turned by {_angle(t, t_new):.3g} rad"
+            raise StepRejected(f"tangent turned by {_angle(t, t_new):.3g} rad")
         p_new = x_new[-1]
         if not par.p_min < p_new < par.p_max:  # landing exactly on an end also ends the run
             p_end = par.p_max if p_new >= par.p_max else par.p_min
             guess = x + (p_end - x[-1]) / (p_new - x[-1]) * (x_new - x)
             res = fixed_p_newton(problem, guess[:-1], p_end, par.newton_tol, par.max_newton)
             if not res.converged:
-                return "landing on the end value failed"
+                raise StepRejected("landing on the end value failed")
             x_new, last = res.x, True
             t_new = tangent(problem, x_new, t)
     except np.linalg.LinAlgError:
-        return "singular bordered matrix"
+        raise StepRejected("singular bordered matrix") from None
     return _Step(x_new, t_new, res, last)
 
 
@@ -174,15 +178,17 @@ def _validate_start(p0: float, par: ContinuationParams) -> None:
 def continuation(problem: Problem, u0: Array, p0: float,
                  params: ContinuationParams = ContinuationParams(),
                  detection: DetectionParams = DetectionParams(), *,
-                 callback: Optional[Callback] = None) -> Branch:
+                 workers: Optional[int] = None, callback: Optional[Callback] = None) -> Branch:
     """Follow G(u, p) = 0 from (u0, p0) (u0 is first corrected at fixed p0).
 
     Stores at every accepted point the tracked spectrum of problem.stability_matrix and locates
-    every birth/death of a complex pair (collisions.py). callback(k, p, u, eigenvalues) is called
-    for every accepted point k. Returns a Branch.
+    every birth/death of a complex pair (collisions.py). workers: processes that scan steps
+    while the continuation goes on (scans.py; 0: every scan inline; None: automatic,
+    scans.planned_workers). callback(k, p, u, eigenvalues) is called for every accepted point
+    k. Returns a Branch.
     """
     _validate_start(p0, params)
-    workers = default_workers(problem, np.size(u0), detection)
+    workers = default_workers(problem, np.size(u0), detection, workers)
     with blas_threads():
         return _continuation(problem, np.asarray(u0, dtype=float), float(p0), params, detection, workers,
                              callback)
@@ -200,7 +206,7 @@ def _continuation(problem, u0, p0, params, detection, workers, callback) -> Bran
     except np.linalg.LinAlgError as err:
         raise ContinuationError(f"tangent undefined at p0={p0} (fold or singular point)") from err
     sample = _sorted(_sample(problem, 0.0, x, t, detection, None, side=+1))
-    rec = _Recorder(detection, callback)
+    rec = BranchRecorder(detection.rel_tol, detection.rho, callback)
     rec.add(sample, 0.0, start, t, 0)
     with scans_for(problem, workers) as scans:
         status = _follow(problem, scans, workers, _Start(x, t, sample, 0.0), rec, params, detection)
@@ -233,8 +239,8 @@ class _Pending:
     end: Optional[Sample]
 
 
-def _follow(problem: Problem, scans, workers: int, here: _Start, rec: "_Recorder",
-            params: ContinuationParams, detection: DetectionParams) -> str:
+def _follow(problem: Problem, scans, workers: int, here: _Start, rec: "BranchRecorder",
+            params: ContinuationParams, detection: DetectionParams) -> Stop:
     """Steps from `here` until the run ends; returns its status. Each accepted step is
     committed and its scan submitted; the scans are recorded in order as they come back (at
     once inline; with `workers`, the continuation goes on while the pending steps' end samples
@@ -245,8 +251,8 @@ def _follow(problem: Problem, scans, workers: int, here: _Start, rec: "_Recorder
     here = replace(here, ds=params.ds, g=problem.event_functions(here.x[:-1], here.x[-1]))
     labels = np.arange(here.sample.eigvals.size)
     pending: deque[_Pending] = deque()
-    previous: Optional[Sample] = None  # the exhaustive detection's stencil (scans inline)
-    status, stopped = "max_steps", False
+    previous: Optional[Sample] = None  # a stencil for the next scan (Detector.stencil_from_previous)
+    status, stopped = Stop(StopCode.MAX_STEPS), False
     while True:
         while pending and (stopped or pending_full(workers, [item.end for item in pending])
                            or scans.ready(pending[0].ticket)):
@@ -258,7 +264,7 @@ def _follow(problem: Problem, scans, workers: int, here: _Start, rec: "_Recorder
                 problem.restore(item.state)
                 here, stopped = replace(item.start, ds=0.5 * item.start.ds), False
                 if here.ds < params.ds_min:
-                    status, stopped = f"ds_min: {outcome.failure} at p={here.x[-1]:.12g}", True
+                    status, stopped = Stop(StopCode.DS_MIN, outcome.failure, float(here.x[-1])), True
                 break
             scan = outcome.result
             ahead = bool(pending)  # later points were tracked from this step's unscanned end
@@ -267,7 +273,7 @@ def _follow(problem: Problem, scans, workers: int, here: _Start, rec: "_Recorder
                                for c in scan.collisions]
             rec.warnings += scan.warnings
             rec.events += item.step.event
-            previous = None if scan.collisions or detection.slopes else item.start.sample
+            previous = item.start.sample if detection.detector.stencil_from_previous and not scan.collisions else None
             if item.end is None:
                 continue
             tracked = None if scan.tracked is None else scan.tracked[labels]
@@ -283,7 +289,7 @@ def _follow(problem: Problem, scans, workers: int, here: _Start, rec: "_Recorder
         if stopped:
             continue
         if rec.steps + len(pending) >= params.max_steps:
-            status, stopped = "max_steps", True
+            status, stopped = Stop(StopCode.MAX_STEPS), True
             continue
         here, stop = _advance(problem, scans, here, rec.steps + len(pending), pending, previous, params,
                               detection)
@@ -295,19 +301,17 @@ def _advance(problem, scans, here: _Start, index: int, pending: deque, previous,
     """Step `index` from `here`: accepted, committed and its scan submitted (appended to
     pending), or rejected (ds halved). Returns (where the next step starts, the run's status if
     it stops there, else None)."""
-    step = _attempt(problem, here.x, here.t, here.ds, params)
-    if isinstance(step, _Step):
-        try:
-            if here.g is not None:
-                step = _cut_at_event(problem, here.x, step, here.g, params)
-            end = _sample(problem, 1.0, step.x, step.tangent, detection, here.sample, side=-1)
-        except SegmentSolveError as err:
-            step = f"collision scan: {err}"
-        except SingularMatrix as err:
-            step = f"singular matrix: {err}"
-    if not isinstance(step, _Step):
-        here = replace(here, ds=0.5 * here.ds)
-        return here, (f"ds_min: {step} at p={here.x[-1]:.12g}" if here.ds < params.ds_min else None)
+    try:
+        step = _attempt(problem, here.x, here.t, here.ds, params)
+        if here.g is not None:
+            step = _cut_at_event(problem, here.x, step, here.g, params)
+        end = _sample(problem, 1.0, step.x, step.tangent, detection, here.sample, side=-1)
+    except StepRejected as err:
+        return _rejected(here, str(err), params)
+    except SegmentSolveError as err:
+        return _rejected(here, f"collision scan: {err}", params)
+    except SingularMatrix as err:
+        return _rejected(here, f"singular matrix: {err}", params)
     state = problem.state()
     ticket = scans.submit(ScanJob(state, here.x, step.x, params.newton_tol, params.max_newton, here.sample,
                                   end, detection, index, previous, step.event))
@@ -315,7 +319,7 @@ def _advance(problem, scans, here: _Start, index: int, pending: deque, previous,
     pending.append(_Pending(ticket, here, state, step if committed is None else committed,
                             None if committed is None else end))
     if committed is None:
-        return here, f"commit: no equilibrium after the commit at p={end.p:.12g}"
+        return here, Stop(StopCode.COMMIT, "no equilibrium after the commit", float(end.p))
     ds = here.ds
     if committed.newton.iterations <= params.fast_newton:
         ds = min(ds * params.growth, params.ds_max)
@@ -324,16 +328,22 @@ def _advance(problem, scans, here: _Start, index: int, pending: deque, previous,
                                                                 if committed.last else None)
 
 
-def _end_status(p: float, params: ContinuationParams) -> str:
-    """The status of a run whose step landed on an end of [p_min, p_max]: "p_end" at the end
+def _rejected(here: _Start, reason: str, params: ContinuationParams):
+    """(here with ds halved, the run's Stop if that is below ds_min, else None)."""
+    here = replace(here, ds=0.5 * here.ds)
+    return here, Stop(StopCode.DS_MIN, reason, float(here.x[-1])) if here.ds < params.ds_min else None
+
+
+def _end_status(p: float, params: ContinuationParams) -> Stop:
+    """The status of a run whose step landed on an end of [p_min, p_max]: REACHED at the end
     it heads for (p_max going up, p_min going down); at the other end the branch turned back
     (a fold) and left the span on the side it started from, short of its goal."""
     if p == (params.p_max if params.direction > 0 else params.p_min):
-        return "p_end"
-    return f"turned back: the branch folded and left the span on its starting side at p={p:.12g}"
+        return Stop(StopCode.REACHED)
+    return Stop(StopCode.TURNED_BACK, "the branch folded and left the span on its starting side", float(p))
 
 
-def _record(problem: Problem, rec: "_Recorder", item: _Pending, end: Sample, solves: int,
+def _record(problem: Problem, rec: "BranchRecorder", item: _Pending, end: Sample, solves: int,
             after: Optional[object], tracked: Optional[Array]) -> None:
     """rec.add for a scanned step; the callback sees the problem in the state committed at the
     step's end: `after`, restored for it while the continuation is ahead (else None: the
@@ -383,41 +393,3 @@ def _commit(problem: Problem, x: Array, step: _Step, end: Sample, par: Continuat
     end = _sample(problem, 0.0, res.x, t_new, detection, end, side=+1)
     newton = replace(res, iterations=step.newton.iterations + res.iterations)
     return _Step(res.x, t_new, newton, step.last, step.event), end
-
-
-class _Recorder:
-    """Accumulates the accepted points of a run and builds the Branch."""
-
-    def __init__(self, detection: DetectionParams, callback: Optional[Callback]):
-        self.rel_tol, self.rho, self.callback = detection.rel_tol, detection.rho, callback
-        self.rows: list[tuple] = []
-        self.collisions: list = []
-        self.warnings: list = []
-        self.events = 0
-        self.continued: list[Array] = []
-        self.last: Optional[Sample] = None
-
-    @property
-    def steps(self) -> int:
-        return len(self.rows) - 1
-
-    def add(self, sample: Sample, ds: float, newton: NewtonResult, t: Array, solves: int,
-            tracked: Optional[Array] = None) -> None:
-        """Record an accepted point (with a spectral window, Branch.continued too)."""
-        u, p = sample.x[:-1].copy(), float(sample.x[-1])
-        self.rows.append((p, u, sample.eigvals, count_complex_pairs(sample.eigvals, self.rel_tol),
-                          ds, newton.iterations, newton.residual, t, solves))
-        if sample.disc is not None:
-            self.continued.append(continued_labels(self.last, sample, tracked, self.rho))
-            self.last = sample.without_vectors()
-        if self.callback is not None:
-            self.callback(len(self.rows) - 1, p, u, sample.eigvals)
-
-    def branch(self, status: str) -> Branch:
-        cols = list(zip(*self.rows))
-        return Branch(p=np.array(cols[0]), u=np.array(cols[1]), eigenvalues=np.array(cols[2]),
-                      n_complex=np.array(cols[3]), ds=np.array(cols[4]),
-                      newton_iterations=np.array(cols[5]), residual=np.array(cols[6]),
-                      tangent=np.array(cols[7]), detection_solves=np.array(cols[8]),
-                      collisions=tuple(self.collisions), status=status, warnings=tuple(self.warnings),
-                      events=self.events, continued=np.array(self.continued) if self.continued else None)

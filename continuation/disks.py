@@ -53,6 +53,7 @@ from diskfriction.continuation.linalg import SingularMatrix, dense, solve
 from diskfriction.continuation.problem import Problem
 from diskfriction.continuation.spectra import Eigensystem, eigensystem
 from diskfriction.continuation.spectral_window import Window, sized, window_eigensystem
+from diskfriction.matrices import Matrix
 from diskfriction.symbolic import System
 
 SPARSE_FROM = 240
@@ -109,7 +110,7 @@ class DiskEquilibria(Problem):
                  window: Window | None = None, gauge: bool = True):
         self.system = system
         self.gauge = gauge  # False: no disk is treated as free (relax: its mass term regularises)
-        self.matrix = matrix or system.scene.matrix
+        self.matrix = Matrix(matrix or system.scene.matrix)
         self.newton_tol = newton_tol
         self.window = window
         self.sparse = (system.ndof >= SPARSE_FROM or window is not None) if sparse is None else sparse
@@ -198,7 +199,7 @@ class DiskEquilibria(Problem):
 
     def stability_matrix(self, q, F_x):
         """J or M^-1 J of the physical J (no gauge rows)."""
-        return self._physical(q, row_scale=None if self.matrix == "J" else 1.0 / self.system.mass_diagonal())
+        return self._physical(q, row_scale=None if self.matrix is Matrix.J else 1.0 / self.system.mass_diagonal())
 
     def eigensystem(self, q, F_x, vectors: bool = False) -> Eigensystem:
         """The coupled chain's eigensystem and each free disk's block, the latter excluded; or,

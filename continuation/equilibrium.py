@@ -20,7 +20,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from diskfriction.continuation.arclength import ContinuationError
-from diskfriction.continuation.branch import stop_reason
 from diskfriction.continuation.collisions import DetectionParams
 from diskfriction.continuation.disks import EquilibriumError
 from diskfriction.continuation.sweep import DiskBranch, SweepParams, sweep
@@ -78,10 +77,10 @@ def check_reached(system: System, branch: DiskBranch, F_x: float) -> None:
     """Raise NoEquilibrium (where the branch ended, why, and its contacts there) unless the
     branch's last point is F_x, reached (to REACHED * F_x)."""
     F_end = float(branch.F_x[-1])
-    if branch.status[-1] == "p_end" and abs(F_end - F_x) <= REACHED * F_x:
+    if branch.status[-1].reached and abs(F_end - F_x) <= REACHED * F_x:
         return
     raise NoEquilibrium(f"no equilibrium beyond F_x = {F_end:.6g} (asked for {F_x:g}): "
-                        f"{stop_reason(branch.status[-1], len(branch))}; there "
+                        f"{branch.status[-1].sentence(len(branch))}; there "
                         f"{contact_states(system, branch.q[-1], branch.xi[-1])}", F_end, F_x)
 
 

@@ -26,7 +26,7 @@ import numpy as np
 from . import certify
 from .samples import Sample, known
 from .segment import Segment
-from .verdicts import Verdict, active_labels, event_labels, scaled_slopes
+from .verdicts import Verdict, VerdictKind, active_labels, event_labels, scaled_slopes
 
 Array = np.ndarray
 
@@ -94,7 +94,7 @@ def certificates_survive(trial: list, new: int, ages: list, judge: Callable[[Sam
     while True:
         a, b = trial[lo], trial[hi]
         again = judge(a, b)
-        trouble = again.labels if again.kind == "split" else event_labels(again.events, n)
+        trouble = again.labels if again.kind == VerdictKind.SPLIT else event_labels(again.events, n)
         if trouble is None or np.any(trouble & ~known(trial[child])):
             return False
         if not (a.partial or b.partial):

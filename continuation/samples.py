@@ -71,7 +71,7 @@ class Sample:
 
     def without_vectors(self) -> "Sample":
         """The same sample without its eigenvectors (the slopes stay), under the same uid: the
-        verdicts cached on it stay valid (collisions.StepScan._release_vectors)."""
+        verdicts cached on it stay valid (collisions.StepScan.release_vectors)."""
         lean = replace(self, system=None)
         object.__setattr__(lean, "uid", self.uid)
         return lean

@@ -92,28 +92,32 @@ def run_scan(problem: Problem, job: ScanJob) -> ScanOutcome:
     return ScanOutcome(result, failure, tuple(a - b for a, b in zip(work.counts(), before)))
 
 
-def default_workers(problem: Problem, n: int, detection: DetectionParams) -> int:
+def default_workers(problem: Problem, n: int, detection: DetectionParams,
+                    asked: Optional[int] = None) -> int:
     """Workers for `problem`, whose stability matrix is n x n: planned_workers, or 0 (inline)
     for a problem whose committed state cannot be shipped (has_snapshots); asking for workers
     explicitly for such a problem raises ValueError."""
-    workers = planned_workers(n, detection)
+    workers = planned_workers(n, detection, asked)
     if workers and not has_snapshots(problem):
-        if detection.workers is not None:
+        if asked is not None:
             raise ValueError(f"{type(problem).__name__} commits a state but has no state()/restore(): "
                              "its steps cannot be scanned on workers (workers=0)")
         return 0
     return workers
 
 
-def planned_workers(n: int, detection: DetectionParams) -> int:
-    """Scan workers for an n x n stability matrix: 0 (inline) unless the detection is fast
-    (the exhaustive one's stencil is a sample of the previous step, known only once that
-    step's scan is done); then detection.workers if set, else 2 from n = PARALLEL_FROM on, on
-    Linux, when this process may use 2 cores or more and is not daemonic."""
-    if not detection.enabled or detection.mode != "fast":
+def planned_workers(n: int, detection: DetectionParams, asked: Optional[int] = None) -> int:
+    """Scan workers for an n x n stability matrix: 0 (inline) unless the detector's scans are
+    independent (Detector.parallel: the exhaustive one's stencil is a sample of the previous
+    step, known only once that step's scan is done); then `asked` if given (0: every scan
+    inline), else 2 from n = PARALLEL_FROM on, on Linux, when this process may use 2 cores or
+    more and is not daemonic. ValueError for asked < 0."""
+    if asked is not None and asked < 0:
+        raise ValueError(f"workers must be >= 0 (or None: automatic), got {asked}")
+    if not (detection.enabled and detection.detector.parallel):
         return 0
-    if detection.workers is not None:
-        return detection.workers
+    if asked is not None:
+        return asked
     if n < PARALLEL_FROM or not sys.platform.startswith("linux"):
         return 0  # fork is the start method there (macOS has fork, but it is not safe to use)
     if multiprocessing.current_process().daemon:

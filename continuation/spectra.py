@@ -22,6 +22,7 @@ one continuous eigenvalue (up to the arbitrary choice at a collision).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import StrEnum
 from typing import Optional
 
 import numpy as np
@@ -34,6 +35,25 @@ Array = np.ndarray
 
 DEFAULT_REL_TOL = 1e-9
 _TINY = np.finfo(float).tiny
+
+
+class Kind(StrEnum):
+    """A collision's kind along the branch direction: two real eigenvalues meet and leave the
+    real axis as a conjugate pair (birth), or the reverse (death). str-valued: a Kind is its
+    name in every file and line (collisions.json's "kind")."""
+
+    BIRTH = "birth"
+    DEATH = "death"
+
+    @property
+    def sign(self) -> int:
+        """The change of the complex-pair count across the collision: +1 or -1."""
+        return 1 if self is Kind.BIRTH else -1
+
+    def real_side(self, before, after):
+        """Of an interval's ends (samples, points) before and after it, the one where the pair
+        is real."""
+        return before if self is Kind.BIRTH else after
 
 
 def spectral_scale(eigvals: Array) -> float:

@@ -24,9 +24,10 @@ import numpy as np
 from diskfriction.continuation.api import Options, solve_branch
 from diskfriction.continuation.collisions import Collision
 from diskfriction.continuation.disks import DiskEquilibria, relax
-from diskfriction.continuation.branch import Branch
+from diskfriction.continuation.branch import Branch, Stop
 from diskfriction.continuation.spectral_window import Window, window_columns
 from diskfriction.continuation.spectra import count_complex_pairs, match_eigenvalues
+from diskfriction.matrices import Matrix
 from diskfriction.symbolic import System
 
 START_FRACTION = 1e-4
@@ -40,15 +41,16 @@ class SweepParams(Options):
     """The options of a disk sweep: solve_branch's Options (api.py), one set of parameters for
     every continuation, plus a spectral window. Steps in the arclength of x = (q, F_x), raw
     units. Where the disk problem takes other defaults than Options', they are set here:
-    ds_max = None takes span / SWEEP_STEPS_PER_SPAN (60) of the whole sweep (not of a leg; Options: span / 50 of its
-    span), the first step ds_max / 2 (graded from rest on the first leg; Options: ds_max / 4),
-    ds_min 1e-10 raw force units (Options: 1e-8 ds_max), newton_tol 1e-11: max|F| at every
-    stored point [force], a tenth of Options' (the history follows q, so the corrector must
-    hold the contacts' forces well below the Coulomb limit's resolution), max_steps 20 000 (N =
-    1000 takes up to 6000 points), and no special points (the disk problem carries history:
-    its folds cannot be located after the run). window: (lo, hi) of Re lambda [the matrix's
-    raw units] to track instead of the whole spectrum (spectral_window.py); None: every
-    eigenvalue.
+    ds_max = None takes span / SWEEP_STEPS_PER_SPAN (60) of the whole sweep (not of a leg;
+    Options: span / 50 of its span), the first step ds_max / 2 (graded from rest on the first
+    leg; Options: ds_max / 4), ds_min 1e-10 raw force units (Options: 1e-8 ds_max), newton_tol
+    1e-11: max|F| at every stored point [force], a tenth of Options' (the history follows q, so
+    the corrector must hold the contacts' forces well below the Coulomb limit's resolution),
+    max_steps 20 000 (N = 1000 takes up to 6000 points), and no special points (the disk
+    problem carries history: its folds cannot be located after the run). workers (Options):
+    processes scanning steps while the sweep goes on (None: automatic; 0: inline). window:
+    (lo, hi) of Re lambda [the matrix's raw units] to track instead of the whole spectrum
+    (spectral_window.py); None: every eigenvalue.
     """
 
     ds_min: Optional[float] = 1e-10
@@ -85,8 +87,8 @@ class DiskBranch:
     leg: np.ndarray
     free: np.ndarray
     collisions: tuple[Collision, ...]
-    matrix: str
-    status: tuple[str, ...]
+    matrix: Matrix
+    status: tuple[Stop, ...]
     events: int
     window: Optional[tuple[float, float]] = None
 
@@ -104,7 +106,7 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
         raise ValueError(f"empty sweep {F_from}:{F_to}")
     if F_from < 0 or F_to < 0:
         raise ValueError(f"F_x must be >= 0 (got {F_from}:{F_to}); the load pushes disk 1 along +x")
-    matrix = matrix or system.scene.matrix
+    matrix = Matrix(matrix or system.scene.matrix)
     legs = [(0, 0.0, F_from), (1, F_from, F_to)] if F_from != 0 else [(1, 0.0, F_to)]
     span = max(abs(F_to - F_from), F_from)
     ds_max = params.ds_max or span / SWEEP_STEPS_PER_SPAN
@@ -138,7 +140,7 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
         if leg == 1:
             collisions = branch.collisions
         F_start = float(branch.p[-1])
-        if branch.status != "p_end":
+        if not branch.status.reached:
             break  # a leg that ended short: the next would start from a load never asked for
     F_x, q, xi, eig, res, leg, free = (np.array(c) for c in zip(*rows))
     rel_tol = params.detection.rel_tol

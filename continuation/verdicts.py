@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from enum import StrEnum
 from typing import Optional
 
 import numpy as np
@@ -32,7 +33,7 @@ import numpy as np
 from . import certify
 from .samples import Sample, known
 from .segment import Segment
-from .spectra import conjugate_pairing
+from .spectra import Kind, conjugate_pairing
 
 Array = np.ndarray
 
@@ -41,14 +42,22 @@ SPLIT_OFF_ENDS = 0.125
 worst pair's model minimum may sit at an end: a sample there would teach nothing new)."""
 
 
+class VerdictKind(StrEnum):
+    """What an interval still needs (module docstring)."""
+
+    CLEAN = "clean"
+    SPLIT = "split"
+    EVENTS = "events"
+
+
 @dataclass(frozen=True)
 class Verdict:
-    """kind: "clean" | "split" | "events"; events [(i, j, "birth" | "death")]; consistent:
+    """kind: a VerdictKind; events [(i, j, spectra.Kind)]; consistent:
     whether the events explain the status change; split_at: where to sample next (in s);
     labels: for a split of the fast detection, the mask of labels in trouble (the only ones a
     partial sample there needs), or None if the next sample must be a full spectrum."""
 
-    kind: str
+    kind: VerdictKind
     events: list
     consistent: bool
     split_at: float = math.nan
@@ -71,29 +80,37 @@ def status_events(a: Sample, b: Sample, active: Optional[Array] = None):
     born, died = (sa == 0) & (sb != 0), (sa != 0) & (sb == 0)
     bu, bl = np.flatnonzero(born & (sb > 0)), np.flatnonzero(born & (sb < 0))
     du, dl = np.flatnonzero(died & (sa > 0)), np.flatnonzero(died & (sa < 0))
-    events = [(i, j, "birth") for i, j in conjugate_pairing(b.eigvals, bu, bl, other=a.eigvals)]
-    events += [(i, j, "death") for i, j in conjugate_pairing(a.eigvals, du, dl, other=b.eigvals)]
+    events = [(i, j, Kind.BIRTH) for i, j in conjugate_pairing(b.eigvals, bu, bl, other=a.eigvals)]
+    events += [(i, j, Kind.DEATH) for i, j in conjugate_pairing(a.eigvals, du, dl, other=b.eigvals)]
     consistent = bu.size == bl.size and du.size == dl.size and not np.any(sa * sb < 0)
     return events, consistent
 
 
-def judge(a: Sample, b: Sample, stencil: Optional[Sample], segment: Segment, rho: float,
-          doubt: float, fast: bool) -> Verdict:
-    """The verdict on [a, b] (module docstring): fast if the samples carry slopes, else
-    exhaustive with the third sample `stencil` (None: none available, the interval splits)."""
+def judge_fast(a: Sample, b: Sample, segment: Segment, rho: float, doubt: float) -> Verdict:
+    """The fast detection's verdict on [a, b] (module docstring; the samples carry slopes)."""
     active = active_labels(a, b)
     events, consistent = status_events(a, b, active)
-    mid = 0.5 * (a.s + b.s)
     if not consistent:
-        return Verdict("split", events, False, mid)
-    if fast:
-        split = hermite_split(a, b, events, active, segment, rho, doubt)
-        if split is not None:
-            t_split, labels = split
-            return Verdict("split", events, True, a.s + t_split * (b.s - a.s), labels)
-    elif stencil is None or uncertified(a, b, stencil, rho):
-        return Verdict("split", events, True, mid)
-    return Verdict("events" if events else "clean", events, True)
+        return Verdict(VerdictKind.SPLIT, events, False, 0.5 * (a.s + b.s))
+    split = hermite_split(a, b, events, active, segment, rho, doubt)
+    if split is not None:
+        t_split, labels = split
+        return Verdict(VerdictKind.SPLIT, events, True, a.s + t_split * (b.s - a.s), labels)
+    return _settled(events)
+
+
+def judge_exhaustive(a: Sample, b: Sample, stencil: Optional[Sample], rho: float) -> Verdict:
+    """The exhaustive detection's verdict on [a, b] (module docstring) with the third sample
+    `stencil` (None: none available, the interval splits)."""
+    events, consistent = status_events(a, b, active_labels(a, b))
+    if not consistent or stencil is None or uncertified(a, b, stencil, rho):
+        return Verdict(VerdictKind.SPLIT, events, consistent, 0.5 * (a.s + b.s))
+    return _settled(events)
+
+
+def _settled(events: list) -> Verdict:
+    """The verdict on a certified interval: events to locate, or clean."""
+    return Verdict(VerdictKind.EVENTS if events else VerdictKind.CLEAN, events, True)
 
 
 def scaled_slopes(a: Sample, b: Sample, segment: Segment) -> tuple[Array, Array]:

@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Iterable, NamedTuple
 
 import numpy as np
+from diskfriction.continuation.spectra import Kind
 
 
 class Window(NamedTuple):
@@ -17,16 +18,16 @@ class Window(NamedTuple):
 
 def complex_windows(F_start: float, F_stop: float, pairs_at_start: int,
                     collisions: Iterable[tuple[float, str]]) -> list[Window]:
-    """The intervals of a leg from F_start to F_stop cut at its collisions ((F_x, "birth" |
-    "death") in branch order): the pair count starts at pairs_at_start and changes by +1 at
-    a birth, -1 at a death."""
+    """The intervals of a leg from F_start to F_stop cut at its collisions ((F_x, kind) in
+    branch order, kind a spectra.Kind or its name): the pair count starts at pairs_at_start
+    and changes by +1 at a birth, -1 at a death (Kind.sign)."""
     collisions = list(collisions)
     edges = [float(F_start)] + [float(p) for p, _ in collisions] + [float(F_stop)]
     count, out = int(pairs_at_start), []
     for k, (a, b) in enumerate(zip(edges, edges[1:])):
         out.append(Window(a, b, count))
         if k < len(collisions):
-            count += 1 if collisions[k][1] == "birth" else -1
+            count += Kind(collisions[k][1]).sign
     return out
 
 

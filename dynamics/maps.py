@@ -207,7 +207,6 @@ def sliding_load(runs: list[dict]) -> tuple[Optional[float], Optional[float]]:
 def branch_summary(system, branch) -> dict:
     """status, F_end, reason, collisions, windows, complex_windows, F_complex and sigma_max of
     a swept branch (module docstring)."""
-    from diskfriction.continuation.branch import stop_reason
     from diskfriction.continuation.equilibrium import contact_states
     from diskfriction.continuation.windows import complex_spans
     from diskfriction.dynamics.verify import windows
@@ -216,9 +215,9 @@ def branch_summary(system, branch) -> dict:
     spans = complex_spans(todo)
     rows = np.flatnonzero(branch.leg == 1)
     F_end = float(branch.F_x[-1])
-    stopped = [status for status in branch.status if status != "p_end"]
+    stopped = [status for status in branch.status if not status.reached]
     reason = "" if not stopped else (f"branch ended at F_x = {F_end:.6g}: "
-                                     f"{stop_reason(stopped[0], len(branch))}; there "
+                                     f"{stopped[0].sentence(len(branch))}; there "
                                      f"{contact_states(system, branch.q[-1], branch.xi[-1])}")
     return {"status": "ended" if stopped else "ok", "F_end": F_end, "reason": reason,
             "collisions": len(branch.collisions), "windows": len(todo),
@@ -231,7 +230,6 @@ def map_cell(scene: Scene, params: MapParams) -> dict:
     located collisions (as bifurcate's collisions.json), windows [start, stop, pairs] and,
     with slide runs, one row per window (dynamics.verify.window_run)."""
     from diskfriction.continuation.arclength import ContinuationError
-    from diskfriction.continuation.collisions import DetectionParams
     from diskfriction.continuation.disks import EquilibriumError
     from diskfriction.continuation.records import collision_records
     from diskfriction.continuation.sweep import SweepParams, sweep
@@ -246,7 +244,7 @@ def map_cell(scene: Scene, params: MapParams) -> dict:
     try:
         # the cells already run one per core: each sweep scans its steps inline
         branch = sweep(system, params.F_from, params.F_to, params.matrix,
-                       SweepParams(detection=DetectionParams(workers=0)))
+                       SweepParams(workers=0))
     except (EquilibriumError, ContinuationError, np.linalg.LinAlgError) as error:
         summary |= {"status": "failed", "reason": f"no branch: {error}"}
     else:

@@ -14,6 +14,9 @@ from scipy.optimize import brentq
 from diskfriction.continuation import (ContinuationParams, DetectionParams, FunctionProblem, continuation,
                           count_complex_pairs)
 from diskfriction.continuation.bifurcations import locate_folds, locate_hopf
+from diskfriction.continuation.branch import Stop, StopCode
+from diskfriction.continuation.detectors import DETECTORS, Kind
+from diskfriction.continuation.detectors.fast import Fast
 from diskfriction.continuation.spectra import sort_spectrum
 
 TOL_P = 1e-10
@@ -76,7 +79,7 @@ def test_fold_of_scalar_equation_is_passed_and_located():
     problem = FunctionProblem(G=lambda u, p: np.array([u[0] ** 2 + p]), G_u=lambda u, p: np.array([[2 * u[0]]]),
                               G_p=lambda u, p: np.array([1.0]))
     br = run(problem, 1, p_min=-1.0, p_max=1.0, ds=0.1, ds_max=0.2, u0=np.array([1.0]))
-    assert br.status.startswith("turned back") and br.status.endswith("at p=-1")
+    assert br.status.code == StopCode.TURNED_BACK and br.status.p == -1
     assert br.p[-1] == -1.0 and br.u[-1, 0] == pytest.approx(-1.0, abs=1e-10)
     assert np.all(np.abs(br.u[:, 0] ** 2 + br.p) <= 1e-12)
     folds = locate_folds(problem, br)
@@ -105,7 +108,7 @@ def test_brusselator_hopf_and_collisions_match_analytic():
     a = np.sqrt(2.0)
     problem = brusselator(a)
     br = run(problem, 2, p_min=0.0, p_max=7.0, ds=0.1, ds_max=0.5, u0=np.array([a, 0.0]))
-    assert br.status == "p_end" and br.p[-1] == 7.0
+    assert br.status.reached and br.p[-1] == 7.0
     assert np.allclose(br.u[:, 1], br.p / a, atol=1e-10)
     hopf = locate_hopf(problem, br)
     assert len(hopf) == 1
@@ -129,7 +132,7 @@ def test_2x2_collision_located_to_1e10_with_jordan_vectors(direction, kind):
     a = -0.7
     problem = blocks_family([(a, lambda p: p - P0, lambda p: 1.0)])
     br = run(problem, 2, ds=0.07, ds_max=0.1, direction=direction)
-    assert br.status == "p_end" and br.p[-1] == (1.0 if direction > 0 else 0.0)
+    assert br.status.reached and br.p[-1] == (1.0 if direction > 0 else 0.0)
     (c,) = br.collisions
     assert c.kind == kind and c.resolved
     assert abs(c.p - P0) <= TOL_P and c.bracket[0] <= c.p <= c.bracket[1]
@@ -171,7 +174,7 @@ def test_bubble_narrower_than_the_step_is_found(ds):
     p2 = p1 + 1e-3
     problem = bubble_problem(p1, p2)
     br = run(problem, 3, ds=ds, u0=np.array([0.0, 0.0, 0.0]))
-    assert br.status == "p_end" and np.max(np.diff(br.p)) >= 9 * (p2 - p1)
+    assert br.status.reached and np.max(np.diff(br.p)) >= 9 * (p2 - p1)
     assert located(br, "birth") == pytest.approx([p1], abs=TOL_P)
     assert located(br, "death") == pytest.approx([p2], abs=TOL_P)
     assert all(c.resolved and c.residual <= 1e-12 for c in br.collisions)
@@ -225,7 +228,7 @@ def test_collision_located_through_a_fold():
 
     problem = FunctionProblem(G, G_u, lambda u, p: np.array([1.0, 0, 0, 0, 0]), A=lambda u, p: A(u))
     br = run(problem, 5, p_min=-1.0, p_max=1.0, ds=0.1, u0=np.array([1.0, 0, 0, 0, 0]))
-    assert br.status.startswith("turned back") and br.u[-1, 0] == pytest.approx(-1.0)
+    assert br.status.code == StopCode.TURNED_BACK and br.u[-1, 0] == pytest.approx(-1.0)
     assert [c.kind for c in br.collisions] == ["birth", "birth"]
     assert [c.p for c in br.collisions] == pytest.approx([-0.09, -0.04], abs=TOL_P)
     assert [c.u[0] for c in br.collisions] == pytest.approx([0.3, -0.2], abs=1e-9)
@@ -336,3 +339,52 @@ def test_bubble_of_a_fast_eigenvalue_passing_a_cluster_is_found(ds):
     assert located(branch, "birth") == pytest.approx([p1], abs=TOL_P)
     assert located(branch, "death") == pytest.approx([p2], abs=TOL_P)
     assert_count_changes_only_at_collisions(problem, branch, 0.0, 0.4)
+
+
+def test_a_stop_prints_its_status_line_and_says_its_reason_without_the_location():
+    """Branch.status is a Stop; its line (MESSAGES) is the text the status had as a string,
+    and sentence() is what stop_reason parsed back out of it by regex before."""
+    failed = Stop(StopCode.DS_MIN, "corrector failed (residual 1.63e-11)", 5.0997512345678)
+    assert str(failed) == "ds_min: corrector failed (residual 1.63e-11) at p=5.09975123457"
+    assert failed.sentence(7) == "corrector failed (residual 1.63e-11)" and not failed.reached
+    folded = Stop(StopCode.TURNED_BACK, "the branch folded and left the span on its starting side", -1.0)
+    assert str(folded) == "turned back: the branch folded and left the span on its starting side at p=-1"
+    assert str(Stop(StopCode.COMMIT, "no equilibrium after the commit", 0.5)) == \
+        "commit: no equilibrium after the commit at p=0.5"
+    assert str(Stop(StopCode.REACHED)) == "p_end" and Stop(StopCode.REACHED).sentence(3) == "reached"
+    assert Stop(StopCode.MAX_STEPS).sentence(12) == "the run stopped after 12 points"
+
+
+def test_a_run_cut_short_by_max_steps_says_so():
+    """The status of a run that used up its steps is MAX_STEPS, not REACHED."""
+    problem, _ = fast_eigenvalue_through_a_cluster()
+    branch = continuation(problem, np.zeros(4), 0.0, ContinuationParams(ds=0.01, ds_max=0.01, max_steps=3,
+                                                                      p_max=0.4))
+    assert branch.status == Stop(StopCode.MAX_STEPS) and len(branch) == 4 and str(branch.status) == "max_steps"
+
+
+class Bisecting(Fast):
+    """An added detector: the fast verdicts, but each event bracketed by bisection down to
+    tol_p (no Newton locator), so its collisions come from StepScan.interpolated."""
+
+    name = "bisecting"
+
+    def resolve(self, scan, idx, verdict):
+        scan.split(idx, 0.5 * (scan.samples[idx].s + scan.samples[idx + 1].s))
+        return True
+
+
+def test_a_detector_added_by_one_registry_entry_finds_the_collisions(monkeypatch):
+    """Adding a detector is one class and one DETECTORS entry (docs/continuation.md): the
+    scan drives it, and it brackets the bubble of a fast eigenvalue passing a cluster (steps
+    250 times its width) to tol_p, where the fast detection's Newton locator puts it."""
+    monkeypatch.setitem(DETECTORS, Bisecting.name, Bisecting())
+    problem, (p1, p2) = fast_eigenvalue_through_a_cluster()
+    par = ContinuationParams(ds=0.1, ds_min=1e-9, ds_max=0.1, newton_tol=1e-12, p_min=0.0, p_max=0.4)
+    branch = continuation(problem, np.zeros(4), 0.0, par, DetectionParams(mode=Bisecting.name))
+    assert [c.kind for c in branch.collisions] == [Kind.BIRTH, Kind.DEATH]
+    assert located(branch, "birth") == pytest.approx([p1], abs=TOL_P)
+    assert located(branch, "death") == pytest.approx([p2], abs=TOL_P)
+    assert all(c.resolved and c.bracket[1] - c.bracket[0] <= TOL_P for c in branch.collisions)
+    with pytest.raises(ValueError, match="mode must be one of"):
+        DetectionParams(mode="bisect")

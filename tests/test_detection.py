@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from diskfriction.continuation import ContinuationParams, DetectionParams, FunctionProblem, continuation
+from diskfriction.continuation.branch import Stop, StopCode
 from diskfriction.continuation.disks import DiskEquilibria, relax
 from diskfriction.continuation.locate import locate_double_eigenvalue
 from diskfriction.continuation.newton import bordered_newton, tangent
@@ -145,7 +146,7 @@ def test_eps_zero_runs_to_the_end_with_free_rolling_modes_excluded():
     spreads, and the branch reaches F_x = 0.12."""
     system = System.from_scene(Scene(N=20))
     branch = sweep(system, 0.0, 0.12, "J")
-    assert branch.status == ("p_end",) and branch.F_x[-1] == 0.12
+    assert branch.status == (Stop(StopCode.REACHED),) and branch.F_x[-1] == 0.12
     assert branch.free[0] > 0 and branch.free[-1] < branch.free[0]
     problem = DiskEquilibria(system, branch.q[0], branch.xi[0], branch.F_x[0], "J")
     assert problem.free_count == branch.free[0]
@@ -163,7 +164,7 @@ def test_eps_zero_long_sparse_chain_finds_the_collisions_of_the_short_one():
     within 1e-9 in F_x; N = 100 runs to 0.12 with its free modes counted and falling."""
     branches = {N: sweep(System.from_scene(Scene(N=N)), 0.0, 0.12, "J") for N in (20, 100)}
     long, short = branches[100], branches[20]
-    assert long.status == ("p_end",) and long.F_x[-1] == 0.12
+    assert long.status == (Stop(StopCode.REACHED),) and long.F_x[-1] == 0.12
     assert long.free[-1] > 0 and long.free[-1] < long.free[0]
     assert [c.kind for c in long.collisions] == [c.kind for c in short.collisions]
     assert max(abs(a.p - b.p) for a, b in zip(long.collisions, short.collisions)) <= 1e-9
@@ -413,7 +414,6 @@ def test_settled_samples_drop_their_vectors_and_the_scan_finds_the_same(monkeypa
     from diskfriction.continuation.collisions import StepScan
 
     system = System.from_scene(Scene(N=20, eps=1e-4))
-    detection = DetectionParams(workers=0)
     released, inner = [], []
     run = StepScan.run
 
@@ -425,11 +425,11 @@ def test_settled_samples_drop_their_vectors_and_the_scan_finds_the_same(monkeypa
         return found
 
     monkeypatch.setattr(StepScan, "run", counting_run)
-    lean = sweep(system, 0.0, 0.12, "J", SweepParams(detection=detection))
+    lean = sweep(system, 0.0, 0.12, "J", SweepParams(workers=0))
     assert 0 < sum(released) < sum(inner)
-    monkeypatch.setattr(StepScan, "_release_vectors", lambda self: None)
+    monkeypatch.setattr(StepScan, "release_vectors", lambda self: None)
     released.clear()
-    kept = sweep(system, 0.0, 0.12, "J", SweepParams(detection=detection))
+    kept = sweep(system, 0.0, 0.12, "J", SweepParams(workers=0))
     assert sum(released) == 0
     assert np.array_equal(lean.F_x, kept.F_x) and np.array_equal(lean.eigenvalues, kept.eigenvalues)
     assert [(c.p, c.kind, c.pair) for c in lean.collisions] == [(c.p, c.kind, c.pair) for c in kept.collisions]

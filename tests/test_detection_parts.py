@@ -14,7 +14,7 @@ from diskfriction.continuation.partial_splits import (PARTIAL_CLUSTERS, PARTIAL_
                                                       clusters, partial_allowed)
 from diskfriction.continuation.samples import Sample, continuation_perm, label_gaps, sample_at
 from diskfriction.continuation.segment import Segment
-from diskfriction.continuation.verdicts import Verdict, judge
+from diskfriction.continuation.verdicts import Verdict, judge_exhaustive, judge_fast
 
 RHO, DOUBT, REL_TOL = 0.5, 0.25, 1e-9
 V, C = 10.0, 1e-3
@@ -55,7 +55,7 @@ def label_of(sample, value: float) -> int:
 def test_a_verdict_is_clean_far_from_any_encounter():
     problem = bubble_problem()
     a, b, segment = interval(problem, 4, 0.03, 0.07)
-    verdict = judge(a, b, None, segment, RHO, DOUBT, fast=True)
+    verdict = judge_fast(a, b, segment, RHO, DOUBT)
     assert verdict.kind == "clean" and verdict.events == [] and verdict.consistent
 
 
@@ -66,7 +66,7 @@ def test_a_verdict_splits_an_interval_that_hides_a_whole_bubble_for_the_pair_in_
     problem = bubble_problem()
     a, b, segment = interval(problem, 4, 0.19, 0.21)
     assert not np.any(a.status) and not np.any(b.status)
-    verdict = judge(a, b, None, segment, RHO, DOUBT, fast=True)
+    verdict = judge_fast(a, b, segment, RHO, DOUBT)
     assert verdict.kind == "split" and verdict.consistent and 0.0 < verdict.split_at < 1.0
     fast, two = label_of(a, V * 0.19), label_of(a, 2.0)
     assert np.flatnonzero(verdict.labels).tolist() == sorted([fast, two])
@@ -78,7 +78,7 @@ def test_a_verdict_lists_the_birth_of_the_pair_and_its_labels():
     problem = bubble_problem()
     a, b, segment = interval(problem, 4, 0.1995, 0.2001)
     assert np.count_nonzero(b.status) == 2
-    verdict = judge(a, b, None, segment, RHO, DOUBT, fast=True)
+    verdict = judge_fast(a, b, segment, RHO, DOUBT)
     assert verdict.kind == "events" and len(verdict.events) == 1
     i, j, kind = verdict.events[0]
     assert kind == "birth" and {i, j} == {label_of(a, V * 0.1995), label_of(a, 2.0)}
@@ -96,7 +96,7 @@ def test_the_exhaustive_verdict_needs_its_stencil():
         stencil = None
         if p_c is not None:
             stencil = replace(interval(problem, 4, p_a, p_c, slopes=False)[1], s=(p_c - p_a) / (p_b - p_a))
-        return judge(a, b, stencil, segment, RHO, DOUBT, fast=False).kind
+        return judge_exhaustive(a, b, stencil, RHO).kind
 
     assert verdict(0.02, 0.04, None) == "split"
     assert verdict(0.02, 0.04, 0.05) == "clean"

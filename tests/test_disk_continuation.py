@@ -4,8 +4,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from diskfriction.continuation.disks import relax
+from diskfriction.continuation.branch import Stop, StopCode
+from diskfriction.continuation.disks import DiskEquilibria, relax
 from diskfriction.continuation.sweep import SweepParams, sweep
+from diskfriction.matrices import Matrix
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
 
@@ -22,6 +24,14 @@ def paper_branch(request, paper_system):
     return sweep(paper_system, 0.0, 0.12, request.param)
 
 
+def test_a_matrix_name_other_than_J_or_M_inv_J_is_refused(paper_system):
+    """Before, any matrix name other than "J" meant M^-1 J silently."""
+    q, xi = paper_system.rest_state()
+    with pytest.raises(ValueError, match="'M J' is not a valid Matrix"):
+        DiskEquilibria(paper_system, q, xi, 1e-5, "M J")
+    assert DiskEquilibria(paper_system, q, xi, 1e-5, "M^-1 J").matrix is Matrix.M_INV_J
+
+
 def test_rest_state_is_singular_and_relaxation_starts_the_branch(paper_system):
     """eps = 0: the pairs touch at delta = 0 and each disk rolls freely (N zero modes of J);
     pseudo-transient relaxation still reaches the equilibrium at a small load."""
@@ -34,7 +44,7 @@ def test_rest_state_is_singular_and_relaxation_starts_the_branch(paper_system):
 
 
 def test_equilibrium_residual_stays_below_1e10_along_the_paper_branch(paper_branch, paper_system):
-    assert paper_branch.status == ("p_end",) and paper_branch.F_x[-1] == 0.12
+    assert paper_branch.status == (Stop(StopCode.REACHED),) and paper_branch.F_x[-1] == 0.12
     res = [np.abs(paper_system.forces(q, xi, F)).max()
            for F, q, xi in zip(paper_branch.F_x, paper_branch.q, paper_branch.xi)]
     assert max(res) <= 1e-10

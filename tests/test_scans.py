@@ -22,7 +22,7 @@ from invariants import unaccounted_pair_changes
 
 def run(system, workers):
     work.reset()
-    branch = sweep(system, 0.0, 0.12, "J", SweepParams(detection=DetectionParams(workers=workers)))
+    branch = sweep(system, 0.0, 0.12, "J", SweepParams(workers=workers))
     return branch, work.counts()
 
 
@@ -87,7 +87,7 @@ def test_a_failed_scan_rejects_its_step_after_the_branch_went_on(monkeypatch):
             return scans
 
         monkeypatch.setattr(arclength, "scans_for", scans_for)
-        monkeypatch.setattr(arclength, "default_workers", lambda problem, n, detection: 1)
+        monkeypatch.setattr(arclength, "default_workers", lambda problem, n, detection, asked: 1)
         branches.append(sweep(system, 0.0, 0.12, "J"))
         assert scans.failed == 1 and not scans._done
     inline, deferred = branches
@@ -135,16 +135,16 @@ class NoSnapshots(Snapshots):
 
 
 def test_workers_by_default_and_on_request():
-    fast, exhaustive = DetectionParams(), DetectionParams(mode="exhaustive", workers=2)
+    fast, exhaustive = DetectionParams(), DetectionParams(mode="exhaustive")
     assert has_snapshots(LINEAR) and has_snapshots(Snapshots()) and not has_snapshots(NoSnapshots())
     assert default_workers(LINEAR, 30, fast) == 0  # small: inline
-    assert default_workers(LINEAR, 300, exhaustive) == 0  # its stencil needs the previous scan
+    assert default_workers(LINEAR, 300, exhaustive, 2) == 0  # its stencil needs the previous scan
     assert default_workers(NoSnapshots(), 300, fast) == 0
-    assert default_workers(LINEAR, 30, DetectionParams(workers=3)) == 3
+    assert default_workers(LINEAR, 30, fast, 3) == 3
     with pytest.raises(ValueError, match="NoSnapshots commits a state"):
-        default_workers(NoSnapshots(), 300, DetectionParams(workers=2))
+        default_workers(NoSnapshots(), 300, fast, 2)
     with pytest.raises(ValueError, match="workers must be >= 0"):
-        DetectionParams(workers=-1)
+        default_workers(LINEAR, 300, fast, -1)
 
 
 def _default_in(conn):

@@ -51,7 +51,7 @@ def branch(scene: Scene, matrix: str, ds_divisions: int, tol_p: float | None = N
             "collision_eigenvalue": np.array([c.eigenvalue for c in b.collisions], dtype=float),
             "collision_kind": [c.kind for c in b.collisions],
             "collision_resolved": [bool(c.resolved) for c in b.collisions],
-            "status": list(b.status), "points": len(b), "seconds": seconds}
+            "status": [str(s) for s in b.status], "points": len(b), "seconds": seconds}
 
 
 @computation("spectra_at")

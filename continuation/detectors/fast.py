@@ -1,0 +1,92 @@
+"""The fast detection (the default): samples carry eigenvalue slopes from left and right
+eigenvectors; intervals are certified by cubic Hermite models of every pair's discriminant
+(certify.worst_uncertified_pair) and the labels by their slopes (certify.inconsistent_labels);
+an uncertified interval gets a new sample where the worst pair's model is lowest, partial
+(only the eigenvalues near the labels in trouble, partial_splits.py) from n = partial_from on;
+events are located by Newton's method on the minimally augmented system (locate.py): linear
+solves, no eigensolver. One full spectrum per accepted point."""
+from __future__ import annotations
+
+from typing import Optional
+
+from .. import certify
+from ..locate import LocatorFailed, locate_double_eigenvalue
+from ..samples import Sample
+from ..segment import Segment
+from ..verdicts import Verdict, event_model, judge_fast, scaled_slopes
+from .base import Collision, Detector, Kind
+
+
+class Fast(Detector):
+    """The fast detection (module docstring)."""
+
+    name = "fast"
+    slopes = True
+    partial_splits = True
+    parallel = True
+    window = True
+
+    def judge(self, a: Sample, b: Sample, stencil: Optional[Sample], segment: Segment, params) -> Verdict:
+        return judge_fast(a, b, segment, params.rho, params.doubt)
+
+    def resolve(self, scan, idx: int, verdict: Verdict) -> bool:
+        """Locate the first event of the interval not yet located; where the locator fails,
+        split the interval instead (fallback_split)."""
+        a, b = scan.samples[idx], scan.samples[idx + 1]
+        for i, j, kind in verdict.events:
+            key = (a.uid, b.uid, i, j)
+            if key in scan.located:
+                continue
+            found = locate(scan, idx, i, j, kind)
+            if found is None:
+                scan.split(idx, fallback_split(scan, a, b))
+            else:
+                scan.located[key] = found
+            return True
+        return False
+
+    def final(self, scan, a: Sample, b: Sample, i: int, j: int, kind: Kind) -> bool:
+        return scan.narrow(a, b)
+
+    def settle(self, scan) -> None:
+        scan.release_vectors()
+
+
+def locate(scan, idx: int, i: int, j: int, kind: Kind) -> Optional[Collision]:
+    """Newton on the minimally augmented system from the cubic model's root over
+    scan.samples[idx], scan.samples[idx + 1]; None if it fails or lands outside the interval."""
+    a, b = scan.samples[idx], scan.samples[idx + 1]
+    segment, params = scan.segment, scan.params
+    mean, D = event_model(a, b, i, j, *scaled_slopes(a, b, segment))
+    roots = certify.cubic_roots_in_unit(D)
+    t0 = roots[0] if roots else 0.5
+    right, left = kind.real_side(a, b).system.vectors(i)
+    x0 = segment.secant_point(a.s + t0 * (b.s - a.s))
+    try:
+        found = locate_double_eigenvalue(
+            scan.problem, x0, float(certify.cubic_at(mean, t0)), right, left.conj(),
+            segment.sigma, params.tol_p, segment.tol, params.locator_iterations)
+    except LocatorFailed as err:
+        scan.warnings.append(f"step {scan.step}: locator: {err}; splitting")
+        return None
+    s = float(segment.sigma @ (found.x - segment.x_a)) / segment.length
+    lo, hi = min(a.p, b.p), max(a.p, b.p)
+    p = float(found.x[-1])
+    if not (a.s - 1e-9 <= s <= b.s + 1e-9 and lo - params.tol_p <= p <= hi + params.tol_p):
+        return None
+    return Collision(p=p, kind=kind, eigenvalue=found.lam, eigenvector=found.v,
+                     generalized_eigenvector=found.w, left_right_overlap=found.overlap,
+                     bracket=(p - found.dp, p + found.dp), residual=found.residual,
+                     u=found.x[:-1].copy(), step=scan.step, pair=(i, j))
+
+
+def fallback_split(scan, a: Sample, b: Sample) -> float:
+    """Where to sample when the locator failed: the midpoint, except in the last interval of a
+    step ending on a contact event, where the spectrum is not smooth (a Hertz stiffness
+    ~ delta^(1/2) has an infinite slope at delta = 0), collisions crowd towards the event and
+    Newton cannot converge on one sitting at it: there a sample tol_p / 2 before the end
+    isolates it (collision at the event within tol_p)."""
+    tol_p = scan.params.tol_p
+    if scan.ends_at_event and b.s == 1.0 and abs(b.p - a.p) > tol_p:
+        return b.s - 0.5 * tol_p / abs(b.p - a.p) * (b.s - a.s)
+    return 0.5 * (a.s + b.s)
