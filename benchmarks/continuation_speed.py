@@ -15,7 +15,7 @@ import numpy as np
 from diskfriction.continuation.collisions import DetectionParams
 from diskfriction.continuation.linalg import blas_threads, work
 from diskfriction.continuation.spectra import eigensystem
-from diskfriction.continuation.sweep import SweepParams, sweep
+from diskfriction.disks.sweep import SweepParams, sweep
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
 

@@ -15,7 +15,7 @@ import time
 import numpy as np
 import scipy.linalg as sla
 
-from diskfriction.continuation.disks import DiskEquilibria, relax
+from diskfriction.disks.equilibria import DiskEquilibria, relax
 from diskfriction.continuation.linalg import blas_threads, dense
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System

@@ -12,7 +12,7 @@ import argparse
 import tempfile
 import time
 
-from diskfriction.dynamics.ensemble import run_ensemble
+from diskfriction.studies.ensemble import run_ensemble
 from diskfriction.reports.units import PaperUnits
 from diskfriction.scenes import Scene
 

@@ -17,7 +17,7 @@ import statistics
 import tempfile
 import time
 
-from diskfriction.dynamics.maps import Axis, MapParams, SlideParams, grid_values, map_cells, run_map
+from diskfriction.studies.maps import Axis, MapParams, SlideParams, grid_values, map_cells, run_map
 from diskfriction.dynamics.stepper import load_stepper
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System

@@ -29,10 +29,10 @@ import numpy as np
 CHILD = r"""
 import json, resource, signal, sys, time
 from diskfriction.continuation.collisions import DetectionParams
-from diskfriction.continuation.disks import DiskEquilibria
+from diskfriction.disks.equilibria import DiskEquilibria
 from diskfriction.continuation.linalg import work
 from diskfriction.continuation.scans import default_workers
-from diskfriction.continuation.sweep import SweepParams, sweep
+from diskfriction.disks.sweep import SweepParams, sweep
 from diskfriction.reports.units import PaperUnits
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System

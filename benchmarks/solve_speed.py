@@ -16,7 +16,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from diskfriction.continuation.disks import DiskEquilibria, relax
+from diskfriction.disks.equilibria import DiskEquilibria, relax
 from diskfriction.continuation.linalg import bordered, blas_threads
 from diskfriction.continuation.locate import BORDER_SCALE
 from diskfriction.continuation.triangular import TriangularFactors

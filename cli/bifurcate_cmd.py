@@ -8,11 +8,10 @@ import json
 import math
 from pathlib import Path
 
-from diskfriction.cli.common import (EXIT_FAILED, CommandError, add_scene_argument,
+from diskfriction.cli.common import (EXIT_FAILED, CommandError, add_matrix_argument, add_scene_argument,
                                      check_memory, number, output_dir, path,
-                                     scene_from_args)
+                                     matrix_from_args, scene_from_args)
 from diskfriction.cli.progress import Progress
-from diskfriction.matrices import MATRIX_OPTIONS
 from diskfriction.words import count
 from diskfriction.scenes.scene import NEGATIVE_LOAD
 
@@ -30,8 +29,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--fx", metavar="A:B",
                         help="sweep F_x from A to B (raw units); A > B unloads after loading to A "
                              "(default: the scene's F_x range)")
-    parser.add_argument("--matrix", metavar="J|M^-1J",
-                        help="stability matrix (default: the scene's)")
+    add_matrix_argument(parser, "stability matrix")
     parser.add_argument("--out", metavar="DIR", help="output directory (default: out/bifurcate/SCENE)")
     parser.add_argument("--ds-max", type=float, metavar="DS",
                         help="largest arclength step (default: span / 60)")
@@ -112,21 +110,19 @@ def run(args: argparse.Namespace) -> int:
     if window is not None and not detector.window:
         raise CommandError("bifurcate error: --window: needs the fast detection (eigenvalue "
                            f"slopes), not --detection {args.detection}")
-    if args.matrix is not None and args.matrix not in MATRIX_OPTIONS:
-        raise CommandError(f"bifurcate error: --matrix: must be J or M^-1J (got {args.matrix!r})")
     if args.ds_max is not None:
         number("bifurcate", "ds-max", args.ds_max)
     if args.workers is not None and args.workers < 0:
         raise CommandError(f"bifurcate error: --workers: must be >= 0 (got {args.workers})")
-    matrix = MATRIX_OPTIONS[args.matrix] if args.matrix else scene.matrix
+    matrix = matrix_from_args("bifurcate", args, scene)
     out = output_dir("bifurcate", args.out, Path("out") / "bifurcate" / scene.name)
 
     from diskfriction.continuation.arclength import ContinuationError
     from diskfriction.continuation.collisions import DetectionParams
-    from diskfriction.continuation.disks import EquilibriumError
+    from diskfriction.disks.equilibria import EquilibriumError
     from diskfriction.continuation.scans import planned_workers
     from diskfriction.continuation.spectral_window import WindowCrowded
-    from diskfriction.continuation.sweep import SweepParams, sweep
+    from diskfriction.disks.sweep import SweepParams, sweep
     from diskfriction.reports.bifurcation import collision_records, plot_diagram, save_branch
     from diskfriction.symbolic import System
 
@@ -188,7 +184,7 @@ def run(args: argparse.Namespace) -> int:
                   f"(lambda/k_n = {r['lambda_re'] / scene.k_n:.5g})")
         print(f"wrote {out}/branch.npz, collisions.json, diagram.png")
     if not branch.status[-1].reached:
-        from diskfriction.continuation.equilibrium import contact_states
+        from diskfriction.disks.equilibrium import contact_states
 
         raise CommandError(f"bifurcate error: {scene.source}: the sweep ended at F_x = "
                            f"{branch.F_x[-1]:.6g}, short of {F_to:g}: "

@@ -10,6 +10,7 @@ from typing import Optional
 
 from diskfriction.errors import OneLineError
 from diskfriction.files import writable
+from diskfriction.matrices import MATRIX_OPTIONS, Matrix
 from diskfriction.scenes.load import SceneError, default_scene_path, load_scene
 from diskfriction.scenes.scene import NEGATIVE_LOAD, Scene
 
@@ -35,6 +36,20 @@ def add_scene_argument(parser: argparse.ArgumentParser) -> None:
 def scene_from_args(args: argparse.Namespace) -> Scene:
     """The scene named by the FILE argument, or the paper scene; raises SceneError."""
     return load_scene(args.scene if args.scene is not None else default_scene_path())
+
+
+def add_matrix_argument(parser: argparse.ArgumentParser, help: str) -> None:
+    """Give ``parser`` the option --matrix J|M^-1J (diskfriction.matrices.MATRIX_OPTIONS)."""
+    parser.add_argument("--matrix", metavar="J|M^-1J", help=f"{help} (default: the scene's)")
+
+
+def matrix_from_args(command: str, args: argparse.Namespace, scene: Scene) -> Matrix:
+    """The matrix --matrix names, or the scene's; a one-line CommandError for another name."""
+    if args.matrix is None:
+        return Matrix(scene.matrix)
+    if args.matrix not in MATRIX_OPTIONS:
+        raise CommandError(f"{command} error: --matrix: must be J or M^-1J (got {args.matrix!r})")
+    return MATRIX_OPTIONS[args.matrix]
 
 
 def number(command: str, option: str, value, zero: bool = False, integer: bool = False):
@@ -111,9 +126,9 @@ def check_memory(command: str, scene: Scene, processes: int = 1, dense: Optional
     naming what it counted: the larger of a sweep, dense in n = ndof (unless `dense` is False: a
     spectral window, a sweep without spectra, or eps = 0, the default None meaning eps > 0) in
     each of the `processes` that take spectra at once (a sweep's and its scan workers, or a
-    map's cells on this machine), with its stored points (continuation/memory.py), and the dense
+    map's cells on this machine), with its stored points (disks/memory.py), and the dense
     spectrum of M^-1 J at a run's start in each of the `spectra` processes that take one at once."""
-    from diskfriction.continuation.memory import spectrum_bytes, sweep_bytes
+    from diskfriction.disks.memory import spectrum_bytes, sweep_bytes
     from diskfriction.memory import NotEnoughMemory, require_memory
 
     n = scene.ndof

@@ -6,7 +6,7 @@ one dynamics run per window between collisions (as verify does): which windows s
 lowest sliding load F_slide and mu_eff = F_slide / (N F_y) against the Coulomb limit mu.
 Cells run as tasks on dask.distributed (a local cluster of this machine's cores, or
 --scheduler ADDRESS), each written to DIR/cells/ the moment it finishes; a rerun resumes.
-Writes DIR/map.csv (one row per cell), DIR/map.json and DIR/map.png (dynamics/maps.py,
+Writes DIR/map.csv (one row per cell), DIR/map.json and DIR/map.png (studies/maps.py,
 reports/maps.py). Raw units on the command line and in files; the figure uses the paper's.
 """
 from __future__ import annotations
@@ -15,9 +15,8 @@ import argparse
 from pathlib import Path
 
 from diskfriction.cli.bifurcate_cmd import parse_range
-from diskfriction.matrices import MATRIX_OPTIONS
-from diskfriction.cli.common import (CommandError, add_scene_argument, check_memory,
-                                     number, output_dir, scene_from_args)
+from diskfriction.cli.common import (CommandError, add_matrix_argument, add_scene_argument, check_memory,
+                                     number, output_dir, matrix_from_args, scene_from_args)
 from diskfriction.cli.progress import Progress
 from diskfriction.words import count, duration
 from diskfriction.cli.simulate_cmd import SCHEDULER, SINGLE_AMPLITUDE
@@ -26,7 +25,7 @@ VARY = "KEY=LO:HI:COUNT[:log]"
 T_END = 1000.0
 """Default duration of a slide run [raw time], verify's: sigma t_end > ln(1e-4 / 1e-10) = 14
 for every pair growing faster than sigma = 0.014 [1 / time], enough for the growth to reach
-the substrate's breach (dynamics/maps.py); the paper's sliding windows grow at 0.02 .. 0.3."""
+the substrate's breach (studies/maps.py); the paper's sliding windows grow at 0.02 .. 0.3."""
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -41,8 +40,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--fx", metavar="A:B",
                         help="sweep F_x from A to B in every cell (raw units, A < B; default: "
                              "the scene's F_x range)")
-    parser.add_argument("--matrix", metavar="J|M^-1J",
-                        help="matrix whose collisions define the windows (default: the scene's)")
+    add_matrix_argument(parser, "matrix whose collisions define the windows")
     parser.add_argument("--slide", action="store_true",
                         help="run the dynamics once per window: which slide, F_slide, mu_eff")
     parser.add_argument("--t-end", type=float, default=None, metavar="T",
@@ -59,9 +57,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def parse_vary(text: str):
-    """'KEY=LO:HI:COUNT[:log]' -> dynamics.maps.Axis; else a one-line CommandError naming the
+    """'KEY=LO:HI:COUNT[:log]' -> studies.maps.Axis; else a one-line CommandError naming the
     specification (unknown or non-numeric key, malformed numbers, a grid grid_values refuses)."""
-    from diskfriction.dynamics.maps import Axis, grid_values
+    from diskfriction.studies.maps import Axis, grid_values
     from diskfriction.scenes.load import SCHEMA, number_keys
 
     def bad(what: str) -> CommandError:
@@ -91,7 +89,7 @@ def parse_vary(text: str):
 def grid(scene, texts: list[str]):
     """(axes, cells) of the --vary specifications: one or two distinct keys, every cell a
     valid scene (a bad value is one line naming its --vary and key), else a CommandError."""
-    from diskfriction.dynamics.maps import map_cells
+    from diskfriction.studies.maps import map_cells
     from diskfriction.scenes.load import SceneError
 
     axes = [parse_vary(text) for text in texts]
@@ -115,8 +113,6 @@ def run(args: argparse.Namespace) -> int:
     F_from, F_to = parse_range(args.fx, command="map") if args.fx is not None else scene.F_x_range
     if F_from > F_to:
         raise CommandError(f"map error: --fx: a map loads, A < B (got {args.fx!r})")
-    if args.matrix is not None and args.matrix not in MATRIX_OPTIONS:
-        raise CommandError(f"map error: --matrix: must be J or M^-1J (got {args.matrix!r})")
     for option, value in (("t-end", args.t_end), ("amplitude", args.amplitude)):
         if value is not None and not args.slide:
             raise CommandError(f"map error: --{option}: sets the slide runs; add --slide "
@@ -134,18 +130,18 @@ def run(args: argparse.Namespace) -> int:
                                f"has its own workers (got {args.workers!r})")
     out = output_dir("map", args.out, Path("out") / "map" / scene.name)
     args.keeps = ("cells", out / "cells")  # what Ctrl-C leaves to resume from (cli.common)
-    from diskfriction.dynamics.cluster import code_version, local_workers
+    from diskfriction.studies.cluster import code_version, local_workers
 
     at_once = 1 if args.scheduler is not None else min(len(cells), local_workers(args.workers))
     for cell in cells:
         check_memory("map", cell.scene, at_once, spectra=at_once if args.slide else 0)
 
-    from diskfriction.dynamics.maps import MapParams, SlideParams, run_map
+    from diskfriction.studies.maps import MapParams, SlideParams, run_map
     from diskfriction.dynamics.stepper import load_stepper
     from diskfriction.reports.maps import plot_map, save_map
     from diskfriction.symbolic import System
 
-    matrix = MATRIX_OPTIONS[args.matrix] if args.matrix else scene.matrix
+    matrix = matrix_from_args("map", args, scene)
     params = MapParams(F_from, F_to, matrix, SlideParams(t_end, amplitude) if args.slide else None)
     progress = Progress("map")
     try:
@@ -173,10 +169,10 @@ def run(args: argparse.Namespace) -> int:
 
 
 def estimate(cells, params, out: Path, at_once: int, remote: bool) -> str:
-    """The rough wall time of the cells not on disk yet (dynamics.maps.cell_seconds), on the
+    """The rough wall time of the cells not on disk yet (studies.maps.cell_seconds), on the
     local cluster's workers (at_once), or per worker of a remote scheduler."""
-    from diskfriction.dynamics.cluster import code_version
-    from diskfriction.dynamics.maps import cell_path, cell_seconds
+    from diskfriction.studies.cluster import code_version
+    from diskfriction.studies.maps import cell_path, cell_seconds
 
     version = code_version()
     todo = [c for c in cells if not cell_path(out, c.scene, params, version).exists()]

@@ -138,9 +138,9 @@ def _continue(spec, label: str, span, options, out: Path, as_json: bool) -> int:
 
     from diskfriction.continuation.api import ProblemError, check_problem, solve_branch
     from diskfriction.continuation.arclength import ContinuationError
-    from diskfriction.continuation.memory import sweep_bytes
+    from diskfriction.disks.memory import sweep_bytes
     from diskfriction.memory import NotEnoughMemory, require_memory
-    from diskfriction.continuation.records import collision_record
+    from diskfriction.disks.records import collision_record
     from diskfriction.reports.problem import plot_problem_diagram, save_outputs
 
     a, b = span

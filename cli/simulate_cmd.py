@@ -105,7 +105,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def single_run(scene, F_x: float, args, out: Path, progress: Progress) -> int:
-    from diskfriction.continuation.equilibrium import equilibrium_at
+    from diskfriction.disks.equilibrium import equilibrium_at
     from diskfriction.dynamics.simulate import UnstableStep, inaccuracy, plan_run, simulate, summarize
     from diskfriction.dynamics.start import Perturbation, spectrum
     from diskfriction.dynamics.stepper import load_stepper
@@ -154,8 +154,8 @@ def single_run(scene, F_x: float, args, out: Path, progress: Progress) -> int:
 def ensemble_estimate(scene, loads, K: int, args, out: Path) -> str:
     """The realizations not on disk yet and their rough wall time (dynamics.simulate.run_seconds)
     on the local cluster's workers, or per worker of a remote scheduler."""
-    from diskfriction.dynamics.cluster import local_workers
-    from diskfriction.dynamics.ensemble import RunSpec, pending
+    from diskfriction.studies.cluster import local_workers
+    from diskfriction.studies.ensemble import RunSpec, pending
     from diskfriction.dynamics.simulate import run_seconds
 
     todo, _ = pending(scene, loads, K, RunSpec(args.t_end, args.amplitude, args.perturbation or
@@ -169,7 +169,7 @@ def ensemble_estimate(scene, loads, K: int, args, out: Path) -> str:
 
 
 def ensemble_run(scene, loads, args, out: Path, progress: Progress) -> int:
-    from diskfriction.dynamics.ensemble import run_ensemble
+    from diskfriction.studies.ensemble import run_ensemble
     from diskfriction.dynamics.stepper import load_stepper
     from diskfriction.reports.units import PaperUnits
     from diskfriction.symbolic import System

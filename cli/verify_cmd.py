@@ -2,7 +2,7 @@
 
 From the branch (0 .. the scene's F_x range end, the scene's or --matrix's stability matrix),
 run the dynamics at the midpoint of every complex window and every all-real interval between
-collisions (dynamics/verify.py) and tabulate: window, F_x, sigma predicted (M^-1 J), sigma
+collisions (studies/verify.py) and tabulate: window, F_x, sigma predicted (M^-1 J), sigma
 measured, max M, slid ("not resolved" where the run's energy budget did not close). Writes
 DIR/verify.json, DIR/verify.md and DIR/verify.png (the Im lambda diagram with each window
 shaded by whether its run slid, stayed or is not resolved, over the growth rate measured
@@ -13,9 +13,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from diskfriction.matrices import MATRIX_OPTIONS
-from diskfriction.cli.common import (EXIT_FAILED, CommandError, add_scene_argument,
-                                     check_memory, number, output_dir, scene_from_args)
+from diskfriction.cli.common import (EXIT_FAILED, CommandError, add_matrix_argument, add_scene_argument,
+                                     check_memory, number, output_dir, matrix_from_args, scene_from_args)
 from diskfriction.cli.progress import Progress
 from diskfriction.cli.simulate_cmd import SINGLE_AMPLITUDE
 
@@ -25,7 +24,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "verify", help="run the dynamics in every complex window and real interval",
         description=__doc__.split("\n\n", 1)[1])
     add_scene_argument(parser)
-    parser.add_argument("--matrix", metavar="J|M^-1J", help="matrix defining the windows (default: the scene's)")
+    add_matrix_argument(parser, "matrix defining the windows")
     parser.add_argument("--t-end", type=float, default=1000.0, metavar="T", help="duration of each run, raw time")
     parser.add_argument("--amplitude", type=float, default=SINGLE_AMPLITUDE, metavar="A",
                         help="perturbation amplitude, raw (default 1e-10: room for the growth fit)")
@@ -35,11 +34,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     scene = scene_from_args(args)
-    if args.matrix is not None and args.matrix not in MATRIX_OPTIONS:
-        raise CommandError(f"verify error: --matrix: must be J or M^-1J (got {args.matrix!r})")
     number("verify", "t-end", args.t_end)
     number("verify", "amplitude", args.amplitude, zero=True)
-    matrix = MATRIX_OPTIONS[args.matrix] if args.matrix else scene.matrix
+    matrix = matrix_from_args("verify", args, scene)
     out = output_dir("verify", args.out, Path("out") / "verify" / scene.name)
     from diskfriction.continuation.collisions import DetectionParams
     from diskfriction.continuation.scans import planned_workers
@@ -47,9 +44,9 @@ def run(args: argparse.Namespace) -> int:
     check_memory("verify", scene, 1 + planned_workers(scene.ndof, DetectionParams()), spectra=1)
 
     from diskfriction.continuation.arclength import ContinuationError
-    from diskfriction.continuation.disks import EquilibriumError
+    from diskfriction.disks.equilibria import EquilibriumError
     from diskfriction.dynamics.stepper import load_stepper
-    from diskfriction.dynamics.verify import verify_windows
+    from diskfriction.studies.verify import verify_windows
     from diskfriction.files import save_json, save_text
     from diskfriction.reports.verify import plot_verify
     from diskfriction.symbolic import System

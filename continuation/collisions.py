@@ -69,7 +69,7 @@ class DetectionParams:
     (0 < rho < 1, certify.py); max_solves: samples allowed per step; enabled: False skips
     detection (spectra are still computed, tracked and counted, unless spectra is False: then
     no eigenvalue is computed at all, for a caller that needs only the equilibria, e.g.
-    continuation.equilibrium); min_ds: intervals narrower
+    disks.equilibrium); min_ds: intervals narrower
     than this in s are final (the segment coordinate's resolution, 100 ulp of 1);
     locator_iterations: Newton iterations of the fast locator before it falls back to a split;
     partial_from: matrix size n from which a split sample of the fast detection is partial

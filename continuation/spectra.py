@@ -151,7 +151,7 @@ class Eigensystem:
     A r_i = lambda_i r_i) and left vectors (rows of `left`, l_i^H A = lambda_i l_i^H) scaled so
     that l_i^H r_i = 1; `excluded` marks modes kept out of collision detection (exactly
     decoupled modes such as free rolling disks, whose eigenvalues are degenerate by symmetry
-    and can never become complex: see continuation/disks.py; or, when only a spectral window
+    and can never become complex: see disks/equilibria.py; or, when only a spectral window
     is tracked, the eigenvalues beyond its guard band: continuation/spectral_window.py); `guard` marks
     the eigenvalues in a window's guard band, the only ones that may enter or leave the
     tracked set between two samples; `columns`, when only some eigenvalues have vectors (a
@@ -202,7 +202,7 @@ def eigenvalue_slopes(system: Eigensystem, dA: Array) -> Array:
     """d lambda_i = l_i^H dA r_i for a perturbation dA of the matrix (first-order perturbation
     of simple eigenvalues; infinite at a collision, where the pair's discriminant stays smooth).
     dA dense or sparse. An eigenvalue without vectors (Eigensystem.columns -1: a free disk's
-    mode, kept out of collision detection, continuation/disks.py) gets 0: its slope only
+    mode, kept out of collision detection, disks/equilibria.py) gets 0: its slope only
     predicts where it goes for tracking, and a free disk's block changes only through pair
     overlaps of rounding size."""
     slopes = np.einsum("ij,ji->i", system.left, dA @ system.right)

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from diskfriction.continuation.spectra import eigen_status
+from diskfriction.continuation.spectra import Kind, eigen_status
 
 # The paper's numbers (docs/model.md#targets), paper units.
 PAPER_COMPLEX_LOADS = (0.03, 0.04)
@@ -63,7 +63,7 @@ def births_of_pairs_at(branch: dict, F: float) -> list[float]:
         lo = branch["F_x"][rows[k - 1]] if k > 0 else -np.inf
         hi = branch["F_x"][rows[k]]
         located = [p for p, kind in zip(branch["collision_F_x"], branch["collision_kind"])
-                   if kind == "birth" and lo <= p <= hi]
+                   if kind == Kind.BIRTH and lo <= p <= hi]
         births.append(float(located[-1]) if located else float(hi))
     return births
 

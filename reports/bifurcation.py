@@ -10,8 +10,9 @@ from typing import Optional
 
 import numpy as np
 
-from diskfriction.continuation.records import collision_records
-from diskfriction.continuation.sweep import DiskBranch
+from diskfriction.continuation.spectra import Kind
+from diskfriction.disks.records import collision_records
+from diskfriction.disks.sweep import DiskBranch
 from diskfriction.files import save_json, save_npz
 from diskfriction.reports.figures import (legend, line_key, new_figure, re_scale, re_values,
                                           save_figure, set_re_axis)
@@ -53,7 +54,7 @@ def narrow_bubbles(collisions: list[tuple[float, str, float]], pixel: float) -> 
     """Indices i where collision i is a birth and i + 1 the death of the same bubble, closer
     than `pixel` in F_x: drawn as one marker, since neither a line nor shading can show it."""
     return [i for i in range(len(collisions) - 1)
-            if collisions[i][1] == "birth" and collisions[i + 1][1] == "death"
+            if collisions[i][1] == Kind.BIRTH and collisions[i + 1][1] == Kind.DEATH
             and abs(collisions[i + 1][0] - collisions[i][0]) < pixel]
 
 
@@ -73,8 +74,8 @@ def pair_line(F: np.ndarray, im: np.ndarray, collisions: list[tuple[float, str, 
         return min(found, key=lambda p: abs(p - to)) if found else None
 
     for a, b in zip(starts, stops):
-        birth = nearest("birth", F[a - 1], F[a], F[a]) if a > 0 else None
-        death = nearest("death", F[b], F[b + 1], F[b]) if b + 1 < F.size else None
+        birth = nearest(Kind.BIRTH, F[a - 1], F[a], F[a]) if a > 0 else None
+        death = nearest(Kind.DEATH, F[b], F[b + 1], F[b]) if b + 1 < F.size else None
         xs += ([birth] if birth is not None else []) + list(F[a:b + 1]) + \
             ([death] if death is not None else []) + [np.nan]
         ys += ([0.0] if birth is not None else []) + list(im[a:b + 1]) + \
@@ -131,7 +132,7 @@ def draw_spectrum(top, bottom, F_x: np.ndarray, lam: np.ndarray, leg: np.ndarray
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    from diskfriction.continuation.windows import complex_spans, leg_windows
+    from diskfriction.disks.windows import complex_spans, leg_windows
     from diskfriction.reports.analysis import eigen_status_rows
 
     upper = eigen_status_rows(lam) == 1
@@ -169,7 +170,7 @@ def draw_spectrum(top, bottom, F_x: np.ndarray, lam: np.ndarray, leg: np.ndarray
     in_bubble = {i for b in bubbles for i in (b, b + 1)}
     for i, (p, kind, value) in enumerate(collisions):
         if i not in in_bubble:
-            marker, color = BIRTH if kind == "birth" else DEATH
+            marker, color = BIRTH if kind == Kind.BIRTH else DEATH
             top.plot(p, 0.0, marker, color=color, ms=5)
             if bottom is not None:
                 bottom.plot(p, re_values(value, scale), marker, color=color, ms=5)
@@ -180,11 +181,11 @@ def draw_spectrum(top, bottom, F_x: np.ndarray, lam: np.ndarray, leg: np.ndarray
         top.plot(0.5 * (a + b), height, BUBBLE[0], color=BUBBLE[1], ms=5)
         if bottom is not None:
             bottom.plot(0.5 * (a + b), re_values(value, scale), BUBBLE[0], color=BUBBLE[1], ms=5)
-    counts = {kind: sum(c[1] == kind for c in collisions) for kind in ("birth", "death")}
+    counts = {kind: sum(c[1] == kind for c in collisions) for kind in Kind}
     handles += [Line2D([], [], ls="", marker=BIRTH[0], color=BIRTH[1],
-                       label=f"birth of a pair ({counts['birth']})"),
+                       label=f"birth of a pair ({counts[Kind.BIRTH]})"),
                 Line2D([], [], ls="", marker=DEATH[0], color=DEATH[1],
-                       label=f"death of a pair ({counts['death']})")]
+                       label=f"death of a pair ({counts[Kind.DEATH]})")]
     if bubbles:
         handles.append(Line2D([], [], ls="", marker=BUBBLE[0], color=BUBBLE[1],
                               label=f"bubble narrower than a pixel ({len(bubbles)})"))

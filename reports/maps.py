@@ -1,7 +1,7 @@
-"""Outputs of a parameter map (dynamics/maps.py): the tidy table, its parameters, the figure.
+"""Outputs of a parameter map (studies/maps.py): the tidy table, its parameters, the figure.
 
     map.csv   one row per cell, in grid order (the first key slowest): the varied values, then
-              dynamics.maps.COLUMNS. Raw units (F_x [force], sigma_max [1 / time], wall_time
+              studies.maps.COLUMNS. Raw units (F_x [force], sigma_max [1 / time], wall_time
               [s]); an empty field is a value not computed (no slide runs, no branch, nothing
               slid). Floats are written with repr, so that they read back to the same bits:
               pandas.read_csv("map.csv") loads it. Every column but wall_time is the same, bit
@@ -25,8 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
-from diskfriction.dynamics.maps import COLUMNS, Axis, Cell, MapParams
-from diskfriction.continuation.windows import Window, complex_spans
+from diskfriction.studies.maps import COLUMNS, Axis, Cell, MapParams
+from diskfriction.disks.windows import Window, complex_spans
 from diskfriction.files import save_json, save_text
 from diskfriction.reports.figures import OUTCOME_STYLE, new_figure, save_figure
 from diskfriction.reports.units import F_X_LABEL, PaperUnits
@@ -36,7 +36,7 @@ STATUS_MARK = {"failed": "F", "ended": "E"}
 
 
 def table_rows(cells: list[Cell], records: list[dict]) -> list[dict]:
-    """One row per cell: its varied values, then its summary (dynamics.maps.COLUMNS)."""
+    """One row per cell: its varied values, then its summary (studies.maps.COLUMNS)."""
     return [dict(cell.values) | {c: record["summary"][c] for c in COLUMNS}
             for cell, record in zip(cells, records)]
 
@@ -88,7 +88,7 @@ def headline(reason: str, width: int = 150) -> str:
 def draw_bands(ax, y: float, record: dict, params: MapParams) -> None:
     """One cell's row at height y: its branch's extent (grey line, x where it ended), complex
     windows (orange), windows whose run slid (red, thinner; adjacent ones merged as complex
-    windows are, continuation.windows.complex_spans) and those whose run is not resolved
+    windows are, disks.windows.complex_spans) and those whose run is not resolved
     (slid None: grey, hatched), F_slide (black triangle); a failed or ended cell says why."""
     s = record["summary"]
     if s["status"] == "failed":

@@ -16,7 +16,7 @@ import numpy as np
 from diskfriction.continuation.api import BifurcationProblem, BranchResult
 from diskfriction.continuation.bifurcations import SpecialPoint
 from diskfriction.files import save_json, save_npz
-from diskfriction.continuation.records import RECORD_KEYS, collision_record
+from diskfriction.disks.records import RECORD_KEYS, collision_record
 from diskfriction.reports.bifurcation import diagram_axes, draw_spectrum, save_diagram
 from diskfriction.reports.figures import relabel
 

@@ -1,5 +1,5 @@
 """verify.png: which windows of the bifurcation diagram slide, and the growth rates measured
-against the spectrum's (`diskfriction verify`, rows of dynamics.verify.window_run).
+against the spectrum's (`diskfriction verify`, rows of studies.verify.window_run).
 
 Paper units (reports/units.py): eigenvalues of the windows' matrix in its paper unit, growth
 rates in 1/tau, F_x as the paper quotes it. Plots only: no physics.
@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from diskfriction.continuation.sweep import DiskBranch
+from diskfriction.disks.sweep import DiskBranch
 from diskfriction.reports.bifurcation import draw_spectrum
 from diskfriction.reports.figures import (OUTCOME_STYLE, legend, new_figure, outcome_patches,
                                           save_figure)

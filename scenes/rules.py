@@ -16,6 +16,8 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, Callable
 
+from diskfriction.matrices import Matrix
+
 NORMAL_LAWS = {"hertz": Fraction(3, 2), "hooke": Fraction(1)}
 """Normal contact laws F_n = k_n delta^p [force] by name, each with its exponent p (k_n in
 force / length^p): the one place a normal law is added. symbolic/laws.py derives from it, with
@@ -25,7 +27,7 @@ normal_energy and coulomb_limit; Scene the rest overlap delta_w0 = (F_y / k_n)^(
 TANGENTIAL_LAWS = ("mindlin-smooth", "mindlin-linear", "none")
 FRICTION_KINDS = ("disk-disk", "substrate")
 CONVENTIONS = ("model", "lammps")
-MATRICES = ("J", "M^-1 J")
+MATRICES = tuple(Matrix)  # diskfriction.matrices: the one definition of the names
 NEGATIVE_LOAD = ("a negative load is the mirror image of a positive one (x -> -x, theta -> "
                  "-theta, disk i -> disk 2 - i mod N), so use |F_x| (docs/physics.md)")
 """Why F_x < 0 is refused, by the scene loader and by every command."""

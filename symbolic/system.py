@@ -12,6 +12,7 @@ from typing import Optional
 
 import numpy as np
 
+from diskfriction.matrices import Matrix
 from diskfriction.scenes import Scene
 from diskfriction.symbolic.generated import Progress
 from diskfriction.symbolic.kernels import load_kernels
@@ -86,9 +87,10 @@ class System:
         return M
 
     def stability_matrix(self, J: np.ndarray, matrix: str | None = None) -> np.ndarray:
-        """"J" (the paper's eq. 8) or "M^-1 J" (small oscillations M q'' = -J q)."""
-        matrix = matrix or self.scene.matrix
-        return J if matrix == "J" else J / self.mass_diagonal()[:, None]
+        """"J" (the paper's eq. 8) or "M^-1 J" (small oscillations M q'' = -J q); any other
+        name is a ValueError (diskfriction.matrices.Matrix)."""
+        matrix = Matrix(matrix or self.scene.matrix)
+        return J if matrix is Matrix.J else J / self.mass_diagonal()[:, None]
 
     def overlaps(self, q: np.ndarray) -> np.ndarray:
         """delta of every contact (pairs, then substrate) [length]; active iff delta > 0."""

@@ -7,11 +7,11 @@ import pytest
 
 from diskfriction.continuation import ContinuationParams, DetectionParams, FunctionProblem, continuation
 from diskfriction.continuation.branch import Stop, StopCode
-from diskfriction.continuation.disks import DiskEquilibria, relax
+from diskfriction.disks.equilibria import DiskEquilibria, relax
 from diskfriction.continuation.locate import locate_double_eigenvalue
 from diskfriction.continuation.newton import bordered_newton, tangent
 from diskfriction.continuation.spectra import eigenvalue_slopes
-from diskfriction.continuation.sweep import SweepParams, sweep
+from diskfriction.disks.sweep import SweepParams, sweep
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
 

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from diskfriction.continuation.branch import Stop, StopCode
-from diskfriction.continuation.disks import DiskEquilibria, relax
-from diskfriction.continuation.sweep import SweepParams, sweep
+from diskfriction.disks.equilibria import DiskEquilibria, relax
+from diskfriction.disks.sweep import SweepParams, sweep
 from diskfriction.matrices import Matrix
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System

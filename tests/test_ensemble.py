@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from diskfriction.dynamics.ensemble import (EnsembleMismatch, RunSpec, pending, aggregate, breach_speed,
+from diskfriction.studies.ensemble import (EnsembleMismatch, RunSpec, pending, aggregate, breach_speed,
                                            check_directory, code_version, front_slope,
                                            parameters, run_ensemble, sliding_speed)
 from diskfriction.scenes import Scene
@@ -172,7 +172,7 @@ def test_an_interrupt_ends_with_one_line_that_says_whether_a_rerun_resumes(capsy
 def test_windows_are_the_intervals_between_collisions_with_their_pair_count():
     from types import SimpleNamespace
 
-    from diskfriction.dynamics.verify import windows
+    from diskfriction.studies.verify import windows
 
     c = lambda p, kind: SimpleNamespace(p=p, kind=kind)
     branch = SimpleNamespace(F_x=np.array([0.0, 0.5, 1.0]), n_complex=np.array([1, 2, 0]),

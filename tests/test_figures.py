@@ -231,11 +231,11 @@ def test_wall_time_log_axes_have_tick_labels_that_do_not_overlap(axes, lo, hi):
 def test_the_diagram_shades_the_windows_of_the_requested_leg_from_its_start(axes):
     """A sweep 0.5 -> 0.4 after loading to 0.5 (leg 0), its one pair dying at 0.48, inside the
     first unloading step: the shaded span is 0.48 .. 0.5, the windows verify runs in
-    (continuation.windows.leg_windows). The diagram counted the pairs from the first unloading
+    (disks.windows.leg_windows). The diagram counted the pairs from the first unloading
     point, after the death, and shaded nothing."""
     from matplotlib.patches import Polygon, Rectangle
 
-    from diskfriction.continuation.windows import leg_windows
+    from diskfriction.disks.windows import leg_windows
     from diskfriction.reports.bifurcation import draw_spectrum
 
     F = np.array([0.0, 0.25, 0.5, 0.45, 0.4])

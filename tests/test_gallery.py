@@ -112,7 +112,7 @@ def test_fitzhugh_nagumo_folds_hopf_points_and_collisions_match_the_closed_forms
 def test_disk_chain_through_the_public_api_is_bifurcate_in_fewer_than_30_lines():
     """The example's branch and its 22 collisions are bit-identical to the sweep that
     `diskfriction bifurcate` runs on the paper's scene."""
-    from diskfriction.continuation.sweep import sweep
+    from diskfriction.disks.sweep import sweep
 
     assert len((EXAMPLES / "disk_chain.py").read_text().splitlines()) < 30
     spec = load_example("disk_chain").problem

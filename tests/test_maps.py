@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 from commandline import error_line, run_cli
 
-from diskfriction.dynamics.maps import (COLUMNS, Axis, MapParams, SlideParams, grid_values,
+from diskfriction.studies.maps import (COLUMNS, Axis, MapParams, SlideParams, grid_values,
                                         map_cell, map_cells, run_map, sliding_load)
 from diskfriction.reports.maps import csv_text, save_map, table_rows
 from diskfriction.scenes import Scene
@@ -201,7 +201,7 @@ def test_the_estimate_printed_first_grows_with_what_a_cell_does(tmp_path):
     """Issue 23: a map of 100 000 cells started silently. cell_seconds grows with N, with slide
     runs and their length; the CLI's estimate counts only the cells not yet on disk."""
     from diskfriction.cli.map_cmd import estimate
-    from diskfriction.dynamics.maps import cell_seconds
+    from diskfriction.studies.maps import cell_seconds
 
     sweep, slide = MapParams(0.0, 0.12, "J"), MapParams(0.0, 0.12, "J", SlideParams())
     longer = MapParams(0.0, 0.12, "J", SlideParams(t_end=1e4))

@@ -14,7 +14,7 @@ from diskfriction.continuation.linalg import work
 from diskfriction.continuation.problem import FunctionProblem, Problem
 from diskfriction.continuation.scans import (InlineScans, ScanJob, ScanOutcome, WorkerError, WorkerScans,
                                              default_workers, has_snapshots)
-from diskfriction.continuation.sweep import SweepParams, sweep
+from diskfriction.disks.sweep import SweepParams, sweep
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
 from invariants import unaccounted_pair_changes

@@ -6,7 +6,7 @@ import pytest
 
 from diskfriction.continuation.samples import Sample, continuation_perm
 from diskfriction.continuation.spectral_window import Window, window_columns
-from diskfriction.continuation.sweep import SweepParams, sweep
+from diskfriction.disks.sweep import SweepParams, sweep
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
 

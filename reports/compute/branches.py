@@ -16,11 +16,11 @@ def _system(scene: Scene):
 
 def _sweep(scene: Scene, F_from: float, F_to: float, matrix: str, ds_max=None, detection=True,
            tol_p=None):
-    """continuation.sweep with the report's failures turned into ComputationFailed."""
+    """disks.sweep with the report's failures turned into ComputationFailed."""
     from diskfriction.continuation.arclength import ContinuationError
     from diskfriction.continuation.collisions import DetectionParams
-    from diskfriction.continuation.disks import EquilibriumError
-    from diskfriction.continuation.sweep import SweepParams, sweep
+    from diskfriction.disks.equilibria import EquilibriumError
+    from diskfriction.disks.sweep import SweepParams, sweep
 
     det = DetectionParams(enabled=detection, **({"tol_p": tol_p} if tol_p else {}))
     try:
@@ -30,14 +30,14 @@ def _sweep(scene: Scene, F_from: float, F_to: float, matrix: str, ds_max=None, d
 
 
 def sweep_span(scene: Scene) -> float:
-    """The span continuation.sweep scales its steps with: max(|F_to - F_from|, F_from)."""
+    """The span disks.sweep scales its steps with: max(|F_to - F_from|, F_from)."""
     a, b = scene.F_x_range
     return max(abs(b - a), a)
 
 
 @computation("branch")
 def branch(scene: Scene, matrix: str, ds_divisions: int, tol_p: float | None = None) -> dict:
-    """The branch over the scene's F_x range with every collision located (continuation.sweep,
+    """The branch over the scene's F_x range with every collision located (disks.sweep,
     ds_max = span / ds_divisions). Rows: F_x, tracked eigenvalues of `matrix` [raw], n_complex,
     leg; collisions: F_x, kind, double eigenvalue [raw], resolved."""
     import time
@@ -59,7 +59,7 @@ def spectra_at(scene: Scene, matrix: str, loads: list[float]) -> dict:
     """Eigenvalues of `matrix` [raw] at exactly each load (one sweep from rest per load), the
     number of complex pairs, the state (q, xi). A load the branch from rest does not reach has
     nan rows and its message in `failed`."""
-    from diskfriction.continuation.equilibrium import NoEquilibrium, equilibrium_at
+    from diskfriction.disks.equilibrium import NoEquilibrium, equilibrium_at
     from diskfriction.continuation.spectra import count_complex_pairs
 
     system = _system(scene)
@@ -101,7 +101,7 @@ def shear_mode(scene: Scene, F_x: float) -> dict:
     the shear wave: wavelength L / n [length], k = 2 pi n / L, omega = sqrt(eigenvalue of
     M^-1 J whose eigenvector overlaps it most) [1 / time], V2 = omega / k [length / time].
     """
-    from diskfriction.continuation.equilibrium import equilibrium_at
+    from diskfriction.disks.equilibrium import equilibrium_at
 
     system = _system(scene)
     N = scene.N

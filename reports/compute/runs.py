@@ -34,7 +34,7 @@ def trajectory(scene: Scene, F_x: float, t_end: float, kick: float, seed: int, d
     `kick` [length / time] (dynamics.simulate, default dt and recording), to t_end [time].
     Keeps t, M [length^2], C_x, C_y [length] (thinned to MAX_FRAMES), x, y of `disk` (1-based)
     at every frame until 10 % past its first breach or onset of sliding, and the summary."""
-    from diskfriction.continuation.equilibrium import equilibrium_at
+    from diskfriction.disks.equilibrium import equilibrium_at
     from diskfriction.dynamics import Perturbation, simulate, summarize
 
     if not 1 <= disk <= scene.N:
@@ -56,11 +56,11 @@ def trajectory(scene: Scene, F_x: float, t_end: float, kick: float, seed: int, d
 @computation("ensemble", DYNAMICS_DEPS)
 def ensemble(scene: Scene, loads: list[float], realizations: int, t_end: float, kick: float,
              seed: int, workdir: str) -> dict:
-    """dynamics.ensemble.run_ensemble (seeded random-velocity kicks, seeds seed..seed+R-1):
+    """studies.ensemble.run_ensemble (seeded random-velocity kicks, seeds seed..seed+R-1):
     V1 per load, V2 pooled, V_cm per load and its linear fit [raw units], and per load the
     first-breach and sliding-onset times and positions of every disk in every realization
     (arrays realizations x N, nan where it never happened)."""
-    from diskfriction.dynamics.ensemble import run_ensemble
+    from diskfriction.studies.ensemble import run_ensemble
 
     ens = run_ensemble(scene, loads, realizations, t_end, out=workdir, seed=seed, amplitude=kick)
     out = ens.as_dict()

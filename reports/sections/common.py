@@ -5,11 +5,12 @@ import dataclasses
 
 import numpy as np
 
+from diskfriction.matrices import Matrix
 from diskfriction.reports.registry import Need
 from diskfriction.reports.settings import Settings
 from diskfriction.scenes import Scene
 
-MATRICES = ("J", "M^-1 J")
+MATRICES = tuple(Matrix)  # both, in the paper's order: J first
 
 
 def branch_need(scene: Scene, settings: Settings, matrix: str, label: str | None = None) -> Need:

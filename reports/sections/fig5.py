@@ -65,7 +65,7 @@ def render(ctx):
                        "the mean over realizations)")]
     rows.append(["V2 (all loads)", estimate(ens["V2"], u.velocity), f"{PAPER_V2:g}"])
     text.append(table(["F_x", "ours [2R/tau]", "paper [2R/tau]"], rows))
-    text.append(f"Ensemble: dynamics.ensemble.run_ensemble, {s.realizations} seeded random "
+    text.append(f"Ensemble: studies.ensemble.run_ensemble, {s.realizations} seeded random "
                 f"velocity kicks of {s.kick:g} per load, runs to {s.ensemble_t_end:g} raw time; "
                 f"V1 and V2 are per-realization slopes (module docstring), averaged "
                 f"(standard error of the mean).\n")

@@ -19,11 +19,10 @@ import numpy as np
 from diskfriction.reports import analysis as A
 from diskfriction.reports.registry import Need, Section
 from diskfriction.reports.figures import new_figure, outcome_word
-from diskfriction.reports.sections.common import ensemble_need, failures, fmt, run_need, table
+from diskfriction.reports.sections.common import MATRICES, ensemble_need, failures, fmt, run_need, table
 from diskfriction.reports.sections.runs import NEEDS_ENSEMBLE
 from diskfriction.scenes import Scene
 
-MATRICES = ("J", "M^-1 J")
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,7 @@ from diskfriction.reports.sections.common import ensemble_need, failures, fmt, r
 from diskfriction.reports.units import TIME_LABEL
 
 NEEDS_SIMULATE = lambda: missing("diskfriction.dynamics.simulate")  # noqa: E731
-NEEDS_ENSEMBLE = lambda: missing("diskfriction.dynamics.ensemble")  # noqa: E731
+NEEDS_ENSEMBLE = lambda: missing("diskfriction.studies.ensemble")  # noqa: E731
 
 
 def protocol(ctx) -> str:

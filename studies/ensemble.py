@@ -32,7 +32,7 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from diskfriction.dynamics.cluster import as_finished, code_version, dask_client, task_key
+from diskfriction.studies.cluster import as_finished, code_version, dask_client, task_key
 from diskfriction.errors import OneLineError
 from diskfriction.files import save_json
 from diskfriction.scenes import Scene
@@ -252,8 +252,8 @@ def done_count(summaries: dict) -> int:
 def _run_tasks(scene, todo, summaries, scheduler, tick) -> None:
     """Connect (a scheduler that cannot be reached fails before any sweep), get the equilibrium
     at every load of `todo`, submit the missing realizations, and write each one the moment it
-    finishes (dynamics/cluster.py)."""
-    from diskfriction.continuation.equilibrium import equilibrium_at
+    finishes (studies/cluster.py)."""
+    from diskfriction.disks.equilibrium import equilibrium_at
     from diskfriction.symbolic import System
 
     with dask_client(scheduler) as client:

@@ -23,7 +23,7 @@ import numpy as np
 
 from diskfriction.continuation.api import Options, solve_branch
 from diskfriction.continuation.collisions import Collision
-from diskfriction.continuation.disks import DiskEquilibria, relax
+from diskfriction.disks.equilibria import DiskEquilibria, relax
 from diskfriction.continuation.branch import Branch, Stop
 from diskfriction.continuation.spectral_window import Window, window_columns
 from diskfriction.continuation.spectra import count_complex_pairs, match_eigenvalues
@@ -67,7 +67,7 @@ class DiskBranch:
     F_x (m,); q (m, n); xi (m, 2N) committed history; eigenvalues (m, n) tracked spectrum of
     `matrix`; n_complex (m,); residual (m,) max|F|; leg (m,) 0 = preparation from rest,
     1 = the requested sweep; free (m,) free rolling modes (disks touching only the substrate,
-    continuation/disks.py), excluded from the collisions; collisions of the requested leg, in
+    disks/equilibria.py), excluded from the collisions; collisions of the requested leg, in
     branch order; status per leg run (a leg that did not reach its end is the last run);
     events: contact events (opening, closing, Coulomb cap, a free disk joining) the steps were
     cut at; window: (lo, hi) of Re lambda tracked, or None (then every eigenvalue); with a

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from diskfriction.continuation.collisions import Collision
-from diskfriction.continuation.sweep import DiskBranch
+from diskfriction.disks.sweep import DiskBranch
 
 
 def collision_record(c: Collision, parameter: str, matrix: str, window=None) -> dict:

@@ -7,12 +7,12 @@ combination is a cell: the base scene with those values, checked as a scene file
 (scenes.load.with_values), before anything runs (map_cells). Each cell (map_cell, in a dask
 worker, raw units):
   * sweeps F_x from F_from to F_to with every collision of `matrix` located, exactly as
-    `bifurcate` does (continuation.sweep, default SweepParams): the collisions, the windows
-    between them (dynamics.verify.windows), the F_x where the first complex window starts,
+    `bifurcate` does (disks.sweep, default SweepParams): the collisions, the windows
+    between them (studies.verify.windows), the F_x where the first complex window starts,
     and sigma_max = max |Im sqrt(lambda)| over the complex pairs of M^-1 J at the branch's
     points (the growth rate of the fastest oscillatory instability, [1 / time]);
   * with SlideParams, runs the dynamics once per window, as `verify` does
-    (dynamics.verify.window_run: at the window's midpoint, along its largest complex pair of
+    (studies.verify.window_run: at the window's midpoint, along its largest complex pair of
     M^-1 J, to t_end). F_slide is the lowest load whose run slid; F_slide_lo the highest load
     below it whose run did not: the lowest sliding load lies in (F_slide_lo, F_slide]. Its
     effective friction coefficient mu_eff = F_slide / (N F_y) is to be compared with the
@@ -23,14 +23,14 @@ worker, raw units):
     a = 1e-10) cannot be seen to slide, so F_slide is an upper bound that can fall as t_end
     grows (docs/maps.md measures by how much).
   * status: "ok" (the branch reached F_to), "ended" (it stopped before F_to; `reason` says
-    where and why, as continuation.equilibrium does), or "failed" (no branch at all, e.g. no
+    where and why, as disks.equilibrium does), or "failed" (no branch at all, e.g. no
     sticking equilibrium at small mu; `reason` is the continuation's own line).
 Results do not depend on which worker ran a cell or when: a cell is a pure function of its
 scene and the map's parameters, and a map's table is assembled in grid order.
 
 Layout of a map directory: cells/<key>.json, one record per finished cell (map_cell), written
 atomically the moment it arrives. The key hashes the cell's scene, the map's parameters and
-the code version (dynamics/cluster.py), not the grid: a rerun skips the cells on disk,
+the code version (studies/cluster.py), not the grid: a rerun skips the cells on disk,
 another grid reuses the cells it shares, and an interrupt loses nothing finished. The table
 and figures beside them (map.csv, map.json, map.png) are written by reports/maps.py.
 """
@@ -46,7 +46,7 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from diskfriction.dynamics.cluster import as_finished, code_version, dask_client, task_key
+from diskfriction.studies.cluster import as_finished, code_version, dask_client, task_key
 from diskfriction.files import save_json
 from diskfriction.scenes import Scene
 from diskfriction.scenes.load import number_keys, with_values
@@ -105,11 +105,11 @@ the same 24 collisions at every N, so 25 windows."""
 
 
 def cell_seconds(scene: Scene, params: MapParams) -> float:
-    """Rough wall time of one cell in its worker [s]: the sweep (continuation.cost) and, with
+    """Rough wall time of one cell in its worker [s]: the sweep (disks.cost) and, with
     slide runs, per window the sweep to its midpoint and the run's steps (dynamics.simulate:
     SECONDS_PER_DISK_STEP, dt = DT_FRACTION 2 / omega_max). Within a factor of 2 of the cells
     of N = 10 .. 40 timed for docs/maps.md; for the estimate `map` prints before it starts."""
-    from diskfriction.continuation.cost import sweep_seconds
+    from diskfriction.disks.cost import sweep_seconds
     from diskfriction.dynamics.simulate import run_seconds
 
     dense = scene.eps > 0
@@ -177,10 +177,10 @@ def growth_rate_max(system, branch, rows: np.ndarray) -> float:
 
 
 def slide_runs(system, todo, slide: SlideParams) -> list[dict]:
-    """One run per window (dynamics.verify.window_run); a window whose midpoint the branch
+    """One run per window (studies.verify.window_run); a window whose midpoint the branch
     from rest does not reach gets slid = None and the reason."""
-    from diskfriction.continuation.equilibrium import NoEquilibrium
-    from diskfriction.dynamics.verify import window_run
+    from diskfriction.disks.equilibrium import NoEquilibrium
+    from diskfriction.studies.verify import window_run
 
     runs = []
     for k, window in enumerate(todo):
@@ -207,9 +207,9 @@ def sliding_load(runs: list[dict]) -> tuple[Optional[float], Optional[float]]:
 def branch_summary(system, branch) -> dict:
     """status, F_end, reason, collisions, windows, complex_windows, F_complex and sigma_max of
     a swept branch (module docstring)."""
-    from diskfriction.continuation.equilibrium import contact_states
-    from diskfriction.continuation.windows import complex_spans
-    from diskfriction.dynamics.verify import windows
+    from diskfriction.disks.equilibrium import contact_states
+    from diskfriction.disks.windows import complex_spans
+    from diskfriction.studies.verify import windows
 
     todo = windows(branch)
     spans = complex_spans(todo)
@@ -228,12 +228,12 @@ def branch_summary(system, branch) -> dict:
 def map_cell(scene: Scene, params: MapParams) -> dict:
     """The record of one cell (raw units): its scene (physics fields), summary (COLUMNS), the
     located collisions (as bifurcate's collisions.json), windows [start, stop, pairs] and,
-    with slide runs, one row per window (dynamics.verify.window_run)."""
+    with slide runs, one row per window (studies.verify.window_run)."""
     from diskfriction.continuation.arclength import ContinuationError
-    from diskfriction.continuation.disks import EquilibriumError
-    from diskfriction.continuation.records import collision_records
-    from diskfriction.continuation.sweep import SweepParams, sweep
-    from diskfriction.dynamics.verify import windows
+    from diskfriction.disks.equilibria import EquilibriumError
+    from diskfriction.disks.records import collision_records
+    from diskfriction.disks.sweep import SweepParams, sweep
+    from diskfriction.studies.verify import windows
     from diskfriction.symbolic import System
 
     start = time.perf_counter()
@@ -278,7 +278,7 @@ def run_map(cells: list[Cell], params: MapParams, out: Path, scheduler: Optional
             progress: Optional[Callable[[int, int], None]] = None) -> list[dict]:
     """The record of every cell, in the order of `cells`: read from OUT/cells where it is,
     else computed on dask (the scheduler at `scheduler`, or a local cluster of `workers`
-    processes, dynamics/cluster.py) and written the moment it arrives. progress(done, total)
+    processes, studies/cluster.py) and written the moment it arrives. progress(done, total)
     before the first cell and after every finished one."""
     version = code_version()
     paths = {cell.index: cell_path(out, cell.scene, params, version) for cell in cells}

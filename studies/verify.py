@@ -10,9 +10,9 @@ from __future__ import annotations
 from typing import Callable, Optional
 
 
-from diskfriction.continuation.equilibrium import check_reached, equilibrium_at
-from diskfriction.continuation.sweep import DiskBranch, sweep
-from diskfriction.continuation.windows import Window, leg_windows
+from diskfriction.disks.equilibrium import check_reached, equilibrium_at
+from diskfriction.disks.sweep import DiskBranch, sweep
+from diskfriction.disks.windows import Window, leg_windows
 from diskfriction.dynamics.simulate import inaccuracy, simulate, summarize
 from diskfriction.dynamics.start import Perturbation, spectrum
 from diskfriction.scenes import Scene
@@ -21,7 +21,7 @@ from diskfriction.words import count
 
 
 def windows(branch: DiskBranch) -> list[Window]:
-    """The windows of a swept branch's requested leg (continuation.windows.leg_windows)."""
+    """The windows of a swept branch's requested leg (disks.windows.leg_windows)."""
     return leg_windows(branch.F_x, branch.n_complex, branch.leg, [(c.p, c.kind) for c in branch.collisions])
 
 

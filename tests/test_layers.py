@@ -1,0 +1,68 @@
+"""The layers of the tree (docs/architecture.md): a module imports only from its own folder and
+the layers below it, never from a layer above or a sibling. Read from the sources with ast, so
+an import inside a function counts too."""
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+LAYERS = [
+    {"diskfriction"},            # errors, files, memory, words: what every layer may use
+    {"scenes"},
+    {"symbolic"},
+    {"continuation"},            # the generic core: knows nothing of disks
+    {"disks", "dynamics"},       # the disk problem; the Newtonian dynamics (siblings)
+    {"studies", "peers"},        # verify, ensembles, maps; the LAMMPS cross-check
+    {"reports"},
+    {"cli"},
+]
+RANK = {folder: k for k, layer in enumerate(LAYERS) for folder in layer}
+ENTRY_POINTS = {"diskfriction/__main__.py"}  # `python -m diskfriction` starts the command line
+
+
+def imported_folders(path: Path) -> set[str]:
+    """The diskfriction.<folder> names a module imports (absolute imports; a relative import
+    stays in its own folder)."""
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
+            [node.module or ""] if isinstance(node, ast.ImportFrom) and not node.level else []
+        for name in names:
+            parts = name.split(".")
+            if parts[0] == "diskfriction":
+                found.add(parts[1] if len(parts) > 1 and parts[1] in RANK else "diskfriction")
+    return found
+
+
+def violations() -> list[str]:
+    """'module -> folder' for every import of a layer above the module's or of a sibling."""
+    found = []
+    for folder, rank in RANK.items():
+        for path in sorted((ROOT / folder).rglob("*.py")):
+            name = path.relative_to(ROOT).as_posix()
+            if name in ENTRY_POINTS:
+                continue
+            for other in imported_folders(path) - {folder}:
+                if RANK[other] >= rank:
+                    found.append(f"{name} -> diskfriction.{other}")
+    return found
+
+
+def test_no_module_imports_a_layer_above_it_or_a_sibling():
+    assert violations() == []
+
+
+def test_every_installed_folder_has_a_layer():
+    """A new top-level package must be placed in LAYERS (and in docs/architecture.md)."""
+    folders = {p.parent.name for p in ROOT.glob("*/__init__.py")} - {"tests", "benchmarks", "examples"}
+    assert folders <= set(RANK), folders - set(RANK)
+
+
+def test_the_rule_catches_an_upward_import(tmp_path, monkeypatch):
+    """The check reads what it should: an import of the studies from the core is caught."""
+    core = tmp_path / "continuation"
+    core.mkdir()
+    (core / "x.py").write_text("def f():\n    from diskfriction.studies.maps import grid_values\n")
+    monkeypatch.setattr(__import__(__name__), "ROOT", tmp_path)
+    assert violations() == ["continuation/x.py -> diskfriction.studies"]
