@@ -102,9 +102,9 @@ class Options:
     ds_max: Optional[float] = None
     ds: Optional[float] = None
     ds_min: Optional[float] = None
-    newton_tol: float = 1e-10
-    max_newton: int = 8
-    max_steps: int = 10_000
+    newton_tol: float = ContinuationParams.newton_tol  # the core's defaults, not copies of them
+    max_newton: int = ContinuationParams.max_newton
+    max_steps: int = ContinuationParams.max_steps
     detection: DetectionParams = DetectionParams()
     workers: Optional[int] = None
     special_points: tuple[str, ...] = ("fold", "hopf")
