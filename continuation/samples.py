@@ -17,7 +17,6 @@ eigenvalue beyond the guard bands may leave it and another join it (window_match
 """
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass, field, replace
 from typing import Optional
 
@@ -32,7 +31,6 @@ from .spectra import (Eigensystem, eigen_status, eigenvalue_slopes, imag_thresho
                       status_at)
 
 Array = np.ndarray
-_uid = itertools.count()
 
 
 @dataclass(frozen=True)
@@ -44,7 +42,12 @@ class Sample:
     eigenvalue's distance to the nearest other one (a lower bound where not all are known).
     known: None for a full sample; for a partial one (partial_sample_at) the mask of labels
     computed, the others holding nan (status: the left neighbour's). disc: a spectral window's
-    (sigma, radius), Eigensystem.disc (None: every eigenvalue computed, or a partial sample)."""
+    (sigma, radius), Eigensystem.disc (None: every eigenvalue computed, or a partial sample).
+    uid: the token the scan's caches key on (verdicts, located collisions): a new one whenever
+    the point, its labels or its slopes change (at, relabel, with_slopes; any replace() that
+    changes the data must pass uid=object()), the same one when only the vectors are released
+    (without_vectors). A token of its own, not a number from a shared counter: no state is
+    shared between samples, and none collides between a scan worker and this process."""
 
     s: float
     x: Array
@@ -59,7 +62,7 @@ class Sample:
     gaps: Optional[Array] = None
     known: Optional[Array] = None
     disc: Optional[tuple[float, float]] = None
-    uid: int = field(default_factory=lambda: next(_uid), init=False, repr=False, compare=False)
+    uid: object = field(default_factory=object, repr=False, compare=False)
 
     @property
     def p(self) -> float:
@@ -67,19 +70,21 @@ class Sample:
 
     def at(self, s: float) -> "Sample":
         """The same point at another segment coordinate (a new step starts at its old end)."""
-        return replace(self, s=s)
+        return replace(self, s=s, uid=object())
+
+    def with_slopes(self, dlam: Array) -> "Sample":
+        """The same point with other eigenvalue slopes d lambda / d tau (after an event)."""
+        return replace(self, dlam=dlam, uid=object())
 
     def without_vectors(self) -> "Sample":
         """The same sample without its eigenvectors (the slopes stay), under the same uid: the
         verdicts cached on it stay valid (collisions.StepScan.release_vectors)."""
-        lean = replace(self, system=None)
-        object.__setattr__(lean, "uid", self.uid)
-        return lean
+        return replace(self, system=None)
 
     def relabel(self, perm: Array) -> "Sample":
         """Labels permuted: new[i] = old[perm[i]]."""
         take = lambda a: None if a is None else a[perm]  # noqa: E731
-        return replace(self, eigvals=self.eigvals[perm], status=self.status[perm],
+        return replace(self, uid=object(), eigvals=self.eigvals[perm], status=self.status[perm],
                        excluded=self.excluded[perm], dlam=take(self.dlam), guard=take(self.guard),
                        gaps=take(self.gaps), known=take(self.known),
                        system=None if self.system is None else self.system.permuted(perm))

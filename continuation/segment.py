@@ -11,7 +11,8 @@ state committed at x_a (events are located before the step is committed).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from functools import cached_property
 from typing import Callable, Optional
 
 import numpy as np
@@ -35,14 +36,16 @@ class Segment:
     x_b: Array
     tol: float
     max_iter: int
-    sigma: Array = field(init=False, repr=False)
 
-    def __post_init__(self):
+    @cached_property
+    def sigma(self) -> Array:
+        """The unit direction of x_b - x_a (of p for a zero-length step: the segment is one
+        point, any direction will do)."""
         d = self.x_b - self.x_a
         norm = np.linalg.norm(d)
-        if norm == 0.0:  # a zero-length step: any unit direction, the segment is one point
+        if norm == 0.0:
             d, norm = np.eye(d.size)[-1], 1.0
-        object.__setattr__(self, "sigma", d / norm)
+        return d / norm
 
     @property
     def length(self) -> float:

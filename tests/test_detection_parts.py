@@ -273,3 +273,24 @@ def test_nearest_gaps_equal_all_pairs_on_spectra_with_ties_and_pairs():
         pairs = [min((abs(complex(a) - complex(b)) for j, b in enumerate(lam) if j != i), default=np.inf)
                  for i, a in enumerate(lam)]
         assert np.array_equal(nearest_gaps(lam), pairs)
+
+
+def test_a_samples_cache_token_changes_with_its_data_and_survives_releasing_its_vectors():
+    """Sample.uid keys the scan's caches: a new token when the point, the labels or the slopes
+    change, the same when only the vectors go; tokens are objects of their own (no shared
+    counter: a sample made in a scan worker cannot take the token of one made here), and a
+    pickled sample keeps one token for its copies within one message."""
+    import pickle
+
+    from diskfriction.continuation.samples import Sample
+    from diskfriction.continuation.spectra import Eigensystem
+
+    values = np.array([1.0 + 0j, 2.0 + 0j])
+    a = Sample(0.0, np.zeros(3), values, np.zeros(2, int), 1e-12, np.zeros(2, bool),
+               dlam=np.ones(2, complex), system=Eigensystem(values, np.eye(2), np.eye(2)))
+    changed = [a.at(0.5), a.relabel(np.array([1, 0])), a.with_slopes(np.zeros(2, complex))]
+    assert all(b.uid is not a.uid for b in changed) and len({id(b.uid) for b in changed}) == 3
+    lean = a.without_vectors()
+    assert lean.system is None and lean.uid is a.uid
+    copies = pickle.loads(pickle.dumps((a, lean)))
+    assert copies[0].uid is copies[1].uid
