@@ -13,7 +13,7 @@ import time
 import numpy as np
 
 from diskfriction.continuation.collisions import DetectionParams
-from diskfriction.continuation.linalg import blas_threads, work
+from diskfriction.continuation.linalg import blas_threads, measured
 from diskfriction.continuation.spectra import eigensystem
 from diskfriction.disks.sweep import SweepParams, sweep
 from diskfriction.scenes import Scene
@@ -65,8 +65,8 @@ def main() -> None:
     for matrix in ("J", "M^-1 J"):
         for mode in ("fast", "exhaustive"):
             params = SweepParams(detection=DetectionParams(mode=mode))
-            work.reset()
-            t, branch = timed(lambda: sweep(system, 0.0, 0.12, matrix, params), args.repeat)
+            with measured() as work:
+                t, branch = timed(lambda: sweep(system, 0.0, 0.12, matrix, params), args.repeat)
             print(f"paper diagram 0..0.12, {matrix:<6} {mode:<10}: {t:.2f} s warm, {len(branch)} "
                   f"points, {len(branch.collisions)} collisions, "
                   f"{work.spectra / args.repeat / len(branch):.1f} spectra per point  (target <= 0.3 s)")

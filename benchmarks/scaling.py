@@ -30,7 +30,7 @@ CHILD = r"""
 import json, resource, signal, sys, time
 from diskfriction.continuation.collisions import DetectionParams
 from diskfriction.disks.equilibria import DiskEquilibria
-from diskfriction.continuation.linalg import work
+from diskfriction.continuation.linalg import measured
 from diskfriction.continuation.scans import default_workers
 from diskfriction.disks.sweep import SweepParams, sweep
 from diskfriction.reports.units import PaperUnits
@@ -64,17 +64,17 @@ used = default_workers(DiskEquilibria(system, *system.rest_state(), 0.0), system
 # compile and warm up on at most N = 100 (n = 300: the sparse path too), not on the big chain
 sweep(System.from_scene(Scene(N=min(N, 100), eps=eps)), 0.0, 1e-3, "J",
       SweepParams(detection=DetectionParams(mode=mode)))
-work.reset()
 signal.signal(signal.SIGALRM, out_of_time)  # the budget also stops a run inside a step
 signal.alarm(max(1, round(budget)))
 t0 = time.perf_counter()
 out = {"N": N, "eps": eps, "mode": mode + ("" if window is None else " " + sys.argv[5]), "workers": used}
-try:
-    branch = sweep(system, 0.0, 0.12, "J", params, progress)
-    out.update(done=branch.status[-1].reached, points=len(branch),
-               collisions=[c.p for c in branch.collisions], free=int(branch.free[-1]))
-except OutOfTime:
-    out.update(done=False, points=None, collisions=None)
+with measured() as work:
+    try:
+        branch = sweep(system, 0.0, 0.12, "J", params, progress)
+        out.update(done=branch.status[-1].reached, points=len(branch),
+                   collisions=[c.p for c in branch.collisions], free=int(branch.free[-1]))
+    except OutOfTime:
+        out.update(done=False, points=None, collisions=None)
 signal.alarm(0)
 out.update(seconds=time.perf_counter() - t0, reached=reached["F_x"], spectra=work.spectra,
            partial=work.spectra_partial, factorizations=work.factorizations, solves=work.solves,

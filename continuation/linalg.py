@@ -20,6 +20,7 @@ worker, a second sweep).
 """
 from __future__ import annotations
 
+import contextlib
 import functools
 from dataclasses import dataclass
 from typing import Optional, Union
@@ -36,28 +37,47 @@ Matrix = Union[Array, sp.spmatrix, sp.sparray]
 
 @dataclass
 class Work:
-    """What the core spent since the last reset: full eigendecompositions (dense, O(n^3)),
-    partial ones (a few eigenvalues near a shift: nearest.py), LU factorizations and
-    triangular solves. Printed by benchmarks/scaling.py."""
+    """What the core spent: full eigendecompositions (dense, O(n^3)), partial ones (a few
+    eigenvalues near a shift: nearest.py), LU factorizations and triangular solves. Printed
+    by benchmarks/scaling.py."""
 
     spectra: int = 0
     spectra_partial: int = 0
     factorizations: int = 0
     solves: int = 0
 
-    def reset(self) -> None:
-        self.spectra = self.spectra_partial = self.factorizations = self.solves = 0
-
     def counts(self) -> tuple[int, int, int, int]:
         return self.spectra, self.spectra_partial, self.factorizations, self.solves
 
     def add(self, counts: tuple[int, int, int, int]) -> None:
-        """Book work done elsewhere (a scan worker's counts)."""
         self.spectra, self.spectra_partial, self.factorizations, self.solves = (
             a + b for a, b in zip(self.counts(), counts))
 
 
-work = Work()
+_LEDGER = Work()
+"""Everything this process's core has spent, scan workers' results included (book). Only
+ever added to: what a piece of work cost is read with measured(), never by resetting it."""
+
+
+def book(kind: str, n: int = 1) -> None:
+    """Add n of `kind` (a Work field: "spectra", "solves", ...) to the ledger."""
+    setattr(_LEDGER, kind, getattr(_LEDGER, kind) + n)
+
+
+def book_counts(counts: tuple[int, int, int, int]) -> None:
+    """Add the counts of work done elsewhere (a scan worker's, ScanOutcome.spent)."""
+    _LEDGER.add(counts)
+
+
+@contextlib.contextmanager
+def measured():
+    """The work the core spends inside the block, scan workers' booked results included: a
+    Work that holds it once the block ends (`with measured() as spent: ...; spent.spectra`)."""
+    before, spent = _LEDGER.counts(), Work()
+    try:
+        yield spent
+    finally:
+        spent.add(tuple(a - b for a, b in zip(_LEDGER.counts(), before)))
 
 
 class SingularMatrix(np.linalg.LinAlgError):
@@ -120,7 +140,7 @@ class Factorization:
 
     def solve(self, rhs: Array, transpose: bool = False) -> Array:
         self.solves += 1
-        work.solves += 1
+        book("solves")
         if self.sparse and self.triangular is None and self.solves >= COPY_FACTORS_AT:
             self.triangular = TriangularFactors.of(self.lu)
         if self.triangular is not None:
@@ -138,7 +158,7 @@ class Factorization:
 
 def factorize(M: Matrix) -> Factorization:
     """LU of M (dense getrf or sparse SuperLU); raises SingularMatrix if M is singular."""
-    work.factorizations += 1
+    book("factorizations")
     if sp.issparse(M):
         try:
             return Factorization(spla.splu(M if M.format == "csc" else sp.csc_array(M)), True)

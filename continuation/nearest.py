@@ -46,7 +46,7 @@ def nearest_eigensystem(A: Matrix, sigma: float, k: int) -> tuple[Eigensystem, f
     """(the eigensystem of the k eigenvalues of A nearest sigma with normalised left and right
     vectors, radius: the largest |lambda - sigma| among them); every eigenvalue of A strictly
     closer to sigma than radius is among the k. Raises ShiftInvertFailed. The caller books it
-    (linalg.work)."""
+    (linalg.book)."""
     n = A.shape[0]
     if not 0 < k < n - 1:
         raise ShiftInvertFailed(f"k = {k} must lie in 1..{n - 2} for an {n} x {n} matrix")

@@ -24,7 +24,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from .certify import inconsistent_labels, nearest_gaps
-from .linalg import work
+from .linalg import book
 from .nearest import ShiftInvertFailed, nearest_eigensystem
 from .problem import Problem
 from .spectra import (Eigensystem, eigen_status, eigenvalue_slopes, imag_threshold, match_eigenvalues,
@@ -345,7 +345,7 @@ def partial_sample_at(problem: Problem, s: float, x: Array, left: Sample, cluste
     eigvals, dlam_all = np.full(n, np.nan, complex), np.full(n, np.nan, complex)
     gaps, columns, rights, lefts = np.full(n, np.nan), np.full(n, -1), [], []
     for labels, sigma, k in clusters:
-        work.spectra_partial += 1
+        book("spectra_partial")
         try:
             system, radius = nearest_eigensystem(A, sigma, k)
         except ShiftInvertFailed:

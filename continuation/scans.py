@@ -12,7 +12,7 @@ committed at the step's start, and the scans of later steps are dropped.
 
 InlineScans scans at once, in this process (the problem is still in the step's start state).
 WorkerScans forks worker processes that each hold a copy of the problem as it was at the fork,
-restore the job's state, scan and send back the ScanResult with what it cost (linalg.work).
+restore the job's state, scan and send back the ScanResult with what it cost (linalg.book).
 Fork, not spawn: a worker inherits the compiled kernels instead of compiling them again. Jobs
 go to idle workers in order of submission; results are taken in any order and kept until asked
 for. On 2 cores, the paper scene with N = 100 (n = 300): the 74 scans took 13.1 s one after
@@ -33,7 +33,7 @@ import numpy as np
 from diskfriction.errors import OneLineError
 
 from .collisions import DetectionParams, ScanResult, scan_step
-from .linalg import SingularMatrix, blas_threads, work
+from .linalg import SingularMatrix, blas_threads, book_counts, measured
 from .problem import Problem
 from .samples import Sample
 from .segment import Segment, SegmentSolveError
@@ -71,7 +71,7 @@ class ScanJob:
 @dataclass(frozen=True)
 class ScanOutcome:
     """A scan's result, or why it failed (failure: the step is rejected, as when its corrector
-    fails); spent: the linalg.work counts the scan booked."""
+    fails); spent: the linalg.Work counts the scan spent (linalg.measured)."""
 
     result: Optional[ScanResult]
     failure: Optional[str]
@@ -80,16 +80,17 @@ class ScanOutcome:
 
 def run_scan(problem: Problem, job: ScanJob) -> ScanOutcome:
     """Scan job's step on `problem`, which is in job.state."""
-    before = work.counts()
     result, failure = None, None
-    try:
-        result = scan_step(problem, Segment(problem, job.x_a, job.x_b, job.tol, job.max_iter),
-                           job.start, job.end, job.detection, job.step, job.previous, job.ends_at_event)
-    except SegmentSolveError as err:
-        failure = f"collision scan: {err}"
-    except SingularMatrix as err:
-        failure = f"singular matrix: {err}"
-    return ScanOutcome(result, failure, tuple(a - b for a, b in zip(work.counts(), before)))
+    with measured() as spent:
+        try:
+            result = scan_step(problem, Segment(problem, job.x_a, job.x_b, job.tol, job.max_iter),
+                               job.start, job.end, job.detection, job.step, job.previous,
+                               job.ends_at_event)
+        except SegmentSolveError as err:
+            failure = f"collision scan: {err}"
+        except SingularMatrix as err:
+            failure = f"singular matrix: {err}"
+    return ScanOutcome(result, failure, spent.counts())
 
 
 def default_workers(problem: Problem, n: int, detection: DetectionParams,
@@ -263,7 +264,7 @@ class WorkerScans:
         while ticket not in self._done:
             self._receive(None)
         outcome = self._done.pop(ticket)
-        work.add(outcome.spent)  # booked in the worker
+        book_counts(outcome.spent)  # spent in the worker
         return outcome
 
     def discard(self, tickets) -> None:

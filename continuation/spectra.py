@@ -29,7 +29,7 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.optimize import linear_sum_assignment
 
-from .linalg import work
+from .linalg import book
 
 Array = np.ndarray
 
@@ -188,8 +188,8 @@ class Eigensystem:
 
 def eigensystem(A: Array, vectors: bool) -> Eigensystem:
     """All eigenvalues of the dense matrix A (LAPACK dgeev), with left and right vectors
-    normalised to l_i^H r_i = 1 if `vectors`; booked as a full spectrum (linalg.work)."""
-    work.spectra += 1
+    normalised to l_i^H r_i = 1 if `vectors`; booked as a full spectrum (linalg.book)."""
+    book("spectra")
     if not vectors:
         return Eigensystem(np.linalg.eigvals(A).astype(complex))
     lam, vl, vr = sla.eig(A, left=True, right=True, check_finite=False)

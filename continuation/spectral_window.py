@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse.linalg as spla
 
-from .linalg import Matrix, work
+from .linalg import Matrix, book
 from .nearest import nearest_eigensystem
 from .spectra import Eigensystem
 
@@ -100,7 +100,7 @@ def window_eigensystem(A: Matrix, window: Window, vectors: bool) -> Eigensystem:
     """The window.k eigenvalues of the sparse A nearest the window's centre (module docstring),
     with normalised left and right vectors if `vectors`; excluded beyond the guard bands,
     guard within them. Raises WindowCrowded."""
-    work.spectra += 1
+    book("spectra")
     k, sigma = window.k, window.sigma
     if not vectors:
         values = spla.eigs(A, k=k, sigma=sigma, return_eigenvectors=False)

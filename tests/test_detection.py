@@ -69,13 +69,13 @@ def test_fast_and_exhaustive_agree_on_a_core_problem_with_a_bubble(ds):
 def test_fast_detection_spends_about_one_spectrum_per_point():
     """The fast detection's point: full eigendecompositions per accepted point on the paper
     scene, against the exhaustive one's (measured: 2.1 and 14)."""
-    from diskfriction.continuation.linalg import work
+    from diskfriction.continuation.linalg import measured
 
     system = System.from_scene(Scene())
     spent = {}
     for mode in ("fast", "exhaustive"):
-        work.reset()
-        branch = sweep(system, 0.0, 0.12, "J", SweepParams(detection=DetectionParams(mode=mode)))
+        with measured() as work:
+            branch = sweep(system, 0.0, 0.12, "J", SweepParams(detection=DetectionParams(mode=mode)))
         spent[mode] = work.spectra / len(branch)
     assert spent["fast"] <= 3.0 and spent["exhaustive"] >= 4 * spent["fast"]
 
@@ -257,14 +257,14 @@ def test_a_spectral_window_lists_the_full_detection_s_collisions_in_it(partial_f
     1e-9, and counts the complex pairs there; also with every split sample partial where it
     can be (partial_from = 0: at N = 40 the default, n >= 240, takes none), which then takes
     partial samples."""
-    from diskfriction.continuation.linalg import work
+    from diskfriction.continuation.linalg import measured
 
     system = System.from_scene(Scene(N=40, eps=1e-4))
     lo, hi = 0.0553 * system.scene.k_n, 0.0562 * system.scene.k_n
     full = sweep(system, 0.0, 0.12, "J")
     detection = DetectionParams() if partial_from is None else DetectionParams(partial_from=partial_from)
-    work.reset()
-    window = sweep(system, 0.0, 0.12, "J", SweepParams(window=(lo, hi), detection=detection))
+    with measured() as work:
+        window = sweep(system, 0.0, 0.12, "J", SweepParams(window=(lo, hi), detection=detection))
     expected = [(c.kind, c.p) for c in full.collisions if lo <= c.eigenvalue <= hi]
     assert len(expected) >= 2 and window.window == (lo, hi)
     assert window.eigenvalues.shape[1] < system.ndof
@@ -332,14 +332,14 @@ def test_partial_split_samples_find_the_collisions_of_full_ones(scene, matrix, k
     """Split samples as partial spectra (forced at every size: partial_from = 0) give the same
     collisions as full ones, to 1e-9, on the same branch, with fewer full spectra; k_max = 8
     sends more splits to the fallbacks (a full sample, upgrading the partial ones)."""
-    from diskfriction.continuation.linalg import work
+    from diskfriction.continuation.linalg import measured
 
     system = System.from_scene(scene)
     runs, spent = {}, {}
     for partial_from in (0, 10**9):
-        work.reset()
         detection = DetectionParams(partial_from=partial_from, partial_max_k=k_max)
-        runs[partial_from] = sweep(system, 0.0, 0.12, matrix, SweepParams(detection=detection))
+        with measured() as work:
+            runs[partial_from] = sweep(system, 0.0, 0.12, matrix, SweepParams(detection=detection))
         spent[partial_from] = (work.spectra, work.spectra_partial)
     assert np.array_equal(runs[0].F_x, runs[10**9].F_x)
     assert_same_collisions(locations(runs[0]), locations(runs[10**9]))

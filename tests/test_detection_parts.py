@@ -294,3 +294,20 @@ def test_a_samples_cache_token_changes_with_its_data_and_survives_releasing_its_
     assert lean.system is None and lean.uid is a.uid
     copies = pickle.loads(pickle.dumps((a, lean)))
     assert copies[0].uid is copies[1].uid
+
+
+def test_measured_work_is_what_the_block_spent_and_nests():
+    """linalg.measured: the core's spending inside a block, read without resetting anything
+    (an outer measurement keeps what an inner one saw); workers' counts booked with
+    book_counts count in the block that books them."""
+    from diskfriction.continuation.linalg import book_counts, measured
+    from diskfriction.continuation.spectra import eigensystem
+
+    A = np.diag([1.0, 2.0, 3.0])
+    with measured() as outer:
+        eigensystem(A, False)
+        with measured() as inner:
+            eigensystem(A, False)
+            book_counts((2, 1, 0, 5))
+    assert inner.counts() == (3, 1, 0, 5)
+    assert outer.counts() == (4, 1, 0, 5)

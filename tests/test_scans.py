@@ -10,7 +10,7 @@ import pytest
 
 from diskfriction.continuation import arclength
 from diskfriction.continuation.collisions import DetectionParams
-from diskfriction.continuation.linalg import work
+from diskfriction.continuation.linalg import measured
 from diskfriction.continuation.problem import FunctionProblem, Problem
 from diskfriction.continuation.scans import (InlineScans, ScanJob, ScanOutcome, WorkerError, WorkerScans,
                                              default_workers, has_snapshots)
@@ -21,8 +21,8 @@ from invariants import unaccounted_pair_changes
 
 
 def run(system, workers):
-    work.reset()
-    branch = sweep(system, 0.0, 0.12, "J", SweepParams(workers=workers))
+    with measured() as work:
+        branch = sweep(system, 0.0, 0.12, "J", SweepParams(workers=workers))
     return branch, work.counts()
 
 
