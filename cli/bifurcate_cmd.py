@@ -8,13 +8,12 @@ import json
 import math
 from pathlib import Path
 
-from diskfriction.cli.common import (EXIT_FAILED, CommandError, add_matrix_argument, add_scene_argument,
-                                     check_memory, number, output_dir, path,
-                                     matrix_from_args, scene_from_args)
+from diskfriction.cli.common import (EXIT_FAILED, CommandError, add_matrix_argument,
+                                     add_scene_argument, check_memory, matrix_from_args, number,
+                                     output_dir, path, scene_from_args)
 from diskfriction.cli.progress import Progress
 from diskfriction.words import count
 from diskfriction.scenes.scene import NEGATIVE_LOAD
-
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:

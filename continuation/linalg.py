@@ -84,10 +84,6 @@ class SingularMatrix(np.linalg.LinAlgError):
     """A factorization met an exactly singular (or non-finite) matrix."""
 
 
-def is_sparse(K: Matrix) -> bool:
-    return sp.issparse(K)
-
-
 def dense(K: Matrix) -> Array:
     """K as a dense ndarray (no copy if it is one)."""
     return K.toarray() if sp.issparse(K) else np.asarray(K)

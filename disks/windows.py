@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Iterable, NamedTuple
 
 import numpy as np
+
 from diskfriction.continuation.spectra import Kind
 
 

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 from typing import Callable, Optional
 
-
 from diskfriction.disks.equilibrium import check_reached, equilibrium_at
 from diskfriction.disks.sweep import DiskBranch, sweep
 from diskfriction.disks.windows import Window, leg_windows
@@ -35,9 +34,10 @@ def window_run(system: System, window: Window, index: int, t_end: float, amplitu
     a, b, pairs = window
     F = 0.5 * (a + b)
     eq = equilibrium_at(system, F)
-    kind = "eigenvector" if spectrum(system, eq.q, eq.xi).pairs.size else "random-velocity"
+    spec = spectrum(system, eq.q, eq.xi)  # decides the start, and simulate steps with it
+    kind = "eigenvector" if spec.pairs.size else "random-velocity"
     s = summarize(simulate(system, eq.q, eq.xi, F, t_end,
-                           perturbation=Perturbation(kind, amplitude, index)))
+                           perturbation=Perturbation(kind, amplitude, index), spec=spec))
     row = {"window": [a, b], "complex_pairs": pairs, "F_x": F, "perturbation": kind,
            "sigma_predicted": s["sigma_predicted"], "sigma_measured": s["sigma_measured"],
            "M_max": s["M_max"], "accurate": s["accurate"], "slid": s["slid"], "V_cm": s["V_cm"]}
