@@ -12,7 +12,7 @@ LAYERS = [
     {"scenes"},
     {"symbolic"},
     {"continuation"},            # the generic core: knows nothing of disks
-    {"disks", "dynamics"},       # the disk problem; the Newtonian dynamics (siblings)
+    {"disks", "packings", "dynamics"},  # the chain and the packing problems; the dynamics (siblings)
     {"studies", "peers"},        # verify, ensembles, maps; the LAMMPS cross-check
     {"reports"},
     {"cli"},
