@@ -1,7 +1,8 @@
-# Assembly source of every generated kernel module (see codegen.py), rendered by
+# Assembly source of the chain's generated kernel module (see codegen.py), rendered by
 # symbolic/template.py: each "...  # @fragment NAME" line becomes the per-contact code the dynamics
 # stepper pastes too, for the scene's conventions.
-# Not importable on its own: math, numba, np, D, coulomb_limit, pair_contact, pair_force,
+# Not importable on its own: math, numba, np, D, coulomb_limit, two_diff, pair_overlap,
+# commit_history (symbolic/contact_src.py), pair_contact, pair_force,
 # pair_increment_coeffs, wall_contact, wall_force, wall_increment_coeffs, PAIR_FRICTION,
 # WALL_FRICTION and CONVENTIONS are defined by the generated part above it.
 #
@@ -25,14 +26,6 @@ def pair_dofs(k, N, idx):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def two_diff(a, b):
-    """s = fl(a - b) and its rounding error e = (a - b) - s, exactly (Knuth's TwoSum)."""
-    s = a - b
-    bb = s - a
-    return s, (a - (s - bb)) - (b + bb)
-
-
-@numba.njit(cache=True, error_model="numpy")
 def pair_separation(q, k, N, L):
     """r_i - r_j of pair k (the last pair sees disk 0 shifted by the ring length L) and the
     rounding errors of its two components: (dx, dy, ex, ey) with r_i - r_j = (dx + ex, dy + ey)."""
@@ -43,22 +36,6 @@ def pair_separation(q, k, N, L):
         ex += e
     dy, ey = two_diff(q[N + k], q[N + j])
     return dx, dy, ex, ey
-
-
-@numba.njit(cache=True, error_model="numpy")
-def pair_overlap(dx, dy, ex, ey, R):
-    """delta = 2R - |r_ij| [length] to full relative accuracy even for delta << 2R.
-
-    2R - rho cancels: a rounding of ~1e-16 in dx is a relative error 1e-16 / delta in delta
-    (1e-6 at delta = 1e-10). Instead delta = (4R^2 - |r_ij|^2) / (2R + rho) with
-    4R^2 - |r_ij|^2 = (2R - a)(2R + a) - b^2 - 2 (dx ex + dy ey), a = max(|dx|, |dy|),
-    b = min(...): 2R - a is exact for a in [R, 4R] (Sterbenz) and the TwoSum errors ex, ey of
-    the separation are restored to first order (their squares are below 1e-32)."""
-    a = max(abs(dx), abs(dy))
-    b = min(abs(dx), abs(dy))
-    two_R = 2.0 * R
-    num = (two_R - a) * (two_R + a) - b * b - 2.0 * (dx * ex + dy * ey)
-    return num / (two_R + math.sqrt(dx * dx + dy * dy))
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -195,37 +172,6 @@ def history_increment(q0, q1, params, dxi):
             ...  # @fragment pair_increment
         if WALL_FRICTION:
             ...  # @fragment wall_increment
-
-
-@numba.njit(cache=True, error_model="numpy")
-def commit_history(xi0, dxi, delta0, delta1, params, cap, xi1, slid):
-    """docs/model.md's history rule for one step with increment dxi, into xi1 [length].
-
-    Open at the end (delta1 <= 0): xi1 = 0. Closed during the step (delta0 <= 0 < delta1): the
-    contact starts from zero at first contact ("t = 0 upon first contact", paper) and charges the
-    part of the increment after it, delta1 / (delta1 - delta0) of dxi with delta taken linear
-    along the step (a contact touching at delta0 = 0 charges all of it); conventions "lammps"
-    charge all of dxi (symbolic/template.py, first_contact). Otherwise
-    xi1 = xi0 + dxi. With `cap`, a history beyond its Coulomb limit t* = coulomb_limit(delta1)
-    (Hertz: mu k_n delta1 / k_t) is set to sign(xi1) t* (the contact slides) and slid[c] is
-    True. Returns the number capped."""
-    k_n, k_t, mu = params[1], params[2], params[3]
-    n_slid = 0
-    for c in range(xi0.shape[0]):
-        slid[c] = False
-        if delta1[c] <= 0.0:
-            xi1[c] = 0.0
-            continue
-        if delta0[c] <= 0.0:
-            ...  # @fragment first_contact
-        else:
-            xi1[c] = xi0[c] + dxi[c]
-        t_star = coulomb_limit(delta1[c], k_n, k_t, mu)
-        if cap and abs(xi1[c]) > t_star:
-            xi1[c] = t_star if xi1[c] > 0.0 else -t_star
-            slid[c] = True
-            n_slid += 1
-    return n_slid
 
 
 def ring_of_two():

@@ -29,9 +29,13 @@ NJIT = '@numba.njit(cache=True, error_model="numpy")'
 """Every generated function: numba's numpy error model drops the zero-division checks; each
 division in the kernels is by a quantity kept positive (rho, delta > 0 guarded, mu k_n delta)."""
 
-_ARGS = {"pair": "dx, dy, delta, xi, R, k_n, k_t, mu", "wall": "delta, xi, R, k_n, k_t, mu"}
+_ARGS = {"pair": "dx, dy, delta, xi, R, k_n, k_t, mu", "wall": "delta, xi, R, k_n, k_t, mu",
+         "grain": "dx, dy, delta, xi, R_i, R_j, k_n, k_t, mu"}
 
-_PREAMBLE = {"pair": ["rho = math.sqrt(dx * dx + dy * dy)"], "wall": []}
+_RHO = ["rho = math.sqrt(dx * dx + dy * dy)"]
+_PREAMBLE = {"pair": _RHO, "wall": [], "grain": _RHO}
+
+_INCREMENT_ARGS = {"pair": "dx, dy, R, w", "wall": "R, w", "grain": "dx, dy, R_i, R_j, w"}
 
 
 class _KernelPrinter(PythonCodePrinter):
@@ -162,29 +166,31 @@ def law_functions(normal: str) -> str:
 def _increment_coeffs(c: ContactExprs) -> str:
     """Source of <kind>_increment_coeffs: w with d xi = w . dq over the local dofs."""
     printer = _KernelPrinter()
-    args = "dx, dy, R, w" if c.kind == "pair" else "R, w"
-    lines = [NJIT, f"def {c.kind}_increment_coeffs({args}):",
+    lines = [NJIT, f"def {c.kind}_increment_coeffs({_INCREMENT_ARGS[c.kind]}):",
              f'    """d xi = w . dq over the local dofs {", ".join(c.dofs)}."""']
-    if c.kind == "pair":
-        lines.append("    rho = math.sqrt(dx * dx + dy * dy)")
+    lines += [f"    {line}" for line in _PREAMBLE[c.kind]]
     lines += [f"    w[{a}] = {printer.doprint(e)}" for a, e in enumerate(c.w)]
     return "\n".join(lines) + "\n"
 
 
-def module_source(pair: ContactExprs, wall: ContactExprs, dialect: Dialect, header: str,
-                  assembly: str) -> str:
-    """The whole generated module: header, kernels, then the assembly source rendered for
-    the dialect (symbolic/template.py)."""
+def _kernels(c: ContactExprs) -> list[str]:
+    """The three functions of one contact kernel: with J, force only, increment coefficients."""
+    return [_kernel(c, True), _kernel(c, False), _increment_coeffs(c)]
+
+
+def module_source(contacts: list[ContactExprs], dialect: Dialect, header: str,
+                  sources: list[str]) -> str:
+    """The whole generated module: header, the flags (D, <KIND>_FRICTION for each contact
+    kind), the normal law's functions, the kernels of `contacts`, then the assembly `sources`
+    rendered for the dialect (symbolic/template.py)."""
     parts = [
         header,
         "import math\n\nimport numba\nimport numpy as np\n",
         f"D = {3 if dialect.rotation else 2}  # degrees of freedom per disk",
-        f"PAIR_FRICTION = {pair.law != 'none'}",
-        f"WALL_FRICTION = {wall.law != 'none'}",
+        *[f"{c.kind.upper()}_FRICTION = {c.law != 'none'}" for c in contacts],
         f"CONVENTIONS = {dialect.conventions!r}  # docs/physics.md, Conventions\n\n",
-        law_functions(pair.normal),
-        _kernel(pair, True), _kernel(pair, False), _increment_coeffs(pair),
-        _kernel(wall, True), _kernel(wall, False), _increment_coeffs(wall),
-        render(assembly, dialect),
+        law_functions(contacts[0].normal),
+        *[text for c in contacts for text in _kernels(c)],
+        *[render(source, dialect) for source in sources],
     ]
     return "\n\n".join(p.rstrip("\n") + "\n" for p in parts)

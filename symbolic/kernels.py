@@ -22,8 +22,8 @@ from diskfriction.symbolic.template import Dialect
 
 GENERATOR_VERSION = 1
 _SOURCES = tuple(f"diskfriction.symbolic.{name}" for name in
-                 ("laws", "contacts", "codegen", "assembly_src", "template", "kernels",
-                  "generated"))
+                 ("laws", "contacts", "codegen", "contact_src", "assembly_src", "packing_src",
+                  "template", "kernels", "generated"))
 
 
 def cache_dir() -> Path:
@@ -56,9 +56,21 @@ def module_hash(effects: Effects) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
+def _header(key: str, digest: str) -> str:
+    return (f'"""diskfriction generated kernels. Do not edit: regenerated from symbolic/.\n\n'
+            f"hash: {digest}\neffects: {key}\n"
+            f'generator: {generator_version()}\n"""')
+
+
+def _assembly(*names: str) -> list[str]:
+    """The text of the assembly sources symbolic/<name>.py."""
+    return [(Path(__file__).parent / f"{name}.py").read_text() for name in names]
+
+
 def generate_source(effects: Effects, digest: str, progress: Optional[Progress] = None) -> str:
-    """Derive both contact kernels for these effects and print the module's source;
-    progress("generating", fraction) between the steps (fractions: their share of the time)."""
+    """Derive both contact kernels of the chain for these effects and print the module's
+    source; progress("generating", fraction) between the steps (fractions: their share of the
+    time)."""
     from diskfriction.symbolic import codegen, contacts
 
     tick = (lambda fraction: progress("generating", fraction)) if progress else (lambda f: None)
@@ -68,11 +80,9 @@ def generate_source(effects: Effects, digest: str, progress: Optional[Progress] 
     tick(0.4)
     wall = contacts.wall_contact(effects.wall_law, effects.rotation, effects.normal)
     tick(0.45)
-    header = (f'"""diskfriction generated kernels. Do not edit: regenerated from symbolic/.\n\n'
-              f"hash: {digest}\neffects: {effects_key(effects)}\n"
-              f'generator: {generator_version()}\n"""')
-    assembly = (Path(__file__).parent / "assembly_src.py").read_text()
-    source = codegen.module_source(pair, wall, dialect(effects), header, assembly)
+    source = codegen.module_source([pair, wall], dialect(effects),
+                                   _header(effects_key(effects), digest),
+                                   _assembly("contact_src", "assembly_src"))
     tick(1.0)
     return source
 
@@ -88,3 +98,26 @@ def load_kernels(effects: Effects, progress: Optional[Progress] = None) -> Modul
     digest = module_hash(effects)
     return load_generated(module_path(effects), f"diskfriction_kernels_{digest}",
                           lambda: generate_source(effects, digest, progress), progress)
+
+
+def packing_key(effects: Effects) -> str:
+    """What changes a packing's derivation: the grain pairs' law and the normal law (a packing
+    has no substrate; its disks rotate, conventions "model": docs/packings.md)."""
+    return f"packing;pair={effects.pair_law};normal={effects.normal}"
+
+
+def load_packing_kernels(effects: Effects, progress: Optional[Progress] = None) -> ModuleType:
+    """The generated module of a packing (symbolic/packing_src.py over the grain-pair kernel),
+    cached and checked as load_kernels."""
+    from diskfriction.symbolic import codegen, contacts
+
+    key = packing_key(effects)
+    digest = hashlib.sha256(f"{key}|{generator_version()}".encode()).hexdigest()[:16]
+
+    def source() -> str:
+        grain = contacts.pair_contact(effects.pair_law, True, "model", effects.normal, "grain")
+        return codegen.module_source([grain], Dialect("model", True), _header(key, digest),
+                                     _assembly("contact_src", "packing_src"))
+
+    return load_generated(cache_dir() / f"packing_{digest}.py", f"diskfriction_packing_{digest}",
+                          source, progress)

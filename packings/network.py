@@ -1,0 +1,115 @@
+"""The contact network of a packing, evaluated through its generated kernels (docs/packings.md).
+
+State: q = (x_1..x_N, y_1..y_N, theta_1..theta_N) [length, rad] in unwrapped coordinates, the
+strain gamma of the Lees-Edwards box [1], and the contacts as int64 rows (i, j, cx, cy): disk i
+touches the image of disk j shifted by (cx L + cy gamma L, cy L). The history xi [length] has
+one entry per contact row, in the same order; a row keeps its image while it lasts, so a
+contact never jumps between images along a branch.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from types import ModuleType
+from typing import Optional
+
+import numpy as np
+import scipy.sparse as sp
+
+from diskfriction.scenes import Effects
+from diskfriction.symbolic.generated import Progress
+from diskfriction.symbolic.kernels import load_packing_kernels
+
+D = 3  # x, y, theta per disk: a packing's disks rotate
+
+
+@dataclass(frozen=True)
+class Network:
+    """N disks of radii `radii` in a periodic square box of side L, bound to the kernels of
+    their contact law. constants = (R, k_n, k_t, mu) in raw units (R the small radius)."""
+
+    kernels: ModuleType
+    radii: np.ndarray
+    L: float
+    constants: tuple[float, float, float, float]
+
+    @classmethod
+    def build(cls, radii: np.ndarray, L: float, k_n: float, k_t: float, mu: float,
+              effects: Effects = Effects(), progress: Optional[Progress] = None) -> Network:
+        """Bind the disks to the kernels of `effects` (generated and compiled on a cold cache)."""
+        radii = np.ascontiguousarray(radii, dtype=float)
+        return cls(load_packing_kernels(effects, progress), radii, float(L),
+                   (float(radii.min()), float(k_n), float(k_t), float(mu)))
+
+    @property
+    def N(self) -> int:
+        return self.radii.size
+
+    @property
+    def ndof(self) -> int:
+        return D * self.N
+
+    def params(self, gamma: float) -> np.ndarray:
+        """The kernels' params (R, k_n, k_t, mu, 0, L, gamma) (symbolic/packing_src.py)."""
+        R, k_n, k_t, mu = self.constants
+        return np.array([R, k_n, k_t, mu, 0.0, self.L, gamma])
+
+    def contacts(self, q: np.ndarray, gamma: float, reach: float = 0.0) -> np.ndarray:
+        """Rows (i, j, cx, cy), i < j, of the pairs whose nearest Lees-Edwards images overlap by
+        delta > -reach [length] (a cell list, O(N))."""
+        return self.kernels.near_pairs(q, self.radii, self.L, gamma, reach)
+
+    def overlaps(self, q: np.ndarray, contacts: np.ndarray, gamma: float) -> np.ndarray:
+        """delta = R_i + R_j - |r_ij| of every contact row [length]; active iff delta > 0."""
+        delta = np.empty(contacts.shape[0])
+        self.kernels.overlaps(q, self.radii, contacts, self.params(gamma), delta)
+        return delta
+
+    def forces(self, q: np.ndarray, xi: np.ndarray, contacts: np.ndarray, gamma: float
+               ) -> np.ndarray:
+        """Generalized forces F(q, xi; gamma) [force; torque for the angles]."""
+        F = np.empty(self.ndof)
+        self.kernels.forces(q, xi, self.radii, contacts, self.params(gamma), F)
+        return F
+
+    def evaluate(self, q: np.ndarray, xi: np.ndarray, contacts: np.ndarray, gamma: float
+                 ) -> tuple[np.ndarray, sp.csr_matrix, np.ndarray]:
+        """F, the sparse total stiffness J = -dF/dq (history following q) [force / length] and
+        dF/dgamma (history following gamma) [force]."""
+        n = self.ndof
+        rows, cols = self.kernels.jacobian_pattern(self.N, contacts)
+        F, F_gamma, values = np.empty(n), np.empty(n), np.empty(rows.size)
+        self.kernels.evaluate(q, xi, self.radii, contacts, self.params(gamma), F, values, F_gamma)
+        return F, sp.csr_matrix((values, (rows, cols)), shape=(n, n)), F_gamma
+
+    def history_step(self, q0: np.ndarray, q1: np.ndarray, gamma0: float, gamma1: float,
+                     xi0: np.ndarray, contacts: np.ndarray, cap: bool = True
+                     ) -> tuple[np.ndarray, np.ndarray]:
+        """xi after the straight step (q0, gamma0) -> (q1, gamma1) over fixed contact rows: the
+        midpoint increment, the chain's history rule (reset where open at the end, the part
+        after first contact where closing, with `cap` the Coulomb cap |xi| <= t*). Returns
+        (xi1, slid), slid True where the cap acted."""
+        m = contacts.shape[0]
+        dxi, xi1, slid = np.empty(m), np.empty(m), np.empty(m, dtype=np.bool_)
+        self.kernels.history_increment(q0, q1, gamma0, gamma1, self.radii, contacts,
+                                       self.params(gamma0), dxi)
+        self.kernels.commit_history(xi0, dxi, self.overlaps(q0, contacts, gamma0),
+                                    self.overlaps(q1, contacts, gamma1), self.params(gamma1),
+                                    cap, xi1, slid)
+        return xi1, slid
+
+    def stress(self, q: np.ndarray, xi: np.ndarray, contacts: np.ndarray, gamma: float
+               ) -> np.ndarray:
+        """The contact stress (sigma_xx, sigma_yy, sigma_xy, sigma_yx) [force / length],
+        sigma_ab = -(1 / L^2) sum r_ij,a f_ij,b: compression negative; the pressure is
+        P = -(sigma_xx + sigma_yy) / 2 and the shear stress under positive strain sigma_xy."""
+        sigma = np.empty(4)
+        self.kernels.stress(q, xi, self.radii, contacts, self.params(gamma), sigma)
+        return sigma
+
+    def frictionless(self, xy: np.ndarray) -> tuple[np.ndarray, float, float]:
+        """At gamma = 0 without friction, for a minimiser: xy = (x_1..x_N, y_1..y_N) -> (F =
+        -dU/dxy [force], U [energy], the virial W = sum |r_ij| F_n [energy])."""
+        F = np.empty(2 * self.N)
+        U, W = self.kernels.frictionless(np.ascontiguousarray(xy, dtype=float), self.radii,
+                                         self.L, self.constants[1], F)
+        return F, U, W
