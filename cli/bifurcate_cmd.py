@@ -103,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
         return run_problem(args)
     if args.p is not None:
         raise CommandError("bifurcate error: --p: only with --problem FILE.py (a scene's load is --fx)")
-    scene = scene_from_args(args)
+    scene = scene_from_args(args, "bifurcate")
     F_from, F_to = parse_range(args.fx) if args.fx is not None else scene.F_x_range
     window = parse_window(args.window) if args.window is not None else None
     if window is not None and not detector.window:

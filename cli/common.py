@@ -12,6 +12,7 @@ from diskfriction.errors import OneLineError
 from diskfriction.files import writable
 from diskfriction.matrices import MATRIX_OPTIONS, Matrix
 from diskfriction.scenes.load import SceneError, default_scene_path, load_scene
+from diskfriction.scenes.packing import PackingScene
 from diskfriction.scenes.scene import NEGATIVE_LOAD, Scene
 
 EXIT_BAD_INPUT = 2  # as argparse exits on a usage error
@@ -33,9 +34,24 @@ def add_scene_argument(parser: argparse.ArgumentParser) -> None:
                         help="scene TOML file (default: the paper scene, scenes/paper.toml)")
 
 
-def scene_from_args(args: argparse.Namespace) -> Scene:
-    """The scene named by the FILE argument, or the paper scene; raises SceneError."""
-    return load_scene(args.scene if args.scene is not None else default_scene_path())
+def scene_from_args(args: argparse.Namespace, command: Optional[str] = None
+                    ) -> Scene | PackingScene:
+    """The scene named by the FILE argument, or the paper scene; raises SceneError. With
+    `command`, a chain Scene only: a packing scene is a one-line CommandError (exit 2) saying
+    which commands take packings so far (docs/packings.md)."""
+    file = args.scene if args.scene is not None else default_scene_path()
+    scene = load_scene(file)
+    return scene if command is None else chain_scene(command, file, scene)
+
+
+def chain_scene(command: str, file, scene: Scene | PackingScene) -> Scene:
+    """`scene` if it is a chain; a packing is a one-line CommandError (exit 2) saying which
+    commands take packings so far."""
+    if isinstance(scene, PackingScene):
+        raise CommandError(f"{command} error: {file}: geometry = \"packing\": {command} takes "
+                           f"chain scenes only so far; `diskfriction scene` and `diskfriction "
+                           f"prepare` take packings (docs/packings.md)")
+    return scene
 
 
 def add_matrix_argument(parser: argparse.ArgumentParser, help: str) -> None:

@@ -46,7 +46,7 @@ def run(args: argparse.Namespace) -> int:
     from diskfriction.peers.lammps_deck import check_representable
     from diskfriction.peers.lammps_run import find_lammps
 
-    scene = scene_from_args(args)
+    scene = scene_from_args(args, "crosscheck")
     F_x = load("crosscheck", args.fx)
     run_length("crosscheck", args.t_end, args.dt)
     if args.every is not None:

@@ -44,7 +44,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from diskfriction.peers.lammps_deck import check_representable
 
-    scene = scene_from_args(args)
+    scene = scene_from_args(args, "export")
     F_x = load("export", args.fx)
     check_representable(scene)
     out = output_dir("export", args.out, Path("out") / "export" / scene.name)

@@ -108,7 +108,7 @@ def grid(scene, texts: list[str]):
 
 
 def run(args: argparse.Namespace) -> int:
-    scene = scene_from_args(args)
+    scene = scene_from_args(args, "map")
     axes, cells = grid(scene, args.vary)
     F_from, F_to = parse_range(args.fx, command="map") if args.fx is not None else scene.F_x_range
     if F_from > F_to:

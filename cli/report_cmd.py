@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from diskfriction.cli.common import CommandError, check_memory, output_dir
+from diskfriction.cli.common import CommandError, chain_scene, check_memory, output_dir
 from diskfriction.scenes.load import default_scene_path, load_scene
 
 
@@ -34,7 +34,8 @@ def run(args: argparse.Namespace) -> int:
     from diskfriction.reports.builder import build_report, sections_named
     from diskfriction.reports.settings import SettingError, Settings, with_setting
 
-    scenes = [load_scene(p) for p in args.scenes] or [load_scene(default_scene_path())]
+    files = args.scenes or [default_scene_path()]
+    scenes = [chain_scene("report", file, load_scene(file)) for file in files]
     only = tuple(k.strip() for item in args.only or () for k in item.split(",") if k.strip())
     if args.only is not None and not only:
         raise CommandError(f"report error: --only: no section named (got "

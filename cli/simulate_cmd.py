@@ -78,7 +78,7 @@ SCHEDULER = re.compile(r"^((tcp|tls|ws|wss|ucx)://)?[^\s:/]+:\d+$")
 
 
 def run(args: argparse.Namespace) -> int:
-    scene = scene_from_args(args)
+    scene = scene_from_args(args, "simulate")
     loads = parse_loads(args.fx)
     run_length("simulate", args.t_end, args.dt)
     number("simulate", "seed", args.seed, zero=True, integer=True)  # numpy seeds are >= 0

@@ -33,7 +33,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    scene = scene_from_args(args)
+    scene = scene_from_args(args, "verify")
     number("verify", "t-end", args.t_end)
     number("verify", "amplitude", args.amplitude, zero=True)
     matrix = matrix_from_args("verify", args, scene)

@@ -1,9 +1,12 @@
 """Scene files: load and validate a TOML scene, write a resolved scene back as TOML.
 
-A scene file has a top-level ``name`` and the tables [disks], [contacts], [load], [effects],
-[stability] (schema and units: scenes/paper.toml). Every key is optional; a missing key takes the
-Scene() default. Files are parsed with tomllib only: nothing in a file is ever evaluated as code.
-Every problem raises one SceneError whose str() is a single line naming the file and dotted key.
+A scene file has a top-level ``name``, an optional top-level ``geometry`` ("chain", the default,
+or "packing") and the tables of its geometry's schema: for a chain [disks], [contacts], [load],
+[effects], [stability] (schema and units: scenes/paper.toml); for a packing [packing], [disks],
+[contacts], [shear], [effects], [stability] (PACKING_SCHEMA, scenes/packing.toml). Every key is
+optional; a missing key takes the Scene() or PackingScene() default. Files are parsed with
+tomllib only: nothing in a file is ever evaluated as code. Every problem raises one SceneError
+whose str() is a single line naming the file and dotted key.
 """
 from __future__ import annotations
 
@@ -14,8 +17,9 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Callable, Iterator
 
-from diskfriction.scenes.rules import (EFFECTS_RULES, FRICTION, SCENE_RULES, Invalid, Rule,
-                                       kind)
+from diskfriction.scenes.packing import PackingScene
+from diskfriction.scenes.rules import (EFFECTS_RULES, FRICTION, GEOMETRIES, PACKING_RULES,
+                                       SCENE_RULES, Invalid, Rule, expect, kind)
 from diskfriction.scenes.scene import Effects, Scene, SceneValueError
 
 FILE_KEY = "<file>"
@@ -140,9 +144,67 @@ SCHEMA: dict[str, _Key] = {
                                                               "increment (docs/physics.md)"),
     "stability.matrix": _Key(SCENE_RULES["matrix"], "stability matrix"),
 }
-TABLES = tuple(dict.fromkeys(key.partition(".")[0] for key in SCHEMA if "." in key))
 KEYS = {**_FIELDS, **_EFFECT_FIELDS}
 """Scene or Effects field -> the dotted key that sets it (effects.friction sets two switches)."""
+
+
+def _packing_friction(value: Any) -> tuple[str, ...]:
+    """A packing file's effects.friction: [] or ["disk-disk"] (a packing has no substrate)."""
+    kinds = FRICTION.check(value)
+    if "substrate" in kinds:
+        raise Invalid("a packing has no substrate: friction is a subset of disk-disk")
+    return kinds
+
+
+# PackingScene field -> dotted key, for the fields a packing file sets one to one.
+_PACKING_FIELDS = {
+    "name": "name",
+    "N": "packing.N",
+    "size_ratio": "packing.size_ratio",
+    "fraction_small": "packing.fraction_small",
+    "pressure": "packing.pressure",
+    "seed": "packing.seed",
+    "R": "disks.R",
+    "m": "disks.m",
+    "inertia": "disks.inertia",
+    "k_n": "contacts.k_n",
+    "k_t": "contacts.k_t",
+    "mu": "contacts.mu",
+    "gamma_range": "shear.gamma",
+    "matrix": "stability.matrix",
+}
+_PACKING_EFFECTS = {"normal": "effects.normal", "tangential": "effects.tangential"}
+PACKING_SCHEMA: dict[str, _Key] = {
+    "name": _Key(PACKING_RULES["name"], "label"),
+    "packing.N": _Key(PACKING_RULES["N"], "number of disks"),
+    "packing.size_ratio": _Key(PACKING_RULES["size_ratio"], "large / small radius"),
+    "packing.fraction_small": _Key(PACKING_RULES["fraction_small"], "fraction of small disks"),
+    "packing.pressure": _Key(PACKING_RULES["pressure"], "target pressure of the preparation",
+                             "[force / length]"),
+    "packing.seed": _Key(PACKING_RULES["seed"], "seed of the initial positions"),
+    "disks.R": _Key(PACKING_RULES["R"], "small disk radius", "[length]"),
+    "disks.m": _Key(PACKING_RULES["m"], "small disk mass (same density for all)", "[mass]"),
+    "disks.inertia": _Key(PACKING_RULES["inertia"], "c in I = c m_i R_i^2 (0.5: uniform disk)"),
+    "contacts.k_n": SCHEMA["contacts.k_n"],
+    "contacts.k_t": SCHEMA["contacts.k_t"],
+    "contacts.mu": SCHEMA["contacts.mu"],
+    "shear.gamma": _Key(PACKING_RULES["gamma_range"], "quasistatic range [start, stop] of the "
+                                                      "shear strain (Lees-Edwards)"),
+    "effects.normal": SCHEMA["effects.normal"],
+    "effects.tangential": SCHEMA["effects.tangential"],
+    "effects.friction": _Key(Rule(_packing_friction, "[] or [\"disk-disk\"]"),
+                             "where the tangential law acts"),
+    "stability.matrix": SCHEMA["stability.matrix"],
+}
+PACKING_KEYS = {**_PACKING_FIELDS, **_PACKING_EFFECTS}
+SCHEMAS = {"chain": SCHEMA, "packing": PACKING_SCHEMA}
+
+
+def _tables(schema: dict[str, _Key]) -> tuple[str, ...]:
+    return tuple(dict.fromkeys(key.partition(".")[0] for key in schema if "." in key))
+
+
+TABLES = _tables(SCHEMA)
 
 
 # ---------------------------------------------------------------- Scene <-> dotted values
@@ -201,55 +263,98 @@ def _read_document(file: str) -> dict[str, Any]:
         raise SceneError(file, FILE_KEY, "malformed TOML", str(error)) from None
 
 
-def _unknown(file: str, table: str, name: str, value: Any) -> SceneError:
+def _unknown(file: str, table: str, name: str, value: Any, schema: dict = SCHEMA) -> SceneError:
     """The error for a key or table the schema does not know in ``table``, listing known ones."""
-    siblings = [key.rpartition(".")[2] for key in SCHEMA if key.rpartition(".")[0] == table]
-    known = siblings if table else siblings + [f"[{each}]" for each in TABLES]
+    siblings = [key.rpartition(".")[2] for key in schema if key.rpartition(".")[0] == table]
+    known = siblings if table else ["geometry"] + siblings + [f"[{each}]" for each in _tables(schema)]
     what = "unknown table" if isinstance(value, dict) else "unknown key"
     where = f" in [{table}]" if table else ""
     key = f"{table}.{name}" if table else name
     return SceneError(file, key, f"{what}{where}, expected one of {', '.join(known)}", value)
 
 
-def _entry(file: str, table: str, name: str, value: Any) -> tuple[str, Any]:
+def _entry(file: str, table: str, name: str, value: Any, schema: dict = SCHEMA
+           ) -> tuple[str, Any]:
     """(dotted key, value) for key ``name`` of ``table`` ("" at top level); unknown ones raise."""
     key = f"{table}.{name}" if table else name
-    if key not in SCHEMA or key.rpartition(".")[0] != table:  # a quoted "disks.N" is no key
-        raise _unknown(file, table, name, value)
+    if key not in schema or key.rpartition(".")[0] != table:  # a quoted "disks.N" is no key
+        raise _unknown(file, table, name, value, schema)
     return key, value
 
 
-def _entries(document: dict[str, Any], file: str) -> Iterator[tuple[str, Any]]:
+def _entries(document: dict[str, Any], file: str, schema: dict = SCHEMA
+             ) -> Iterator[tuple[str, Any]]:
     """(dotted key, value) for every key of ``document`` in file order; unknown ones raise."""
+    tables = _tables(schema)
     for name, value in document.items():
-        if name not in TABLES:
-            yield _entry(file, "", name, value)
+        if name not in tables:
+            yield _entry(file, "", name, value, schema)
         elif not isinstance(value, dict):
             raise SceneError(file, name, f"expected a table, not {kind(value)}", value)
         else:
-            yield from (_entry(file, name, inner, item) for inner, item in value.items())
+            yield from (_entry(file, name, inner, item, schema) for inner, item in value.items())
 
 
-def _check(file: str, key: str, value: Any) -> Any:
-    """The Scene value of ``value`` at the known dotted ``key``, by the rule of the field it
+def _check(file: str, key: str, value: Any, schema: dict = SCHEMA) -> Any:
+    """The scene value of ``value`` at the known dotted ``key``, by the rule of the field it
     sets; a bad value raises."""
     try:
-        return SCHEMA[key].rule.check(value)
+        return schema[key].rule.check(value)
     except Invalid as invalid:
         raise SceneError(file, key, invalid.what, value) from None
 
 
-def _checked(entries: Iterator[tuple[str, Any]], file: str) -> dict[str, Any]:
-    """The Scene value of every (dotted key, value) of ``entries``; the first bad key raises."""
-    return {key: _check(file, key, value) for key, value in entries}
+def _checked(entries: Iterator[tuple[str, Any]], file: str, schema: dict = SCHEMA
+             ) -> dict[str, Any]:
+    """The scene value of every (dotted key, value) of ``entries``; the first bad key raises."""
+    return {key: _check(file, key, value, schema) for key, value in entries}
 
 
-def load_scene(path: str | os.PathLike[str]) -> Scene:
-    """The Scene in the TOML file ``path``: missing keys take Scene() defaults, ``name`` defaults
-    to the file's stem, ``source`` is the path as given. Raises SceneError on any problem."""
+def _geometry(document: dict[str, Any], file: str) -> str:
+    """The document's top-level ``geometry`` (taken out of it), "chain" when absent."""
+    value = document.pop("geometry", "chain")
+    try:
+        if expect(value, str, "a string") not in GEOMETRIES:
+            raise Invalid(f"unknown geometry: must be one of {' | '.join(GEOMETRIES)}")
+    except Invalid as invalid:
+        raise SceneError(file, "geometry", invalid.what, value) from None
+    return value
+
+
+def _packing_values(scene: PackingScene) -> dict[str, Any]:
+    """Every dotted key of PACKING_SCHEMA with its value in ``scene``."""
+    values = {key: getattr(scene, field) for field, key in _PACKING_FIELDS.items()}
+    values |= {key: getattr(scene.effects, field) for field, key in _PACKING_EFFECTS.items()}
+    values["effects.friction"] = ["disk-disk"] if scene.effects.pair_friction else []
+    return {key: values[key] for key in PACKING_SCHEMA}
+
+
+def _packing_scene(values: dict[str, Any], given: dict[str, Any], origin: str) -> PackingScene:
+    """The PackingScene of the checked dotted ``values``; as _scene for derived problems."""
+    try:
+        effects = Effects(**{field: values[key] for field, key in _PACKING_EFFECTS.items()},
+                          pair_friction="disk-disk" in values["effects.friction"],
+                          wall_friction=False)
+        return PackingScene(**{field: values[key] for field, key in _PACKING_FIELDS.items()},
+                            effects=effects, source=origin)
+    except SceneValueError as error:
+        key = PACKING_KEYS.get(error.fields[0], "effects.friction")
+        raise SceneError(origin, key, error.what, values.get(key)) from None
+
+
+def load_scene(path: str | os.PathLike[str]) -> Scene | PackingScene:
+    """The Scene (or, with ``geometry = "packing"``, the PackingScene) in the TOML file
+    ``path``: missing keys take the defaults, ``name`` defaults to the file's stem, ``source``
+    is the path as given. Raises SceneError on any problem."""
     file = os.fspath(path)
+    document = _read_document(file)
+    geometry = _geometry(document, file)
+    schema = SCHEMAS[geometry]
+    given = _checked(_entries(document, file, schema), file, schema)
+    if geometry == "packing":
+        defaults = _packing_values(replace(PackingScene(), name=Path(file).stem))
+        return _packing_scene(defaults | given, given, file)
     defaults = _values(replace(Scene(), name=Path(file).stem))
-    given = _checked(_entries(_read_document(file), file), file)
     return _scene(defaults | given, given, origin=file, source=file)
 
 
@@ -282,7 +387,7 @@ def _line(text: str, comment: str) -> str:
     return f"{text:<{COMMENT_COLUMN}} # {comment}"
 
 
-def _key_lines(values: dict[str, Any], prefix: str = "") -> list[str]:
+def _key_lines(values: dict[str, Any], prefix: str = "", schema: dict = SCHEMA) -> list[str]:
     """``key = value  # comment`` lines for dotted ``values``, with [table] headers.
 
     With a ``prefix`` (a comment marker) the lines are comments and carry no table headers.
@@ -293,7 +398,7 @@ def _key_lines(values: dict[str, Any], prefix: str = "") -> list[str]:
         if head != table and not prefix:
             lines += ["", f"[{head}]"]
         table = head
-        lines.append(_line(f"{prefix}{name} = {_toml(value)}", SCHEMA[key].comment))
+        lines.append(_line(f"{prefix}{name} = {_toml(value)}", schema[key].comment))
     return lines
 
 
@@ -315,8 +420,17 @@ def _derived_lines(scene: Scene) -> list[str]:
     ]
 
 
-def format_scene(scene: Scene) -> str:
+def format_scene(scene: Scene | PackingScene) -> str:
     """``scene`` as TOML in the scene-file schema, every key written out, then comment lines
-    with the derived quantities (L, I, delta_w0, tau, ndof) and the resolved effects."""
+    with the derived quantities (chain: L, I, delta_w0, tau, ndof; packing: delta_0, ndof) and
+    the resolved effects."""
     header = f"# scene {_toml_string(scene.name)} from {_toml_string(scene.source)}"
+    if isinstance(scene, PackingScene):
+        derived = [("delta_0", scene.delta_0, "overlap carrying the force 2 R P, (2 R P / k_n)^(1/p)"),
+                   ("ndof", scene.ndof, "degrees of freedom, 3 N")]
+        return "\n".join([header, "", _line('geometry = "packing"', "a 2D packing (docs/packings.md)"),
+                          *_key_lines(_packing_values(scene), schema=PACKING_SCHEMA), "",
+                          "# derived (comments, not read back):",
+                          *(_line(f"# {name} = {_toml(value)}", comment)
+                            for name, value, comment in derived)]) + "\n"
     return "\n".join([header, *_key_lines(_values(scene)), *_derived_lines(scene)]) + "\n"

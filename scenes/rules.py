@@ -117,6 +117,27 @@ def _load_range(value: Any) -> tuple[float, float]:
     return (start, stop)
 
 
+def _strain_range(value: Any) -> tuple[float, float]:
+    """gamma: an array [start, stop] of two finite numbers with 0 <= start < stop (a negative
+    strain is the mirror image x -> -x of a positive one)."""
+    if len(expect(value, (list, tuple), "an array [start, stop]")) != 2:
+        raise Invalid(f"expected exactly two numbers [start, stop], not {len(value)}")
+    start, stop = map(number, value)
+    if start < 0:
+        raise Invalid("must be >= 0: a negative strain is the mirror image x -> -x of a positive one")
+    if start >= stop:
+        raise Invalid("empty range: start == stop" if start == stop else "reversed range: start > stop")
+    return (start, stop)
+
+
+def _seed(value: Any) -> int:
+    """A seed: an integer >= 0 (numpy's generators take no negative seed)."""
+    seed = int(expect(value, numbers.Integral, "an integer"))
+    if seed < 0:
+        raise Invalid("must be >= 0")
+    return seed
+
+
 def _one_of(options: tuple[str, ...], effect: str) -> Rule:
     """A string naming one of ``options``; anything else is an unknown effect."""
 
@@ -148,6 +169,29 @@ SCENE_RULES: dict[str, Rule] = {
     "source": TEXT,
 }
 """Scene field -> its rule (``effects`` is an Effects, which checks its own fields)."""
+
+GEOMETRIES = ("chain", "packing")
+"""What a scene file's top-level ``geometry`` names: the paper's chain on a substrate (the
+default), or a 2D packing in a sheared periodic box (scenes/packing.py, docs/packings.md)."""
+
+PACKING_RULES: dict[str, Rule] = {
+    "N": Rule(_count, "an integer >= 2"),
+    "size_ratio": _number_rule(lambda x: x >= 1.0, ">= 1"),
+    "fraction_small": _number_rule(lambda x: 0.0 <= x <= 1.0, "in [0, 1]"),
+    "pressure": POSITIVE,
+    "seed": Rule(_seed, "an integer >= 0"),
+    "R": POSITIVE,
+    "m": POSITIVE,
+    "inertia": POSITIVE,
+    "k_n": POSITIVE,
+    "k_t": POSITIVE,
+    "mu": _number_rule(lambda x: x >= 0.0, ">= 0"),
+    "gamma_range": Rule(_strain_range, "0 <= start < stop"),
+    "matrix": _one_of(MATRICES, "stability matrix"),
+    "name": TEXT,
+    "source": TEXT,
+}
+"""PackingScene field -> its rule."""
 
 EFFECTS_RULES: dict[str, Rule] = {
     "normal": _one_of(tuple(NORMAL_LAWS), "normal law"),

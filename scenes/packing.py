@@ -1,0 +1,79 @@
+"""The PackingScene: N bidisperse frictional disks in a periodic square box, prepared at a
+target pressure and sheared quasistatically with Lees-Edwards boundaries (docs/packings.md).
+
+Raw units as the chain's (docs/model.md#units): lengths where the small disks' diameter is 2R,
+masses in units of the small disks' mass m (every disk has the same density: a disk of radius
+r has mass m r^2 / R^2 and moment of inertia c m_i r^2), stiffnesses k_n [force / length^p],
+pressure [force / length] (a 2D pressure). Every field is checked by its rule
+(scenes/rules.py: PACKING_RULES) when constructed.
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+from diskfriction.scenes.rules import NORMAL_LAWS, PACKING_RULES
+from diskfriction.scenes.scene import Effects, SceneValueError, _check_fields
+
+
+@dataclass(frozen=True)
+class PackingScene:
+    """A packing of N disks: round(N fraction_small) of radius R, the rest of radius
+    R size_ratio, placed from `seed` and minimised without friction to the 2D pressure
+    `pressure`; then friction is switched on (every history zero) and the box sheared from
+    gamma_range[0] to gamma_range[1]. Contacts obey the chain's laws (Hertz normal force
+    k_n delta^p with one k_n for every pair, smoothed Mindlin with k_t and mu; Effects) with
+    lever arms R_i, R_j; the disks rotate."""
+
+    N: int = 256
+    size_ratio: float = 1.4
+    fraction_small: float = 0.5
+    pressure: float = 0.1
+    seed: int = 1
+    R: float = 0.5
+    m: float = 1.0
+    inertia: float = 0.5
+    k_n: float = 2000.0
+    k_t: float = 2000.0 * 2.0 / 7.0
+    mu: float = 10.0
+    gamma_range: tuple[float, float] = (0.0, 0.05)
+    matrix: str = "M^-1 J"
+    effects: Effects = Effects(wall_friction=False)
+    name: str = "packing"
+    source: str = "<defaults>"
+
+    def __post_init__(self) -> None:
+        _check_fields(self, PACKING_RULES)
+        if not isinstance(self.effects, Effects):
+            raise SceneValueError("PackingScene", ("effects",), (self.effects,),
+                                  "expected an Effects")
+        if not self.effects.rotation:
+            raise SceneValueError("PackingScene", ("effects",), (self.effects,),
+                                  "a packing's disks rotate: rotation must be true")
+        if self.effects.conventions != "model":
+            raise SceneValueError("PackingScene", ("effects",), (self.effects,),
+                                  'a packing takes conventions "model" only')
+
+    @property
+    def resolved_effects(self) -> Effects:
+        """Effects actually simulated: no substrate; mu = 0 carries no tangential force."""
+        pair = self.effects.pair_friction and self.mu > 0.0 and self.effects.tangential != "none"
+        return dataclasses.replace(self.effects, pair_friction=pair, wall_friction=False,
+                                   tangential=self.effects.tangential if pair else "none")
+
+    @property
+    def ndof(self) -> int:
+        return 3 * self.N
+
+    @property
+    def delta_0(self) -> float:
+        """The overlap of a contact carrying the force P 2R, (2 R P / k_n)^(1/p): the typical
+        overlap at the target pressure [length]."""
+        return (2.0 * self.R * self.pressure / self.k_n) ** float(1 / NORMAL_LAWS[self.effects.normal])
+
+    def physics_fields(self) -> dict:
+        """Every field that enters physics (all but name and source), as JSON values."""
+        fields = dataclasses.asdict(self)
+        del fields["name"], fields["source"]
+        fields["gamma_range"] = list(fields["gamma_range"])
+        return fields

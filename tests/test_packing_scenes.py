@@ -1,0 +1,103 @@
+"""Packing scenes (issue 25): geometry = "packing" in a scene file, its schema and rules, and
+the commands that do not take packings yet refusing one in one line."""
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import pytest
+from commandline import error_line, run_cli
+
+from diskfriction.scenes import Effects, SceneError, format_scene, load_scene
+from diskfriction.scenes.load import PACKING_SCHEMA
+from diskfriction.scenes.packing import PackingScene
+from diskfriction.scenes.scene import SceneValueError
+
+PACKAGED = Path(__file__).resolve().parents[1] / "scenes" / "packing.toml"
+
+
+def write(tmp_path: Path, text: str) -> Path:
+    path = tmp_path / "pack.toml"
+    path.write_text('geometry = "packing"\n' + text, encoding="utf-8")
+    return path
+
+
+def test_the_packaged_packing_scene_is_what_the_scene_command_prints_for_it():
+    scene = load_scene(PACKAGED)
+    assert dataclasses.replace(scene, source="<defaults>") == PackingScene()
+    printed = format_scene(scene)
+    keys = printed[printed.index("\n") + 1:printed.index("\n# derived")]
+    assert PACKAGED.read_text(encoding="utf-8").endswith(keys.rstrip("\n") + "\n")
+
+
+def test_a_packing_scene_round_trips_through_format_scene(tmp_path):
+    scene = PackingScene(N=17, size_ratio=1.25, fraction_small=0.3, pressure=0.02, seed=9,
+                         mu=0.5, gamma_range=(0.01, 0.2), matrix="J", name="odd",
+                         effects=Effects(normal="hooke", pair_friction=False, wall_friction=False))
+    path = tmp_path / "round.toml"
+    path.write_text(format_scene(scene), encoding="utf-8")
+    assert dataclasses.replace(load_scene(path), source=scene.source) == scene
+
+
+BAD = [("packing.N", "1", "must be >= 2"),
+       ("packing.size_ratio", "0.9", "must be >= 1"),
+       ("packing.fraction_small", "1.5", "must be in [0, 1]"),
+       ("packing.pressure", "-0.1", "must be > 0"),
+       ("packing.seed", "-3", "must be >= 0"),
+       ("packing.seed", "1.5", "expected an integer"),
+       ("disks.R", "0", "must be > 0"),
+       ("contacts.mu", "-1", "must be >= 0"),
+       ("shear.gamma", "[0.1, 0.0]", "reversed range"),
+       ("shear.gamma", "[-0.1, 0.1]", "must be >= 0"),
+       ("effects.friction", '["substrate"]', "a packing has no substrate"),
+       ("effects.normal", '"coulomb"', "unknown effect"),
+       ("stability.matrix", '"K"', "unknown effect")]
+
+
+@pytest.mark.parametrize("key, value, what", BAD, ids=[f"{k}={v}" for k, v, _ in BAD])
+def test_a_bad_packing_value_is_one_line_naming_file_key_and_value(tmp_path, key, value, what):
+    table, name = key.split(".")
+    path = write(tmp_path, f"[{table}]\n{name} = {value}\n")
+    with pytest.raises(SceneError) as raised:
+        load_scene(path)
+    error = raised.value
+    assert (error.file, error.key) == (str(path), key) and what in error.what
+    assert "\n" not in str(error)
+
+
+@pytest.mark.parametrize("text, key", [("[load]\nF_y = 0.1\n", "load"),
+                                       ("[disks]\neps = 0.01\n", "disks.eps"),
+                                       ("[effects]\nrotation = false\n", "effects.rotation")])
+def test_chain_keys_are_unknown_in_a_packing_file(tmp_path, text, key):
+    with pytest.raises(SceneError) as raised:
+        load_scene(write(tmp_path, text))
+    assert raised.value.key == key and "unknown" in raised.value.what
+
+
+def test_an_unknown_geometry_is_refused(tmp_path):
+    path = tmp_path / "g.toml"
+    path.write_text('geometry = "hexagon"\n')
+    with pytest.raises(SceneError) as raised:
+        load_scene(path)
+    assert raised.value.key == "geometry" and raised.value.value == "hexagon"
+
+
+def test_the_packing_scene_checks_its_effects():
+    with pytest.raises(SceneValueError, match="rotate"):
+        PackingScene(effects=Effects(rotation=False))
+    with pytest.raises(SceneValueError, match="conventions"):
+        PackingScene(effects=Effects(conventions="lammps"))
+    assert PackingScene(mu=0.0).resolved_effects.pair_law == "none"
+    assert set(PACKING_SCHEMA) >= {"packing.N", "packing.pressure", "shear.gamma"}
+
+
+@pytest.mark.parametrize("command, extra", [("bifurcate", []), ("verify", ["--t-end", "1"]),
+                                            ("simulate", ["--fx", "0.01", "--t-end", "1"]),
+                                            ("map", ["--vary", "contacts.mu=5:10:2"]),
+                                            ("report", ["--only", "fig6"])])
+def test_commands_without_packings_refuse_a_packing_scene_in_one_line(tmp_path, command, extra):
+    result = run_cli(command, str(PACKAGED), *extra, "--out", str(tmp_path / "out"))
+    assert result.returncode == 2 and result.stderr.count("\n") == 1
+    line = error_line(result, command)
+    assert str(PACKAGED) in line and 'geometry = "packing"' in line
+    assert not (tmp_path / "out").exists()
