@@ -9,12 +9,12 @@ from __future__ import annotations
 import argparse
 import sys
 
-from diskfriction.cli import (bifurcate_cmd, crosscheck_cmd, export_cmd, map_cmd, report_cmd,
-                              scene_cmd, simulate_cmd, verify_cmd)
+from diskfriction.cli import (bifurcate_cmd, crosscheck_cmd, export_cmd, map_cmd, prepare_cmd,
+                              report_cmd, scene_cmd, simulate_cmd, verify_cmd)
 from diskfriction.cli.common import run_command
 
 SUBCOMMANDS = (scene_cmd, bifurcate_cmd, simulate_cmd, verify_cmd, map_cmd, report_cmd, export_cmd,
-               crosscheck_cmd)
+               crosscheck_cmd, prepare_cmd)
 
 
 class VersionAction(argparse.Action):

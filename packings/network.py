@@ -106,10 +106,16 @@ class Network:
         self.kernels.stress(q, xi, self.radii, contacts, self.params(gamma), sigma)
         return sigma
 
-    def frictionless(self, xy: np.ndarray) -> tuple[np.ndarray, float, float]:
-        """At gamma = 0 without friction, for a minimiser: xy = (x_1..x_N, y_1..y_N) -> (F =
-        -dU/dxy [force], U [energy], the virial W = sum |r_ij| F_n [energy])."""
-        F = np.empty(2 * self.N)
-        U, W = self.kernels.frictionless(np.ascontiguousarray(xy, dtype=float), self.radii,
-                                         self.L, self.constants[1], F)
-        return F, U, W
+
+def frictionless_forces(kernels: ModuleType, k_n: float):
+    """The preparation's pair_forces (packings/prepare.py) from a packing's kernels:
+    (positions (N, 2), radii, L) -> (F (N, 2) [force], U [energy], virial [energy]) of the
+    frictionless normal forces at gamma = 0 (kernels.frictionless)."""
+
+    def pair_forces(positions: np.ndarray, radii: np.ndarray, L: float):
+        N = radii.size
+        F = np.empty(2 * N)
+        U, W = kernels.frictionless(np.ascontiguousarray(positions.T).ravel(), radii, L, k_n, F)
+        return F.reshape(2, N).T, U, W
+
+    return pair_forces

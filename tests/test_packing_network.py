@@ -11,7 +11,7 @@ import pytest
 
 import reference_model as ref
 from diskfriction.packings.network import Network
-from diskfriction.scenes import Effects, Scene
+from diskfriction.scenes import Scene
 from diskfriction.symbolic.system import System
 
 K_N, K_T, MU = 2000.0, 4000.0 / 7.0, 10.0

@@ -101,3 +101,33 @@ def test_commands_without_packings_refuse_a_packing_scene_in_one_line(tmp_path, 
     line = error_line(result, command)
     assert str(PACKAGED) in line and 'geometry = "packing"' in line
     assert not (tmp_path / "out").exists()
+
+
+def test_prepare_writes_a_packing_that_a_second_run_reproduces_bit_for_bit(tmp_path):
+    """`prepare` on a 32-disk scene: the target pressure to 1e-3, every disk balanced to
+    F_TOL of a contact's force, z at least isostatic without rattlers; the same scene gives
+    the same packing.npz bytes."""
+    import json
+
+    import numpy as np
+
+    from diskfriction.packings.prepare import load_packing
+    from diskfriction.packings.prepared import F_TOL
+
+    scene = write(tmp_path, "[packing]\nN = 32\npressure = 0.05\n")
+    first = run_cli("prepare", str(scene), "--out", str(tmp_path / "a"))
+    second = run_cli("prepare", str(scene), "--out", str(tmp_path / "b"))
+    assert first.returncode == 0 and second.returncode == 0, first.stderr
+    summary = json.loads((tmp_path / "a" / "packing.json").read_text())
+    assert abs(summary["pressure"] / 0.05 - 1) <= 1e-3 and 0.8 < summary["phi"] < 0.9
+    jammed = 32 - summary["rattlers"]  # isostatic counting with P > 0: z >= 4 - 2 / jammed
+    assert summary["max_force"] <= F_TOL * 0.05 * 1.0 and summary["z"] >= 4 - 2 / jammed
+    a, b = (load_packing(tmp_path / d / "packing.npz") for d in "ab")
+    assert np.array_equal(a.positions, b.positions) and a.L == b.L
+    assert (tmp_path / "a" / "packing.npz").read_bytes() == (tmp_path / "b" / "packing.npz").read_bytes()
+
+
+def test_prepare_refuses_a_chain_scene_in_one_line(tmp_path):
+    result = run_cli("prepare", "--out", str(tmp_path / "out"))
+    assert result.returncode == 2 and "prepare takes a packing scene" in error_line(result, "prepare")
+    assert not (tmp_path / "out").exists()
