@@ -31,8 +31,8 @@ def run(args: argparse.Namespace) -> int:
                            f"packing scene (geometry = \"packing\", docs/packings.md)")
     out = output_dir("prepare", args.out, Path("out/prepare"))
     from diskfriction.files import save_json
-    from diskfriction.packings.prepare import contacts, save_packing
-    from diskfriction.packings.prepared import prepare_scene
+    from diskfriction.packings.prepare import save_packing
+    from diskfriction.packings.prepared import contact_number, prepare_scene
 
     progress = Progress("prepare")
     try:
@@ -42,18 +42,17 @@ def run(args: argparse.Namespace) -> int:
         seconds = time.perf_counter() - start
     finally:
         progress.close()
-    i, j = contacts(packing.positions, packing.radii, packing.L)
+    n_contacts, z = contact_number(packing)
     rattling = packing.rattlers
-    z = 2 * sum(1 for a, b in zip(i, j) if not (rattling[a] or rattling[b])) / max(1, (~rattling).sum())
     save_packing(out / "packing.npz", packing)
     summary = {"scene": scene.name, "N": scene.N, "L": packing.L, "phi": packing.phi,
                "pressure": packing.pressure, "target_pressure": scene.pressure,
-               "max_force": packing.max_force, "contacts": int(len(i)),
+               "max_force": packing.max_force, "contacts": n_contacts,
                "rattlers": int(rattling.sum()), "z": z, "fire_steps": packing.steps,
                "relaxations": packing.relaxations, "seconds": seconds}
     save_json(out / "packing.json", summary)
     print(f"{scene.N} disks: phi = {packing.phi:.4f}, P = {packing.pressure:.6g} (target "
-          f"{scene.pressure:g}), {len(i)} contacts, z = {z:.3f} without the "
+          f"{scene.pressure:g}), {n_contacts} contacts, z = {z:.3f} without the "
           f"{int(rattling.sum())} rattlers, max |F| = {packing.max_force:.1e}; "
           f"{seconds:.1f} s -> {out}")
     return 0

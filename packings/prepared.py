@@ -6,7 +6,7 @@ from typing import Optional
 
 from diskfriction.packings.fire import Progress
 from diskfriction.packings.network import frictionless_forces
-from diskfriction.packings.prepare import Packing, prepare
+from diskfriction.packings.prepare import Packing, contacts, prepare
 from diskfriction.scenes.packing import PackingScene
 from diskfriction.symbolic.kernels import load_packing_kernels
 
@@ -25,3 +25,12 @@ def prepare_scene(scene: PackingScene, progress: Optional[Progress] = None) -> P
                    scene.fraction_small, pressure=scene.pressure,
                    pair_forces=frictionless_forces(kernels, scene.k_n),
                    f_tol=F_TOL * scene.pressure * 2.0 * scene.R, progress=progress)
+
+
+def contact_number(packing: Packing) -> tuple[int, float]:
+    """(the number of contacts, z = 2 x the contacts between non-rattlers / the non-rattlers):
+    the mean contact number of the rigid part, isostatic at 4 for frictionless disks."""
+    i, j = contacts(packing.positions, packing.radii, packing.L)
+    loose = packing.rattlers
+    kept = int(((~loose[i]) & (~loose[j])).sum())
+    return len(i), 2 * kept / max(1, int((~loose).sum()))
