@@ -136,6 +136,7 @@ def mp_grain(dx, dy, xi, R_i, R_j):
             -(Fn * ny + Ft * nx), -R_j * Ft]
 
 
+@mp.workdps(50)  # whatever precision other tests left mpmath at
 def test_one_contact_of_unequal_disks_matches_the_mpmath_transcription():
     """f and the total stiffness of disks of radii 0.5 and 0.7: the stiffness by 50-digit
     central differences, d xi = s . d r_ij - (R_i d theta_i + R_j d theta_j) along each step."""
