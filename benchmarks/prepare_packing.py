@@ -67,8 +67,8 @@ def main() -> None:
                   f"{seconds / calls * 1e3:>9.3f}{p.phi:>8.4f}{int(p.rattlers.sum()):>10}",
                   flush=True)
     if 1024 not in args.sizes:
-        print(f"N = 1024 left out: one reference force call takes {seconds_per_call(1024) * 1e3:.0f}"
-              f" ms (--sizes 1024 to run it)")
+        ms = seconds_per_call(1024) * 1e3
+        print(f"N = 1024 left out: one reference force call takes {ms:.0f} ms (--sizes 1024)")
     print(f"machine: {os.cpu_count()} cores; numpy {np.__version__}")
 
 
