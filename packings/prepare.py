@@ -185,9 +185,10 @@ def relax(fractions: np.ndarray, radii: np.ndarray, L: float, pair_forces: PairF
                                f"phi = {phi:.4f} (max |F| = {result.max_force:.3g})")
     positions = wrap(result.x, L)
     _, energy, virial = pair_forces(positions, radii, L)
+    pressure = float(virial) / (2 * L * L)
     if progress is not None:
-        progress(f"relaxed at phi = {phi:.5f}: P = {virial / (2 * L * L):.4g}", None)
-    return Relaxed(positions, L, phi, virial / (2 * L * L), float(energy), result.max_force,
+        progress(f"relaxed at phi = {phi:.5f}: P = {pressure:.4g}", None)
+    return Relaxed(positions, L, phi, pressure, float(energy), result.max_force,
                    result.steps, phi * (1 - mean_overlap(positions, radii, L)) ** 2)
 
 
