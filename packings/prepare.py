@@ -9,18 +9,20 @@ length (2D), energies in force * length.
 The force comes from outside: pair_forces(positions, radii, L) -> (F (N, 2), energy, virial),
 the frictionless normal force, always called with positions in [0, L).
 
-Pressure protocol: the random configuration is relaxed at PHI_START; the packing fraction then
-goes up (or down) by PHI_STEP until the target is bracketed, then a safeguarded secant on
-g(phi) = P^(2/3) - P_target^(2/3), linear in phi above jamming for Hertz contacts (P ~ (phi -
-phi_J)^(3/2)), until |P / P_target - 1| <= PRESSURE_RTOL (next_phi). Each step rescales the
-positions and the box affinely, from the last jammed configuration above the target when there
-is one (so that the secant walks along one contact network), and relaxes again.
+Pressure protocol: the random configuration is relaxed at PHI_START, above jamming (relaxing
+near phi_J is slow: at N = 256 one run at 0.84 took > 60000 FIRE steps, against ~3000 at 0.88);
+phi goes up by PHI_STEP while the pressure is below the target, then down along the jammed
+branch by a safeguarded secant on g(phi) = P^(2/3) - P_target^(2/3), linear in phi above
+jamming for Hertz contacts (P ~ (phi - phi_J)^(3/2)), until |P / P_target - 1| <=
+PRESSURE_RTOL (next_phi). Each step rescales the positions and the box affinely, from the last
+configuration above the target (so that the secant walks along one contact network), and
+relaxes again.
 """
 from __future__ import annotations
 
 import zipfile
 from dataclasses import dataclass, fields
-from typing import Callable, NamedTuple, Optional
+from typing import Callable, Optional
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -32,8 +34,8 @@ from diskfriction.packings.fire import Progress, fire
 PairForces = Callable[[np.ndarray, np.ndarray, float], tuple[np.ndarray, float, float]]
 """pair_forces(positions, radii, L) -> (F (N, 2), energy, virial = sum_contacts r_ij . f_ij)."""
 
-PHI_START = 0.80      # below jamming (near 0.84 for these disks): the search starts unjammed
-PHI_STEP = 0.02       # steps of the packing fraction until the target pressure is bracketed
+PHI_START = 0.88      # above jamming (near 0.84): relaxing there is fast, unlike near phi_J
+PHI_STEP = 0.02       # steps of phi while the target is not bracketed
 PHI_MAX = 0.95        # no jammed state below this: the preparation fails
 PHI_MIN = 0.30        # decompressed this far and still above the target: fails
 PRESSURE_RTOL = 1e-3  # |P / P_target - 1| at the end
@@ -59,7 +61,8 @@ class Packing:
     [force / length], energy [force * length] and max_force = max_i |F_i| [force] measured at
     the positions; phi = pi sum R_i^2 / L^2; rattlers (N,) bool (function rattlers). Made from:
     seed, R, k_n, size_ratio, fraction_small, target ("pressure" or "phi") at target_value,
-    f_tol; steps: FIRE steps over all relaxations, relaxations: FIRE runs."""
+    f_tol; steps: FIRE steps over all relaxations, relaxations: FIRE runs (pair_forces was
+    called steps + 2 relaxations times)."""
     positions: np.ndarray
     radii: np.ndarray
     L: float
@@ -155,16 +158,18 @@ def first_time_step(k_n: float, R: float) -> float:
 
 @dataclass(frozen=True, eq=False)
 class Relaxed:
-    """One FIRE relaxation at box side L: positions in [0, L), pressure = virial / (2 L^2),
-    energy, max_force = max_i |F_i| at them, the FIRE steps it took, and overlap: the mean over
-    contacts of delta_ij / (R_i + R_j) (0 without contacts)."""
+    """One FIRE relaxation in the box of side L at packing fraction phi: positions in [0, L),
+    pressure = virial / (2 L^2), energy, max_force = max_i |F_i| at them, the FIRE steps it
+    took; phi_J = phi (1 - <delta_ij / (R_i + R_j)>_contacts)^2, where an affine decompression
+    would open the mean contact: an estimate of jamming (phi without contacts)."""
     positions: np.ndarray
     L: float
+    phi: float
     pressure: float
     energy: float
     max_force: float
     steps: int
-    overlap: float
+    phi_J: float
 
 
 def relax(fractions: np.ndarray, radii: np.ndarray, L: float, pair_forces: PairForces,
@@ -179,60 +184,49 @@ def relax(fractions: np.ndarray, radii: np.ndarray, L: float, pair_forces: PairF
         raise PreparationError(f"FIRE did not reach max |F| <= {f_tol:g} in {MAX_STEPS} steps at "
                                f"phi = {phi:.4f} (max |F| = {result.max_force:.3g})")
     positions = wrap(result.x, L)
-    F, energy, virial = pair_forces(positions, radii, L)
+    _, energy, virial = pair_forces(positions, radii, L)
+    pressure = float(virial) / (2 * L * L)
     if progress is not None:
-        progress(f"relaxed at phi = {phi:.5f}: P = {virial / (2 * L * L):.4g}", None)
-    return Relaxed(positions, L, virial / (2 * L * L), float(energy), result.max_force,
-                   result.steps, mean_overlap(positions, radii, L))
+        progress(f"relaxed at phi = {phi:.5f}: P = {pressure:.4g}", None)
+    return Relaxed(positions, L, phi, pressure, float(energy), result.max_force,
+                   result.steps, phi * (1 - mean_overlap(positions, radii, L)) ** 2)
 
 
-class End(NamedTuple):
-    """A relaxed point of the pressure search: phi, its pressure P and g = P^(2/3) -
-    target^(2/3), the positions as fractions of the box side, and phi_J = phi (1 - overlap)^2:
-    where an affine decompression would open the mean contact (an estimate of jamming)."""
-    phi: float
-    pressure: float
-    g: float
-    fractions: np.ndarray
-    phi_J: float
-
-
-def next_phi(lo: Optional[End], hi: Optional[End], jammed: list[End], target: float) -> float:
-    """The next packing fraction of the search: PHI_STEP up from lo (or down from hi) until the
-    target is bracketed (lo.g < 0 <= hi.g). Then, with P^(2/3) linear in phi above jamming:
-    the secant of g through the last two jammed points, or with one, phi_J + (phi - phi_J)
-    (target / P)^(2/3) from its jamming estimate; the bracket's midpoint if that falls outside."""
+def next_phi(lo: Optional[Relaxed], hi: Optional[Relaxed], jammed: list[Relaxed],
+             target: float) -> float:
+    """The next packing fraction of the search, g = P^(2/3) - target^(2/3) < 0 at lo, >= 0 at
+    hi. No hi yet: PHI_STEP up. Else, with P^(2/3) linear in phi above jamming: the secant of g
+    through the last two jammed runs, or with one, phi_J + (phi - phi_J) (target / P)^(2/3);
+    if that leaves the bracket (lo.phi or PHI_MIN, hi.phi): its midpoint, or PHI_STEP down."""
     if hi is None:
         return lo.phi + PHI_STEP
-    if lo is None:
-        return hi.phi - PHI_STEP
-    a, b = jammed[-2:] if len(jammed) >= 2 else (None, jammed[-1])
-    phi = b.phi_J + (b.phi - b.phi_J) * (target / b.pressure) ** (2 / 3) if a is None or \
-        a.g == b.g else b.phi - b.g * (b.phi - a.phi) / (b.g - a.g)
-    return phi if lo.phi < phi < hi.phi else (lo.phi + hi.phi) / 2
+    b = jammed[-1]
+    a = jammed[-2] if len(jammed) >= 2 and jammed[-2].pressure != b.pressure else None
+    phi = b.phi_J + (b.phi - b.phi_J) * (target / b.pressure) ** (2 / 3) if a is None else \
+        b.phi - (b.pressure ** (2 / 3) - target ** (2 / 3)) * (b.phi - a.phi) / \
+        (b.pressure ** (2 / 3) - a.pressure ** (2 / 3))
+    if (lo.phi if lo else PHI_MIN) < phi < hi.phi:
+        return phi
+    return (lo.phi + hi.phi) / 2 if lo else hi.phi - PHI_STEP
 
 
 def pressure_search(relax_at: Callable[[float, np.ndarray], Relaxed], fractions: np.ndarray,
                     target: float) -> list[Relaxed]:
     """The relaxations that bring the pressure to target (module docstring, next_phi), the last
     one within PRESSURE_RTOL. relax_at(phi, fractions) relaxes at packing fraction phi from
-    positions fractions L: the last jammed configuration above the target once there is one,
-    else the last one. Jammed: P >= JAMMED * target."""
+    positions fractions L: those of the last run above the target once there is one, else of
+    the last run. Jammed: P >= JAMMED target."""
     runs, lo, hi, jammed = [], None, None, []
     phi = PHI_START
     while len(runs) < MAX_RELAXATIONS:
-        run = relax_at(phi, hi.fractions if hi else lo.fractions if lo else fractions)
+        start = hi or lo
+        run = relax_at(phi, start.positions / start.L if start else fractions)
         runs.append(run)
         if abs(run.pressure / target - 1) <= PRESSURE_RTOL:
             return runs
-        end = End(phi, run.pressure, run.pressure ** (2 / 3) - target ** (2 / 3),
-                  run.positions / run.L, phi * (1 - run.overlap) ** 2)
-        if end.g < 0:
-            lo = end
-        else:
-            hi = end
-        if end.pressure >= JAMMED * target:
-            jammed.append(end)
+        lo, hi = (run, hi) if run.pressure < target else (lo, run)
+        if run.pressure >= JAMMED * target:
+            jammed.append(run)
         phi = next_phi(lo, hi, jammed, target)
         if phi > PHI_MAX:
             raise PreparationError(f"no jammed state below phi = {PHI_MAX}: the pressure "
@@ -249,13 +243,14 @@ def prepare(N: int, seed: int, R: float, k_n: float, size_ratio: float = 1.4,
             phi: Optional[float] = None, pair_forces: PairForces, f_tol: float,
             progress: Optional[Progress] = None) -> Packing:
     """A frictionless packing of N disks (radii: bidisperse_radii) at a target pressure [force /
-    length] or packing fraction phi (exactly one): positions uniform at random in the box
-    (fractions drawn from np.random.default_rng(seed) after the radii), relaxed by FIRE until
-    max_i |F_i| <= f_tol [force, absolute]. With phi: L = box_side(radii, phi), relaxed once.
-    With pressure: the search of the module docstring. R [length], k_n [force / length^(3/2)]
-    set FIRE's first time step (first_time_step); pair_forces is the force (module docstring).
-    f_tol is absolute: a contact carries about P <2R> [force], so P is measured to about
-    f_tol / (P <2R>) relative, and the pressure search needs that well below PRESSURE_RTOL."""
+    length] or packing fraction phi (exactly one), relaxed by FIRE until max_i |F_i| <= f_tol
+    [force]. The start: positions uniform at random (fractions of the box side, drawn from
+    np.random.default_rng(seed) after the radii: uncorrelated, as a dilute gas), put in the box
+    of side L = box_side(radii, phi) and relaxed once, or with a pressure at PHI_START and
+    searched (module docstring). R [length], k_n [force / length^(3/2)] set FIRE's first time
+    step (first_time_step); pair_forces gives the force (module docstring).
+    f_tol is absolute, not scaled: a contact carries about P <2R> [force], so P is known to about
+    f_tol / (P <2R>) relative; keep that well below PRESSURE_RTOL (1e-8 at P = 1e-2: 1e-6)."""
     if (pressure is None) == (phi is None):
         raise PreparationError("prepare needs exactly one of pressure and phi")
     rules = {"N >= 1": N >= 1, "seed >= 0": seed >= 0, "R > 0": R > 0, "k_n > 0": k_n > 0,
@@ -281,7 +276,7 @@ def prepare(N: int, seed: int, R: float, k_n: float, size_ratio: float = 1.4,
     last = runs[-1]
     rattling = rattlers(*contacts(last.positions, radii, last.L), N)
     return Packing(last.positions, radii, last.L, last.pressure, last.energy, last.max_force,
-                   packing_fraction(radii, last.L), rattling,
+                   last.phi, rattling,
                    int(seed), float(R), float(k_n), float(size_ratio), float(fraction_small),
                    "pressure" if phi is None else "phi", float(pressure or phi), float(f_tol),
                    sum(run.steps for run in runs), len(runs))

@@ -48,6 +48,13 @@ def test_fire_reaches_the_minimum_of_an_anisotropic_quadratic():
     assert result.energy <= 1e-20
 
 
+def test_fire_stops_an_undamped_oscillation_by_its_uphill_restarts():
+    """In 1D the mixing cannot damp: x'' = -x would oscillate for ever; FIRE zeroes v when
+    F . v <= 0 and so comes to rest at x = 0 (131 steps, never without the restart)."""
+    result = fire(lambda x: (-x, 0.5 * x @ x), np.ones(1), 0.1, 1e-10, 1000)
+    assert result.converged and abs(result.x[0]) <= 1e-10
+
+
 def test_fire_separates_three_overlapping_disks():
     """Three disks piled up in a roomy box end apart: no overlap left, zero energy."""
     radii = np.array([0.5, 0.5, 0.7])
