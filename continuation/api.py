@@ -97,7 +97,9 @@ class Options:
     a Hopf point is where a complex pair of the tracked matrix crosses Re = 0, a Hopf
     bifurcation when that matrix is the Jacobian of u' = G(u, p): leave "hopf" out for any
     other (e.g. M^-1 K, whose eigenvalues are omega^2). Nothing is located for a problem with a
-    commit hook (its state is gone after the run)."""
+    commit hook (its state is gone after the run). stop_at_fold: end the run at the last point
+    before a step that turns p back (Stop code "fold"), for a problem whose branch beyond a
+    fold is not physical (a loaded state that carries history jumps there)."""
 
     ds_max: Optional[float] = None
     ds: Optional[float] = None
@@ -108,6 +110,7 @@ class Options:
     detection: DetectionParams = DetectionParams()
     workers: Optional[int] = None
     special_points: tuple[str, ...] = ("fold", "hopf")
+    stop_at_fold: bool = False
 
     def __post_init__(self):
         for name in ("ds_max", "ds", "ds_min", "newton_tol"):
@@ -127,7 +130,8 @@ class Options:
         return ContinuationParams(ds=ds, ds_min=ds_min, ds_max=ds_max, newton_tol=self.newton_tol,
                                   max_newton=self.max_newton, p_min=min(p_start, p_stop),
                                   p_max=max(p_start, p_stop), max_steps=self.max_steps,
-                                  direction=1 if p_stop > p_start else -1)
+                                  direction=1 if p_stop > p_start else -1,
+                                  stop_at_fold=self.stop_at_fold)
 
 
 @dataclass(frozen=True)

@@ -8,6 +8,8 @@ Step control (arclength ds in the Euclidean norm of x):
   * corrector failure (no convergence in max_newton updates)   -> ds / 2, retry;
   * angle(t_k, t_(k+1)) > max_angle                             -> ds / 2, retry;
   * ds would drop below ds_min                                  -> stop, Stop DS_MIN;
+  * with stop_at_fold, a corrected step past a fold (p falls      -> stop at x_k, Stop FOLD;
+    back, or the tangent there points back in p)
   * accepted with <= fast_newton updates                        -> ds = min(growth ds, ds_max).
 End: when the corrected p leaves [p_min, p_max] the step is clipped: x is re-solved at the end
 value p_end (fixed-p Newton from the secant point at p_end), stored, and the run stops: REACHED
@@ -71,6 +73,7 @@ class ContinuationParams:
     growth: float = 1.5
     fast_newton: int = 3
     event_tol: float = 1e-13
+    stop_at_fold: bool = False
 
     def __post_init__(self):
         if not 0.0 < self.ds_min <= self.ds <= self.ds_max:
@@ -303,6 +306,9 @@ def _advance(problem, scans, here: _Start, index: int, pending: deque, previous,
     it stops there, else None)."""
     try:
         step = _attempt(problem, here.x, here.t, here.ds, params)
+        forward = params.direction * np.array([step.x[-1] - here.x[-1], step.tangent[-1]])
+        if params.stop_at_fold and forward.min() < 0:
+            return here, Stop(StopCode.FOLD, "the next step passed a fold in p", float(here.x[-1]))
         if here.g is not None:
             step = _cut_at_event(problem, here.x, step, here.g, params)
         end = _sample(problem, 1.0, step.x, step.tangent, detection, here.sample, side=-1)

@@ -18,13 +18,15 @@ Array = np.ndarray
 class StopCode(StrEnum):
     """Why a run stopped (arclength.py): it reached the end of the span it heads for, the
     branch folded and left the span on its starting side, the step limit, a step that had to
-    shrink below ds_min, or a commit (Problem.commit) after which no equilibrium was found."""
+    shrink below ds_min, a commit (Problem.commit) after which no equilibrium was found, or
+    (with stop_at_fold) a step that would have turned p back."""
 
     REACHED = "p_end"
     TURNED_BACK = "turned back"
     MAX_STEPS = "max_steps"
     DS_MIN = "ds_min"
     COMMIT = "commit"
+    FOLD = "fold"
 
 
 MESSAGES = {
@@ -33,6 +35,7 @@ MESSAGES = {
     StopCode.DS_MIN: "ds_min: {reason} at p={p:.12g}",
     StopCode.COMMIT: "commit: {reason} at p={p:.12g}",
     StopCode.TURNED_BACK: "turned back: {reason} at p={p:.12g}",
+    StopCode.FOLD: "fold: {reason} at p={p:.12g}",
 }
 """The status line of each code (str(Stop)): the text Branch.status had before it was a Stop."""
 

@@ -88,6 +88,20 @@ def test_fold_of_scalar_equation_is_passed_and_located():
     assert folds[0].bracket[0] <= folds[0].p <= folds[0].bracket[1]
 
 
+def test_stop_at_fold_ends_the_run_before_p_turns_back():
+    """The same fold with stop_at_fold: the run ends (Stop "fold") at its last point before a
+    step past the fold (p falling, or the tangent pointing back in p), within one step of the
+    fold p = 0, and every point has u > 0 (the branch never went round)."""
+    problem = FunctionProblem(G=lambda u, p: np.array([u[0] ** 2 + p]), G_u=lambda u, p: np.array([[2 * u[0]]]),
+                              G_p=lambda u, p: np.array([1.0]))
+    par = ContinuationParams(ds=0.1, ds_min=1e-9, ds_max=0.2, newton_tol=1e-12, p_min=-1.0,
+                             p_max=1.0, stop_at_fold=True)
+    br = continuation(problem, np.array([1.0]), -1.0, par)
+    assert br.status.code == StopCode.FOLD and br.status.p == br.p[-1]
+    assert np.all(np.diff(br.p) > 0) and np.all(br.u[:, 0] > 0)
+    assert -0.2 <= br.p[-1] < 0
+
+
 def brusselator(a):
     """x' = a - (b + 1) x + x^2 y, y' = b x - x^2 y with p = b; steady state (a, b / a);
     Jacobian [[b - 1, a^2], [-b, -a^2]]: Hopf at b = 1 + a^2, complex pair for

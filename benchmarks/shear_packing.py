@@ -1,0 +1,54 @@
+"""Quasistatic shear of packings (issue 25): for each N and seed, the seconds to prepare and to
+shear with friction from gamma = 0 to GAMMA_END (or to where the branch ends), the accepted
+points, the contact events, the collisions located, how often an accepted state has complex
+pairs and how many, the largest force residual, how the branch ended (p_end; fold: the
+saddle-node in gamma, the plastic event of quasistatic shear; ds_min; commit) and the smallest
+real part of the tracked spectrum at the end over its value at the start (a fold drives it to
+0). One line per run, measured in this run, scans inline (workers = 0).
+
+Run: python benchmarks/shear_packing.py [N:SEEDS:GAMMA_END ...]   (default: 32:3:0.01 64:3:0.01)
+"""
+from __future__ import annotations
+
+import sys
+import time
+
+import numpy as np
+
+from diskfriction.packings.prepared import prepare_scene
+from diskfriction.packings.shear import ShearParams, shear
+from diskfriction.scenes.packing import PackingScene
+
+
+def smallest(eigenvalues: np.ndarray) -> float:
+    """The smallest real part of the tracked (nonzero) eigenvalues."""
+    return float(eigenvalues[eigenvalues != 0].real.min())
+
+
+def run(N: int, seed: int, gamma_end: float) -> str:
+    scene = PackingScene(N=N, seed=seed, gamma_range=(0.0, gamma_end))
+    start = time.perf_counter()
+    packing = prepare_scene(scene)
+    prepared = time.perf_counter() - start
+    branch = shear(scene, packing, ShearParams(workers=0))
+    sheared = time.perf_counter() - start - prepared
+    fell = smallest(branch.eigenvalues[-1]) / smallest(branch.eigenvalues[0])
+    end = branch.status.code.value
+    return (f"{N:>5} {seed:>4} {prepared:>7.1f} {sheared:>7.1f} {branch.gamma[-1]:>10.3e} "
+            f"{end:>12} {len(branch):>6} {branch.events:>6} {len(branch.collisions):>10} "
+            f"{np.mean(branch.n_complex > 0):>8.2f} {np.mean(branch.n_complex):>7.1f} "
+            f"{branch.residual.max():>9.1e} {int(branch.loose[0]):>5} {fell:>9.1e}")
+
+
+def main(runs: list[str]) -> None:
+    print(f"{'N':>5} {'seed':>4} {'prep s':>7} {'shear s':>7} {'gamma end':>10} {'ended':>12} "
+          f"{'points':>6} {'events':>6} {'collisions':>10} {'complex':>8} {'pairs':>7} "
+          f"{'max |F|':>9} {'loose':>5} {'min/start':>9}")
+    for spec in runs:
+        N, seeds, gamma_end = spec.split(":")
+        for seed in range(1, int(seeds) + 1):
+            print(run(int(N), seed, float(gamma_end)), flush=True)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:] or ["32:3:0.01", "64:3:0.01"])

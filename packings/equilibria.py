@@ -1,0 +1,265 @@
+"""Equilibria of a sheared packing as a continuation problem, with the tangential history carried
+(docs/packings.md#shear).
+
+u = q = (x, y, theta) of every disk (packings/network.py), p = gamma, the Lees-Edwards strain.
+The committed state (q_c, xi_c, gamma_c) is the last accepted point; the residual of a trial
+(q, gamma) is the quasistatic step from it, as for the chain (disks/equilibria.py):
+
+    G(q, gamma) = F(q, xi(q, gamma); gamma),  xi = history rule from the committed state,
+
+dG/dq = -J (the total stiffness, history following q), dG/dgamma = dF/dgamma (history following
+gamma). Contact rows: every pair within REACH of touching at the committed point; a row keeps its
+image and its history while it lasts, and the rows are found again at every commit (the history
+carried over by (i, j, cx, cy)); a pair that was not a row cannot close within one step
+(commit checks that it did not).
+
+Two kinds of exact zero modes are handled explicitly:
+- **Translations.** A uniform shift of every disk changes no force: J T = 0 for T = the x and y
+  translations, and the forces sum to zero (Newton's third law), so two equations are
+  redundant. The reference disk (the one with most contacts) has its x and y equations
+  replaced by gauge rows kappa (x - x_c) = 0, kappa (y - y_c) = 0.
+- **Loose disks** (rattlers): a disk with fewer than LOOSE_BELOW contacts (delta > 0) carries no
+  load. Its contacts are left out of the forces (their rows stay as watched rows, so that a
+  contact closing on it is an event), its three equations are replaced by gauge rows holding it
+  at its committed place, and it joins the network at the commit where it has enough contacts.
+  The forces a loose disk's own slight overlaps would exert (of the preparation's force
+  tolerance) are dropped; `loose_force` reports their largest value.
+
+The tracked matrix is the network's stability matrix A (J or M^-1 J) in coordinates relative to
+the reference disk, A_g: with P the map q -> (q_k - q_ref for x and y dofs, theta as it is) on
+the kept dofs (not the reference's x, y, not a loose disk's) and E the kept columns,
+A_red = P A E has exactly the spectrum of A without its two translation zeros (A T = 0 makes A
+block triangular in the basis (T, E)); A_g is A_red at the kept dofs and zeros elsewhere, so
+that every sample has n eigenvalues; the zeros are excluded from detection.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+import numpy as np
+import scipy.sparse as sp
+
+from diskfriction.continuation.problem import Problem
+from diskfriction.continuation.spectra import Eigensystem, eigensystem
+from diskfriction.matrices import Matrix
+from diskfriction.packings.network import D, Network
+
+REACH = 0.1
+"""Pairs within this fraction of the small radius R of touching are contact rows [R]."""
+
+LOOSE_BELOW = 2
+"""A disk with fewer contacts than this is loose: with friction two contacts hold a disk."""
+
+DERIVATIVE_STEP = (1e-11, 1e-7)
+"""Range of the finite-difference length along the branch, 0.1 of the smallest active overlap
+[length], as the chain's."""
+
+
+class MissedContact(RuntimeError):
+    """A pair that was no contact row overlaps after a step: the step was longer than REACH."""
+
+
+@dataclass(frozen=True)
+class Gauge:
+    """The gauge of one committed state: the reference disk, the loose disks, the equation rows
+    replaced by gauge rows, the kept dofs of the tracked matrix and its reduction P."""
+
+    ref: int
+    loose: np.ndarray  # bool (N,)
+    rows: np.ndarray  # equation rows replaced by kappa (q - q_c) = 0
+    kept: np.ndarray  # dofs of A_red
+    P: sp.csr_array  # (kept, n): q -> coordinates relative to the reference disk
+
+    @classmethod
+    def of(cls, N: int, counts: np.ndarray) -> "Gauge":
+        loose = counts < LOOSE_BELOW
+        if loose.all():
+            raise ValueError("every disk is loose: the packing is not jammed")
+        ref = int(np.argmax(counts))
+        loose_dofs = (np.arange(D)[:, None] * N + np.flatnonzero(loose)[None, :]).ravel()
+        rows = np.union1d([ref, N + ref], loose_dofs)
+        kept = np.setdiff1d(np.arange(D * N), rows)
+        coupling = np.where(kept < N, ref, np.where(kept < 2 * N, N + ref, -1))
+        r = np.arange(kept.size)
+        data = np.concatenate([np.ones(kept.size), -np.ones(int((coupling >= 0).sum()))])
+        P = sp.csr_array((data, (np.concatenate([r, r[coupling >= 0]]),
+                                 np.concatenate([kept, coupling[coupling >= 0]]))),
+                         shape=(kept.size, D * N))
+        return cls(ref, loose, rows, kept, P)
+
+
+class PackingEquilibria(Problem):
+    """The continuation problem of a packing's Network in the strain (module docstring)."""
+
+    def __init__(self, network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray,
+                 gamma: float, mass: np.ndarray, matrix: str = "M^-1 J",
+                 newton_tol: float = 1e-11):
+        self.network, self.mass = network, mass
+        self.matrix = Matrix(matrix)
+        self.newton_tol = newton_tol
+        self.reach = REACH * network.constants[0]
+        self._set_committed(q, xi, rows, gamma)
+
+    # -- the committed state
+    def _set_committed(self, q, xi, rows, gamma) -> None:
+        self.q_c, self.xi_c, self.rows_c, self.gamma_c = q.copy(), xi.copy(), rows, float(gamma)
+        delta = self.network.overlaps(q, rows, gamma)
+        counts = np.bincount(rows[delta > 0, :2].ravel(), minlength=self.network.N)
+        self.gauge = Gauge.of(self.network.N, counts)
+        on_loose = self.gauge.loose[rows[:, 0]] | self.gauge.loose[rows[:, 1]]
+        self.active = ~on_loose  # rows whose forces act; the others are watched
+        scale = np.median(delta[delta > 0]) if (delta > 0).any() else self.network.constants[0]
+        self.kappa = float(self.network.kernels.normal_stiffness(scale, self.network.constants[1]))
+        self._last = (None, None)
+
+    def trial(self, q, gamma, cap: bool = True) -> tuple[np.ndarray, np.ndarray]:
+        """History of every row at (q, gamma), reached by a straight step from the committed
+        state, and the rows the cap acted on."""
+        return self.network.history_step(self.q_c, q, self.gamma_c, gamma, self.xi_c,
+                                         self.rows_c, cap=cap)
+
+    def _evaluate(self, q, gamma):
+        """(F, J, dF/dgamma) of the active rows at the trial (q, gamma), kept for the last one."""
+        key = (q.tobytes(), gamma)
+        if self._last[0] != key:
+            xi = self.trial(q, gamma)[0]
+            self._last = (key, self.network.evaluate(q, xi[self.active], self.rows_c[self.active],
+                                                     gamma))
+        return self._last[1]
+
+    # -- Problem protocol
+    def residual(self, q, gamma):
+        G = self._evaluate(q, gamma)[0].copy()
+        g = self.gauge.rows
+        G[g] = self.kappa * (q[g] - self.q_c[g])
+        return G
+
+    def jacobian(self, q, gamma):
+        """dG/dq = -J with the gauge rows (sparse)."""
+        keep = np.ones(q.size)
+        keep[self.gauge.rows] = 0.0
+        gauge = np.zeros(q.size)
+        gauge[self.gauge.rows] = self.kappa
+        J = self._evaluate(q, gamma)[1]
+        return (sp.diags_array(keep) @ (-J) + sp.diags_array(gauge)).tocsr()
+
+    def dG_dp(self, q, gamma):
+        F_gamma = self._evaluate(q, gamma)[2].copy()
+        F_gamma[self.gauge.rows] = 0.0
+        return F_gamma
+
+    def physical(self, q, gamma):
+        """The network's J or M^-1 J at (q, gamma), sparse (loose disks' rows and columns 0)."""
+        J = self._evaluate(q, gamma)[1]
+        return J if self.matrix is Matrix.J else sp.diags_array(1.0 / self.mass) @ J
+
+    def reduced(self, q, gamma):
+        """A_red = P A E: the tracked spectrum without the translations and the loose disks."""
+        g = self.gauge
+        return (g.P @ self.physical(q, gamma) @ sp.eye_array(q.size, format="csc")[:, g.kept]).toarray()
+
+    def stability_matrix(self, q, gamma):
+        """A_g: A_red at the kept dofs, zeros at the gauge rows (module docstring)."""
+        A = np.zeros((q.size, q.size))
+        A[np.ix_(self.gauge.kept, self.gauge.kept)] = self.reduced(q, gamma)
+        return A
+
+    def eigensystem(self, q, gamma, vectors: bool = False) -> Eigensystem:
+        """A_red's eigensystem at the kept dofs; the gauge rows' zeros excluded, without vectors."""
+        kept, n = self.gauge.kept, q.size
+        found = eigensystem(self.reduced(q, gamma), vectors)
+        values, excluded = np.zeros(n, complex), np.ones(n, bool)
+        values[kept], excluded[kept] = found.values, False
+        if not vectors:
+            return Eigensystem(values, excluded=excluded)
+        right = np.zeros((n, kept.size), complex)
+        right[kept] = found.right
+        left = np.zeros((kept.size, n), complex)
+        left[:, kept] = found.left
+        columns = np.full(n, -1)
+        columns[kept] = np.arange(kept.size)
+        return Eigensystem(values, right, left, excluded, columns=columns)
+
+    def derivative_step(self, x) -> float:
+        delta = self.network.overlaps(x[:-1], self.rows_c[self.active], float(x[-1]))
+        active = delta[delta > 0]
+        h = 0.1 * float(active.min()) if active.size else DERIVATIVE_STEP[1]
+        return min(max(h, DERIVATIVE_STEP[0]), DERIVATIVE_STEP[1])
+
+    def event_functions(self, q, gamma):
+        """Per row: delta (a contact opening or closing, on the network or on a loose disk),
+        then t* - |xi| of the uncapped history of the active contacts (1 for the others)."""
+        delta = self.network.overlaps(q, self.rows_c, gamma)
+        xi = self.trial(q, gamma, cap=False)[0]
+        t_star = self.network.kernels.coulomb_limit(np.maximum(delta, 0.0),
+                                                    *self.network.constants[1:])
+        margin = np.where((delta > 0) & self.active, t_star - np.abs(xi), 1.0)
+        return np.concatenate([delta, margin])
+
+    def state(self) -> tuple:
+        return self.q_c.copy(), self.xi_c.copy(), self.rows_c.copy(), self.gamma_c
+
+    def restore(self, snapshot: tuple) -> None:
+        self._set_committed(*snapshot)
+
+    def commit(self, q_old, gamma_old, q_new, gamma_new) -> bool:
+        """Commit at (q_new, gamma_new): the rows found again (histories carried by row), the
+        gauge with them. True (re-solve there) when the cap acted or the loose disks changed.
+        MissedContact if a pair that was no row overlaps."""
+        xi, slid = self.trial(q_new, gamma_new)
+        rows = self.network.contacts(q_new, gamma_new, self.reach)
+        xi_rows = carried(self.rows_c, xi, rows)
+        fresh = ~np.isin(row_keys(rows), row_keys(self.rows_c))
+        if fresh.any() and (self.network.overlaps(q_new, rows[fresh], gamma_new) > 0).any():
+            raise MissedContact(f"a pair closed within one step at gamma = {gamma_new:.12g} "
+                                f"without being a contact row: the step was longer than the "
+                                f"reach {self.reach:g}")
+        loose, capped = self.gauge.loose, bool(slid[self.active].any())  # watched rows carry no force
+        self._set_committed(q_new, xi_rows, rows, gamma_new)
+        return capped or not np.array_equal(loose, self.gauge.loose)
+
+    def loose_force(self, q, gamma) -> float:
+        """The largest force the loose disks' contacts would exert at (q, gamma) [force]."""
+        watched = ~self.active
+        if not watched.any():
+            return 0.0
+        xi = self.trial(q, gamma)[0]
+        return float(np.abs(self.network.forces(q, xi[watched], self.rows_c[watched], gamma)).max())
+
+
+def row_keys(rows: np.ndarray) -> np.ndarray:
+    """One integer per contact row (i, j, cx, cy), images within +-2^15."""
+    shifted = rows[:, 2:] + 2**15
+    return ((rows[:, 0] * 2**20 + rows[:, 1]) * 2**16 + shifted[:, 0]) * 2**16 + shifted[:, 1]
+
+
+def carried(old_rows: np.ndarray, xi: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """The history of each of `rows` taken from the same row among `old_rows` (0 for a new
+    one)."""
+    old = dict(zip(row_keys(old_rows).tolist(), xi.tolist()))
+    return np.array([old.get(k, 0.0) for k in row_keys(rows).tolist()])
+
+
+def start(network: Network, positions: np.ndarray, gamma: float = 0.0
+          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(q, xi, rows) of a prepared packing's positions (N, 2) with friction switched on: angles
+    0, every history 0."""
+    N = network.N
+    q = np.concatenate([positions[:, 0], positions[:, 1], np.zeros(N)])
+    rows = network.contacts(q, gamma, REACH * network.constants[0])
+    return q, np.zeros(rows.shape[0]), rows
+
+
+def mass_diagonal(network: Network, m: float, inertia: float) -> np.ndarray:
+    """diag(M): m_i = m (R_i / R)^2 for x and y (one density), I_i = c m_i R_i^2 for theta."""
+    R = network.constants[0]
+    m_i = m * (network.radii / R) ** 2
+    return np.concatenate([m_i, m_i, inertia * m_i * network.radii**2])
+
+
+def largest_force(problem: PackingEquilibria, q: np.ndarray, gamma: float) -> float:
+    """max |F| over every equation of the network's disks, the reference disk's included (the
+    loose disks' excluded) at (q, gamma) [force]."""
+    F = problem._evaluate(q, gamma)[0].copy()
+    loose = np.flatnonzero(problem.gauge.loose)
+    F[(np.arange(D)[:, None] * problem.network.N + loose[None, :]).ravel()] = 0.0
+    return float(np.abs(F).max())

@@ -1,0 +1,107 @@
+"""Quasistatic shear of a prepared packing: the branch of equilibria in the strain gamma, with
+the history carried, the spectrum tracked and every birth and death of a complex pair located
+(docs/packings.md#shear). A thin layer over the core's solve_branch, as disks/sweep.py is.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Callable, Optional
+
+import numpy as np
+
+from diskfriction.continuation.api import Options, solve_branch
+from diskfriction.continuation.branch import Stop
+from diskfriction.continuation.collisions import Collision
+from diskfriction.continuation.spectra import count_complex_pairs
+from diskfriction.matrices import Matrix
+from diskfriction.packings.equilibria import PackingEquilibria, largest_force, mass_diagonal, start
+from diskfriction.packings.network import Network
+from diskfriction.packings.prepare import Packing
+from diskfriction.scenes.packing import PackingScene
+
+STEP_IN_STRAIN = 2e-4
+"""The largest step moves the disks by about this strain: ds_max = STEP_IN_STRAIN times the
+arclength of an affine shear of unit strain, |(y_i, 0, 0)| over the disks [length]."""
+
+
+@dataclass(frozen=True)
+class ShearParams(Options):
+    """solve_branch's Options with the packing's defaults: ds_max from STEP_IN_STRAIN (None),
+    newton_tol 1e-11 [force] (of a contact's force P 2R = 0.1 at the default pressure),
+    max_steps 20 000, no special points (the problem carries history), and the run ends at a
+    fold in gamma (stop_at_fold): the saddle-node where quasistatic shear loses the branch is a
+    plastic event; beyond it the branch of unstable states it would follow back is no state
+    the packing passes through."""
+
+    newton_tol: float = 1e-11
+    max_steps: int = 20_000
+    special_points: tuple[str, ...] = ()
+    stop_at_fold: bool = True
+
+
+@dataclass(frozen=True)
+class PackingBranch:
+    """Accepted equilibria of a shear run, one row per point (raw units).
+
+    gamma (m,); q (m, 3N); eigenvalues (m, 3N) of `matrix` in coordinates relative to the
+    reference disk (packings/equilibria.py; the translations' and loose disks' zeros
+    included); n_complex (m,); residual (m,) max|F| over the network's disks [force]; contacts
+    (m,) active contacts; loose (m,) loose disks; stress (m, 4) sigma_xx, sigma_yy, sigma_xy,
+    sigma_yx [force / length]; collisions in branch order; status; events: steps cut at a
+    contact event."""
+
+    gamma: np.ndarray
+    q: np.ndarray
+    eigenvalues: np.ndarray
+    n_complex: np.ndarray
+    residual: np.ndarray
+    contacts: np.ndarray
+    loose: np.ndarray
+    stress: np.ndarray
+    collisions: tuple[Collision, ...]
+    matrix: Matrix
+    status: Stop
+    events: int
+
+    def __len__(self) -> int:
+        return self.gamma.size
+
+
+def network_of(scene: PackingScene, packing: Packing) -> Network:
+    """The packing's disks bound to the scene's kernels."""
+    return Network.build(packing.radii, packing.L, scene.k_n, scene.k_t, scene.mu,
+                         scene.resolved_effects)
+
+
+def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearParams(),
+          progress: Optional[Callable[[float], None]] = None) -> PackingBranch:
+    """Follow the equilibria of `packing` with friction switched on from gamma = 0 to the end
+    of the scene's gamma range (collisions below its start are left out)."""
+    network = network_of(scene, packing)
+    q, xi, rows = start(network, packing.positions)
+    mass = mass_diagonal(network, scene.m, scene.inertia)
+    problem = PackingEquilibria(network, q, xi, rows, 0.0, mass, scene.matrix, params.newton_tol)
+    g0, g1 = scene.gamma_range
+    affine = float(np.linalg.norm(packing.positions[:, 1]))
+    ds_max = params.ds_max or STEP_IN_STRAIN * affine
+    options = replace(params, ds_max=ds_max, ds=params.ds or ds_max / 4,
+                      ds_min=params.ds_min or 1e-8 * ds_max)
+    records = []
+
+    def record(k, gamma, q_k, eigvals):
+        xi_k = problem.trial(q_k, gamma)[0][problem.active]
+        rows_k = problem.rows_c[problem.active]
+        delta = network.overlaps(q_k, rows_k, gamma)
+        records.append((gamma, q_k.copy(), eigvals, largest_force(problem, q_k, gamma),
+                        int((delta > 0).sum()), int(problem.gauge.loose.sum()),
+                        network.stress(q_k, xi_k, rows_k, gamma)))
+        if progress is not None:
+            progress(gamma)
+
+    branch = solve_branch(problem, q, (0.0, g1), options, callback=record).branch
+    gamma, q_all, eig, res, contacts, loose, stress = (np.array(c) for c in zip(*records))
+    rel_tol = params.detection.rel_tol
+    n_complex = np.array([count_complex_pairs(e[e != 0], rel_tol) for e in eig])
+    collisions = tuple(c for c in branch.collisions if c.p >= g0)
+    return PackingBranch(gamma, q_all, eig, n_complex, res, contacts, loose, stress, collisions,
+                         Matrix(scene.matrix), branch.status, branch.events)

@@ -1,0 +1,72 @@
+"""Quasistatic shear of a packing (issue 25, docs/packings.md#shear): every accepted point in
+force balance, the tracked spectrum equal to the network's own, every change in the number of
+complex pairs accounted for by a located collision, and the collisions where the dense spectra
+say they are."""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from invariants import unaccounted_pair_changes
+
+from diskfriction.packings.equilibria import PackingEquilibria, mass_diagonal, start
+from diskfriction.packings.prepared import prepare_scene
+from diskfriction.packings.shear import ShearParams, network_of, shear
+from diskfriction.scenes.packing import PackingScene
+
+SCENE = PackingScene(N=24, seed=3, gamma_range=(0.0, 0.002))
+
+
+@pytest.fixture(scope="module")
+def packing():
+    return prepare_scene(SCENE)
+
+
+@pytest.fixture(scope="module")
+def branch(packing):
+    return shear(SCENE, packing, ShearParams(workers=0))
+
+
+def problem_at_start(packing) -> PackingEquilibria:
+    network = network_of(SCENE, packing)
+    q, xi, rows = start(network, packing.positions)
+    return PackingEquilibria(network, q, xi, rows, 0.0,
+                             mass_diagonal(network, SCENE.m, SCENE.inertia), SCENE.matrix)
+
+
+def test_the_tracked_spectrum_is_the_networks_without_its_zero_modes(packing):
+    """A_red's eigenvalues are those of the network's M^-1 J less its two translation zeros and
+    the loose disks' zero rows; the same after friction has charged the histories (xi != 0)."""
+    problem = problem_at_start(packing)
+    rng = np.random.default_rng(0)
+    problem.xi_c = rng.uniform(-0.5, 0.5, problem.xi_c.size) * 1e-4  # a charged history
+    q = problem.q_c
+    full = np.linalg.eigvals(problem.physical(q, 0.0).toarray())
+    tracked = problem.eigensystem(q, 0.0).values[~problem.eigensystem(q, 0.0).excluded]
+    zeros = 2 + 3 * int(problem.gauge.loose.sum())
+    nonzero = full[np.argsort(np.abs(full))[zeros:]]
+    assert np.allclose(np.sort_complex(nonzero), np.sort_complex(tracked),
+                       rtol=0, atol=1e-9 * np.abs(full).max())
+    assert np.sort(np.abs(full))[zeros - 1] <= 1e-9 * np.abs(full).max()
+
+
+def test_every_accepted_point_is_in_force_balance(branch):
+    assert len(branch) > 10 and branch.gamma[-1] > 0
+    assert branch.residual.max() <= ShearParams().newton_tol
+
+
+def test_complex_pairs_appear_only_once_shear_has_charged_the_histories(branch):
+    """At gamma = 0 every history is 0 and J is symmetric: no complex pair; the histories the
+    shear charges make J non-symmetric and pairs are born."""
+    assert branch.n_complex[0] == 0 and branch.n_complex.max() > 0
+
+
+def test_every_change_in_the_complex_pairs_is_a_located_collision(branch):
+    kinds = [(c.p, c.kind) for c in branch.collisions]
+    assert unaccounted_pair_changes(branch.gamma, branch.n_complex, kinds) == []
+
+
+def test_shear_stress_grows_with_strain(branch):
+    """Positive strain loads the packing: sigma_xy rises from its value at rest."""
+    assert branch.stress[-1, 2] > branch.stress[0, 2]
