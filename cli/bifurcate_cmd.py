@@ -13,6 +13,7 @@ from diskfriction.cli.common import (EXIT_FAILED, CommandError, add_matrix_argum
                                      output_dir, path, scene_from_args)
 from diskfriction.cli.progress import Progress
 from diskfriction.words import count
+from diskfriction.scenes.packing import PackingScene
 from diskfriction.scenes.scene import NEGATIVE_LOAD
 
 
@@ -103,7 +104,11 @@ def run(args: argparse.Namespace) -> int:
         return run_problem(args)
     if args.p is not None:
         raise CommandError("bifurcate error: --p: only with --problem FILE.py (a scene's load is --fx)")
-    scene = scene_from_args(args, "bifurcate")
+    scene = scene_from_args(args)
+    if isinstance(scene, PackingScene):
+        from diskfriction.cli.packing_cmd import run_packing
+
+        return run_packing(args, scene)
     F_from, F_to = parse_range(args.fx) if args.fx is not None else scene.F_x_range
     window = parse_window(args.window) if args.window is not None else None
     if window is not None and not detector.window:

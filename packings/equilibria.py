@@ -18,8 +18,8 @@ Two kinds of exact zero modes are handled explicitly:
   translations, and the forces sum to zero (Newton's third law), so two equations are
   redundant. The reference disk (the one with most contacts) has its x and y equations
   replaced by gauge rows kappa (x - x_c) = 0, kappa (y - y_c) = 0.
-- **Loose disks** (rattlers): a disk with fewer than LOOSE_BELOW contacts (delta > 0) carries no
-  load. Its contacts are left out of the forces (their rows stay as watched rows, so that a
+- **Loose disks** (rattlers): a disk with fewer than LOOSE_BELOW contacts that hold it (delta >
+  delta_hold, LOOSE_OVERLAP of the median overlap at the start) carries no load. Its contacts are left out of the forces (their rows stay as watched rows, so that a
   contact closing on it is an event), its three equations are replaced by gauge rows holding it
   at its committed place, and it joins the network at the commit where it has enough contacts.
   The forces a loose disk's own slight overlaps would exert (of the preparation's force
@@ -48,6 +48,13 @@ REACH = 0.1
 
 LOOSE_BELOW = 2
 """A disk with fewer contacts than this is loose: with friction two contacts hold a disk."""
+
+LOOSE_OVERLAP = 1e-3
+"""A contact counts towards holding its disks when its overlap exceeds this fraction of the
+median overlap at the start, delta_hold [1]. A disk whose second-last such contact unloads is
+near a singular point (the Hertz stiffness k_n delta^(1/2) of its contacts vanishes with their
+forces: a disk held by two contacts unloads both together); counting from delta_hold makes it
+loose, by an event, while its stiffness is still 3 % of a typical contact's."""
 
 DERIVATIVE_STEP = (1e-11, 1e-7)
 """Range of the finite-difference length along the branch, 0.1 of the smallest active overlap
@@ -97,13 +104,15 @@ class PackingEquilibria(Problem):
         self.matrix = Matrix(matrix)
         self.newton_tol = newton_tol
         self.reach = REACH * network.constants[0]
+        delta = network.overlaps(q, rows, gamma)
+        self.delta_hold = LOOSE_OVERLAP * float(np.median(delta[delta > 0]))
         self._set_committed(q, xi, rows, gamma)
 
     # -- the committed state
     def _set_committed(self, q, xi, rows, gamma) -> None:
         self.q_c, self.xi_c, self.rows_c, self.gamma_c = q.copy(), xi.copy(), rows, float(gamma)
         delta = self.network.overlaps(q, rows, gamma)
-        counts = np.bincount(rows[delta > 0, :2].ravel(), minlength=self.network.N)
+        counts = np.bincount(rows[delta > self.delta_hold, :2].ravel(), minlength=self.network.N)
         self.gauge = Gauge.of(self.network.N, counts)
         on_loose = self.gauge.loose[rows[:, 0]] | self.gauge.loose[rows[:, 1]]
         self.active = ~on_loose  # rows whose forces act; the others are watched
@@ -187,13 +196,15 @@ class PackingEquilibria(Problem):
 
     def event_functions(self, q, gamma):
         """Per row: delta (a contact opening or closing, on the network or on a loose disk),
-        then t* - |xi| of the uncapped history of the active contacts (1 for the others)."""
+        delta - delta_hold (a contact starting or ending to hold its disks: a disk turning
+        loose or joining), then t* - |xi| of the uncapped history of the active contacts (1 for
+        the others)."""
         delta = self.network.overlaps(q, self.rows_c, gamma)
         xi = self.trial(q, gamma, cap=False)[0]
         t_star = self.network.kernels.coulomb_limit(np.maximum(delta, 0.0),
                                                     *self.network.constants[1:])
         margin = np.where((delta > 0) & self.active, t_star - np.abs(xi), 1.0)
-        return np.concatenate([delta, margin])
+        return np.concatenate([delta, delta - self.delta_hold, margin])
 
     def state(self) -> tuple:
         return self.q_c.copy(), self.xi_c.copy(), self.rows_c.copy(), self.gamma_c

@@ -91,7 +91,7 @@ def test_the_packing_scene_checks_its_effects():
     assert set(PACKING_SCHEMA) >= {"packing.N", "packing.pressure", "shear.gamma"}
 
 
-@pytest.mark.parametrize("command, extra", [("bifurcate", []), ("verify", ["--t-end", "1"]),
+@pytest.mark.parametrize("command, extra", [("verify", ["--t-end", "1"]),
                                             ("simulate", ["--fx", "0.01", "--t-end", "1"]),
                                             ("map", ["--vary", "contacts.mu=5:10:2"]),
                                             ("report", ["--only", "fig6"])])
@@ -130,4 +130,33 @@ def test_prepare_writes_a_packing_that_a_second_run_reproduces_bit_for_bit(tmp_p
 def test_prepare_refuses_a_chain_scene_in_one_line(tmp_path):
     result = run_cli("prepare", "--out", str(tmp_path / "out"))
     assert result.returncode == 2 and "prepare takes a packing scene" in error_line(result, "prepare")
+    assert not (tmp_path / "out").exists()
+
+
+def test_bifurcate_shears_a_packing_scene_and_writes_its_branch(tmp_path):
+    """`bifurcate` on a 24-disk packing to gamma = 0.002: exit 0, the files written, every
+    collision in collisions.json within the range, the branch in force balance."""
+    import json
+
+    import numpy as np
+
+    scene = write(tmp_path, "[packing]\nN = 24\nseed = 3\n[shear]\ngamma = [0.0, 0.002]\n")
+    result = run_cli("bifurcate", str(scene), "--out", str(tmp_path / "out"))
+    assert result.returncode == 0, result.stderr
+    out = tmp_path / "out"
+    assert {p.name for p in out.iterdir()} >= {"branch.npz", "collisions.json", "diagram.png",
+                                               "packing.npz"}
+    with np.load(out / "branch.npz") as branch:
+        assert branch["gamma"][-1] == 0.002 and branch["residual"].max() <= 1e-11
+        assert branch["eigenvalues"].shape == (branch["gamma"].size, 3 * 24)
+    records = json.loads((out / "collisions.json").read_text())["collisions"]
+    assert records and all(0 <= r["gamma"] <= 0.002 for r in records)
+    assert f"{len(records)} collisions" in result.stdout
+
+
+@pytest.mark.parametrize("option, value", [("--fx", "0:0.1"), ("--window", "0:1"),
+                                           ("--ds-max", "0.1")])
+def test_bifurcate_refuses_chain_options_for_a_packing_in_one_line(tmp_path, option, value):
+    result = run_cli("bifurcate", str(PACKAGED), option, value, "--out", str(tmp_path / "out"))
+    assert result.returncode == 2 and option in error_line(result, "bifurcate")
     assert not (tmp_path / "out").exists()

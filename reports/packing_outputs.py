@@ -1,0 +1,53 @@
+"""A packing's shear branch as files and a figure (issue 25, docs/packings.md#shear):
+branch.npz, collisions.json and diagram.png of `diskfriction bifurcate PACKING_SCENE`."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from diskfriction.files import save_json, save_npz
+from diskfriction.packings.shear import PackingBranch
+from diskfriction.reports.figures import new_figure, save_figure
+from diskfriction.scenes.packing import PackingScene
+
+
+def collision_records(branch: PackingBranch) -> list[dict]:
+    """One record per located collision: strain, kind, the double eigenvalue, the matrix."""
+    return [{"gamma": c.p, "kind": str(c.kind), "lambda_re": c.eigenvalue,
+             "lambda_im": 0.0, "matrix": str(branch.matrix)} for c in branch.collisions]
+
+
+def save_packing_branch(out: Path, branch: PackingBranch, scene: PackingScene) -> None:
+    """branch.npz (every PackingBranch array, raw units) and collisions.json."""
+    save_npz(out / "branch.npz", gamma=branch.gamma, q=branch.q, eigenvalues=branch.eigenvalues,
+             n_complex=branch.n_complex, residual=branch.residual, contacts=branch.contacts,
+             loose=branch.loose, stress=branch.stress, matrix=np.array(str(branch.matrix)),
+             status=np.array(str(branch.status)))
+    save_json(out / "collisions.json", {"scene": scene.name, "matrix": str(branch.matrix),
+                                        "collisions": collision_records(branch)})
+
+
+def plot_packing_diagram(branch: PackingBranch, scene: PackingScene, path: Path) -> None:
+    """Three panels against the strain: the shear stress sigma_xy with the collisions marked,
+    the number of complex pairs, and Im lambda of every complex eigenvalue (raw units of the
+    matrix; a point per eigenvalue with Im lambda > 0)."""
+    fig, (stress, pairs, im) = new_figure(3, 1, figsize=(7, 8), sharex=True)
+    gamma = branch.gamma
+    stress.plot(gamma, branch.stress[:, 2], color="k", lw=1)
+    stress.set_ylabel("sigma_xy [force / length]")
+    for c in branch.collisions:
+        stress.axvline(c.p, color="tab:red" if str(c.kind) == "birth" else "tab:blue", lw=0.3,
+                       alpha=0.5)
+    pairs.step(gamma, branch.n_complex, where="post", color="k", lw=1)
+    pairs.set_ylabel("complex pairs")
+    lam = branch.eigenvalues
+    g, values = np.broadcast_to(gamma[:, None], lam.shape), lam.imag
+    shown = values > 1e-12 * np.abs(lam).max()
+    im.plot(g[shown], values[shown], ".", ms=1.5, color="tab:purple")
+    im.set_ylabel(f"Im lambda of {branch.matrix} (raw)")
+    im.set_xlabel("shear strain gamma")
+    stress.set_title(f"{scene.name}: N = {scene.N}, P = {scene.pressure:g}, mu = {scene.mu:g}; "
+                     f"{len(branch.collisions)} collisions (red: birth, blue: death)", fontsize=9)
+    fig.tight_layout()
+    save_figure(fig, path)
