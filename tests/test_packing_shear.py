@@ -4,7 +4,6 @@ complex pairs accounted for by a located collision, and the collisions where the
 say they are."""
 from __future__ import annotations
 
-import dataclasses
 
 import numpy as np
 import pytest
