@@ -69,3 +69,31 @@ def test_every_change_in_the_complex_pairs_is_a_located_collision(branch):
 def test_shear_stress_grows_with_strain(branch):
     """Positive strain loads the packing: sigma_xy rises from its value at rest."""
     assert branch.stress[-1, 2] > branch.stress[0, 2]
+
+
+def test_contact_events_are_located_on_the_branch_to_1e_12(packing):
+    """Every step cut at an event ends where an event function vanishes: a contact opening or
+    closing (delta), starting or ending to hold its disk (delta - delta_hold) or reaching its
+    Coulomb limit. The crossed component's |g| at the step's end over its mean slope in gamma
+    across the step, the strain between the end and the zero, is at most 1e-12."""
+    import diskfriction.packings.equilibria as equilibria
+
+    ends = []
+    commit = equilibria.PackingEquilibria.commit
+
+    def recording(self, q_old, g_old, q_new, g_new):
+        before = self.event_functions(q_old, g_old)
+        after = self.event_functions(q_new, g_new)
+        crossed = ((before > 0) & (after <= 0)) | ((before < 0) & (after > 0))
+        if crossed.any():
+            slope = np.abs(after[crossed] - before[crossed]) / abs(g_new - g_old)
+            ends.append(float(np.min(np.abs(after[crossed]) / slope)))
+        return commit(self, q_old, g_old, q_new, g_new)
+
+    equilibria.PackingEquilibria.commit = recording
+    try:
+        branch = shear(SCENE, packing, ShearParams(workers=0))
+    finally:
+        equilibria.PackingEquilibria.commit = commit
+    assert branch.events >= 2 and len(ends) >= branch.events
+    assert max(ends) <= 1e-12, ends
