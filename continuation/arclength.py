@@ -8,8 +8,9 @@ Step control (arclength ds in the Euclidean norm of x):
   * corrector failure (no convergence in max_newton updates)   -> ds / 2, retry;
   * angle(t_k, t_(k+1)) > max_angle                             -> ds / 2, retry;
   * ds would drop below ds_min                                  -> stop, Stop DS_MIN;
-  * with stop_at_fold, a corrected step past a fold (p falls      -> stop at x_k, Stop FOLD;
-    back, or the tangent there points back in p)
+  * with stop_at_fold, a corrected step past a fold (p falls      -> ds / 2, retry; below
+    back, the tangent there points back in p, or a real tracked        ds_min: stop at x_k,
+    eigenvalue changed sign: a step that jumped the fold)              Stop FOLD
   * accepted with <= fast_newton updates                        -> ds = min(growth ds, ds_max).
 End: when the corrected p leaves [p_min, p_max] the step is clipped: x is re-solved at the end
 value p_end (fixed-p Newton from the secant point at p_end), stored, and the run stops: REACHED
@@ -308,10 +309,13 @@ def _advance(problem, scans, here: _Start, index: int, pending: deque, previous,
         step = _attempt(problem, here.x, here.t, here.ds, params)
         forward = params.direction * np.array([step.x[-1] - here.x[-1], step.tangent[-1]])
         if params.stop_at_fold and forward.min() < 0:
-            return here, Stop(StopCode.FOLD, "the next step passed a fold in p", float(here.x[-1]))
+            return _towards_fold(here, "the next step passed a fold in p", params)
         if here.g is not None:
             step = _cut_at_event(problem, here.x, step, here.g, params)
         end = _sample(problem, 1.0, step.x, step.tangent, detection, here.sample, side=-1)
+        if params.stop_at_fold and negative_parity(end) != negative_parity(here.sample):
+            return _towards_fold(here, "the next step crossed a fold: a real eigenvalue of the "
+                                       "tracked matrix changed sign", params)
     except StepRejected as err:
         return _rejected(here, str(err), params)
     except SegmentSolveError as err:
@@ -332,6 +336,25 @@ def _advance(problem, scans, here: _Start, index: int, pending: deque, previous,
     g = problem.event_functions(committed.x[:-1], committed.x[-1]) if here.g is not None else None
     return _Start(committed.x, committed.tangent, end, ds, g), (_end_status(committed.x[-1], params)
                                                                 if committed.last else None)
+
+
+def _towards_fold(here: _Start, reason: str, params: ContinuationParams):
+    """A step past a fold with stop_at_fold: rejected with ds halved, so that the run closes in
+    on the fold, until the step would drop below ds_min; then the run ends at `here`, within
+    about ds_min (arclength) of the fold, with Stop FOLD."""
+    if 0.5 * here.ds >= params.ds_min:
+        return replace(here, ds=0.5 * here.ds), None
+    return here, Stop(StopCode.FOLD, reason, float(here.x[-1]))
+
+
+def negative_parity(sample: Sample) -> int:
+    """The parity of the number of real tracked eigenvalues below 0 (excluded and unknown ones
+    left out): the sign of the tracked matrix's determinant, which changes where a real
+    eigenvalue passes through 0, at a fold (or a branch point) of a branch whose tracked matrix
+    is dG/du up to a definite factor (M^-1 J of the disk problems)."""
+    ev, real = sample.eigvals, sample.status == 0
+    counted = real & ~sample.excluded & np.isfinite(ev)
+    return int(np.count_nonzero(ev[counted].real < 0)) % 2
 
 
 def _rejected(here: _Start, reason: str, params: ContinuationParams):
