@@ -43,7 +43,8 @@ class ShearParams(Options):
 class PackingBranch:
     """Accepted equilibria of a shear run, one row per point (raw units).
 
-    gamma (m,); q (m, 3N); eigenvalues (m, 3N) of `matrix` in coordinates relative to the
+    gamma (m,); q (m, 3N); rows, xi: each point's contact rows (i, j, cx, cy) and their
+    committed histories (the state a run starts from); eigenvalues (m, 3N) of `matrix` in coordinates relative to the
     reference disk (packings/equilibria.py; the translations' and loose disks' zeros
     included); n_complex (m,); residual (m,) max|F| over the network's disks [force]; contacts
     (m,) active contacts; loose (m,) loose disks; stress (m, 4) sigma_xx, sigma_yy, sigma_xy,
@@ -52,6 +53,8 @@ class PackingBranch:
 
     gamma: np.ndarray
     q: np.ndarray
+    rows: tuple[np.ndarray, ...]
+    xi: tuple[np.ndarray, ...]
     eigenvalues: np.ndarray
     n_complex: np.ndarray
     residual: np.ndarray
@@ -89,19 +92,22 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
     records = []
 
     def record(k, gamma, q_k, eigvals):
-        xi_k = problem.trial(q_k, gamma)[0][problem.active]
-        rows_k = problem.rows_c[problem.active]
+        xi_all = problem.trial(q_k, gamma)[0]
+        xi_k, rows_k = xi_all[problem.active], problem.rows_c[problem.active]
         delta = network.overlaps(q_k, rows_k, gamma)
-        records.append((gamma, q_k.copy(), eigvals, largest_force(problem, q_k, gamma),
+        records.append((gamma, q_k.copy(), problem.rows_c.copy(), xi_all, eigvals,
+                        largest_force(problem, q_k, gamma),
                         int((delta > 0).sum()), int(problem.gauge.loose.sum()),
                         network.stress(q_k, xi_k, rows_k, gamma)))
         if progress is not None:
             progress(gamma)
 
     branch = solve_branch(problem, q, (0.0, g1), options, callback=record).branch
-    gamma, q_all, eig, res, contacts, loose, stress = (np.array(c) for c in zip(*records))
+    gamma, q_all, rows, xi, eig, res, contacts, loose, stress = zip(*records)
+    gamma, q_all, eig, res, contacts, loose, stress = (np.array(c) for c in
+                                                      (gamma, q_all, eig, res, contacts, loose, stress))
     rel_tol = params.detection.rel_tol
     n_complex = np.array([count_complex_pairs(e[e != 0], rel_tol) for e in eig])
     collisions = tuple(c for c in branch.collisions if c.p >= g0)
-    return PackingBranch(gamma, q_all, eig, n_complex, res, contacts, loose, stress, collisions,
+    return PackingBranch(gamma, q_all, rows, xi, eig, n_complex, res, contacts, loose, stress, collisions,
                          Matrix(scene.matrix), branch.status, branch.events)

@@ -221,6 +221,71 @@ def history_increment(q0, q1, gamma0, gamma1, radii, contacts, params, dxi):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def tangential_forces(q, xi, radii, contacts, params, ft):
+    """F_t of every contact row, the tangential force along s on disk i [force] (0 if open):
+    from the torque the kernel writes on disk i, T_i = -R_i F_t."""
+    N, m = radii.shape[0], 2 * D
+    k_n, k_t, mu, L, gamma = params[1], params[2], params[3], params[5], params[6]
+    f = np.empty(m)
+    for c in range(contacts.shape[0]):
+        i, j = contacts[c, 0], contacts[c, 1]
+        dx, dy, ex, ey = grain_separation(q, i, j, contacts[c, 2], contacts[c, 3], N, L, gamma)
+        delta = pair_overlap(dx, dy, ex, ey, 0.5 * (radii[i] + radii[j]))
+        ft[c] = 0.0
+        if delta > 0.0:
+            grain_force(dx, dy, delta, xi[c], radii[i], radii[j], k_n, k_t, mu, f)
+            ft[c] = -f[D - 1] / radii[i]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def normal_energy_sum(q, radii, contacts, params):
+    """U_n = sum of normal_energy(delta) over the contact rows [energy]."""
+    N, L, gamma, k_n = radii.shape[0], params[5], params[6], params[1]
+    U = 0.0
+    for c in range(contacts.shape[0]):
+        i, j = contacts[c, 0], contacts[c, 1]
+        dx, dy, ex, ey = grain_separation(q, i, j, contacts[c, 2], contacts[c, 3], N, L, gamma)
+        delta = pair_overlap(dx, dy, ex, ey, 0.5 * (radii[i] + radii[j]))
+        if delta > 0.0:
+            U += normal_energy(delta, k_n)
+    return U
+
+
+@numba.njit(cache=True, error_model="numpy")
+def advance(q, v, xi, radii, contacts, params, inv_mass, dt, steps, F, work):
+    """`steps` velocity Verlet steps of M q'' = F(q, xi) over fixed contact rows (the strain
+    fixed): kick, drift, the history of the drift by the chain's rule (midpoint increment,
+    reset on opening, the part after first contact on closing, the Coulomb cap: the only
+    dissipation), forces, kick. F holds the forces at q on entry and on return. work[0] gains
+    the trapezoid work of the tangential forces on the disks, sum F_t dxi [energy], so that
+    E_k + U_n - work is conserved while nothing slides. Returns the number of capped
+    (sliding) contact updates."""
+    n, m = q.shape[0], contacts.shape[0]
+    dxi, xi1, slid = np.empty(m), np.empty(m), np.empty(m, np.bool_)
+    delta0, delta1 = np.empty(m), np.empty(m)
+    ft0, ft1, q0 = np.empty(m), np.empty(m), np.empty(n)
+    gamma, capped = params[6], 0
+    overlaps(q, radii, contacts, params, delta0)
+    tangential_forces(q, xi, radii, contacts, params, ft0)
+    for _ in range(steps):
+        for k in range(n):
+            v[k] += 0.5 * dt * F[k] * inv_mass[k]
+            q0[k] = q[k]
+            q[k] += dt * v[k]
+        history_increment(q0, q, gamma, gamma, radii, contacts, params, dxi)
+        overlaps(q, radii, contacts, params, delta1)
+        capped += commit_history(xi, dxi, delta0, delta1, params, True, xi1, slid)
+        tangential_forces(q, xi1, radii, contacts, params, ft1)
+        for c in range(m):
+            work[0] += 0.5 * (ft0[c] + ft1[c]) * dxi[c]
+            xi[c], ft0[c], delta0[c] = xi1[c], ft1[c], delta1[c]
+        forces(q, xi, radii, contacts, params, F)
+        for k in range(n):
+            v[k] += 0.5 * dt * F[k] * inv_mass[k]
+    return capped
+
+
+@numba.njit(cache=True, error_model="numpy")
 def frictionless(q, radii, L, k_n, F):
     """The frictionless packing at rest (gamma = 0) for a minimiser: q = (x_1..x_N, y_1..y_N),
     F = -dU/dq [force] into F (same layout), and returns (U, W): the energy U = sum of
@@ -273,7 +338,10 @@ def warm_up(progress=None):
              lambda: overlaps(q + 1e-4, radii, contacts, params, delta1),
              lambda: history_increment(q, q + 1e-4, 0.0, 1e-4, radii, contacts, params, dxi),
              lambda: commit_history(xi, dxi, delta0, delta1, params, True, xi1, slid),
-             lambda: frictionless(q[:6].copy(), radii, params[5], params[1], F2)]
+             lambda: frictionless(q[:6].copy(), radii, params[5], params[1], F2),
+             lambda: normal_energy_sum(q, radii, contacts, params),
+             lambda: advance(q.copy(), np.zeros(n), xi.copy(), radii, contacts, params,
+                             np.ones(n), 1e-3, 2, F.copy(), np.zeros(1))]
     for k, call in enumerate(calls):
         call()
         if progress is not None:
