@@ -49,8 +49,8 @@ def chain_scene(command: str, file, scene: Scene | PackingScene) -> Scene:
     commands take packings so far."""
     if isinstance(scene, PackingScene):
         raise CommandError(f"{command} error: {file}: geometry = \"packing\": {command} takes "
-                           f"chain scenes only so far; `diskfriction scene`, `prepare` and "
-                           f"`bifurcate` take packings (docs/packings.md)")
+                           f"chain scenes only so far; `diskfriction scene`, `prepare`, "
+                           f"`bifurcate` and `simulate` take packings (docs/packings.md)")
     return scene
 
 

@@ -17,6 +17,7 @@ from diskfriction.cli.common import (EXIT_FAILED, CommandError, add_scene_argume
                                      number, output_dir, run_length, scene_from_args)
 from diskfriction.cli.progress import Progress
 from diskfriction.words import count, duration
+from diskfriction.scenes.packing import PackingScene
 from diskfriction.scenes.scene import NEGATIVE_LOAD
 
 KINDS = ("random-velocity", "random-position", "eigenvector", "none")
@@ -32,8 +33,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "Coulomb sliding. Raw units on the command line and in files; the plot "
                     "uses the paper's units.")
     add_scene_argument(parser)
-    parser.add_argument("--fx", required=True, metavar="F[,F...]",
-                        help="load(s) F_x, raw units; several make an ensemble")
+    parser.add_argument("--fx", metavar="F[,F...]",
+                        help="load(s) F_x, raw units; several make an ensemble (a chain scene)")
+    parser.add_argument("--gamma", type=float, metavar="G",
+                        help="the strain to start from (a packing scene, docs/packings.md)")
     parser.add_argument("--t-end", required=True, type=float, metavar="T", help="duration, raw time")
     parser.add_argument("--seed", type=int, default=0, help="seed of the (first) realization")
     parser.add_argument("--perturbation", default=None, choices=KINDS,
@@ -78,7 +81,17 @@ SCHEDULER = re.compile(r"^((tcp|tls|ws|wss|ucx)://)?[^\s:/]+:\d+$")
 
 
 def run(args: argparse.Namespace) -> int:
-    scene = scene_from_args(args, "simulate")
+    scene = scene_from_args(args)
+    if isinstance(scene, PackingScene):
+        from diskfriction.cli.packing_cmd import run_packing_simulate
+
+        return run_packing_simulate(args, scene)
+    if args.gamma is not None:
+        raise CommandError(f"simulate error: --gamma: only for a packing scene; a chain's load "
+                           f"is --fx (got {args.gamma!r})")
+    if args.fx is None:
+        raise CommandError("simulate error: --fx: a chain scene needs the load(s) to start from "
+                           "(got nothing)")
     loads = parse_loads(args.fx)
     run_length("simulate", args.t_end, args.dt)
     number("simulate", "seed", args.seed, zero=True, integer=True)  # numpy seeds are >= 0

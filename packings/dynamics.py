@@ -75,3 +75,28 @@ def simulate(network: Network, q: np.ndarray, v: np.ndarray, xi: np.ndarray, row
             frame(done * dt)
     t, qs, budget, kinetic, slid = (np.array(c) for c in zip(*out))
     return PackingRun(t, qs, budget, kinetic, slid, dt)
+
+
+def distance(run: PackingRun, q_eq: np.ndarray, mass: np.ndarray) -> np.ndarray:
+    """The mass-weighted distance from the equilibrium, sqrt(sum m (q - q_eq)^2), per frame."""
+    return np.sqrt(np.sum(mass * (run.q - q_eq) ** 2, axis=1))
+
+
+def growth_rate(t: np.ndarray, d: np.ndarray, lo: float, hi: float) -> tuple[float, int]:
+    """(sigma, maxima used): the slope of log d over the local maxima of d(t) with lo < d < hi
+    (the oscillation of a complex pair's mode rides on e^(sigma t)); nan with fewer than 5."""
+    peaks = [f for f in range(1, len(d) - 1) if d[f - 1] <= d[f] >= d[f + 1]]
+    t, d = t[peaks], d[peaks]
+    window = (d > lo) & (d < hi)
+    if window.sum() < 5:
+        return float("nan"), int(window.sum())
+    return float(np.polyfit(t[window], np.log(d[window]), 1)[0]), int(window.sum())
+
+
+def fastest_pair(eigenvalues: np.ndarray, rel_tol: float = 1e-9) -> tuple[int, float]:
+    """(index, sigma) of the complex eigenvalue of M^-1 J with the largest growth rate sigma =
+    |Im sqrt(lambda)|; (-1, 0) when every eigenvalue is real."""
+    lam = eigenvalues.astype(complex)
+    sigma = np.where(np.abs(lam.imag) > rel_tol * np.abs(lam).max(), np.abs(np.sqrt(lam).imag), 0.0)
+    i = int(np.argmax(sigma))
+    return (i, float(sigma[i])) if sigma[i] > 0 else (-1, 0.0)

@@ -51,3 +51,23 @@ def plot_packing_diagram(branch: PackingBranch, scene: PackingScene, path: Path)
                      f"{len(branch.collisions)} collisions (red: birth, blue: death)", fontsize=9)
     fig.tight_layout()
     save_figure(fig, path)
+
+
+def plot_packing_run(t: np.ndarray, d: np.ndarray, sigma: float, measured: float,
+                     scene: PackingScene, gamma: float, path: Path) -> None:
+    """The mass-weighted distance from the equilibrium against time (log), with e^(sigma t) of
+    the spectrum's fastest complex pair and the measured slope."""
+    fig, ax = new_figure(figsize=(7, 4))
+    ax.semilogy(t, np.maximum(d, 1e-300), color="k", lw=0.6, label="|q - q_eq| (mass-weighted)")
+    if sigma > 0:
+        ax.semilogy(t, d[0] * np.exp(sigma * t), "--", color="tab:red", lw=1,
+                    label=f"spectrum: sigma = {sigma:.4g}")
+    if np.isfinite(measured):
+        ax.plot([], [], " ", label=f"measured: sigma = {measured:.4g}")
+    ax.set_ylim(max(d.min(), 1e-16) / 2, d.max() * 5)
+    ax.set_xlabel("t (raw time)")
+    ax.set_ylabel("distance [length x mass^(1/2)]")
+    ax.set_title(f"{scene.name}: N = {scene.N}, gamma = {gamma:.4g}", fontsize=9)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    save_figure(fig, path)
