@@ -162,19 +162,27 @@ def evaluate(q, xi, radii, contacts, params, F, Jvals, F_gamma):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def contact_force(q, xi_c, radii, contacts, c, N, params, f):
+    """The force kernel of contact row c at q with history xi_c into f (disk i's x, y, theta,
+    then disk j's); returns (dx, dy, active): r_i - r_j of the row's image and delta > 0."""
+    i, j = contacts[c, 0], contacts[c, 1]
+    dx, dy, ex, ey = grain_separation(q, i, j, contacts[c, 2], contacts[c, 3], N, params[5],
+                                      params[6])
+    delta = pair_overlap(dx, dy, ex, ey, 0.5 * (radii[i] + radii[j]))
+    if delta > 0.0:
+        grain_force(dx, dy, delta, xi_c, radii[i], radii[j], params[1], params[2], params[3], f)
+    return dx, dy, delta > 0.0
+
+
+@numba.njit(cache=True, error_model="numpy")
 def forces(q, xi, radii, contacts, params, F):
     """F(q, xi; gamma) only [force, torque]."""
     N, m = radii.shape[0], 2 * D
-    k_n, k_t, mu, L, gamma = params[1], params[2], params[3], params[5], params[6]
     F[:] = 0.0
     f, idx = np.empty(m), np.empty(m, np.int64)
     for c in range(contacts.shape[0]):
-        i, j = contacts[c, 0], contacts[c, 1]
-        dx, dy, ex, ey = grain_separation(q, i, j, contacts[c, 2], contacts[c, 3], N, L, gamma)
-        delta = pair_overlap(dx, dy, ex, ey, 0.5 * (radii[i] + radii[j]))
-        if delta > 0.0:
-            grain_force(dx, dy, delta, xi[c], radii[i], radii[j], k_n, k_t, mu, f)
-            grain_dofs(i, j, N, idx)
+        if contact_force(q, xi[c], radii, contacts, c, N, params, f)[2]:
+            grain_dofs(contacts[c, 0], contacts[c, 1], N, idx)
             for a in range(m):
                 F[idx[a]] += f[a]
 
@@ -185,16 +193,12 @@ def stress(q, xi, radii, contacts, params, sigma):
     [force / length], f_ij the force on i (so that compression is a negative normal stress, as
     in continuum mechanics): sigma = (sigma_xx, sigma_yy, sigma_xy, sigma_yx); the pressure is
     P = -(sigma_xx + sigma_yy) / 2."""
-    N, m = radii.shape[0], 2 * D
-    k_n, k_t, mu, L, gamma = params[1], params[2], params[3], params[5], params[6]
-    f = np.empty(m)
+    N, L = radii.shape[0], params[5]
+    f = np.empty(2 * D)
     sigma[:] = 0.0
     for c in range(contacts.shape[0]):
-        i, j = contacts[c, 0], contacts[c, 1]
-        dx, dy, ex, ey = grain_separation(q, i, j, contacts[c, 2], contacts[c, 3], N, L, gamma)
-        delta = pair_overlap(dx, dy, ex, ey, 0.5 * (radii[i] + radii[j]))
-        if delta > 0.0:
-            grain_force(dx, dy, delta, xi[c], radii[i], radii[j], k_n, k_t, mu, f)
+        dx, dy, active = contact_force(q, xi[c], radii, contacts, c, N, params, f)
+        if active:
             sigma[0] -= dx * f[0]
             sigma[1] -= dy * f[1]
             sigma[2] -= dx * f[1]
@@ -224,17 +228,11 @@ def history_increment(q0, q1, gamma0, gamma1, radii, contacts, params, dxi):
 def tangential_forces(q, xi, radii, contacts, params, ft):
     """F_t of every contact row, the tangential force along s on disk i [force] (0 if open):
     from the torque the kernel writes on disk i, T_i = -R_i F_t."""
-    N, m = radii.shape[0], 2 * D
-    k_n, k_t, mu, L, gamma = params[1], params[2], params[3], params[5], params[6]
-    f = np.empty(m)
+    N = radii.shape[0]
+    f = np.empty(2 * D)
     for c in range(contacts.shape[0]):
-        i, j = contacts[c, 0], contacts[c, 1]
-        dx, dy, ex, ey = grain_separation(q, i, j, contacts[c, 2], contacts[c, 3], N, L, gamma)
-        delta = pair_overlap(dx, dy, ex, ey, 0.5 * (radii[i] + radii[j]))
-        ft[c] = 0.0
-        if delta > 0.0:
-            grain_force(dx, dy, delta, xi[c], radii[i], radii[j], k_n, k_t, mu, f)
-            ft[c] = -f[D - 1] / radii[i]
+        active = contact_force(q, xi[c], radii, contacts, c, N, params, f)[2]
+        ft[c] = -f[D - 1] / radii[contacts[c, 0]] if active else 0.0
 
 
 @numba.njit(cache=True, error_model="numpy")
