@@ -18,6 +18,9 @@ CHAIN_ONLY = {"fx": "a packing's load is its strain: [shear] gamma in the scene"
               "p": "only with --problem FILE.py", "ds_max": "a packing's step follows its strain"}
 """bifurcate's options a packing scene does not take, and why."""
 
+PLASTIC_EVENTS = 1000
+"""The plastic events a command passes (packings/plastic.py) before it stops at the next."""
+
 
 def run_packing(args: argparse.Namespace, scene: PackingScene) -> int:
     """bifurcate on a packing scene: prepare, shear, write branch.npz, collisions.json,
@@ -36,6 +39,7 @@ def run_packing(args: argparse.Namespace, scene: PackingScene) -> int:
     from diskfriction.continuation.branch import StopCode
     from diskfriction.continuation.collisions import DetectionParams
     from diskfriction.packings.equilibria import MissedContact
+    from diskfriction.packings.plastic import RelaxationFailed
     from diskfriction.packings.prepare import save_packing
     from diskfriction.packings.prepared import prepare_scene
     from diskfriction.packings.shear import ShearParams, shear
@@ -53,8 +57,9 @@ def run_packing(args: argparse.Namespace, scene: PackingScene) -> int:
         params = ShearParams(detection=DetectionParams(mode=args.detection), workers=args.workers)
         try:
             branch = shear(scene, packing, params,
-                           lambda gamma: progress(gamma / g1, f"gamma = {gamma:.3e}"))
-        except (ContinuationError, MissedContact) as error:
+                           lambda gamma: progress(gamma / g1, f"gamma = {gamma:.3e}"),
+                           plastic_events=PLASTIC_EVENTS)
+        except (ContinuationError, MissedContact, RelaxationFailed) as error:
             raise CommandError(f"bifurcate error: {scene.source}: {error}", EXIT_FAILED) from None
         progress.stage(f"writing {out}/branch.npz, collisions.json")
         save_packing_branch(out, branch, scene)
@@ -70,6 +75,9 @@ def run_packing(args: argparse.Namespace, scene: PackingScene) -> int:
               f"{branch.gamma[-1]:.6g}, max residual {branch.residual.max():.1e}, "
               f"{branch.events} contact events split; {branch.contacts[0]} -> "
               f"{branch.contacts[-1]} contacts, {branch.loose[-1]} loose disks")
+        print(f"{count(len(branch.plastic), 'plastic event')} passed (folds in gamma, relaxed "
+              f"with friction)" + "".join(f"\n  gamma = {e.gamma:.9f}: sigma_xy {e.stress_before:.6g} "
+                                          f"-> {e.stress_after:.6g}" for e in branch.plastic))
         print(f"{count(len(records), 'collision')} ({matrix}) with gamma >= {g0:g}; complex "
               f"pairs at {100 * (branch.n_complex > 0).mean():.0f} % of the equilibria, at most "
               f"{branch.n_complex.max()}")
@@ -122,7 +130,8 @@ def run_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> int:
         packing = prepare_scene(scene, progress.part("relax"))
         progress.stage(f"shear gamma 0 -> {args.gamma:g}")
         branch = shear(scene, packing, ShearParams(workers=0),
-                       lambda g: progress(g / max(args.gamma, 1e-300), f"gamma = {g:.3e}"))
+                       lambda g: progress(g / max(args.gamma, 1e-300), f"gamma = {g:.3e}"),
+                       plastic_events=PLASTIC_EVENTS)
         if not branch.status.reached:
             raise CommandError(f"simulate error: {scene.source}: no equilibrium beyond gamma = "
                                f"{branch.gamma[-1]:.9g} (asked for {args.gamma:g}): the branch "

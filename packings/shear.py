@@ -10,12 +10,13 @@ from typing import Callable, Optional
 import numpy as np
 
 from diskfriction.continuation.api import Options, solve_branch
-from diskfriction.continuation.branch import Stop
+from diskfriction.continuation.branch import Stop, StopCode
 from diskfriction.continuation.collisions import Collision
 from diskfriction.continuation.spectra import count_complex_pairs
 from diskfriction.matrices import Matrix
 from diskfriction.packings.equilibria import PackingEquilibria, largest_force, mass_diagonal, start
 from diskfriction.packings.network import Network
+from diskfriction.packings.plastic import PlasticEvent, past_fold
 from diskfriction.packings.prepare import Packing
 from diskfriction.scenes.packing import PackingScene
 
@@ -48,8 +49,10 @@ class PackingBranch:
     reference disk (packings/equilibria.py; the translations' and loose disks' zeros
     included); n_complex (m,); residual (m,) max|F| over the network's disks [force]; contacts
     (m,) active contacts; loose (m,) loose disks; stress (m, 4) sigma_xx, sigma_yy, sigma_xy,
-    sigma_yx [force / length]; collisions in branch order; status; events: steps cut at a
-    contact event."""
+    sigma_yx [force / length]; collisions in branch order (each segment's eigenvalue labels are
+    its own); status of the last segment; events: steps cut at a contact event; segment (m,)
+    the segment of each point: the branch between two plastic events; plastic: the plastic
+    events (folds in gamma) passed, one between each two segments."""
 
     gamma: np.ndarray
     q: np.ndarray
@@ -65,6 +68,8 @@ class PackingBranch:
     matrix: Matrix
     status: Stop
     events: int
+    segment: np.ndarray
+    plastic: tuple[PlasticEvent, ...] = ()
 
     def __len__(self) -> int:
         return self.gamma.size
@@ -77,37 +82,55 @@ def network_of(scene: PackingScene, packing: Packing) -> Network:
 
 
 def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearParams(),
-          progress: Optional[Callable[[float], None]] = None) -> PackingBranch:
+          progress: Optional[Callable[[float], None]] = None, plastic_events: int = 0
+          ) -> PackingBranch:
     """Follow the equilibria of `packing` with friction switched on from gamma = 0 to the end
-    of the scene's gamma range (collisions below its start are left out)."""
+    of the scene's gamma range (collisions below its start are left out). At a fold (a plastic
+    event) the run ends, unless plastic_events > 0: then up to that many events are passed
+    (packings/plastic.py: strained past the fold, relaxed with friction) and the shear goes on
+    from each relaxed state as a new segment."""
     network = network_of(scene, packing)
-    q, xi, rows = start(network, packing.positions)
     mass = mass_diagonal(network, scene.m, scene.inertia)
-    problem = PackingEquilibria(network, q, xi, rows, 0.0, mass, scene.matrix, params.newton_tol)
     g0, g1 = scene.gamma_range
     affine = float(np.linalg.norm(packing.positions[:, 1]))
     ds_max = params.ds_max or STEP_IN_STRAIN * affine
     options = replace(params, ds_max=ds_max, ds=params.ds or ds_max / 4,
                       ds_min=params.ds_min or 1e-8 * ds_max)
-    records = []
+    records, collisions, events, passed = [], [], 0, []
+    q, xi, rows = start(network, packing.positions)
+    gamma_start = 0.0
+    while True:
+        problem = PackingEquilibria(network, q, xi, rows, gamma_start, mass, scene.matrix,
+                                    params.newton_tol)
+        segment = len(passed)
 
-    def record(k, gamma, q_k, eigvals):
-        xi_all = problem.trial(q_k, gamma)[0]
-        xi_k, rows_k = xi_all[problem.active], problem.rows_c[problem.active]
-        delta = network.overlaps(q_k, rows_k, gamma)
-        records.append((gamma, q_k.copy(), problem.rows_c.copy(), xi_all, eigvals,
-                        largest_force(problem, q_k, gamma),
-                        int((delta > 0).sum()), int(problem.gauge.loose.sum()),
-                        network.stress(q_k, xi_k, rows_k, gamma)))
-        if progress is not None:
-            progress(gamma)
+        def record(k, gamma, q_k, eigvals, problem=problem, segment=segment):
+            xi_all = problem.trial(q_k, gamma)[0]
+            xi_k, rows_k = xi_all[problem.active], problem.rows_c[problem.active]
+            delta = network.overlaps(q_k, rows_k, gamma)
+            records.append((gamma, q_k.copy(), problem.rows_c.copy(), xi_all, eigvals,
+                            largest_force(problem, q_k, gamma),
+                            int((delta > 0).sum()), int(problem.gauge.loose.sum()),
+                            network.stress(q_k, xi_k, rows_k, gamma), segment))
+            if progress is not None:
+                progress(gamma)
 
-    branch = solve_branch(problem, q, (0.0, g1), options, callback=record).branch
-    gamma, q_all, rows, xi, eig, res, contacts, loose, stress = zip(*records)
-    gamma, q_all, eig, res, contacts, loose, stress = (np.array(c) for c in
-                                                      (gamma, q_all, eig, res, contacts, loose, stress))
+        branch = solve_branch(problem, q, (gamma_start, g1), options, callback=record).branch
+        collisions += branch.collisions
+        events += branch.events
+        if branch.status.code is not StopCode.FOLD or len(passed) >= plastic_events:
+            break
+        gamma_f, q_f, rows_f, xi_f = records[-1][0], records[-1][1], records[-1][2], records[-1][3]
+        q, xi, rows, gamma_start, steps = past_fold(network, q_f, xi_f, rows_f, gamma_f,
+                                                    params.newton_tol)
+        after = network.stress(q, xi, rows, gamma_start)[2]
+        passed.append(PlasticEvent(gamma_f, float(records[-1][8][2]), float(after),
+                                   float(np.linalg.norm(q - q_f)), steps))
+    gamma, q_all, rows, xi, eig, res, contacts, loose, stress, segments = zip(*records)
+    gamma, q_all, eig, res, contacts, loose, stress, segments = (
+        np.array(c) for c in (gamma, q_all, eig, res, contacts, loose, stress, segments))
     rel_tol = params.detection.rel_tol
     n_complex = np.array([count_complex_pairs(e[e != 0], rel_tol) for e in eig])
-    collisions = tuple(c for c in branch.collisions if c.p >= g0)
-    return PackingBranch(gamma, q_all, rows, xi, eig, n_complex, res, contacts, loose, stress, collisions,
-                         Matrix(scene.matrix), branch.status, branch.events)
+    return PackingBranch(gamma, q_all, rows, xi, eig, n_complex, res, contacts, loose, stress,
+                         tuple(c for c in collisions if c.p >= g0), Matrix(scene.matrix),
+                         branch.status, events, segments, tuple(passed))

@@ -21,6 +21,7 @@ def collision_records(branch: PackingBranch) -> list[dict]:
 def save_packing_branch(out: Path, branch: PackingBranch, scene: PackingScene) -> None:
     """branch.npz (every PackingBranch array, raw units) and collisions.json."""
     save_npz(out / "branch.npz", gamma=branch.gamma, q=branch.q, eigenvalues=branch.eigenvalues,
+             segment=branch.segment, plastic_gamma=np.array([e.gamma for e in branch.plastic]),
              n_complex=branch.n_complex, residual=branch.residual, contacts=branch.contacts,
              loose=branch.loose, stress=branch.stress, matrix=np.array(str(branch.matrix)),
              status=np.array(str(branch.status)))
@@ -34,7 +35,12 @@ def plot_packing_diagram(branch: PackingBranch, scene: PackingScene, path: Path)
     matrix; a point per eigenvalue with Im lambda > 0)."""
     fig, (stress, pairs, im) = new_figure(3, 1, figsize=(7, 8), sharex=True)
     gamma = branch.gamma
-    stress.plot(gamma, branch.stress[:, 2], color="k", lw=1)
+    for segment in np.unique(branch.segment):
+        on = branch.segment == segment
+        stress.plot(gamma[on], branch.stress[on, 2], color="k", lw=1)
+    for event in branch.plastic:
+        for ax in (stress, pairs, im):
+            ax.axvline(event.gamma, color="k", ls="--", lw=0.8)
     stress.set_ylabel("sigma_xy [force / length]")
     for c in branch.collisions:
         stress.axvline(c.p, color="tab:red" if str(c.kind) == "birth" else "tab:blue", lw=0.3,
@@ -48,7 +54,8 @@ def plot_packing_diagram(branch: PackingBranch, scene: PackingScene, path: Path)
     im.set_ylabel(f"Im lambda of {branch.matrix} (raw)")
     im.set_xlabel("shear strain gamma")
     stress.set_title(f"{scene.name}: N = {scene.N}, P = {scene.pressure:g}, mu = {scene.mu:g}; "
-                     f"{len(branch.collisions)} collisions (red: birth, blue: death)", fontsize=9)
+                     f"{len(branch.collisions)} collisions (red: birth, blue: death), "
+                     f"{len(branch.plastic)} plastic events (dashed)", fontsize=9)
     fig.tight_layout()
     save_figure(fig, path)
 

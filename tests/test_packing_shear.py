@@ -97,3 +97,23 @@ def test_contact_events_are_located_on_the_branch_to_1e_12(packing):
         equilibria.PackingEquilibria.commit = commit
     assert branch.events >= 2 and len(ends) >= branch.events
     assert max(ends) <= 1e-12, ends
+
+
+def test_a_plastic_event_is_passed_by_relaxing_with_friction():
+    """32 disks, seed 2, sheared to gamma = 0.003: the first branch ends at a fold (its
+    smallest eigenvalue near 0: a saddle-node); with plastic events passed, the packing is
+    relaxed past it and the shear goes on to the end as a second segment, every point of which
+    is in force balance."""
+    scene = PackingScene(N=32, seed=2, gamma_range=(0.0, 0.003))
+    packing = prepare_scene(scene)
+    stopped = shear(scene, packing, ShearParams(workers=0))
+    assert str(stopped.status.code) == "fold" and stopped.gamma[-1] < 0.003
+    last = stopped.eigenvalues[-1][stopped.eigenvalues[-1] != 0].real.min()
+    first = stopped.eigenvalues[0][stopped.eigenvalues[0] != 0].real.min()
+    assert 0 < last <= 1e-4 * first
+    passed = shear(scene, packing, ShearParams(workers=0), plastic_events=5)
+    assert passed.status.reached and passed.gamma[-1] == 0.003
+    assert len(passed.plastic) >= 1 and passed.segment.max() == len(passed.plastic)
+    assert passed.plastic[0].gamma == stopped.gamma[-1]
+    assert passed.residual.max() <= ShearParams().newton_tol
+    assert np.all(np.diff(passed.gamma) > 0)

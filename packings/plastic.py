@@ -1,0 +1,80 @@
+"""Past a plastic event: where quasistatic shear reaches a fold in gamma (the saddle-node where
+the branch is lost), the packing is strained a little further and relaxed with friction to the
+next mechanically stable state, from which the shear goes on (docs/packings.md#plastic-events).
+
+The relaxation is FIRE (packings/fire.py) on the frictional forces, the history following the
+relaxation path by the chain's rule (the Coulomb cap included: contacts slide during the
+rearrangement), the contact rows found again whenever the disks may have moved half the reach.
+FIRE's quenches (velocities zeroed going uphill) stand for the dissipation of a real
+rearrangement; the state it finds is an equilibrium with the history the path charged, not the
+one an undamped run would settle in (which needs the dynamics: packings/dynamics.py).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from diskfriction.packings.equilibria import REACH, carried
+from diskfriction.packings.fire import fire
+from diskfriction.packings.network import Network
+from diskfriction.packings.prepare import first_time_step
+
+PAST_FOLD = 1e-7
+"""The strain beyond a fold at which the packing is relaxed [1]: the run ends within about
+ds_min of the fold, so this is past it, and small against the strain between events."""
+
+
+class RelaxationFailed(RuntimeError):
+    """FIRE did not bring the forces below the tolerance after a plastic event."""
+
+
+@dataclass(frozen=True)
+class PlasticEvent:
+    """A plastic event: the fold's strain gamma, the shear stress sigma_xy before and after
+    [force / length], the mass-free displacement |q_after - q_before| [length] and the FIRE
+    steps the relaxation took."""
+
+    gamma: float
+    stress_before: float
+    stress_after: float
+    displacement: float
+    steps: int
+
+
+def relax(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray, gamma: float,
+          f_tol: float, max_steps: int = 200_000) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """FIRE on the frictional forces at fixed strain from (q, xi, rows) until max |F| <= f_tol
+    [force]; returns (q, xi, rows, steps) of the relaxed state. RelaxationFailed otherwise."""
+    reach = REACH * network.constants[0]
+    state = {"q": q.copy(), "xi": xi.copy(), "rows": rows, "searched": q.copy()}
+
+    def forces(x: np.ndarray):
+        xi_new, _ = network.history_step(state["q"], x, gamma, gamma, state["xi"], state["rows"])
+        state["q"], state["xi"] = x.copy(), xi_new
+        if np.abs(x - state["searched"]).max() > 0.5 * reach:
+            rows_new = network.contacts(x, gamma, reach)
+            state["xi"], state["rows"], state["searched"] = (carried(state["rows"], xi_new, rows_new),
+                                                            rows_new, x.copy())
+        return network.forces(x, state["xi"], state["rows"], gamma), 0.0
+
+    R, k_n = network.constants[0], network.constants[1]
+    result = fire(forces, q, first_time_step(k_n, R), f_tol, max_steps)
+    if not result.converged:
+        raise RelaxationFailed(f"the relaxation after the plastic event at gamma = {gamma:.9g} "
+                               f"stopped at max |F| = {result.max_force:.3g} after {result.steps} "
+                               f"FIRE steps")
+    return result.x, state["xi"], state["rows"], result.steps
+
+
+def past_fold(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray, gamma: float,
+              f_tol: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, int]:
+    """The state after the plastic event at the fold (q, xi, rows, gamma): strained affinely by
+    PAST_FOLD (x += d gamma y, the histories charged by it), then relaxed. Returns (q, xi,
+    rows, gamma + PAST_FOLD, FIRE steps)."""
+    N, gamma_new = network.N, gamma + PAST_FOLD
+    q_affine = q.copy()
+    q_affine[:N] += PAST_FOLD * q[N:2 * N]
+    xi_affine, _ = network.history_step(q, q_affine, gamma, gamma_new, xi, rows)
+    q1, xi1, rows1, steps = relax(network, q_affine, xi_affine, rows, gamma_new, f_tol)
+    return q1, xi1, rows1, gamma_new, steps
