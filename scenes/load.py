@@ -12,43 +12,20 @@ from __future__ import annotations
 
 import os
 import tomllib
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from importlib import resources
 from pathlib import Path
 from typing import Any, Callable, Iterator
 
 from diskfriction.scenes.packing import PackingScene
-from diskfriction.scenes.rules import (EFFECTS_RULES, FRICTION, GEOMETRIES, PACKING_RULES,
-                                       SCENE_RULES, Invalid, Rule, expect, kind)
+from diskfriction.scenes.rules import GEOMETRIES, Invalid, expect, kind
+from diskfriction.scenes.schema import (EFFECT_FIELDS, FIELDS, FRICTION_SWITCHES, KEYS,
+                                        PACKING_EFFECTS, PACKING_FIELDS, PACKING_KEYS,
+                                        PACKING_SCHEMA, SCHEMA, SCHEMAS, tables)
 from diskfriction.scenes.scene import Effects, Scene, SceneValueError
 
 FILE_KEY = "<file>"
 COMMENT_COLUMN = 36
-
-# Scene field -> dotted key, for the fields a file sets one to one.
-_FIELDS = {
-    "name": "name",
-    "N": "disks.N",
-    "R": "disks.R",
-    "m": "disks.m",
-    "inertia": "disks.inertia",
-    "eps": "disks.eps",
-    "k_n": "contacts.k_n",
-    "k_t": "contacts.k_t",
-    "mu": "contacts.mu",
-    "F_y": "load.F_y",
-    "F_x_range": "load.F_x",
-    "matrix": "stability.matrix",
-}
-# Effects field -> dotted key, for the effects a file sets one to one.
-_EFFECT_FIELDS = {
-    "normal": "effects.normal",
-    "tangential": "effects.tangential",
-    "rotation": "effects.rotation",
-    "conventions": "effects.conventions",
-}
-# Friction kind in a file -> the Effects switch it turns on.
-_FRICTION_SWITCHES = {"disk-disk": "pair_friction", "substrate": "wall_friction"}
 
 
 class SceneError(Exception):
@@ -99,128 +76,20 @@ def _show(value: Any) -> str:
     return _toml(value, quote=repr)
 
 
-# ---------------------------------------------------------------- the schema
-
-
-@dataclass(frozen=True)
-class _Key:
-    """One key of the schema: the rule of the field it sets (scenes/rules.py), what it means and
-    its unit ("[length]"; "" for a pure number)."""
-
-    rule: Rule
-    meaning: str
-    unit: str = ""
-
-    @property
-    def comment(self) -> str:
-        """What format_scene writes beside the key: meaning, unit and the rule's bound."""
-        text = f"{self.meaning} {self.unit}".strip()
-        return f"{text}; {self.rule.bound}" if self.rule.bound else text
-
-
-STIFFNESS = "[force / length^(3/2)]"
-# Dotted key -> its rule, meaning and unit, in the order format_scene writes them.
-SCHEMA: dict[str, _Key] = {
-    "name": _Key(SCENE_RULES["name"], "label"),
-    "disks.N": _Key(SCENE_RULES["N"], "number of disks"),
-    "disks.R": _Key(SCENE_RULES["R"], "disk radius", "[length]"),
-    "disks.m": _Key(SCENE_RULES["m"], "disk mass", "[mass]"),
-    "disks.inertia": _Key(SCENE_RULES["inertia"], "c in I = c m R^2 (0.5: uniform disk)"),
-    "disks.eps": _Key(SCENE_RULES["eps"], "pre-compression, L = 2 N R (1 - eps)"),
-    "contacts.k_n": _Key(SCENE_RULES["k_n"], "normal stiffness, F_n = k_n delta^p",
-                         "[force / length^p]"),
-    "contacts.k_t": _Key(SCENE_RULES["k_t"], "Mindlin tangential stiffness", STIFFNESS),
-    "contacts.mu": _Key(SCENE_RULES["mu"], "friction coefficient (0 turns friction off)"),
-    "load.F_y": _Key(SCENE_RULES["F_y"], "downward force on every disk", "[force]"),
-    "load.F_x": _Key(SCENE_RULES["F_x_range"], "quasistatic range [start, stop] of the force on "
-                                               "disk 1", "[force]"),
-    "effects.normal": _Key(EFFECTS_RULES["normal"], "normal contact law, F_n = k_n delta^p "
-                                                    "(hertz: p = 3/2, hooke: p = 1)"),
-    "effects.tangential": _Key(EFFECTS_RULES["tangential"], "tangential contact law"),
-    "effects.friction": _Key(FRICTION, "where the tangential law acts"),
-    "effects.rotation": _Key(EFFECTS_RULES["rotation"],
-                             "disks rotate (3 dof per disk) or not (2)"),
-    "effects.conventions": _Key(EFFECTS_RULES["conventions"], "disk-disk lever arm and history "
-                                                              "increment (docs/physics.md)"),
-    "stability.matrix": _Key(SCENE_RULES["matrix"], "stability matrix"),
-}
-KEYS = {**_FIELDS, **_EFFECT_FIELDS}
-"""Scene or Effects field -> the dotted key that sets it (effects.friction sets two switches)."""
-
-
-def _packing_friction(value: Any) -> tuple[str, ...]:
-    """A packing file's effects.friction: [] or ["disk-disk"] (a packing has no substrate)."""
-    kinds = FRICTION.check(value)
-    if "substrate" in kinds:
-        raise Invalid("a packing has no substrate: friction is a subset of disk-disk")
-    return kinds
-
-
-# PackingScene field -> dotted key, for the fields a packing file sets one to one.
-_PACKING_FIELDS = {
-    "name": "name",
-    "N": "packing.N",
-    "size_ratio": "packing.size_ratio",
-    "fraction_small": "packing.fraction_small",
-    "pressure": "packing.pressure",
-    "seed": "packing.seed",
-    "R": "disks.R",
-    "m": "disks.m",
-    "inertia": "disks.inertia",
-    "k_n": "contacts.k_n",
-    "k_t": "contacts.k_t",
-    "mu": "contacts.mu",
-    "gamma_range": "shear.gamma",
-    "matrix": "stability.matrix",
-}
-_PACKING_EFFECTS = {"normal": "effects.normal", "tangential": "effects.tangential"}
-PACKING_SCHEMA: dict[str, _Key] = {
-    "name": _Key(PACKING_RULES["name"], "label"),
-    "packing.N": _Key(PACKING_RULES["N"], "number of disks"),
-    "packing.size_ratio": _Key(PACKING_RULES["size_ratio"], "large / small radius"),
-    "packing.fraction_small": _Key(PACKING_RULES["fraction_small"], "fraction of small disks"),
-    "packing.pressure": _Key(PACKING_RULES["pressure"], "target pressure of the preparation",
-                             "[force / length]"),
-    "packing.seed": _Key(PACKING_RULES["seed"], "seed of the initial positions"),
-    "disks.R": _Key(PACKING_RULES["R"], "small disk radius", "[length]"),
-    "disks.m": _Key(PACKING_RULES["m"], "small disk mass (same density for all)", "[mass]"),
-    "disks.inertia": _Key(PACKING_RULES["inertia"], "c in I = c m_i R_i^2 (0.5: uniform disk)"),
-    "contacts.k_n": SCHEMA["contacts.k_n"],
-    "contacts.k_t": SCHEMA["contacts.k_t"],
-    "contacts.mu": SCHEMA["contacts.mu"],
-    "shear.gamma": _Key(PACKING_RULES["gamma_range"], "quasistatic range [start, stop] of the "
-                                                      "shear strain (Lees-Edwards)"),
-    "effects.normal": SCHEMA["effects.normal"],
-    "effects.tangential": SCHEMA["effects.tangential"],
-    "effects.friction": _Key(Rule(_packing_friction, "[] or [\"disk-disk\"]"),
-                             "where the tangential law acts"),
-    "stability.matrix": SCHEMA["stability.matrix"],
-}
-PACKING_KEYS = {**_PACKING_FIELDS, **_PACKING_EFFECTS}
-SCHEMAS = {"chain": SCHEMA, "packing": PACKING_SCHEMA}
-
-
-def _tables(schema: dict[str, _Key]) -> tuple[str, ...]:
-    return tuple(dict.fromkeys(key.partition(".")[0] for key in schema if "." in key))
-
-
-TABLES = _tables(SCHEMA)
-
-
 # ---------------------------------------------------------------- Scene <-> dotted values
 
 
 def _effect_values(effects: Effects) -> dict[str, Any]:
     """The [effects] keys of ``effects``."""
-    values = {key: getattr(effects, field) for field, key in _EFFECT_FIELDS.items()}
-    values["effects.friction"] = [each for each, switch in _FRICTION_SWITCHES.items()
+    values = {key: getattr(effects, field) for field, key in EFFECT_FIELDS.items()}
+    values["effects.friction"] = [each for each, switch in FRICTION_SWITCHES.items()
                                   if getattr(effects, switch)]
     return values
 
 
 def _values(scene: Scene) -> dict[str, Any]:
     """Every dotted key of the schema with its value in ``scene``."""
-    values = {key: getattr(scene, field) for field, key in _FIELDS.items()}
+    values = {key: getattr(scene, field) for field, key in FIELDS.items()}
     values |= _effect_values(scene.effects)
     return {key: values[key] for key in SCHEMA}
 
@@ -231,10 +100,10 @@ def _scene(values: dict[str, Any], given: dict[str, Any], origin: str, source: s
     overflows) raise SceneError naming the first of them that ``given`` sets."""
     friction = values["effects.friction"]
     try:
-        effects = Effects(**{field: values[key] for field, key in _EFFECT_FIELDS.items()},
+        effects = Effects(**{field: values[key] for field, key in EFFECT_FIELDS.items()},
                           **{switch: each in friction
-                             for each, switch in _FRICTION_SWITCHES.items()})
-        return Scene(**{field: values[key] for field, key in _FIELDS.items()}, effects=effects,
+                             for each, switch in FRICTION_SWITCHES.items()})
+        return Scene(**{field: values[key] for field, key in FIELDS.items()}, effects=effects,
                      source=source)
     except SceneValueError as error:
         keys = [KEYS[field] for field in error.fields]
@@ -266,7 +135,7 @@ def _read_document(file: str) -> dict[str, Any]:
 def _unknown(file: str, table: str, name: str, value: Any, schema: dict = SCHEMA) -> SceneError:
     """The error for a key or table the schema does not know in ``table``, listing known ones."""
     siblings = [key.rpartition(".")[2] for key in schema if key.rpartition(".")[0] == table]
-    known = siblings if table else ["geometry"] + siblings + [f"[{each}]" for each in _tables(schema)]
+    known = siblings if table else ["geometry"] + siblings + [f"[{each}]" for each in tables(schema)]
     what = "unknown table" if isinstance(value, dict) else "unknown key"
     where = f" in [{table}]" if table else ""
     key = f"{table}.{name}" if table else name
@@ -285,9 +154,9 @@ def _entry(file: str, table: str, name: str, value: Any, schema: dict = SCHEMA
 def _entries(document: dict[str, Any], file: str, schema: dict = SCHEMA
              ) -> Iterator[tuple[str, Any]]:
     """(dotted key, value) for every key of ``document`` in file order; unknown ones raise."""
-    tables = _tables(schema)
+    known = tables(schema)
     for name, value in document.items():
-        if name not in tables:
+        if name not in known:
             yield _entry(file, "", name, value, schema)
         elif not isinstance(value, dict):
             raise SceneError(file, name, f"expected a table, not {kind(value)}", value)
@@ -323,8 +192,8 @@ def _geometry(document: dict[str, Any], file: str) -> str:
 
 def _packing_values(scene: PackingScene) -> dict[str, Any]:
     """Every dotted key of PACKING_SCHEMA with its value in ``scene``."""
-    values = {key: getattr(scene, field) for field, key in _PACKING_FIELDS.items()}
-    values |= {key: getattr(scene.effects, field) for field, key in _PACKING_EFFECTS.items()}
+    values = {key: getattr(scene, field) for field, key in PACKING_FIELDS.items()}
+    values |= {key: getattr(scene.effects, field) for field, key in PACKING_EFFECTS.items()}
     values["effects.friction"] = ["disk-disk"] if scene.effects.pair_friction else []
     return {key: values[key] for key in PACKING_SCHEMA}
 
@@ -332,10 +201,10 @@ def _packing_values(scene: PackingScene) -> dict[str, Any]:
 def _packing_scene(values: dict[str, Any], given: dict[str, Any], origin: str) -> PackingScene:
     """The PackingScene of the checked dotted ``values``; as _scene for derived problems."""
     try:
-        effects = Effects(**{field: values[key] for field, key in _PACKING_EFFECTS.items()},
+        effects = Effects(**{field: values[key] for field, key in PACKING_EFFECTS.items()},
                           pair_friction="disk-disk" in values["effects.friction"],
                           wall_friction=False)
-        return PackingScene(**{field: values[key] for field, key in _PACKING_FIELDS.items()},
+        return PackingScene(**{field: values[key] for field, key in PACKING_FIELDS.items()},
                             effects=effects, source=origin)
     except SceneValueError as error:
         key = PACKING_KEYS.get(error.fields[0], "effects.friction")
