@@ -6,6 +6,9 @@ saddle-node in gamma, the plastic event of quasistatic shear; ds_min; commit) an
 real part of the tracked spectrum at the end over its value at the start (a fold drives it to
 0). One line per run, measured in this run, scans inline (workers = 0).
 
+Plastic events (folds) are passed up to PLASTIC_EVENTS times (packings/plastic.py); the column
+"plastic" counts them and "ended" says how the last segment ended.
+
 Run: python benchmarks/shear_packing.py [N:SEEDS:GAMMA_END ...]   (default: 32:3:0.01 64:3:0.01)
 """
 from __future__ import annotations
@@ -19,6 +22,8 @@ from diskfriction.packings.prepared import prepare_scene
 from diskfriction.packings.shear import ShearParams, shear
 from diskfriction.scenes.packing import PackingScene
 
+PLASTIC_EVENTS = 1000
+
 
 def smallest(eigenvalues: np.ndarray) -> float:
     """The smallest real part of the tracked (nonzero) eigenvalues."""
@@ -30,20 +35,21 @@ def run(N: int, seed: int, gamma_end: float) -> str:
     start = time.perf_counter()
     packing = prepare_scene(scene)
     prepared = time.perf_counter() - start
-    branch = shear(scene, packing, ShearParams(workers=0))
+    branch = shear(scene, packing, ShearParams(workers=0), plastic_events=PLASTIC_EVENTS)
     sheared = time.perf_counter() - start - prepared
     fell = smallest(branch.eigenvalues[-1]) / smallest(branch.eigenvalues[0])
     end = branch.status.code.value
     return (f"{N:>5} {seed:>4} {prepared:>7.1f} {sheared:>7.1f} {branch.gamma[-1]:>10.3e} "
             f"{end:>12} {len(branch):>6} {branch.events:>6} {len(branch.collisions):>10} "
             f"{np.mean(branch.n_complex > 0):>8.2f} {np.mean(branch.n_complex):>7.1f} "
-            f"{branch.residual.max():>9.1e} {int(branch.loose[0]):>5} {fell:>9.1e}")
+            f"{branch.residual.max():>9.1e} {int(branch.loose[0]):>5} {fell:>9.1e} "
+            f"{len(branch.plastic):>7} {branch.stress[-1, 2]:>9.4f}")
 
 
 def main(runs: list[str]) -> None:
     print(f"{'N':>5} {'seed':>4} {'prep s':>7} {'shear s':>7} {'gamma end':>10} {'ended':>12} "
           f"{'points':>6} {'events':>6} {'collisions':>10} {'complex':>8} {'pairs':>7} "
-          f"{'max |F|':>9} {'loose':>5} {'min/start':>9}")
+          f"{'max |F|':>9} {'loose':>5} {'min/start':>9} {'plastic':>7} {'sigma_xy':>9}")
     for spec in runs:
         N, seeds, gamma_end = spec.split(":")
         for seed in range(1, int(seeds) + 1):

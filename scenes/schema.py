@@ -6,7 +6,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from diskfriction.scenes.rules import EFFECTS_RULES, FRICTION, PACKING_RULES, SCENE_RULES, Invalid, Rule
+from diskfriction.scenes.rules import (EFFECTS_RULES, FRICTION, PACKING_RULES, SCENE_RULES,
+                                       Invalid, Rule)
 
 # Scene field -> dotted key, for the fields a file sets one to one.
 FIELDS = {
