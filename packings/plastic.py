@@ -31,15 +31,18 @@ class RelaxationFailed(RuntimeError):
 
 @dataclass(frozen=True)
 class PlasticEvent:
-    """A plastic event: the fold's strain gamma, the shear stress sigma_xy before and after
-    [force / length], the mass-free displacement |q_after - q_before| [length] and the FIRE
-    steps the relaxation took."""
+    """A plastic event: the strain gamma where the branch was lost, the shear stress sigma_xy
+    before and after [force / length], the mass-free displacement |q_after - q_before|
+    [length], the FIRE steps the relaxation took, and how the branch was lost (the segment's
+    Stop code: "fold", or "commit" when no equilibrium was near after a contact slid or a disk
+    turned loose)."""
 
     gamma: float
     stress_before: float
     stress_after: float
     displacement: float
     steps: int
+    kind: str = "fold"
 
 
 def relax(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray, gamma: float,

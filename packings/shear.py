@@ -20,6 +20,11 @@ from diskfriction.packings.plastic import PlasticEvent, past_fold
 from diskfriction.packings.prepare import Packing
 from diskfriction.scenes.packing import PackingScene
 
+PLASTIC = (StopCode.FOLD, StopCode.COMMIT)
+"""How a segment ends at a plastic event: a fold in gamma (a saddle-node), or a commit after
+which no equilibrium is near (a contact sliding or a disk turning loose took the state's
+stability with it)."""
+
 STEP_IN_STRAIN = 2e-4
 """The largest step moves the disks by about this strain: ds_max = STEP_IN_STRAIN times the
 arclength of an affine shear of unit strain, |(y_i, 0, 0)| over the disks [length]."""
@@ -118,14 +123,14 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
         branch = solve_branch(problem, q, (gamma_start, g1), options, callback=record).branch
         collisions += branch.collisions
         events += branch.events
-        if branch.status.code is not StopCode.FOLD or len(passed) >= plastic_events:
+        if branch.status.code not in PLASTIC or len(passed) >= plastic_events:
             break
         gamma_f, q_f, rows_f, xi_f = records[-1][0], records[-1][1], records[-1][2], records[-1][3]
         q, xi, rows, gamma_start, steps = past_fold(network, q_f, xi_f, rows_f, gamma_f,
                                                     params.newton_tol)
         after = network.stress(q, xi, rows, gamma_start)[2]
         passed.append(PlasticEvent(gamma_f, float(records[-1][8][2]), float(after),
-                                   float(np.linalg.norm(q - q_f)), steps))
+                                   float(np.linalg.norm(q - q_f)), steps, str(branch.status.code)))
     gamma, q_all, rows, xi, eig, res, contacts, loose, stress, segments = zip(*records)
     gamma, q_all, eig, res, contacts, loose, stress, segments = (
         np.array(c) for c in (gamma, q_all, eig, res, contacts, loose, stress, segments))
