@@ -76,7 +76,7 @@ def run_packing(args: argparse.Namespace, scene: PackingScene) -> int:
               f"{branch.events} contact events split; {branch.contacts[0]} -> "
               f"{branch.contacts[-1]} contacts, {branch.loose[-1]} loose disks")
         print(f"{count(len(branch.plastic), 'plastic event')} passed (folds in gamma, relaxed "
-              f"with friction)" + "".join(f"\n  gamma = {e.gamma:.9f}: sigma_xy {e.stress_before:.6g} "
+              f"with friction)" + "".join(f"\n  gamma = {e.gamma:.9f} ({e.kind}): sigma_xy {e.stress_before:.6g} "
                                           f"-> {e.stress_after:.6g}" for e in branch.plastic))
         print(f"{count(len(records), 'collision')} ({matrix}) with gamma >= {g0:g}; complex "
               f"pairs at {100 * (branch.n_complex > 0).mean():.0f} % of the equilibria, at most "
