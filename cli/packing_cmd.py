@@ -75,9 +75,11 @@ def run_packing(args: argparse.Namespace, scene: PackingScene) -> int:
               f"{branch.gamma[-1]:.6g}, max residual {branch.residual.max():.1e}, "
               f"{branch.events} contact events split; {branch.contacts[0]} -> "
               f"{branch.contacts[-1]} contacts, {branch.loose[-1]} loose disks")
-        print(f"{count(len(branch.plastic), 'plastic event')} passed (folds in gamma, relaxed "
-              f"with friction)" + "".join(f"\n  gamma = {e.gamma:.9f} ({e.kind}): sigma_xy {e.stress_before:.6g} "
-                                          f"-> {e.stress_after:.6g}" for e in branch.plastic))
+        print(f"{count(len(branch.plastic), 'plastic event')} passed (branch lost, relaxed "
+              f"with friction):")
+        for e in branch.plastic:
+            print(f"  gamma = {e.gamma:.9f} ({e.kind}): sigma_xy {e.stress_before:.6g} -> "
+                  f"{e.stress_after:.6g}")
         print(f"{count(len(records), 'collision')} ({matrix}) with gamma >= {g0:g}; complex "
               f"pairs at {100 * (branch.n_complex > 0).mean():.0f} % of the equilibria, at most "
               f"{branch.n_complex.max()}")
