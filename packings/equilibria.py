@@ -18,12 +18,13 @@ Two kinds of exact zero modes are handled explicitly:
   translations, and the forces sum to zero (Newton's third law), so two equations are
   redundant. The reference disk (the one with most contacts) has its x and y equations
   replaced by gauge rows kappa (x - x_c) = 0, kappa (y - y_c) = 0.
-- **Loose disks** (rattlers): a disk with fewer than LOOSE_BELOW contacts that hold it (delta >
-  delta_hold, LOOSE_OVERLAP of the median overlap at the start) carries no load. Its contacts are left out of the forces (their rows stay as watched rows, so that a
-  contact closing on it is an event), its three equations are replaced by gauge rows holding it
-  at its committed place, and it joins the network at the commit where it has enough contacts.
-  The forces a loose disk's own slight overlaps would exert (of the preparation's force
-  tolerance) are dropped; `loose_force` reports their largest value.
+- **Loose disks** (rattlers): a disk with fewer than LOOSE_BELOW contacts that hold it
+  (delta > delta_hold, LOOSE_OVERLAP of the median overlap at the start) carries no load. Its
+  contacts are left out of the forces (their rows stay as watched rows, so that a contact
+  closing on it is an event), its three equations are replaced by gauge rows holding it at its
+  committed place, and it joins the network at the commit where it has enough contacts. The
+  forces its own slight overlaps would exert (below delta_hold, or of the preparation's force
+  tolerance) are dropped.
 
 The tracked matrix is the network's stability matrix A (J or M^-1 J) in coordinates relative to
 the reference disk, A_g: with P the map q -> (q_k - q_ref for x and y dofs, theta as it is) on
@@ -227,14 +228,6 @@ class PackingEquilibria(Problem):
         loose, capped = self.gauge.loose, bool(slid[self.active].any())  # watched rows carry no force
         self._set_committed(q_new, xi_rows, rows, gamma_new)
         return capped or not np.array_equal(loose, self.gauge.loose)
-
-    def loose_force(self, q, gamma) -> float:
-        """The largest force the loose disks' contacts would exert at (q, gamma) [force]."""
-        watched = ~self.active
-        if not watched.any():
-            return 0.0
-        xi = self.trial(q, gamma)[0]
-        return float(np.abs(self.network.forces(q, xi[watched], self.rows_c[watched], gamma)).max())
 
 
 def row_keys(rows: np.ndarray) -> np.ndarray:

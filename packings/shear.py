@@ -50,9 +50,9 @@ class PackingBranch:
     """Accepted equilibria of a shear run, one row per point (raw units).
 
     gamma (m,); q (m, 3N); rows, xi: each point's contact rows (i, j, cx, cy) and their
-    committed histories (the state a run starts from); eigenvalues (m, 3N) of `matrix` in coordinates relative to the
-    reference disk (packings/equilibria.py; the translations' and loose disks' zeros
-    included); n_complex (m,); residual (m,) max|F| over the network's disks [force]; contacts
+    committed histories (the state a run starts from); eigenvalues (m, 3N) of `matrix` in
+    coordinates relative to the reference disk (packings/equilibria.py; the translations' and
+    loose disks' zeros included); n_complex (m,); residual (m,) max|F| over the network's disks [force]; contacts
     (m,) active contacts; loose (m,) loose disks; stress (m, 4) sigma_xx, sigma_yy, sigma_xy,
     sigma_yx [force / length]; collisions in branch order (each segment's eigenvalue labels are
     its own); status of the last segment; events: steps cut at a contact event; segment (m,)
