@@ -156,8 +156,12 @@ def factorize(M: Matrix) -> Factorization:
     """LU of M (dense getrf or sparse SuperLU); raises SingularMatrix if M is singular."""
     book("factorizations")
     if sp.issparse(M):
+        M = M if M.format == "csc" else sp.csc_array(M)
+        empty = _empty_line(M)
+        if empty is not None:  # SuperLU would print BLAS errors (DGEMV) before failing
+            raise SingularMatrix(f"matrix has an empty {empty}")
         try:
-            return Factorization(spla.splu(M if M.format == "csc" else sp.csc_array(M)), True)
+            return Factorization(spla.splu(M), True)
         except RuntimeError as err:  # SuperLU: "Factor is exactly singular"
             raise SingularMatrix(str(err)) from None
     M = np.asarray(M, dtype=float)
@@ -167,6 +171,17 @@ def factorize(M: Matrix) -> Factorization:
     if info > 0:
         raise SingularMatrix(f"matrix is exactly singular (pivot {info})")
     return Factorization((lu, piv), False)
+
+
+def _empty_line(M: sp.csc_array) -> Optional[str]:
+    """"row" or "column" if the sparse M has one without a nonzero value (exactly singular),
+    else None."""
+    magnitude = abs(M)
+    if magnitude.max(axis=0).toarray().min() == 0.0:
+        return "column"
+    if magnitude.max(axis=1).toarray().min() == 0.0:
+        return "row"
+    return None
 
 
 def solve(M: Matrix, rhs: Array) -> Array:
