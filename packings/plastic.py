@@ -34,8 +34,7 @@ class PlasticEvent:
     """A plastic event: the strain gamma where the branch was lost, the shear stress sigma_xy
     before and after [force / length], the mass-free displacement |q_after - q_before|
     [length], the FIRE steps the relaxation took, and how the branch was lost (the segment's
-    Stop code: "fold", or "commit" when no equilibrium was near after a contact slid or a disk
-    turned loose)."""
+    Stop code, packings/shear.py: PLASTIC)."""
 
     gamma: float
     stress_before: float

@@ -20,10 +20,12 @@ from diskfriction.packings.plastic import PlasticEvent, past_fold
 from diskfriction.packings.prepare import Packing
 from diskfriction.scenes.packing import PackingScene
 
-PLASTIC = (StopCode.FOLD, StopCode.COMMIT)
-"""How a segment ends at a plastic event: a fold in gamma (a saddle-node), or a commit after
-which no equilibrium is near (a contact sliding or a disk turning loose took the state's
-stability with it)."""
+PLASTIC = (StopCode.FOLD, StopCode.COMMIT, StopCode.DS_MIN, StopCode.TURNED_BACK)
+"""How a segment ends at a plastic event, the branch lost: a fold in gamma (a saddle-node); a
+commit after which no equilibrium is near (a contact sliding or a disk turning loose took the
+state's stability with it); a step that had to shrink below ds_min (a singular point the
+corrector cannot pass); or, at the start of a segment, a branch that turns back at once (the
+relaxed state sits at a fold)."""
 
 STEP_IN_STRAIN = 2e-4
 """The largest step moves the disks by about this strain: ds_max = STEP_IN_STRAIN times the
