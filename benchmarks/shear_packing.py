@@ -13,6 +13,7 @@ Run: python benchmarks/shear_packing.py [N:SEEDS:GAMMA_END ...]   (default: 32:3
 """
 from __future__ import annotations
 
+import collections
 import sys
 import time
 
@@ -30,6 +31,12 @@ def smallest(eigenvalues: np.ndarray) -> float:
     return float(eigenvalues[eigenvalues != 0].real.min())
 
 
+def kinds(branch) -> str:
+    """How the segments were lost, e.g. "fold 10, ds_min 57, commit 1"."""
+    counts = collections.Counter(event.kind for event in branch.plastic)
+    return ", ".join(f"{kind} {n}" for kind, n in counts.most_common()) or "-"
+
+
 def run(N: int, seed: int, gamma_end: float) -> str:
     scene = PackingScene(N=N, seed=seed, gamma_range=(0.0, gamma_end))
     start = time.perf_counter()
@@ -43,13 +50,13 @@ def run(N: int, seed: int, gamma_end: float) -> str:
             f"{end:>12} {len(branch):>6} {branch.events:>6} {len(branch.collisions):>10} "
             f"{np.mean(branch.n_complex > 0):>8.2f} {np.mean(branch.n_complex):>7.1f} "
             f"{branch.residual.max():>9.1e} {int(branch.loose[0]):>5} {fell:>9.1e} "
-            f"{len(branch.plastic):>7} {branch.stress[-1, 2]:>9.4f}")
+            f"{len(branch.plastic):>7} {branch.stress[-1, 2]:>9.4f}  {kinds(branch)}")
 
 
 def main(runs: list[str]) -> None:
     print(f"{'N':>5} {'seed':>4} {'prep s':>7} {'shear s':>7} {'gamma end':>10} {'ended':>12} "
           f"{'points':>6} {'events':>6} {'collisions':>10} {'complex':>8} {'pairs':>7} "
-          f"{'max |F|':>9} {'loose':>5} {'min/start':>9} {'plastic':>7} {'sigma_xy':>9}")
+          f"{'max |F|':>9} {'loose':>5} {'min/start':>9} {'plastic':>7} {'sigma_xy':>9}  kinds")
     for spec in runs:
         N, seeds, gamma_end = spec.split(":")
         for seed in range(1, int(seeds) + 1):
