@@ -97,7 +97,8 @@ def run_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> int:
     """simulate on a packing scene: prepare, shear to --gamma (exit 1 with one line if the
     branch ends before it), perturb the equilibrium there (default: along the eigenvector of its
     fastest-growing complex pair, else random velocities), integrate, and compare the measured
-    growth rate with the spectrum's. Writes run.npz, summary.json, run.png."""
+    growth rate with the spectrum's. Writes run.npz, summary.json, run.png and snapshot.png
+    (the packing at G, its contact forces and the perturbation)."""
     from diskfriction.cli.common import number, run_length
 
     for option, why in {"fx": "a packing's load is its strain: --gamma G",
@@ -123,7 +124,7 @@ def run_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> int:
     from diskfriction.packings.equilibria import PackingEquilibria, mass_diagonal
     from diskfriction.packings.prepared import prepare_scene
     from diskfriction.packings.shear import ShearParams, network_of, shear
-    from diskfriction.reports.packing_outputs import plot_packing_run
+    from diskfriction.reports.packing_outputs import plot_packing_run, plot_packing_snapshot
 
     scene = dataclasses.replace(scene, gamma_range=(0.0, args.gamma) if args.gamma > 0 else (0.0, 1e-12))
     progress = Progress("simulate")
@@ -178,6 +179,12 @@ def run_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> int:
                  kinetic=run.kinetic, capped=run.capped)
         save_json(out / "summary.json", summary)
         plot_packing_run(run.t, d, sigma, measured, scene, gamma, out / "run.png")
+        delta = network.overlaps(q0, rows0, gamma)
+        force = np.where(delta > 0, network.kernels.normal_force(np.maximum(delta, 0.0),
+                                                                 scene.k_n), 0.0)
+        plot_packing_snapshot(q0, network.radii, network.L, gamma, rows0, force, q - q0 + v,
+                              f"{scene.name} at gamma = {gamma:.4g}: contact forces (red, width "
+                              f"~ F_n) and the perturbation ({kind}, blue)", out / "snapshot.png")
     finally:
         progress.close()
     print(f"gamma = {gamma:g}: {count(int(branch.n_complex[-1]), 'complex pair')}, the fastest "
@@ -185,5 +192,5 @@ def run_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> int:
     print(f"run to t = {run.t[-1]:g} ({kind}, amplitude {amplitude:g}, dt {dt:.4g}): measured "
           f"sigma = {measured:.6g} from {used} maxima; energy budget drift {drift:.2e} "
           f"(max kinetic {run.kinetic.max():.2e}); {int(run.capped[-1])} sliding updates")
-    print(f"wrote {out}/run.npz, summary.json, run.png")
+    print(f"wrote {out}/run.npz, summary.json, run.png, snapshot.png")
     return 0

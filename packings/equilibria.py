@@ -57,6 +57,11 @@ near a singular point (the Hertz stiffness k_n delta^(1/2) of its contacts vanis
 forces: a disk held by two contacts unloads both together); counting from delta_hold makes it
 loose, by an event, while its stiffness is still 3 % of a typical contact's."""
 
+RELEASE_GAP = 1e-2
+"""A pushed loose disk gives way this fraction of R beyond first contact, when nothing is in the
+way: a rattler's place in its cage is arbitrary, and without a gap the pusher would reach it again
+after every strain step of delta_hold / L."""
+
 DERIVATIVE_STEP = (1e-11, 1e-7)
 """Range of the finite-difference length along the branch, 0.1 of the smallest active overlap
 [length], as the chain's."""
@@ -227,7 +232,47 @@ class PackingEquilibria(Problem):
                                 f"reach {self.reach:g}")
         loose, capped = self.gauge.loose, bool(slid[self.active].any())  # watched rows carry no force
         self._set_committed(q_new, xi_rows, rows, gamma_new)
-        return capped or not np.array_equal(loose, self.gauge.loose)
+        moved = self._release_pushed(q_new)
+        if moved is not None:
+            self._set_committed(moved, xi_rows, rows, gamma_new)
+        return capped or moved is not None or not np.array_equal(loose, self.gauge.loose)
+
+    def _release_pushed(self, q: np.ndarray) -> np.ndarray | None:
+        """A loose disk that a neighbour pushes into (a watched row with delta > delta_hold)
+        carries no load, so it gives way: moved by Newton steps along its net normal force,
+        neighbours fixed, until no contact of it holds it or it is caught between contacts
+        that do (then it joins the network at this commit). Returns the moved q, or None."""
+        delta = self.network.overlaps(q, self.rows_c, self.gamma_c)
+        N, rows = self.network.N, self.rows_c
+        pushed = ~self.active & (delta > self.delta_hold)
+        disks = [d for d in np.flatnonzero(self.gauge.loose) if
+                 pushed[(rows[:, 0] == d) | (rows[:, 1] == d)].any()]
+        if not disks:
+            return None
+        q = q.copy()
+        k_n, gap = self.network.constants[1], RELEASE_GAP * self.network.constants[0]
+        for d in disks:
+            mine = rows[(rows[:, 0] == d) | (rows[:, 1] == d)]
+            start = np.array([q[d], q[N + d]])
+            for _ in range(60):
+                dl = self.network.overlaps(q, mine, self.gamma_c)
+                touching = dl > 0
+                if not touching.any():
+                    break
+                F = self.network.forces(q, np.zeros(len(mine)), mine, self.gamma_c)
+                k = float(np.sum(self.network.kernels.normal_stiffness(dl[touching], k_n)))
+                step = np.array([F[d], F[N + d]]) / k
+                if np.abs(step).max() <= 1e-3 * self.delta_hold:
+                    break
+                q[d] += step[0]
+                q[N + d] += step[1]
+            away = np.array([q[d], q[N + d]]) - start
+            if np.any(away) and (self.network.overlaps(q, mine, self.gamma_c) <= self.delta_hold).all():
+                trial = q.copy()  # give way a little further, if nothing is in the way
+                trial[[d, N + d]] += gap * away / np.linalg.norm(away)
+                if (self.network.overlaps(trial, mine, self.gamma_c) < 0).all():
+                    q = trial
+        return q
 
 
 def row_keys(rows: np.ndarray) -> np.ndarray:

@@ -78,3 +78,43 @@ def plot_packing_run(t: np.ndarray, d: np.ndarray, sigma: float, measured: float
     ax.legend(fontsize=8)
     fig.tight_layout()
     save_figure(fig, path)
+
+
+def plot_packing_snapshot(q: np.ndarray, radii: np.ndarray, L: float, gamma: float,
+                          rows: np.ndarray, force: np.ndarray, mode: np.ndarray,
+                          title: str, path: Path) -> None:
+    """The packing at strain gamma in its sheared periodic box: disks as circles (positions
+    wrapped into the box through the Lees-Edwards images), every contact row with a normal force
+    as a line between the centres of width proportional to it, and the (x, y) part of `mode`
+    (a displacement, e.g. an unstable eigenvector's real part) as arrows at the centres."""
+    from matplotlib.collections import LineCollection, PatchCollection
+    from matplotlib.patches import Circle, Polygon
+
+    N = radii.size
+    x, y = q[:N].copy(), q[N:2 * N].copy()
+    k = np.floor(y / L)
+    y, x = y - k * L, x - k * gamma * L
+    x -= np.floor(x / L) * L
+    fig, ax = new_figure(figsize=(6.5, 6.5))
+    ax.add_collection(PatchCollection([Circle((a, b), r) for a, b, r in zip(x, y, radii)],
+                                      facecolor="0.92", edgecolor="0.55", lw=0.5))
+    i, j, cx, cy = rows.T
+    carries = force > 0
+    dx = q[i] - q[j] - cx * L - cy * gamma * L  # r_i - r_j of the row's image
+    dy = q[N + i] - q[N + j] - cy * L
+    segments = np.stack([np.stack([x[i], y[i]], 1), np.stack([x[i] - dx, y[i] - dy], 1)], 1)
+    width = 4.0 * force / force.max() if carries.any() else force
+    ax.add_collection(LineCollection(segments[carries], linewidths=width[carries],
+                                     colors="tab:red"))
+    xy = np.stack([mode[:N], mode[N:2 * N]], 1)
+    scale = 0.8 * radii.min() / max(np.abs(xy).max(), 1e-300)
+    ax.quiver(x, y, scale * xy[:, 0], scale * xy[:, 1], angles="xy", scale_units="xy", scale=1,
+              color="tab:blue", width=0.003)
+    ax.add_patch(Polygon([(0, 0), (L, 0), (L + gamma * L, L), (gamma * L, L)], closed=True,
+                         fill=False, ls="--", lw=0.6, color="k"))
+    ax.set_xlim(-radii.max(), L + gamma * L + radii.max())
+    ax.set_ylim(-radii.max(), L + radii.max())
+    ax.set_aspect("equal")
+    ax.set_title(title, fontsize=9)
+    fig.tight_layout()
+    save_figure(fig, path)

@@ -175,7 +175,7 @@ def test_simulate_from_a_sheared_packing_grows_at_the_spectrums_rate(tmp_path):
     assert summary["perturbation"] == "eigenvector" and summary["complex_pairs"] >= 1
     assert abs(summary["sigma_measured"] / summary["sigma_predicted"] - 1) <= 0.02
     assert summary["budget_drift"] <= 1e-2 * summary["kinetic_max"]
-    assert (tmp_path / "out" / "run.png").exists()
+    assert (tmp_path / "out" / "run.png").exists() and (tmp_path / "out" / "snapshot.png").exists()
 
 
 @pytest.mark.parametrize("args, option", [(["--gamma", "0.001", "--fx", "0.1"], "--fx"),
