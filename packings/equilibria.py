@@ -57,6 +57,11 @@ near a singular point (the Hertz stiffness k_n delta^(1/2) of its contacts vanis
 forces: a disk held by two contacts unloads both together); counting from delta_hold makes it
 loose, by an event, while its stiffness is still 3 % of a typical contact's."""
 
+PUSHED = 10.0
+"""A loose disk gives way when one of its contacts passes PUSHED delta_hold: the force left out of
+the equations until then is below k_n (PUSHED delta_hold)^(3/2), 0.1 % of a typical contact's,
+and a pusher reaches it again only after ten times the strain it would with delta_hold."""
+
 RELEASE_GAP = 1e-2
 """A pushed loose disk gives way this fraction of R beyond first contact, when nothing is in the
 way: a rattler's place in its cage is arbitrary, and without a gap the pusher would reach it again
@@ -210,7 +215,8 @@ class PackingEquilibria(Problem):
         t_star = self.network.kernels.coulomb_limit(np.maximum(delta, 0.0),
                                                     *self.network.constants[1:])
         margin = np.where((delta > 0) & self.active, t_star - np.abs(xi), 1.0)
-        return np.concatenate([delta, delta - self.delta_hold, margin])
+        hold = np.where(self.active, self.delta_hold, PUSHED * self.delta_hold)
+        return np.concatenate([delta, delta - hold, margin])
 
     def state(self) -> tuple:
         return self.q_c.copy(), self.xi_c.copy(), self.rows_c.copy(), self.gamma_c
@@ -244,7 +250,7 @@ class PackingEquilibria(Problem):
         that do (then it joins the network at this commit). Returns the moved q, or None."""
         delta = self.network.overlaps(q, self.rows_c, self.gamma_c)
         N, rows = self.network.N, self.rows_c
-        pushed = ~self.active & (delta > self.delta_hold)
+        pushed = ~self.active & (delta > PUSHED * self.delta_hold)
         disks = [d for d in np.flatnonzero(self.gauge.loose) if
                  pushed[(rows[:, 0] == d) | (rows[:, 1] == d)].any()]
         if not disks:

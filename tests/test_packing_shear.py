@@ -132,7 +132,7 @@ def test_a_loose_disk_pushed_into_gives_way(packing):
     near = int(np.argmax(problem.network.overlaps(q, mine, 0.0)))
     other = mine[near, 1] if mine[near, 0] == d else mine[near, 0]
     toward = np.array([q[other] - q[d], q[N + other] - q[N + d]])
-    gap = -problem.network.overlaps(q, mine[near:near + 1], 0.0)[0] + 100 * problem.delta_hold
+    gap = -problem.network.overlaps(q, mine[near:near + 1], 0.0)[0] + 100 * problem.delta_hold  # past PUSHED = 10
     q[[d, N + d]] += gap * toward / np.linalg.norm(toward)
     assert problem.network.overlaps(q, mine, 0.0).max() > 50 * problem.delta_hold
     problem._set_committed(q, problem.xi_c, rows, 0.0)
