@@ -40,6 +40,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from diskfriction.continuation.problem import Problem
+from diskfriction.errors import OneLineError
 from diskfriction.continuation.spectra import Eigensystem, eigensystem
 from diskfriction.matrices import Matrix
 from diskfriction.packings.network import D, Network
@@ -72,6 +73,10 @@ DERIVATIVE_STEP = (1e-11, 1e-7)
 [length], as the chain's."""
 
 
+class NotJammed(OneLineError):
+    """Every disk of the packing is loose: there is no contact network to shear."""
+
+
 class MissedContact(RuntimeError):
     """A pair that was no contact row overlaps after a step: the step was longer than REACH."""
 
@@ -91,7 +96,8 @@ class Gauge:
     def of(cls, N: int, counts: np.ndarray) -> "Gauge":
         loose = counts < LOOSE_BELOW
         if loose.all():
-            raise ValueError("every disk is loose: the packing is not jammed")
+            raise NotJammed("every disk is loose (fewer than 2 contacts holding it): the packing "
+                            "is not jammed, so there is no network to shear")
         ref = int(np.argmax(counts))
         loose_dofs = (np.arange(D)[:, None] * N + np.flatnonzero(loose)[None, :]).ravel()
         rows = np.union1d([ref, N + ref], loose_dofs)
