@@ -1,5 +1,5 @@
-"""``diskfriction bifurcate PACKING_SCENE [--matrix J|M^-1J] [--workers K] [--out DIR]
-[--json]``: prepare the scene's packing, shear it quasistatically with friction and locate
+"""``diskfriction bifurcate PACKING_SCENE [--matrix J|M^-1J] [--window LO:HI] [--workers K]
+[--out DIR] [--json]``: prepare the scene's packing, shear it quasistatically with friction and locate
 every birth and death of a complex pair (issue 25, docs/packings.md#shear)."""
 from __future__ import annotations
 
@@ -14,7 +14,6 @@ from diskfriction.scenes.packing import PackingScene
 from diskfriction.words import count
 
 CHAIN_ONLY = {"fx": "a packing's load is its strain: [shear] gamma in the scene",
-              "window": "spectral windows are not yet offered for packings",
               "p": "only with --problem FILE.py", "ds_max": "a packing's step follows its strain"}
 """bifurcate's options a packing scene does not take, and why."""
 
@@ -32,12 +31,16 @@ def run_packing(args: argparse.Namespace, scene: PackingScene) -> int:
             raise CommandError(f"bifurcate error: {flag}: {why} (got {getattr(args, option)!r})")
     if args.workers is not None and args.workers < 0:
         raise CommandError(f"bifurcate error: --workers: must be >= 0 (got {args.workers})")
+    from diskfriction.cli.bifurcate_cmd import check_window_covered, parse_window
+
+    window = parse_window(args.window) if args.window is not None else None
     matrix = matrix_from_args("bifurcate", args, scene)
     out = output_dir("bifurcate", args.out, Path("out") / "bifurcate" / scene.name)
 
     from diskfriction.continuation.arclength import ContinuationError
     from diskfriction.continuation.branch import StopCode
     from diskfriction.continuation.collisions import DetectionParams
+    from diskfriction.continuation.spectral_window import WindowCrowded
     from diskfriction.packings.equilibria import MissedContact
     from diskfriction.packings.plastic import RelaxationFailed
     from diskfriction.packings.prepare import save_packing
@@ -58,9 +61,11 @@ def run_packing(args: argparse.Namespace, scene: PackingScene) -> int:
         try:
             branch = shear(scene, packing, params,
                            lambda gamma: progress(gamma / g1, f"gamma = {gamma:.3e}"),
-                           plastic_events=PLASTIC_EVENTS)
-        except (ContinuationError, MissedContact, RelaxationFailed) as error:
+                           plastic_events=PLASTIC_EVENTS, window=window)
+        except (ContinuationError, MissedContact, RelaxationFailed, WindowCrowded) as error:
             raise CommandError(f"bifurcate error: {scene.source}: {error}", EXIT_FAILED) from None
+        if window is not None:
+            check_window_covered(branch, args.window, matrix, 1.0)
         progress.stage(f"writing {out}/branch.npz, collisions.json")
         save_packing_branch(out, branch, scene)
         progress.stage(f"plotting {out}/diagram.png")
@@ -80,9 +85,11 @@ def run_packing(args: argparse.Namespace, scene: PackingScene) -> int:
         for e in branch.plastic:
             print(f"  gamma = {e.gamma:.9f} ({e.kind}): sigma_xy {e.stress_before:.6g} -> "
                   f"{e.stress_after:.6g}")
-        print(f"{count(len(records), 'collision')} ({matrix}) with gamma >= {g0:g}; complex "
-              f"pairs at {100 * (branch.n_complex > 0).mean():.0f} % of the equilibria, at most "
-              f"{branch.n_complex.max()}")
+        inside = ("" if branch.window is None else f", Re lambda in [{branch.window[0]:.6g}, "
+                  f"{branch.window[1]:.6g}] (raw)")
+        print(f"{count(len(records), 'collision')} ({matrix}) with gamma >= {g0:g}{inside}; "
+              f"complex pairs at {100 * (branch.n_complex > 0).mean():.0f} % of the equilibria, "
+              f"at most {branch.n_complex.max()}")
         print(f"wrote {out}/branch.npz, collisions.json, diagram.png, packing.npz")
     if not branch.status.reached:
         why = ("a plastic event: the quasistatic branch folds back in gamma (a saddle-node)"

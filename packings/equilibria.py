@@ -30,18 +30,23 @@ The tracked matrix is the network's stability matrix A (J or M^-1 J) in coordina
 the reference disk, A_g: with P the map q -> (q_k - q_ref for x and y dofs, theta as it is) on
 the kept dofs (not the reference's x, y, not a loose disk's) and E the kept columns,
 A_red = P A E has exactly the spectrum of A without its two translation zeros (A T = 0 makes A
-block triangular in the basis (T, E)); A_g is A_red at the kept dofs and zeros elsewhere, so
-that every sample has n eigenvalues; the zeros are excluded from detection.
+block triangular in the basis (T, E)); A_g (stability_matrix, sparse) is A_red at the kept dofs
+and a constant far below A_red's spectrum on the gauge rows' diagonal (PARKED), so that every
+sample has n eigenvalues; those of the gauge rows are reported as 0 and excluded from detection.
+With a spectral window (continuation/spectral_window.py) only the k eigenvalues of A_red nearest
+the window's centre are computed, by sparse shift-invert: the translations and loose disks never
+crowd a window at 0.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import numpy as np
 import scipy.sparse as sp
 
 from diskfriction.continuation.problem import Problem
 from diskfriction.errors import OneLineError
 from diskfriction.continuation.spectra import Eigensystem, eigensystem
+from diskfriction.continuation.spectral_window import Window, sized, window_eigensystem
 from diskfriction.matrices import Matrix
 from diskfriction.packings.network import D, Network
 
@@ -58,15 +63,21 @@ near a singular point (the Hertz stiffness k_n delta^(1/2) of its contacts vanis
 forces: a disk held by two contacts unloads both together); counting from delta_hold makes it
 loose, by an event, while its stiffness is still 3 % of a typical contact's."""
 
-PUSHED = 10.0
-"""A loose disk gives way when one of its contacts passes PUSHED delta_hold: the force left out of
-the equations until then is below k_n (PUSHED delta_hold)^(3/2), 0.1 % of a typical contact's,
-and a pusher reaches it again only after ten times the strain it would with delta_hold."""
-
 RELEASE_GAP = 1e-2
 """A pushed loose disk gives way this fraction of R beyond first contact, when nothing is in the
 way: a rattler's place in its cage is arbitrary, and without a gap the pusher would reach it again
 after every strain step of delta_hold / L."""
+
+PARKED = 2.0
+"""The gauge rows' diagonal in the tracked matrix A_g is -PARKED times A_red's largest absolute
+row sum at the committed state: below every eigenvalue of A_red (Gershgorin), so that a
+shift-invert near the tracked spectrum (a partial sample near a fold's zero eigenvalue) never
+meets the gauge rows, and constant along a step, so that dA/dgamma is zero there."""
+
+WINDOW_MARGIN, WINDOW_EXTRA = 2.0, 16
+"""A spectral window's k at the start of a segment: WINDOW_MARGIN times the eigenvalues within
+its reach there, plus WINDOW_EXTRA (the chain's 1.5 and 8 are too few: shear softens a packing's
+low spectrum, and 256 disks crowded a window sized so within 7e-4 of strain)."""
 
 DERIVATIVE_STEP = (1e-11, 1e-7)
 """Range of the finite-difference length along the branch, 0.1 of the smallest active overlap
@@ -116,7 +127,7 @@ class PackingEquilibria(Problem):
 
     def __init__(self, network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray,
                  gamma: float, mass: np.ndarray, matrix: str = "M^-1 J",
-                 newton_tol: float = 1e-11):
+                 newton_tol: float = 1e-11, window: Window | None = None):
         self.network, self.mass = network, mass
         self.matrix = Matrix(matrix)
         self.newton_tol = newton_tol
@@ -124,6 +135,9 @@ class PackingEquilibria(Problem):
         delta = network.overlaps(q, rows, gamma)
         self.delta_hold = LOOSE_OVERLAP * float(np.median(delta[delta > 0]))
         self._set_committed(q, xi, rows, gamma)
+        self.window = window
+        if window is not None and window.k == 0:  # sized once, here, at the start state
+            self.window = sized(window, self.reduced(q, gamma), WINDOW_MARGIN, WINDOW_EXTRA)
 
     # -- the committed state
     def _set_committed(self, q, xi, rows, gamma) -> None:
@@ -136,6 +150,8 @@ class PackingEquilibria(Problem):
         scale = np.median(delta[delta > 0]) if (delta > 0).any() else self.network.constants[0]
         self.kappa = float(self.network.kernels.normal_stiffness(scale, self.network.constants[1]))
         self._last = (None, None)
+        A = self.reduced(q, gamma)
+        self.parked = -PARKED * max(float(np.abs(A).sum(axis=1).max(initial=0.0)), 1.0)
 
     def trial(self, q, gamma, cap: bool = True) -> tuple[np.ndarray, np.ndarray]:
         """History of every row at (q, gamma), reached by a straight step from the committed
@@ -178,21 +194,34 @@ class PackingEquilibria(Problem):
         J = self._evaluate(q, gamma)[1]
         return J if self.matrix is Matrix.J else sp.diags_array(1.0 / self.mass) @ J
 
-    def reduced(self, q, gamma):
+    def reduced(self, q, gamma) -> sp.csr_array:
         """A_red = P A E: the tracked spectrum without the translations and the loose disks."""
         g = self.gauge
-        return (g.P @ self.physical(q, gamma) @ sp.eye_array(q.size, format="csc")[:, g.kept]).toarray()
+        return (g.P @ self.physical(q, gamma) @ sp.eye_array(q.size, format="csc")[:, g.kept]).tocsr()
 
-    def stability_matrix(self, q, gamma):
-        """A_g: A_red at the kept dofs, zeros at the gauge rows (module docstring)."""
-        A = np.zeros((q.size, q.size))
-        A[np.ix_(self.gauge.kept, self.gauge.kept)] = self.reduced(q, gamma)
-        return A
+    def stability_matrix(self, q, gamma) -> sp.csr_array:
+        """A_g (sparse): A_red at the kept dofs, the constant `parked` on the gauge rows'
+        diagonal, zeros elsewhere (module docstring)."""
+        kept, n = self.gauge.kept, q.size
+        embed = sp.csr_array((np.ones(kept.size), (kept, np.arange(kept.size))),
+                             shape=(n, kept.size))
+        parked = np.zeros(n)
+        parked[self.gauge.rows] = self.parked
+        return (embed @ self.reduced(q, gamma) @ embed.T + sp.diags_array(parked)).tocsr()
 
     def eigensystem(self, q, gamma, vectors: bool = False) -> Eigensystem:
-        """A_red's eigensystem at the kept dofs; the gauge rows' zeros excluded, without vectors."""
+        """A_red's eigensystem at the kept dofs, the gauge rows' zeros excluded, without
+        vectors; or with a spectral window, the window's k eigenvalues of A_red."""
         kept, n = self.gauge.kept, q.size
-        found = eigensystem(self.reduced(q, gamma), vectors)
+        if self.window is not None:
+            found = window_eigensystem(self.reduced(q, gamma), self.window, vectors)
+            if found.right is None:
+                return found
+            right = np.zeros((n, found.right.shape[1]), complex)
+            left = np.zeros((found.left.shape[0], n), complex)
+            right[kept], left[:, kept] = found.right, found.left
+            return replace(found, right=right, left=left)
+        found = eigensystem(self.reduced(q, gamma).toarray(), vectors)
         values, excluded = np.zeros(n, complex), np.ones(n, bool)
         values[kept], excluded[kept] = found.values, False
         if not vectors:
@@ -212,17 +241,18 @@ class PackingEquilibria(Problem):
         return min(max(h, DERIVATIVE_STEP[0]), DERIVATIVE_STEP[1])
 
     def event_functions(self, q, gamma):
-        """Per row: delta (a contact opening or closing, on the network or on a loose disk),
-        delta - delta_hold (a contact starting or ending to hold its disks: a disk turning
-        loose or joining), then t* - |xi| of the uncapped history of the active contacts (1 for
-        the others)."""
+        """Per active row: delta (a contact of the network opening or closing), delta -
+        delta_hold (a contact starting or ending to hold its disks: a disk turning loose), then
+        t* - |xi| of the uncapped history (a contact reaching its Coulomb limit); 1 for the
+        watched rows, whose contacts carry no force (a loose disk joins or gives way at the
+        commit: _release_pushed)."""
         delta = self.network.overlaps(q, self.rows_c, gamma)
         xi = self.trial(q, gamma, cap=False)[0]
         t_star = self.network.kernels.coulomb_limit(np.maximum(delta, 0.0),
                                                     *self.network.constants[1:])
         margin = np.where((delta > 0) & self.active, t_star - np.abs(xi), 1.0)
-        hold = np.where(self.active, self.delta_hold, PUSHED * self.delta_hold)
-        return np.concatenate([delta, delta - hold, margin])
+        return np.concatenate([np.where(self.active, delta, 1.0),
+                               np.where(self.active, delta - self.delta_hold, 1.0), margin])
 
     def state(self) -> tuple:
         return self.q_c.copy(), self.xi_c.copy(), self.rows_c.copy(), self.gamma_c
@@ -232,7 +262,8 @@ class PackingEquilibria(Problem):
 
     def commit(self, q_old, gamma_old, q_new, gamma_new) -> bool:
         """Commit at (q_new, gamma_new): the rows found again (histories carried by row), the
-        gauge with them. True (re-solve there) when the cap acted or the loose disks changed.
+        loose disks pushed into given way (_release_pushed), then the gauge. True (re-solve
+        there) when the cap acted, a loose disk moved or the loose disks changed.
         MissedContact if a pair that was no row overlaps."""
         xi, slid = self.trial(q_new, gamma_new)
         rows = self.network.contacts(q_new, gamma_new, self.reach)
@@ -243,20 +274,23 @@ class PackingEquilibria(Problem):
                                 f"without being a contact row: the step was longer than the "
                                 f"reach {self.reach:g}")
         loose, capped = self.gauge.loose, bool(slid[self.active].any())  # watched rows carry no force
-        self._set_committed(q_new, xi_rows, rows, gamma_new)
-        moved = self._release_pushed(q_new)
-        if moved is not None:
-            self._set_committed(moved, xi_rows, rows, gamma_new)
+        xi_rows[loose[rows[:, 0]] | loose[rows[:, 1]]] = 0.0  # nor any history: a disk joins afresh
+        moved = self._release_pushed(q_new, rows, gamma_new)
+        self._set_committed(q_new if moved is None else moved, xi_rows, rows, gamma_new)
         return capped or moved is not None or not np.array_equal(loose, self.gauge.loose)
 
-    def _release_pushed(self, q: np.ndarray) -> np.ndarray | None:
-        """A loose disk that a neighbour pushes into (a watched row with delta > delta_hold)
-        carries no load, so it gives way: moved by Newton steps along its net normal force,
-        neighbours fixed, until no contact of it holds it or it is caught between contacts
-        that do (then it joins the network at this commit). Returns the moved q, or None."""
-        delta = self.network.overlaps(q, self.rows_c, self.gamma_c)
-        N, rows = self.network.N, self.rows_c
-        pushed = ~self.active & (delta > PUSHED * self.delta_hold)
+    def _release_pushed(self, q: np.ndarray, rows: np.ndarray, gamma: float) -> np.ndarray | None:
+        """A loose disk (of the committed gauge) that a neighbour pushes into (a contact with
+        delta > delta_hold among `rows` at gamma) carries no load, so it gives way: moved by
+        Newton steps along its net normal force, neighbours fixed, until no contact of it holds
+        it, and RELEASE_GAP further when nothing is in the way. Only a disk caught between
+        contacts whose normal forces balance stays where two of them hold it, and joins the
+        network at this commit (a disk held by two contacts that do not face each other would
+        escape as soon as the equations hold it: no equilibrium near, a failed commit).
+        Returns the moved q, or None."""
+        delta = self.network.overlaps(q, rows, gamma)
+        N = self.network.N
+        pushed = delta > self.delta_hold
         disks = [d for d in np.flatnonzero(self.gauge.loose) if
                  pushed[(rows[:, 0] == d) | (rows[:, 1] == d)].any()]
         if not disks:
@@ -267,11 +301,11 @@ class PackingEquilibria(Problem):
             mine = rows[(rows[:, 0] == d) | (rows[:, 1] == d)]
             start = np.array([q[d], q[N + d]])
             for _ in range(60):
-                dl = self.network.overlaps(q, mine, self.gamma_c)
+                dl = self.network.overlaps(q, mine, gamma)
                 touching = dl > 0
                 if not touching.any():
                     break
-                F = self.network.forces(q, np.zeros(len(mine)), mine, self.gamma_c)
+                F = self.network.forces(q, np.zeros(len(mine)), mine, gamma)
                 k = float(np.sum(self.network.kernels.normal_stiffness(dl[touching], k_n)))
                 step = np.array([F[d], F[N + d]]) / k
                 if np.abs(step).max() <= 1e-3 * self.delta_hold:
@@ -279,10 +313,10 @@ class PackingEquilibria(Problem):
                 q[d] += step[0]
                 q[N + d] += step[1]
             away = np.array([q[d], q[N + d]]) - start
-            if np.any(away) and (self.network.overlaps(q, mine, self.gamma_c) <= self.delta_hold).all():
+            if np.any(away) and (self.network.overlaps(q, mine, gamma) <= self.delta_hold).all():
                 trial = q.copy()  # give way a little further, if nothing is in the way
                 trial[[d, N + d]] += gap * away / np.linalg.norm(away)
-                if (self.network.overlaps(trial, mine, self.gamma_c) < 0).all():
+                if (self.network.overlaps(trial, mine, gamma) < 0).all():
                     q = trial
         return q
 

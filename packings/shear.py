@@ -13,6 +13,7 @@ from diskfriction.continuation.api import Options, solve_branch
 from diskfriction.continuation.branch import Stop, StopCode
 from diskfriction.continuation.collisions import Collision
 from diskfriction.continuation.spectra import count_complex_pairs
+from diskfriction.continuation.spectral_window import Window, window_columns
 from diskfriction.matrices import Matrix
 from diskfriction.packings.equilibria import PackingEquilibria, largest_force, mass_diagonal, start
 from diskfriction.packings.network import Network
@@ -54,12 +55,15 @@ class PackingBranch:
     gamma (m,); q (m, 3N); rows, xi: each point's contact rows (i, j, cx, cy) and their
     committed histories (the state a run starts from); eigenvalues (m, 3N) of `matrix` in
     coordinates relative to the reference disk (packings/equilibria.py; the translations' and
-    loose disks' zeros included); n_complex (m,); residual (m,) max|F| over the network's disks [force]; contacts
-    (m,) active contacts; loose (m,) loose disks; stress (m, 4) sigma_xx, sigma_yy, sigma_xy,
+    loose disks' zeros included), or with a window one column per eigenvalue that passed
+    through the window or its guard bands (spectral_window.window_columns; nan elsewhere);
+    n_complex (m,) (in the window, if one); residual (m,) max|F| over the network's disks
+    [force]; contacts (m,) active contacts; loose (m,) loose disks; stress (m, 4) sigma_xx, sigma_yy, sigma_xy,
     sigma_yx [force / length]; collisions in branch order (each segment's eigenvalue labels are
     its own); status of the last segment; events: steps cut at a contact event; segment (m,)
     the segment of each point: the branch between two plastic events; plastic: the plastic
-    events (folds in gamma) passed, one between each two segments."""
+    events (folds in gamma) passed, one between each two segments; window: (lo, hi) of Re
+    lambda tracked (collisions then only those with lo <= lambda <= hi), or None."""
 
     gamma: np.ndarray
     q: np.ndarray
@@ -77,9 +81,29 @@ class PackingBranch:
     events: int
     segment: np.ndarray
     plastic: tuple[PlasticEvent, ...] = ()
+    window: Optional[tuple[float, float]] = None
 
     def __len__(self) -> int:
         return self.gamma.size
+
+
+def segment_columns(values: list, segments: np.ndarray, continued: dict, band: Window
+                    ) -> np.ndarray:
+    """The stored spectrum of a windowed shear: each segment's window columns
+    (spectral_window.window_columns; its k eigenvalues per point, continued[segment] from its
+    branch) side by side, nan at the other segments' points (a window is sized anew for each
+    segment, and a plastic event continues no eigenvalue)."""
+    blocks = []
+    for segment in np.unique(segments):
+        on = np.flatnonzero(segments == segment)
+        block = np.array([values[i] for i in on])
+        blocks.append((on, window_columns(block, continued[segment], band.tracked(block))))
+    out = np.full((segments.size, sum(b.shape[1] for _, b in blocks)), np.nan, dtype=complex)
+    start = 0
+    for on, block in blocks:
+        out[on, start:start + block.shape[1]] = block
+        start += block.shape[1]
+    return out
 
 
 def network_of(scene: PackingScene, packing: Packing) -> Network:
@@ -89,13 +113,15 @@ def network_of(scene: PackingScene, packing: Packing) -> Network:
 
 
 def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearParams(),
-          progress: Optional[Callable[[float], None]] = None, plastic_events: int = 0
-          ) -> PackingBranch:
+          progress: Optional[Callable[[float], None]] = None, plastic_events: int = 0,
+          window: Optional[tuple[float, float]] = None) -> PackingBranch:
     """Follow the equilibria of `packing` with friction switched on from gamma = 0 to the end
     of the scene's gamma range (collisions below its start are left out). At a fold (a plastic
     event) the run ends, unless plastic_events > 0: then up to that many events are passed
     (packings/plastic.py: strained past the fold, relaxed with friction) and the shear goes on
-    from each relaxed state as a new segment."""
+    from each relaxed state as a new segment. window: (lo, hi) of Re lambda tracked by sparse
+    shift-invert (continuation/spectral_window.py; its k sized at the start of every segment),
+    or None: every eigenvalue, a dense spectrum per sample."""
     network = network_of(scene, packing)
     mass = mass_diagonal(network, scene.m, scene.inertia)
     g0, g1 = scene.gamma_range
@@ -103,12 +129,12 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
     ds_max = params.ds_max or STEP_IN_STRAIN * affine
     options = replace(params, ds_max=ds_max, ds=params.ds or ds_max / 4,
                       ds_min=params.ds_min or 1e-8 * ds_max)
-    records, collisions, events, passed = [], [], 0, []
+    records, collisions, events, passed, continued = [], [], 0, [], {}
     q, xi, rows = start(network, packing.positions)
     gamma_start = 0.0
-    while True:
+    while True:  # a window is sized again for every segment: its columns start anew there
         problem = PackingEquilibria(network, q, xi, rows, gamma_start, mass, scene.matrix,
-                                    params.newton_tol)
+                                    params.newton_tol, None if window is None else Window(*window))
         segment = len(passed)
 
         def record(k, gamma, q_k, eigvals, problem=problem, segment=segment):
@@ -125,6 +151,8 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
         branch = solve_branch(problem, q, (gamma_start, g1), options, callback=record).branch
         collisions += branch.collisions
         events += branch.events
+        if window is not None:
+            continued[segment] = branch.continued
         if branch.status.code not in PLASTIC or len(passed) >= plastic_events:
             break
         gamma_f, q_f, rows_f, xi_f = records[-1][0], records[-1][1], records[-1][2], records[-1][3]
@@ -134,10 +162,18 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
         passed.append(PlasticEvent(gamma_f, float(records[-1][8][2]), float(after),
                                    float(np.linalg.norm(q - q_f)), steps, str(branch.status.code)))
     gamma, q_all, rows, xi, eig, res, contacts, loose, stress, segments = zip(*records)
-    gamma, q_all, eig, res, contacts, loose, stress, segments = (
-        np.array(c) for c in (gamma, q_all, eig, res, contacts, loose, stress, segments))
+    gamma, q_all, res, contacts, loose, stress, segments = (
+        np.array(c) for c in (gamma, q_all, res, contacts, loose, stress, segments))
     rel_tol = params.detection.rel_tol
-    n_complex = np.array([count_complex_pairs(e[e != 0], rel_tol) for e in eig])
+    kept = [c for c in collisions if c.p >= g0]
+    if window is None:
+        eig = np.array(eig)
+        n_complex = np.array([count_complex_pairs(e[e != 0], rel_tol) for e in eig])
+    else:  # the pairs in the window; collisions with their double eigenvalue there
+        band = Window(*window)
+        n_complex = np.array([count_complex_pairs(e[band.inside(e)], rel_tol) for e in eig])
+        kept = [c for c in kept if band.lo <= c.eigenvalue <= band.hi]
+        eig = segment_columns(eig, segments, continued, band)
     return PackingBranch(gamma, q_all, rows, xi, eig, n_complex, res, contacts, loose, stress,
-                         tuple(c for c in collisions if c.p >= g0), Matrix(scene.matrix),
-                         branch.status, events, segments, tuple(passed))
+                         tuple(kept), Matrix(scene.matrix), branch.status, events, segments,
+                         tuple(passed), window)

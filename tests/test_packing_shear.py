@@ -132,12 +132,27 @@ def test_a_loose_disk_pushed_into_gives_way(packing):
     near = int(np.argmax(problem.network.overlaps(q, mine, 0.0)))
     other = mine[near, 1] if mine[near, 0] == d else mine[near, 0]
     toward = np.array([q[other] - q[d], q[N + other] - q[N + d]])
-    gap = -problem.network.overlaps(q, mine[near:near + 1], 0.0)[0] + 100 * problem.delta_hold  # past PUSHED = 10
+    gap = -problem.network.overlaps(q, mine[near:near + 1], 0.0)[0] + 100 * problem.delta_hold
     q[[d, N + d]] += gap * toward / np.linalg.norm(toward)
     assert problem.network.overlaps(q, mine, 0.0).max() > 50 * problem.delta_hold
     problem._set_committed(q, problem.xi_c, rows, 0.0)
-    moved = problem._release_pushed(q)
+    moved = problem._release_pushed(q, rows, 0.0)
     assert moved is not None
     assert problem.network.overlaps(moved, mine, 0.0).max() <= problem.delta_hold
     force = problem.network.forces(moved, np.zeros(len(mine)), mine, 0.0)
     assert np.abs(force).max() <= 1e-3 * SCENE.pressure * 2 * SCENE.R
+
+
+def test_a_spectral_window_finds_the_full_spectrums_collisions_in_it(packing, branch):
+    """Shear tracking only Re lambda in [0, 50] (sparse shift-invert, its k sized at the start):
+    the same collisions as the dense spectra's with their double eigenvalue in the window, each
+    at the same strain within 1e-9; every change of the window's complex pairs is one of them."""
+    window = (0.0, 50.0)
+    windowed = shear(SCENE, packing, ShearParams(workers=0), window=window)
+    inside = sorted(c.p for c in branch.collisions if window[0] <= c.eigenvalue <= window[1])
+    assert windowed.status.reached and len(inside) >= 4
+    assert len(windowed.collisions) == len(inside)
+    assert np.abs(np.array(sorted(c.p for c in windowed.collisions)) - inside).max() <= 1e-9
+    kinds = [(c.p, c.kind) for c in windowed.collisions]
+    assert unaccounted_pair_changes(windowed.gamma, windowed.n_complex, kinds) == []
+    assert windowed.window == window and windowed.eigenvalues.shape[1] < 3 * SCENE.N
