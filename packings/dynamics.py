@@ -100,3 +100,11 @@ def fastest_pair(eigenvalues: np.ndarray, rel_tol: float = 1e-9) -> tuple[int, f
     sigma = np.where(np.abs(lam.imag) > rel_tol * np.abs(lam).max(), np.abs(np.sqrt(lam).imag), 0.0)
     i = int(np.argmax(sigma))
     return (i, float(sigma[i])) if sigma[i] > 0 else (-1, 0.0)
+
+
+def mean_squared_displacement(run: PackingRun, N: int, disks: np.ndarray) -> np.ndarray:
+    """MSD(t) = mean over the chosen disks (bool (N,)) of |r_i(t) - r_i(0)|^2, per frame
+    [length^2]."""
+    dx = run.q[:, :N] - run.q[:1, :N]
+    dy = run.q[:, N:2 * N] - run.q[:1, N:2 * N]
+    return np.mean((dx * dx + dy * dy)[:, disks], axis=1)

@@ -20,11 +20,11 @@ Two kinds of exact zero modes are handled explicitly:
   replaced by gauge rows kappa (x - x_c) = 0, kappa (y - y_c) = 0.
 - **Loose disks** (rattlers): a disk with fewer than LOOSE_BELOW contacts that hold it
   (delta > delta_hold, LOOSE_OVERLAP of the median overlap at the start) carries no load. Its
-  contacts are left out of the forces (their rows stay as watched rows, so that a contact
-  closing on it is an event), its three equations are replaced by gauge rows holding it at its
-  committed place, and it joins the network at the commit where it has enough contacts. The
-  forces its own slight overlaps would exert (below delta_hold, or of the preparation's force
-  tolerance) are dropped.
+  contacts are left out of the forces (their rows stay as watched rows: no events, no
+  history), its three equations are replaced by gauge rows holding it at its committed place.
+  At a commit, a loose disk a neighbour pushed into gives way (_release_pushed), and one caught
+  between facing contacts joins the network. The forces its own slight overlaps would exert
+  (below delta_hold, or of the preparation's force tolerance) are dropped.
 
 The tracked matrix is the network's stability matrix A (J or M^-1 J) in coordinates relative to
 the reference disk, A_g: with P the map q -> (q_k - q_ref for x and y dofs, theta as it is) on
