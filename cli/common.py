@@ -50,7 +50,8 @@ def chain_scene(command: str, file, scene: Scene | PackingScene) -> Scene:
     if isinstance(scene, PackingScene):
         raise CommandError(f"{command} error: {file}: geometry = \"packing\": {command} takes "
                            f"chain scenes only so far; `diskfriction scene`, `prepare`, "
-                           f"`bifurcate`, `simulate` and `report` take packings "
+                           f"`bifurcate`, `simulate`, `verify` and `report` take "
+                           f"packings "
                            f"(docs/packings.md)")
     return scene
 

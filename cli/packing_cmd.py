@@ -126,10 +126,10 @@ def run_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> int:
     import numpy as np
 
     from diskfriction.files import save_json, save_npz
-    from diskfriction.packings.dynamics import (distance, fastest_pair, growth_rate, simulate,
-                                                time_step)
-    from diskfriction.packings.equilibria import PackingEquilibria, mass_diagonal
+    from diskfriction.packings.dynamics import fastest_pair, time_step
+    from diskfriction.packings.equilibria import mass_diagonal
     from diskfriction.packings.prepared import prepare_scene
+    from diskfriction.packings.runs import NoComplexPair, run_from_state
     from diskfriction.packings.shear import ShearParams, network_of, shear
     from diskfriction.reports.packing_outputs import plot_packing_run, plot_packing_snapshot
 
@@ -149,47 +149,31 @@ def run_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> int:
         network = network_of(scene, packing)
         mass = mass_diagonal(network, scene.m, scene.inertia)
         lam = branch.eigenvalues[-1]
-        q0, xi0, rows0, gamma = branch.q[-1], branch.xi[-1], branch.rows[-1], branch.gamma[-1]
         limit = 2.0 / float(np.sqrt(np.abs(lam).max()))
         if args.dt is not None and args.dt >= limit:
             raise CommandError(f"simulate error: --dt: not below velocity Verlet's stability "
                                f"limit 2 / omega_max = {limit:.4g} of the start (got {args.dt!r})")
         dt = args.dt or time_step(lam)
-        i, sigma = fastest_pair(lam)
-        kind = args.perturbation or ("eigenvector" if i >= 0 else "random-velocity")
-        rng = np.random.default_rng(args.seed)
-        q, v = q0.copy(), np.zeros_like(q0)
-        if kind == "eigenvector":
-            if i < 0:
-                raise CommandError(f"simulate error: --perturbation: eigenvector needs a complex "
-                                   f"pair at gamma = {gamma:g}, and there is none")
-            problem = PackingEquilibria(network, q0, xi0, rows0, gamma, mass, scene.matrix)
-            system = problem.eigensystem(q0, gamma, vectors=True)
-            mode = np.real(system.vectors(int(np.argmin(np.abs(system.values - lam[i]))))[0])
-            q += amplitude * mode / np.sqrt(np.sum(mass * mode * mode))
-        elif kind == "random-position":
-            shift = rng.normal(size=q.size)
-            q += amplitude * shift / np.sqrt(np.sum(mass * shift * shift))
-        elif kind == "random-velocity":
-            v = amplitude * rng.normal(size=q.size)
+        kind = args.perturbation or ("eigenvector" if fastest_pair(lam)[0] >= 0 else "random-velocity")
         progress.stage(f"run to t = {args.t_end:g} ({int(round(args.t_end / dt))} steps)")
-        run = simulate(network, q, v, xi0, rows0, gamma, mass, dt, args.t_end, frames=2000)
-        d = distance(run, q0, mass)
-        measured, used = growth_rate(run.t, d, 10 * max(d[0], 1e-300), 1e-3 * scene.delta_0)
-        drift = float(np.abs(run.budget - run.budget[0]).max())
+        try:
+            done = run_from_state(branch, len(branch) - 1, network, mass, scene.matrix, kind,
+                                  amplitude, args.t_end, scene.delta_0, dt, args.seed)
+        except NoComplexPair as error:
+            raise CommandError(f"simulate error: --perturbation: {error}") from None
+        run, gamma, sigma, measured = done.run, done.gamma, done.sigma_predicted, done.sigma_measured
         summary = {"scene": scene.name, "gamma": gamma, "perturbation": kind,
                    "amplitude": amplitude, "dt": dt, "t_end": float(run.t[-1]),
-                   "sigma_predicted": sigma, "sigma_measured": measured, "maxima_fitted": used,
-                   "budget_drift": drift, "kinetic_max": float(run.kinetic.max()),
-                   "sliding_updates": int(run.capped[-1]), "complex_pairs": int(branch.n_complex[-1])}
-        save_npz(out / "run.npz", t=run.t, q=run.q, distance=d, budget=run.budget,
+                   "sigma_predicted": sigma, "sigma_measured": measured, "maxima_fitted": done.maxima,
+                   "budget_drift": done.drift, "kinetic_max": float(run.kinetic.max()),
+                   "sliding_updates": int(run.capped[-1]), "complex_pairs": done.pairs}
+        save_npz(out / "run.npz", t=run.t, q=run.q, distance=done.distance, budget=run.budget,
                  kinetic=run.kinetic, capped=run.capped)
         save_json(out / "summary.json", summary)
-        plot_packing_run(run.t, d, sigma, measured, scene, gamma, out / "run.png")
-        delta = network.overlaps(q0, rows0, gamma)
-        force = np.where(delta > 0, network.kernels.normal_force(np.maximum(delta, 0.0),
-                                                                 scene.k_n), 0.0)
-        plot_packing_snapshot(q0, network.radii, network.L, gamma, rows0, force, q - q0 + v,
+        plot_packing_run(run.t, done.distance, sigma, measured, scene, gamma, out / "run.png")
+        q0, rows0 = branch.q[-1], branch.rows[-1]
+        plot_packing_snapshot(q0, network.radii, network.L, gamma, rows0,
+                              network.normal_forces(q0, rows0, gamma), done.kick,
                               f"{scene.name} at gamma = {gamma:.4g}: contact forces (red, width "
                               f"~ F_n) and the perturbation ({kind}, blue)", out / "snapshot.png")
     finally:
@@ -197,7 +181,88 @@ def run_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> int:
     print(f"gamma = {gamma:g}: {count(int(branch.n_complex[-1]), 'complex pair')}, the fastest "
           f"growing at sigma = {sigma:.6g} (|Im sqrt(lambda)| of M^-1 J)")
     print(f"run to t = {run.t[-1]:g} ({kind}, amplitude {amplitude:g}, dt {dt:.4g}): measured "
-          f"sigma = {measured:.6g} from {used} maxima; energy budget drift {drift:.2e} "
+          f"sigma = {measured:.6g} from {done.maxima} maxima; energy budget drift {done.drift:.2e} "
           f"(max kinetic {run.kinetic.max():.2e}); {int(run.capped[-1])} sliding updates")
     print(f"wrote {out}/run.npz, summary.json, run.png, snapshot.png")
     return 0
+
+
+VERIFY_STATES = (8, 2)
+"""verify runs from at most this many states with complex pairs and with every eigenvalue real,
+evenly spread over the branch's states of each kind."""
+
+
+def spread(states, count: int) -> list[int]:
+    """At most `count` of the indices `states`, evenly spread (first and last included)."""
+    import numpy as np
+
+    if len(states) <= count:
+        return [int(k) for k in states]
+    return [int(states[i]) for i in np.unique(np.linspace(0, len(states) - 1, count).round().astype(int))]
+
+
+def run_packing_verify(args: argparse.Namespace, scene: PackingScene) -> int:
+    """verify on a packing scene: shear over the scene's strain, then run the dynamics from up to
+    VERIFY_STATES states: along the fastest complex pair's eigenvector from states with complex
+    pairs, random velocities from states with every eigenvalue real; tabulate the growth rate
+    measured against the spectrum's and whether contacts slid. Writes verify.json, verify.md."""
+    from diskfriction.cli.common import number
+
+    number("verify", "t-end", args.t_end)
+    number("verify", "amplitude", args.amplitude, zero=True)
+    if args.matrix is not None:
+        raise CommandError(f"verify error: --matrix: a packing's growth rates are those of M^-1 J "
+                           f"(got {args.matrix!r})")
+    out = output_dir("verify", args.out, Path("out") / "verify" / scene.name)
+
+    import numpy as np
+
+    from diskfriction.files import save_json, save_text
+    from diskfriction.packings.equilibria import mass_diagonal
+    from diskfriction.packings.prepared import prepare_scene
+    from diskfriction.packings.runs import run_from_state
+    from diskfriction.packings.shear import ShearParams, network_of, shear
+
+    g1 = scene.gamma_range[1]
+    progress = Progress("verify")
+    try:
+        progress.stage(f"prepare {scene.N} disks to pressure {scene.pressure:g}")
+        packing = prepare_scene(scene, progress.part("relax"))
+        progress.stage(f"shear gamma 0 -> {g1:g}")
+        branch = shear(scene, packing, ShearParams(workers=0),
+                       lambda g: progress(g / g1, f"gamma = {g:.3e}"), plastic_events=PLASTIC_EVENTS)
+        network = network_of(scene, packing)
+        mass = mass_diagonal(network, scene.m, scene.inertia)
+        chosen = ([(k, "eigenvector") for k in spread(np.flatnonzero(branch.n_complex > 0), VERIFY_STATES[0])]
+                  + [(k, "random-velocity") for k in spread(np.flatnonzero(branch.n_complex == 0), VERIFY_STATES[1])])
+        rows = []
+        for n, (k, kind) in enumerate(sorted(chosen)):
+            progress.stage(f"run {n + 1}/{len(chosen)} from gamma = {branch.gamma[k]:.6g} ({kind})")
+            done = run_from_state(branch, k, network, mass, scene.matrix, kind, args.amplitude,
+                                  args.t_end, scene.delta_0)
+            rows.append({"gamma": done.gamma, "complex_pairs": done.pairs, "perturbation": kind,
+                         "sigma_predicted": done.sigma_predicted,
+                         "sigma_measured": done.sigma_measured, "maxima_fitted": done.maxima,
+                         "distance_end": float(done.distance[-1]), "slid": done.slid,
+                         "sliding_updates": int(done.run.capped[-1]), "budget_drift": done.drift})
+        table = packing_verify_table(rows)
+        save_json(out / "verify.json", {"scene": scene.name, "t_end": args.t_end,
+                                        "amplitude": args.amplitude, "runs": rows})
+        save_text(out / "verify.md", table)
+    finally:
+        progress.close()
+    print(table, end="")
+    print(f"wrote {out}/verify.json, verify.md")
+    return 0
+
+
+def packing_verify_table(rows: list[dict]) -> str:
+    """Markdown table of a packing's verify runs (raw units)."""
+    lines = ["Runs from states of the shear branch; sigma = |Im sqrt(lambda)| of M^-1 J (raw "
+             "1/time); distance mass-weighted, raw.", "",
+             "| gamma | pairs | perturbation | sigma predicted | sigma measured | distance at "
+             "the end | slid |", "|---|---|---|---|---|---|---|"]
+    lines += [f"| {r['gamma']:.6g} | {r['complex_pairs']} | {r['perturbation']} | "
+              f"{r['sigma_predicted']:.4g} | {r['sigma_measured']:.4g} | {r['distance_end']:.3g} | "
+              f"{'yes' if r['slid'] else 'no'} |" for r in rows]
+    return "\n".join(lines) + "\n"

@@ -33,7 +33,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    scene = scene_from_args(args, "verify")
+    from diskfriction.scenes.packing import PackingScene
+
+    scene = scene_from_args(args)
+    if isinstance(scene, PackingScene):
+        from diskfriction.cli.packing_cmd import run_packing_verify
+
+        return run_packing_verify(args, scene)
     number("verify", "t-end", args.t_end)
     number("verify", "amplitude", args.amplitude, zero=True)
     matrix = matrix_from_args("verify", args, scene)

@@ -64,6 +64,12 @@ class Network:
         self.kernels.overlaps(q, self.radii, contacts, self.params(gamma), delta)
         return delta
 
+    def normal_forces(self, q: np.ndarray, contacts: np.ndarray, gamma: float) -> np.ndarray:
+        """|F_n| = the normal law at delta of every contact row, 0 where open [force]."""
+        delta = self.overlaps(q, contacts, gamma)
+        return np.where(delta > 0, self.kernels.normal_force(np.maximum(delta, 0.0),
+                                                             self.constants[1]), 0.0)
+
     def forces(self, q: np.ndarray, xi: np.ndarray, contacts: np.ndarray, gamma: float
                ) -> np.ndarray:
         """Generalized forces F(q, xi; gamma) [force; torque for the angles]."""

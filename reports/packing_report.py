@@ -26,6 +26,7 @@ from diskfriction.packings.dynamics import (fastest_pair, mean_squared_displacem
                                             time_step)
 from diskfriction.packings.equilibria import PackingEquilibria, mass_diagonal
 from diskfriction.packings.prepared import prepare_scene
+from diskfriction.packings.runs import fastest_mode
 from diskfriction.packings.shear import PackingBranch, ShearParams, network_of, shear
 from diskfriction.reports.figures import new_figure, save_figure
 from diskfriction.reports.packing_outputs import plot_packing_snapshot
@@ -76,9 +77,8 @@ def build_packing_report(scene: PackingScene, out: Path, plastic_events: int,
         runs.append(msd_run(branch, k, label, network, mass, sigma[k], scene))
     plot_stress(branch, scene, out / "stress.png")
     plot_spectrum(branch, sigma, scene, out / "spectrum.png")
-    mode = unstable_mode(branch, fast, network, mass, scene)
-    delta = network.overlaps(branch.q[fast], branch.rows[fast], branch.gamma[fast])
-    force = np.where(delta > 0, network.kernels.normal_force(np.maximum(delta, 0.0), scene.k_n), 0.0)
+    mode = fastest_mode(branch, fast, network, mass, scene.matrix)
+    force = network.normal_forces(branch.q[fast], branch.rows[fast], branch.gamma[fast])
     plot_packing_snapshot(branch.q[fast], network.radii, network.L, branch.gamma[fast],
                           branch.rows[fast], force, mode,
                           f"{scene.name} at gamma = {branch.gamma[fast]:.4g}: contact forces "
@@ -106,18 +106,6 @@ def msd_run(branch: PackingBranch, k: int, label: str, network, mass: np.ndarray
                    mass, time_step(lam), PERIODS * 2 * np.pi / slowest, frames=400)
     return MsdRun(label, k, float(branch.gamma[k]), int(branch.n_complex[k]), float(sigma),
                   run.t, mean_squared_displacement(run, network.N, ~loose), int(run.capped[-1]))
-
-
-def unstable_mode(branch: PackingBranch, k: int, network, mass, scene) -> np.ndarray:
-    """Re of the right eigenvector of state k's fastest complex pair (zeros if none)."""
-    i, _ = fastest_pair(branch.eigenvalues[k])
-    if i < 0:
-        return np.zeros(branch.q[k].size)
-    problem = PackingEquilibria(network, branch.q[k], branch.xi[k], branch.rows[k],
-                                branch.gamma[k], mass, scene.matrix)
-    system = problem.eigensystem(branch.q[k], branch.gamma[k], vectors=True)
-    j = int(np.argmin(np.abs(system.values - branch.eigenvalues[k][i])))
-    return np.real(system.vectors(j)[0])
 
 
 def complex_spans(gamma: np.ndarray, n_complex: np.ndarray) -> list[tuple[float, float]]:

@@ -1,0 +1,97 @@
+"""A run of the dynamics from one state of a shear branch, perturbed, with its growth measured
+against the spectrum's (docs/packings.md#dynamics): what `simulate PACKING --gamma G` does at
+one state and `verify PACKING` at several.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from diskfriction.packings.dynamics import (PackingRun, distance, fastest_pair, growth_rate,
+                                            simulate, time_step)
+from diskfriction.packings.equilibria import PackingEquilibria
+from diskfriction.packings.network import Network
+from diskfriction.packings.shear import PackingBranch
+
+KINDS = ("eigenvector", "random-position", "random-velocity")
+
+
+class NoComplexPair(ValueError):
+    """An eigenvector perturbation asked for at a state whose eigenvalues are all real."""
+
+
+@dataclass(frozen=True)
+class StateRun:
+    """A run from state k of a branch: its strain, complex pairs, the perturbation (kind,
+    amplitude [length, or length / time for random-velocity], the displacement + velocity it
+    added), the step dt, the fastest pair's growth rate sigma_predicted = |Im sqrt(lambda)| of
+    M^-1 J (0 if none), the run, its mass-weighted distance from the state, sigma_measured (nan
+    with fewer than 5 maxima to fit, `maxima`) and the energy budget's largest drift."""
+
+    k: int
+    gamma: float
+    pairs: int
+    kind: str
+    amplitude: float
+    kick: np.ndarray
+    dt: float
+    sigma_predicted: float
+    run: PackingRun
+    distance: np.ndarray
+    sigma_measured: float
+    maxima: int
+    drift: float
+
+    @property
+    def slid(self) -> bool:
+        """A contact reached its Coulomb limit during the run."""
+        return bool(self.run.capped[-1] > 0)
+
+
+def run_from_state(branch: PackingBranch, k: int, network: Network, mass: np.ndarray,
+                   matrix: str, kind: str, amplitude: float, t_end: float, delta_0: float,
+                   dt: float | None = None, seed: int = 0) -> StateRun:
+    """Perturb state k (eigenvector: along the real part of the fastest complex pair's right
+    eigenvector, mass-normalised; random-position / random-velocity: normal deviates from
+    `seed`), integrate to t_end with dt (default time_step of the state's spectrum) and fit the
+    growth of the distance between 10 times its start and 1e-3 delta_0. Raises NoComplexPair."""
+    lam = branch.eigenvalues[k]
+    q0, xi0, rows0, gamma = branch.q[k], branch.xi[k], branch.rows[k], float(branch.gamma[k])
+    i, sigma = fastest_pair(lam)
+    rng = np.random.default_rng(seed)
+    q, v = q0.copy(), np.zeros_like(q0)
+    if kind == "eigenvector":
+        if i < 0:
+            raise NoComplexPair(f"an eigenvector perturbation needs a complex pair at gamma = "
+                                f"{gamma:g}, and there is none")
+        mode = fastest_mode(branch, k, network, mass, matrix)
+        q += amplitude * mode / np.sqrt(np.sum(mass * mode * mode))
+    elif kind == "random-position":
+        shift = rng.normal(size=q.size)
+        q += amplitude * shift / np.sqrt(np.sum(mass * shift * shift))
+    elif kind == "random-velocity":
+        v = amplitude * rng.normal(size=q.size)
+    else:
+        raise ValueError(f"perturbation must be one of {', '.join(KINDS)} (got {kind!r})")
+    step = dt or time_step(lam)
+    run = simulate(network, q, v, xi0, rows0, gamma, mass, step, t_end, frames=2000)
+    d = distance(run, q0, mass)
+    measured, used = growth_rate(run.t, d, 10 * max(d[0], 1e-300), 1e-3 * delta_0)
+    return StateRun(k, gamma, int(branch.n_complex[k]), kind, amplitude, q - q0 + v, step,
+                    sigma, run, d, measured, used,
+                    float(np.abs(run.budget - run.budget[0]).max()))
+
+
+def fastest_mode(branch: PackingBranch, k: int, network: Network, mass: np.ndarray,
+                 matrix: str) -> np.ndarray:
+    """Re of the right eigenvector of state k's fastest-growing complex pair (dense spectrum);
+    zeros when every eigenvalue is real."""
+    lam = branch.eigenvalues[k]
+    i, _ = fastest_pair(lam)
+    if i < 0:
+        return np.zeros(branch.q[k].size)
+    problem = PackingEquilibria(network, branch.q[k], branch.xi[k], branch.rows[k],
+                                float(branch.gamma[k]), mass, matrix)
+    system = problem.eigensystem(branch.q[k], float(branch.gamma[k]), vectors=True)
+    return np.real(system.vectors(int(np.argmin(np.abs(system.values - lam[i]))))[0])
