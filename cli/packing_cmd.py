@@ -127,27 +127,17 @@ def run_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> int:
 
     from diskfriction.files import save_json, save_npz
     from diskfriction.packings.dynamics import fastest_pair, time_step
-    from diskfriction.packings.equilibria import mass_diagonal
-    from diskfriction.packings.prepared import prepare_scene
     from diskfriction.packings.runs import NoComplexPair, run_from_state
-    from diskfriction.packings.shear import ShearParams, network_of, shear
     from diskfriction.reports.packing_outputs import plot_packing_run, plot_packing_snapshot
 
     scene = dataclasses.replace(scene, gamma_range=(0.0, args.gamma) if args.gamma > 0 else (0.0, 1e-12))
     progress = Progress("simulate")
     try:
-        progress.stage(f"prepare {scene.N} disks to pressure {scene.pressure:g}")
-        packing = prepare_scene(scene, progress.part("relax"))
-        progress.stage(f"shear gamma 0 -> {args.gamma:g}")
-        branch = shear(scene, packing, ShearParams(workers=0),
-                       lambda g: progress(g / max(args.gamma, 1e-300), f"gamma = {g:.3e}"),
-                       plastic_events=PLASTIC_EVENTS)
+        branch, network, mass = sheared(scene, progress)
         if not branch.status.reached:
             raise CommandError(f"simulate error: {scene.source}: no equilibrium beyond gamma = "
                                f"{branch.gamma[-1]:.9g} (asked for {args.gamma:g}): the branch "
                                f"ends there ({branch.status.sentence(len(branch))})", EXIT_FAILED)
-        network = network_of(scene, packing)
-        mass = mass_diagonal(network, scene.m, scene.inertia)
         lam = branch.eigenvalues[-1]
         limit = 2.0 / float(np.sqrt(np.abs(lam).max()))
         if args.dt is not None and args.dt >= limit:
@@ -218,21 +208,11 @@ def run_packing_verify(args: argparse.Namespace, scene: PackingScene) -> int:
     import numpy as np
 
     from diskfriction.files import save_json, save_text
-    from diskfriction.packings.equilibria import mass_diagonal
-    from diskfriction.packings.prepared import prepare_scene
     from diskfriction.packings.runs import run_from_state
-    from diskfriction.packings.shear import ShearParams, network_of, shear
 
-    g1 = scene.gamma_range[1]
     progress = Progress("verify")
     try:
-        progress.stage(f"prepare {scene.N} disks to pressure {scene.pressure:g}")
-        packing = prepare_scene(scene, progress.part("relax"))
-        progress.stage(f"shear gamma 0 -> {g1:g}")
-        branch = shear(scene, packing, ShearParams(workers=0),
-                       lambda g: progress(g / g1, f"gamma = {g:.3e}"), plastic_events=PLASTIC_EVENTS)
-        network = network_of(scene, packing)
-        mass = mass_diagonal(network, scene.m, scene.inertia)
+        branch, network, mass = sheared(scene, progress)
         chosen = ([(k, "eigenvector") for k in spread(np.flatnonzero(branch.n_complex > 0), VERIFY_STATES[0])]
                   + [(k, "random-velocity") for k in spread(np.flatnonzero(branch.n_complex == 0), VERIFY_STATES[1])])
         rows = []
@@ -266,3 +246,21 @@ def packing_verify_table(rows: list[dict]) -> str:
               f"{r['sigma_predicted']:.4g} | {r['sigma_measured']:.4g} | {r['distance_end']:.3g} | "
               f"{'yes' if r['slid'] else 'no'} |" for r in rows]
     return "\n".join(lines) + "\n"
+
+
+def sheared(scene: PackingScene, progress: Progress):
+    """(branch, network, mass): the scene's packing prepared and sheared over its strain range
+    with every eigenvalue tracked, passing up to PLASTIC_EVENTS plastic events; progress shown."""
+    from diskfriction.packings.equilibria import mass_diagonal
+    from diskfriction.packings.prepared import prepare_scene
+    from diskfriction.packings.shear import ShearParams, network_of, shear
+
+    g1 = scene.gamma_range[1]
+    progress.stage(f"prepare {scene.N} disks to pressure {scene.pressure:g}")
+    packing = prepare_scene(scene, progress.part("relax"))
+    progress.stage(f"shear gamma 0 -> {g1:g}")
+    branch = shear(scene, packing, ShearParams(workers=0),
+                   lambda g: progress(g / max(g1, 1e-300), f"gamma = {g:.3e}"),
+                   plastic_events=PLASTIC_EVENTS)
+    network = network_of(scene, packing)
+    return branch, network, mass_diagonal(network, scene.m, scene.inertia)
