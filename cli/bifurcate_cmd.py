@@ -43,9 +43,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              "more; 0: scan each step before the next)")
     parser.add_argument("--window", metavar="LO:HI",
                         help="track only the eigenvalues with LO <= Re lambda <= HI (the "
-                             "diagram's units: lambda / k_n for J) by sparse shift-invert, for "
-                             "chains too long for full spectra (N ~ 1000); collisions are "
-                             "certified and listed in the window only (fast detection)")
+                             "diagram's units: lambda / k_n for J; raw for a packing) by sparse "
+                             "shift-invert, for chains and packings too large for full spectra; "
+                             "collisions are certified and listed in the window only (fast "
+                             "detection)")
     parser.add_argument("--json", action="store_true", help="print the collision list to stdout")
     parser.add_argument("--problem", metavar="FILE.py[:NAME]",
                         help="continue the BifurcationProblem NAME (default: problem) defined in "
@@ -104,16 +105,16 @@ def run(args: argparse.Namespace) -> int:
         return run_problem(args)
     if args.p is not None:
         raise CommandError("bifurcate error: --p: only with --problem FILE.py (a scene's load is --fx)")
+    window = parse_window(args.window) if args.window is not None else None
+    if window is not None and not detector.window:
+        raise CommandError("bifurcate error: --window: needs the fast detection (eigenvalue "
+                           f"slopes), not --detection {args.detection}")
     scene = scene_from_args(args)
     if isinstance(scene, PackingScene):
         from diskfriction.cli.packing_cmd import run_packing
 
         return run_packing(args, scene)
     F_from, F_to = parse_range(args.fx) if args.fx is not None else scene.F_x_range
-    window = parse_window(args.window) if args.window is not None else None
-    if window is not None and not detector.window:
-        raise CommandError("bifurcate error: --window: needs the fast detection (eigenvalue "
-                           f"slopes), not --detection {args.detection}")
     if args.ds_max is not None:
         number("bifurcate", "ds-max", args.ds_max)
     if args.workers is not None and args.workers < 0:

@@ -151,7 +151,8 @@ def test_bifurcate_shears_a_packing_scene_and_writes_its_branch(tmp_path):
     assert f"{len(records)} collisions" in result.stdout
 
 
-@pytest.mark.parametrize("option, value", [("--fx", "0:0.1"), ("--ds-max", "0.1")])
+@pytest.mark.parametrize("option, value", [("--fx", "0:0.1"), ("--ds-max", "0.1"),
+                                           ("--window", "2:1")])
 def test_bifurcate_refuses_chain_options_for_a_packing_in_one_line(tmp_path, option, value):
     result = run_cli("bifurcate", str(PACKAGED), option, value, "--out", str(tmp_path / "out"))
     assert result.returncode == 2 and option in error_line(result, "bifurcate")
