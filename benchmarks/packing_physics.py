@@ -13,7 +13,8 @@ that every pressure is sheared by the same multiple of its overlaps. Printed:
   (branch lost and relaxed) per 1e-3 of strain, and the largest relative drop of sigma_xy;
 - seconds of the whole run. Measured in this run, scans inline.
 
-Run: python benchmarks/packing_physics.py [N] [GAMMA_END] [SEEDS]   (default: 32 0.005 3)
+Run: python benchmarks/packing_physics.py [N] [GAMMA_END] [SEEDS] [MU,...] [P,...]
+     (default: 32 0.005 3 0.3,1,10 0.01,0.1)
 """
 from __future__ import annotations
 
@@ -48,18 +49,20 @@ def run(N: int, mu: float, pressure: float, seed: int, gamma_end: float) -> str:
             f"{time.perf_counter() - start:>7.1f}")
 
 
-def main(N: int, gamma_end: float, seeds: int) -> None:
+def main(N: int, gamma_end: float, seeds: int, mus=MUS, pressures=PRESSURES) -> None:
     print(f"N = {N}, gamma 0 -> {gamma_end:g} (P / 0.1)^(2/3), seeds 1..{seeds}")
     print(f"{'mu':>5} {'P':>6} {'seed':>4} {'gamma end':>9} {'complex':>8} {'pairs':>6} "
           f"{'sigma/omega':>11} {'max':>9} {'coll/1e-3':>11} {'plastic/1e-3':>11} "
           f"{'max drop':>9} {'s':>7}")
-    for pressure in PRESSURES:
-        for mu in MUS:
+    for pressure in pressures:
+        for mu in mus:
             for seed in range(1, seeds + 1):
                 print(run(N, mu, pressure, seed, gamma_end), flush=True)
 
 
 if __name__ == "__main__":
     args = sys.argv[1:]
+    numbers = lambda i, default: (tuple(float(v) for v in args[i].split(","))  # noqa: E731
+                                  if len(args) > i else default)
     main(int(args[0]) if args else 32, float(args[1]) if len(args) > 1 else 0.005,
-         int(args[2]) if len(args) > 2 else 3)
+         int(args[2]) if len(args) > 2 else 3, numbers(3, MUS), numbers(4, PRESSURES))

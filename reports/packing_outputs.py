@@ -49,7 +49,7 @@ def plot_packing_diagram(branch: PackingBranch, scene: PackingScene, path: Path)
     pairs.set_ylabel("complex pairs")
     lam = branch.eigenvalues
     g, values = np.broadcast_to(gamma[:, None], lam.shape), lam.imag
-    shown = values > 1e-12 * np.abs(lam).max()
+    shown = values > 1e-12 * np.nanmax(np.abs(lam))  # nan: a window column not tracked there
     im.plot(g[shown], values[shown], ".", ms=1.5, color="tab:purple")
     im.set_ylabel(f"Im lambda of {branch.matrix} (raw)")
     im.set_xlabel("shear strain gamma")
