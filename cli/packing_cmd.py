@@ -208,7 +208,9 @@ def run_packing_verify(args: argparse.Namespace, scene: PackingScene) -> int:
     import numpy as np
 
     from diskfriction.files import save_json, save_text
+    from diskfriction.packings.plastic import RelaxationFailed
     from diskfriction.packings.runs import run_from_state
+    from diskfriction.packings.shear import ShearParams
 
     progress = Progress("verify")
     try:
@@ -220,11 +222,16 @@ def run_packing_verify(args: argparse.Namespace, scene: PackingScene) -> int:
             progress.stage(f"run {n + 1}/{len(chosen)} from gamma = {branch.gamma[k]:.6g} ({kind})")
             done = run_from_state(branch, k, network, mass, scene.matrix, kind, args.amplitude,
                                   args.t_end, scene.delta_0)
+            try:
+                stress_change, moved = done.settled(network, ShearParams().newton_tol)
+            except RelaxationFailed:  # said in the table as nan
+                stress_change = moved = float("nan")
             rows.append({"gamma": done.gamma, "complex_pairs": done.pairs, "perturbation": kind,
                          "sigma_predicted": done.sigma_predicted,
                          "sigma_measured": done.sigma_measured, "maxima_fitted": done.maxima,
                          "distance_end": float(done.distance[-1]), "slid": done.slid,
-                         "sliding_updates": int(done.run.capped[-1]), "budget_drift": done.drift})
+                         "sliding_updates": int(done.run.capped[-1]), "budget_drift": done.drift,
+                         "stress_change_at_rest": stress_change, "moved_at_rest": moved})
         table = packing_verify_table(rows)
         save_json(out / "verify.json", {"scene": scene.name, "t_end": args.t_end,
                                         "amplitude": args.amplitude, "runs": rows})
@@ -241,10 +248,12 @@ def packing_verify_table(rows: list[dict]) -> str:
     lines = ["Runs from states of the shear branch; sigma = |Im sqrt(lambda)| of M^-1 J (raw "
              "1/time); distance mass-weighted, raw.", "",
              "| gamma | pairs | perturbation | sigma predicted | sigma measured | distance at "
-             "the end | slid |", "|---|---|---|---|---|---|---|"]
+             "the end | slid | at rest: d sigma_xy / sigma_xy | at rest: largest move [R] |",
+             "|---|---|---|---|---|---|---|---|---|"]
     lines += [f"| {r['gamma']:.6g} | {r['complex_pairs']} | {r['perturbation']} | "
               f"{r['sigma_predicted']:.4g} | {r['sigma_measured']:.4g} | {r['distance_end']:.3g} | "
-              f"{'yes' if r['slid'] else 'no'} |" for r in rows]
+              f"{'yes' if r['slid'] else 'no'} | {r['stress_change_at_rest']:.2e} | "
+              f"{r['moved_at_rest']:.2e} |" for r in rows]
     return "\n".join(lines) + "\n"
 
 

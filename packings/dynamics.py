@@ -24,7 +24,8 @@ chain's default: docs/dynamics.md)."""
 @dataclass(frozen=True)
 class PackingRun:
     """Frames of a run: t (f,) [time], q (f, 3N), the energy budget E_k + U_n - W_t (f,)
-    [energy], the kinetic energy (f,), sliding updates (f,) since the start, and the step dt."""
+    [energy], the kinetic energy (f,), sliding updates (f,) since the start, the step dt, and
+    the histories xi of the contact rows at the end."""
 
     t: np.ndarray
     q: np.ndarray
@@ -32,6 +33,8 @@ class PackingRun:
     kinetic: np.ndarray
     capped: np.ndarray
     dt: float
+    xi: np.ndarray
+    rows: np.ndarray
 
 
 def time_step(eigenvalues: np.ndarray) -> float:
@@ -74,7 +77,7 @@ def simulate(network: Network, q: np.ndarray, v: np.ndarray, xi: np.ndarray, row
         if done % every == 0:
             frame(done * dt)
     t, qs, budget, kinetic, slid = (np.array(c) for c in zip(*out))
-    return PackingRun(t, qs, budget, kinetic, slid, dt)
+    return PackingRun(t, qs, budget, kinetic, slid, dt, xi, rows)
 
 
 def distance(run: PackingRun, q_eq: np.ndarray, mass: np.ndarray) -> np.ndarray:

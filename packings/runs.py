@@ -12,6 +12,7 @@ from diskfriction.packings.dynamics import (PackingRun, distance, fastest_pair, 
                                             simulate, time_step)
 from diskfriction.packings.equilibria import PackingEquilibria
 from diskfriction.packings.network import Network
+from diskfriction.packings.plastic import relax
 from diskfriction.packings.shear import PackingBranch
 
 KINDS = ("eigenvector", "random-position", "random-velocity")
@@ -23,7 +24,7 @@ class NoComplexPair(ValueError):
 
 @dataclass(frozen=True)
 class StateRun:
-    """A run from state k of a branch: its strain, complex pairs, the perturbation (kind,
+    """A run from state k of a branch: its strain, the state (q0, xi0, rows0), complex pairs, the perturbation (kind,
     amplitude [length, or length / time for random-velocity], the displacement + velocity it
     added), the step dt, the fastest pair's growth rate sigma_predicted = |Im sqrt(lambda)| of
     M^-1 J (0 if none), the run, its mass-weighted distance from the state, sigma_measured (nan
@@ -31,6 +32,9 @@ class StateRun:
 
     k: int
     gamma: float
+    q0: np.ndarray
+    xi0: np.ndarray
+    rows0: np.ndarray
     pairs: int
     kind: str
     amplitude: float
@@ -42,6 +46,19 @@ class StateRun:
     sigma_measured: float
     maxima: int
     drift: float
+
+    def settled(self, network: Network, f_tol: float) -> tuple[float, float]:
+        """(relative change of sigma_xy, largest displacement of a disk [R]) from the state to
+        where the run's end relaxes at rest (FIRE on the frictional forces, the history
+        following: packings/plastic.relax): near 0 and 0 when the perturbation only wobbled
+        (a slip leaves a little of both), larger where the run rearranged the packing."""
+        q, xi, rows, _ = relax(network, self.run.q[-1], self.run.xi, self.run.rows, self.gamma,
+                               f_tol)
+        before = network.stress(self.q0, self.xi0, self.rows0, self.gamma)[2]
+        after = network.stress(q, xi, rows, self.gamma)[2]
+        N = network.N
+        moved = np.hypot(q[:N] - self.q0[:N], q[N:2 * N] - self.q0[N:2 * N])
+        return float(after / before - 1.0), float(moved.max() / network.constants[0])
 
     @property
     def slid(self) -> bool:
@@ -78,7 +95,7 @@ def run_from_state(branch: PackingBranch, k: int, network: Network, mass: np.nda
     run = simulate(network, q, v, xi0, rows0, gamma, mass, step, t_end, frames=2000)
     d = distance(run, q0, mass)
     measured, used = growth_rate(run.t, d, 10 * max(d[0], 1e-300), 1e-3 * delta_0)
-    return StateRun(k, gamma, int(branch.n_complex[k]), kind, amplitude, q - q0 + v, step,
+    return StateRun(k, gamma, q0, xi0, rows0, int(branch.n_complex[k]), kind, amplitude, q - q0 + v, step,
                     sigma, run, d, measured, used,
                     float(np.abs(run.budget - run.budget[0]).max()))
 
