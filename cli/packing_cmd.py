@@ -258,18 +258,9 @@ def packing_verify_table(rows: list[dict]) -> str:
 
 
 def sheared(scene: PackingScene, progress: Progress):
-    """(branch, network, mass): the scene's packing prepared and sheared over its strain range
-    with every eigenvalue tracked, passing up to PLASTIC_EVENTS plastic events; progress shown."""
-    from diskfriction.packings.equilibria import mass_diagonal
-    from diskfriction.packings.prepared import prepare_scene
-    from diskfriction.packings.shear import ShearParams, network_of, shear
+    """packings/shear.shear_scene with this command's progress lines."""
+    from diskfriction.packings.shear import shear_scene
 
     g1 = scene.gamma_range[1]
-    progress.stage(f"prepare {scene.N} disks to pressure {scene.pressure:g}")
-    packing = prepare_scene(scene, progress.part("relax"))
-    progress.stage(f"shear gamma 0 -> {g1:g}")
-    branch = shear(scene, packing, ShearParams(workers=0),
-                   lambda g: progress(g / max(g1, 1e-300), f"gamma = {g:.3e}"),
-                   plastic_events=PLASTIC_EVENTS)
-    network = network_of(scene, packing)
-    return branch, network, mass_diagonal(network, scene.m, scene.inertia)
+    return shear_scene(scene, PLASTIC_EVENTS, progress.stage, progress.part("relax"),
+                       lambda g: progress(g / max(g1, 1e-300), f"gamma = {g:.3e}"))

@@ -150,8 +150,12 @@ class PackingEquilibria(Problem):
         scale = np.median(delta[delta > 0]) if (delta > 0).any() else self.network.constants[0]
         self.kappa = float(self.network.kernels.normal_stiffness(scale, self.network.constants[1]))
         self._last = (None, None)
-        A = self.reduced(q, gamma)
-        self.parked = -PARKED * max(float(np.abs(A).sum(axis=1).max(initial=0.0)), 1.0)
+        A, kept, n = self.reduced(q, gamma), self.gauge.kept, q.size
+        parked = np.zeros(n)
+        parked[self.gauge.rows] = -PARKED * max(float(np.abs(A).sum(axis=1).max(initial=0.0)), 1.0)
+        self._embed = sp.csr_array((np.ones(kept.size), (kept, np.arange(kept.size))),
+                                   shape=(n, kept.size))
+        self._parked = sp.diags_array(parked)
 
     def trial(self, q, gamma, cap: bool = True) -> tuple[np.ndarray, np.ndarray]:
         """History of every row at (q, gamma), reached by a straight step from the committed
@@ -200,14 +204,9 @@ class PackingEquilibria(Problem):
         return (g.P @ self.physical(q, gamma) @ sp.eye_array(q.size, format="csc")[:, g.kept]).tocsr()
 
     def stability_matrix(self, q, gamma) -> sp.csr_array:
-        """A_g (sparse): A_red at the kept dofs, the constant `parked` on the gauge rows'
-        diagonal, zeros elsewhere (module docstring)."""
-        kept, n = self.gauge.kept, q.size
-        embed = sp.csr_array((np.ones(kept.size), (kept, np.arange(kept.size))),
-                             shape=(n, kept.size))
-        parked = np.zeros(n)
-        parked[self.gauge.rows] = self.parked
-        return (embed @ self.reduced(q, gamma) @ embed.T + sp.diags_array(parked)).tocsr()
+        """A_g (sparse): A_red at the kept dofs, the committed state's PARKED constant on the
+        gauge rows' diagonal, zeros elsewhere (module docstring)."""
+        return (self._embed @ self.reduced(q, gamma) @ self._embed.T + self._parked).tocsr()
 
     def eigensystem(self, q, gamma, vectors: bool = False) -> Eigensystem:
         """A_red's eigensystem at the kept dofs, the gauge rows' zeros excluded, without

@@ -15,7 +15,7 @@ from diskfriction.packings.network import Network
 from diskfriction.packings.plastic import relax
 from diskfriction.packings.shear import PackingBranch
 
-KINDS = ("eigenvector", "random-position", "random-velocity")
+KINDS = ("eigenvector", "random-position", "random-velocity", "none")
 
 
 class NoComplexPair(ValueError):
@@ -24,9 +24,9 @@ class NoComplexPair(ValueError):
 
 @dataclass(frozen=True)
 class StateRun:
-    """A run from state k of a branch: its strain, the state (q0, xi0, rows0), complex pairs, the perturbation (kind,
-    amplitude [length, or length / time for random-velocity], the displacement + velocity it
-    added), the step dt, the fastest pair's growth rate sigma_predicted = |Im sqrt(lambda)| of
+    """A run from state k of a branch: its strain, the state (q0, xi0, rows0), complex pairs,
+    the perturbation (kind, amplitude [length, or length / time for random-velocity], the
+    displacement + velocity it added), the step dt, the fastest pair's growth rate sigma_predicted = |Im sqrt(lambda)| of
     M^-1 J (0 if none), the run, its mass-weighted distance from the state, sigma_measured (nan
     with fewer than 5 maxima to fit, `maxima`) and the energy budget's largest drift."""
 
@@ -71,7 +71,7 @@ def run_from_state(branch: PackingBranch, k: int, network: Network, mass: np.nda
                    dt: float | None = None, seed: int = 0) -> StateRun:
     """Perturb state k (eigenvector: along the real part of the fastest complex pair's right
     eigenvector, mass-normalised; random-position / random-velocity: normal deviates from
-    `seed`), integrate to t_end with dt (default time_step of the state's spectrum) and fit the
+    `seed`; none: the state as it is), integrate to t_end with dt (default time_step of the state's spectrum) and fit the
     growth of the distance between 10 times its start and 1e-3 delta_0. Raises NoComplexPair."""
     lam = branch.eigenvalues[k]
     q0, xi0, rows0, gamma = branch.q[k], branch.xi[k], branch.rows[k], float(branch.gamma[k])
@@ -89,14 +89,15 @@ def run_from_state(branch: PackingBranch, k: int, network: Network, mass: np.nda
         q += amplitude * shift / np.sqrt(np.sum(mass * shift * shift))
     elif kind == "random-velocity":
         v = amplitude * rng.normal(size=q.size)
-    else:
+    elif kind != "none":
         raise ValueError(f"perturbation must be one of {', '.join(KINDS)} (got {kind!r})")
     step = dt or time_step(lam)
     run = simulate(network, q, v, xi0, rows0, gamma, mass, step, t_end, frames=2000)
     d = distance(run, q0, mass)
-    measured, used = growth_rate(run.t, d, 10 * max(d[0], 1e-300), 1e-3 * delta_0)
-    return StateRun(k, gamma, q0, xi0, rows0, int(branch.n_complex[k]), kind, amplitude, q - q0 + v, step,
-                    sigma, run, d, measured, used,
+    measured, used = (growth_rate(run.t, d, 10 * max(d[0], 1e-300), 1e-3 * delta_0)
+                      if kind != "none" else (float("nan"), 0))  # nothing grows from nothing
+    return StateRun(k, gamma, q0, xi0, rows0, int(branch.n_complex[k]), kind, amplitude,
+                    q - q0 + v, step, sigma, run, d, measured, used,
                     float(np.abs(run.budget - run.budget[0]).max()))
 
 

@@ -19,6 +19,7 @@ from diskfriction.packings.equilibria import PackingEquilibria, largest_force, m
 from diskfriction.packings.network import Network
 from diskfriction.packings.plastic import PlasticEvent, past_fold
 from diskfriction.packings.prepare import Packing
+from diskfriction.packings.prepared import prepare_scene
 from diskfriction.scenes.packing import PackingScene
 
 PLASTIC = (StopCode.FOLD, StopCode.COMMIT, StopCode.DS_MIN, StopCode.TURNED_BACK)
@@ -177,3 +178,20 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
     return PackingBranch(gamma, q_all, rows, xi, eig, n_complex, res, contacts, loose, stress,
                          tuple(kept), Matrix(scene.matrix), branch.status, events, segments,
                          tuple(passed), window)
+
+
+def shear_scene(scene: PackingScene, plastic_events: int,
+                stage: Optional[Callable[[str], None]] = None,
+                relax_progress=None, on_gamma: Optional[Callable[[float], None]] = None
+                ) -> tuple[PackingBranch, Network, np.ndarray]:
+    """(branch, network, mass diagonal): the scene's packing prepared (prepared.prepare_scene)
+    and sheared over its strain range with every eigenvalue tracked, passing up to
+    `plastic_events` plastic events; `stage` is told each stage, `relax_progress` is the
+    preparation's progress, `on_gamma` each accepted strain."""
+    say = stage or (lambda line: None)
+    say(f"prepare {scene.N} disks to pressure {scene.pressure:g}")
+    packing = prepare_scene(scene, relax_progress)
+    say(f"shear gamma 0 -> {scene.gamma_range[1]:g}")
+    branch = shear(scene, packing, ShearParams(workers=0), on_gamma, plastic_events=plastic_events)
+    network = network_of(scene, packing)
+    return branch, network, mass_diagonal(network, scene.m, scene.inertia)

@@ -24,10 +24,9 @@ import numpy as np
 from diskfriction.files import save_text
 from diskfriction.packings.dynamics import (fastest_pair, mean_squared_displacement, simulate,
                                             time_step)
-from diskfriction.packings.equilibria import PackingEquilibria, mass_diagonal
-from diskfriction.packings.prepared import prepare_scene
+from diskfriction.packings.equilibria import PackingEquilibria
 from diskfriction.packings.runs import fastest_mode
-from diskfriction.packings.shear import PackingBranch, ShearParams, network_of, shear
+from diskfriction.packings.shear import PackingBranch, shear_scene
 from diskfriction.reports.figures import new_figure, save_figure
 from diskfriction.reports.packing_outputs import plot_packing_snapshot
 from diskfriction.scenes.packing import PackingScene
@@ -62,12 +61,7 @@ def build_packing_report(scene: PackingScene, out: Path, plastic_events: int,
                          progress: Optional[Callable[[str], None]] = None) -> list[str]:
     """Shear, run, draw and write out/report.md; returns the files written."""
     say = progress or (lambda line: None)
-    say(f"prepare {scene.N} disks to pressure {scene.pressure:g}")
-    packing = prepare_scene(scene)
-    say(f"shear gamma 0 -> {scene.gamma_range[1]:g}")
-    branch = shear(scene, packing, ShearParams(workers=0), plastic_events=plastic_events)
-    network = network_of(scene, packing)
-    mass = mass_diagonal(network, scene.m, scene.inertia)
+    branch, network, mass = shear_scene(scene, plastic_events, say)
     sigma = np.array([fastest_pair(e)[1] for e in branch.eigenvalues])
     fast = int(np.argmax(sigma))
     real = np.flatnonzero(branch.n_complex == 0)
@@ -92,7 +86,8 @@ def build_packing_report(scene: PackingScene, out: Path, plastic_events: int,
 def msd_run(branch: PackingBranch, k: int, label: str, network, mass: np.ndarray,
             sigma: float, scene: PackingScene) -> MsdRun:
     """Random velocities (AMPLITUDE, seed 0) of the network's disks, their centre-of-mass
-    velocity removed, from state k, run PERIODS slowest periods; the MSD over the network's disks (a loose disk would drift freely)."""
+    velocity removed, from state k, run PERIODS slowest periods; the MSD over the network's
+    disks (a loose disk would drift freely)."""
     lam = branch.eigenvalues[k]
     slowest = float(np.sqrt(np.min(np.abs(lam[lam != 0]))))
     loose = PackingEquilibria(network, branch.q[k], branch.xi[k], branch.rows[k],

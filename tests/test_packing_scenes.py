@@ -255,3 +255,18 @@ def test_verify_on_a_packing_measures_each_states_growth_against_its_spectrum(tm
     assert all(abs(r["stress_change_at_rest"]) <= 1e-6 for r in still)
     assert min(r["stress_change_at_rest"] for r in grown) <= -1e-2
     assert (tmp_path / "out" / "verify.md").read_text().count("| eigenvector |") == len(grown)
+
+
+def test_simulate_a_packing_without_perturbation_runs_and_fits_no_growth(tmp_path):
+    """--perturbation none (one of simulate's kinds) on a packing: the state as it is, no
+    growth rate fitted, the energy budget closed; not a traceback."""
+    import json
+    import math
+
+    scene = write(tmp_path, "[packing]\nN = 24\nseed = 3\n[shear]\ngamma = [0.0, 0.001]\n")
+    result = run_cli("simulate", str(scene), "--gamma", "0.001", "--t-end", "10",
+                     "--perturbation", "none", "--out", str(tmp_path / "out"))
+    assert result.returncode == 0, result.stderr
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["perturbation"] == "none" and math.isnan(summary["sigma_measured"])
+    assert summary["sliding_updates"] == 0
