@@ -113,7 +113,7 @@ def run(args: argparse.Namespace) -> int:
     if isinstance(scene, PackingScene):
         from diskfriction.cli.packing_cmd import run_packing
 
-        return run_packing(args, scene)
+        return run_packing(args, scene, window)
     F_from, F_to = parse_range(args.fx) if args.fx is not None else scene.F_x_range
     if args.ds_max is not None:
         number("bifurcate", "ds-max", args.ds_max)

@@ -21,19 +21,20 @@ PLASTIC_EVENTS = 1000
 """The plastic events a command passes (packings/plastic.py) before it stops at the next."""
 
 
-def run_packing(args: argparse.Namespace, scene: PackingScene) -> int:
-    """bifurcate on a packing scene: prepare, shear, write branch.npz, collisions.json,
-    diagram.png and packing.npz; exit 1 with one line when the branch ends short of the scene's
-    strain (a plastic event, a fold in gamma), after writing what it reached."""
+def run_packing(args: argparse.Namespace, scene: PackingScene,
+                window: tuple[float, float] | None) -> int:
+    """bifurcate on a packing scene: prepare, shear (with `window`, --window as bifurcate
+    parsed and checked it), write branch.npz, collisions.json, diagram.png and packing.npz;
+    exit 1 with one line when the branch ends short of the scene's strain (a plastic event, a
+    fold in gamma), after writing what it reached."""
     for option, why in CHAIN_ONLY.items():
         if getattr(args, option) is not None:
             flag = "--" + option.replace("_", "-")
             raise CommandError(f"bifurcate error: {flag}: {why} (got {getattr(args, option)!r})")
     if args.workers is not None and args.workers < 0:
         raise CommandError(f"bifurcate error: --workers: must be >= 0 (got {args.workers})")
-    from diskfriction.cli.bifurcate_cmd import check_window_covered, parse_window
+    from diskfriction.cli.bifurcate_cmd import check_window_covered
 
-    window = parse_window(args.window) if args.window is not None else None
     matrix = matrix_from_args("bifurcate", args, scene)
     out = output_dir("bifurcate", args.out, Path("out") / "bifurcate" / scene.name)
 
