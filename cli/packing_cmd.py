@@ -4,6 +4,7 @@ every birth and death of a complex pair (issue 25, docs/packings.md#shear)."""
 from __future__ import annotations
 
 import argparse
+import collections
 import dataclasses
 import json
 from pathlib import Path
@@ -210,7 +211,7 @@ def run_packing_verify(args: argparse.Namespace, scene: PackingScene) -> int:
 
     from diskfriction.files import save_json, save_text
     from diskfriction.packings.plastic import RelaxationFailed
-    from diskfriction.packings.runs import run_from_state
+    from diskfriction.packings.runs import AtRest, run_from_state
     from diskfriction.packings.shear import ShearParams
 
     progress = Progress("verify")
@@ -224,15 +225,18 @@ def run_packing_verify(args: argparse.Namespace, scene: PackingScene) -> int:
             done = run_from_state(branch, k, network, mass, scene.matrix, kind, args.amplitude,
                                   args.t_end, scene.delta_0)
             try:
-                stress_change, moved = done.settled(network, ShearParams().newton_tol)
+                rest = done.settled(network, ShearParams().newton_tol)
             except RelaxationFailed:  # said in the table as nan
-                stress_change = moved = float("nan")
+                rest = AtRest(float("nan"), float("nan"), -1, -1)
             rows.append({"gamma": done.gamma, "complex_pairs": done.pairs, "perturbation": kind,
                          "sigma_predicted": done.sigma_predicted,
                          "sigma_measured": done.sigma_measured, "maxima_fitted": done.maxima,
                          "distance_end": float(done.distance[-1]), "slid": done.slid,
                          "sliding_updates": int(done.run.capped[-1]), "budget_drift": done.drift,
-                         "stress_change_at_rest": stress_change, "moved_at_rest": moved})
+                         "stress_change_at_rest": rest.stress_change, "moved_at_rest": rest.moved,
+                         "contacts_opened_at_rest": rest.opened,
+                         "contacts_formed_at_rest": rest.formed,
+                         "outcome": rest.outcome})
         table = packing_verify_table(rows)
         save_json(out / "verify.json", {"scene": scene.name, "t_end": args.t_end,
                                         "amplitude": args.amplitude, "runs": rows})
@@ -249,13 +253,27 @@ def packing_verify_table(rows: list[dict]) -> str:
     lines = ["Runs from states of the shear branch; sigma = |Im sqrt(lambda)| of M^-1 J (raw "
              "1/time); distance mass-weighted, raw.", "",
              "| gamma | pairs | perturbation | sigma predicted | sigma measured | distance at "
-             "the end | slid | at rest: d sigma_xy / sigma_xy | at rest: largest move [R] |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "the end | slid | at rest: d sigma_xy / sigma_xy | at rest: largest move [R] | "
+             "at rest: contacts opened / formed | outcome |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
     lines += [f"| {r['gamma']:.6g} | {r['complex_pairs']} | {r['perturbation']} | "
               f"{r['sigma_predicted']:.4g} | {r['sigma_measured']:.4g} | {r['distance_end']:.3g} | "
               f"{'yes' if r['slid'] else 'no'} | {r['stress_change_at_rest']:.2e} | "
-              f"{r['moved_at_rest']:.2e} |" for r in rows]
+              f"{r['moved_at_rest']:.2e} | {opened_formed(r)} | {r['outcome']} |" for r in rows]
+    lines.append("")
+    for kind, label in (("eigenvector", "complex pairs"), ("random-velocity", "real states")):
+        outcomes = collections.Counter(r["outcome"] for r in rows if r["perturbation"] == kind)
+        if outcomes:
+            lines.append(f"Runs from {label}: " + ", ".join(
+                f"{n} {what}" for what, n in sorted(outcomes.items())) + ".")
     return "\n".join(lines) + "\n"
+
+
+def opened_formed(row: dict) -> str:
+    """'opened / formed' at rest, '-' where the relaxation failed."""
+    if row["contacts_opened_at_rest"] < 0:
+        return "-"
+    return f"{row['contacts_opened_at_rest']} / {row['contacts_formed_at_rest']}"
 
 
 def sheared(scene: PackingScene, progress: Progress):

@@ -239,7 +239,8 @@ def test_verify_on_a_packing_measures_each_states_growth_against_its_spectrum(tm
     """`verify PACKING` on 24 disks to gamma = 0.002 (t_end 400): runs from states with complex
     pairs grow at the spectrum's rate (most within 2 %; two pairs of near rates may blur one)
     and some slide; runs from states with every eigenvalue real never slide, and relaxed at
-    rest they come back to the state, while one complex pair's run drops the stress by 1 %."""
+    rest they come back to the state, while complex pairs' runs rearrange the contact network,
+    slip (the stress drops by 1 % with the same contacts) or come back."""
     import json
 
     scene = write(tmp_path, "[packing]\nN = 24\nseed = 3\n[shear]\ngamma = [0.0, 0.002]\n")
@@ -252,9 +253,18 @@ def test_verify_on_a_packing_measures_each_states_growth_against_its_spectrum(tm
     close = [abs(r["sigma_measured"] / r["sigma_predicted"] - 1) <= 0.02 for r in grown]
     assert sum(close) >= len(grown) - 1 and any(r["slid"] for r in grown)
     # relaxed at rest: the real states come back; some complex pair rearranged the packing
+    # (its contact network changed) and one dropped the stress by 1 % with the same contacts
     assert all(abs(r["stress_change_at_rest"]) <= 1e-6 for r in still)
+    assert all(r["outcome"] == "came back" for r in still)
     assert min(r["stress_change_at_rest"] for r in grown) <= -1e-2
-    assert (tmp_path / "out" / "verify.md").read_text().count("| eigenvector |") == len(grown)
+    outcomes = {r["outcome"] for r in grown}
+    assert {"rearranged", "slipped", "came back"} <= outcomes
+    for r in grown:
+        changed = r["contacts_opened_at_rest"] + r["contacts_formed_at_rest"] > 0
+        assert (r["outcome"] == "rearranged") == changed
+    text = (tmp_path / "out" / "verify.md").read_text()
+    assert text.count("| eigenvector |") == len(grown)
+    assert f"Runs from real states: {len(still)} came back." in text
 
 
 def test_simulate_a_packing_without_perturbation_runs_and_fits_no_growth(tmp_path):
