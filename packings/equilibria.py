@@ -80,10 +80,11 @@ its reach there, plus WINDOW_EXTRA (the chain's 1.5 and 8 are too few: shear sof
 low spectrum, and 256 disks crowded a window sized so within 7e-4 of strain)."""
 
 SLIP_BAND = 1e-3
-"""A contact sliding at the committed state (its history capped there) sticks again when its
-uncapped history falls this fraction of t* inside the cap [1]. The re-solve after a commit
-leaves sliding contacts slightly inside the cap (up to 1.8e-4 t* seen: 24 disks, mu = 0.3),
-and a smaller band fired a stick event, then a slip event, at the start of every step they slid
+"""A contact is sliding at the committed state where its history lies within this fraction of
+t* of the cap (capped there, or still there since: it stops sliding where it leaves the band),
+and it sticks again when its uncapped history falls further inside [1]. The re-solve after a
+commit leaves sliding contacts slightly inside the cap (up to 1.8e-4 t* seen: 24 disks,
+mu = 0.3), and a smaller band fired a stick event, then a slip event, at the start of every step they slid
 through (64 disks at mu = 0.3 advanced 1e-12 in strain per step). Within the band the smoothed
 law's force is within 2 b^2 = 2e-6 of mu F_n (it peaks at the cap); the linear law's within b."""
 
@@ -148,7 +149,7 @@ class PackingEquilibria(Problem):
             self.window = sized(window, self.reduced(q, gamma), WINDOW_MARGIN, WINDOW_EXTRA)
 
     # -- the committed state
-    def _set_committed(self, q, xi, rows, gamma, sliding=None) -> None:
+    def _set_committed(self, q, xi, rows, gamma) -> None:
         self.q_c, self.xi_c, self.rows_c, self.gamma_c = q.copy(), xi.copy(), rows, float(gamma)
         delta = self.network.overlaps(q, rows, gamma)
         counts = np.bincount(rows[delta > self.delta_hold, :2].ravel(), minlength=self.network.N)
@@ -157,7 +158,7 @@ class PackingEquilibria(Problem):
         self.active = ~on_loose  # rows whose forces act; the others are watched
         t_star = self.network.kernels.coulomb_limit(np.maximum(delta, 0.0),
                                                     *self.network.constants[1:])
-        self.sliding = np.zeros(len(rows), bool) if sliding is None else (sliding & (delta > 0))
+        self.sliding = (delta > 0) & (t_star - np.abs(xi) <= SLIP_BAND * t_star)
         self._band = np.where(self.sliding, SLIP_BAND * t_star, 0.0)
         scale = np.median(delta[delta > 0]) if (delta > 0).any() else self.network.constants[0]
         self.kappa = float(self.network.kernels.normal_stiffness(scale, self.network.constants[1]))
@@ -271,7 +272,7 @@ class PackingEquilibria(Problem):
                                np.where(self.active, margin, 1.0)])
 
     def state(self) -> tuple:
-        return self.q_c.copy(), self.xi_c.copy(), self.rows_c.copy(), self.gamma_c, self.sliding
+        return self.q_c.copy(), self.xi_c.copy(), self.rows_c.copy(), self.gamma_c
 
     def restore(self, snapshot: tuple) -> None:
         self._set_committed(*snapshot)
@@ -292,8 +293,7 @@ class PackingEquilibria(Problem):
         loose, capped = self.gauge.loose, bool(slid[self.active].any())  # watched rows carry no force
         xi_rows[loose[rows[:, 0]] | loose[rows[:, 1]]] = 0.0  # nor any history: a disk joins afresh
         moved = self._release_pushed(q_new, rows, gamma_new)
-        sliding = carried(self.rows_c, slid & self.active, rows) > 0
-        self._set_committed(q_new if moved is None else moved, xi_rows, rows, gamma_new, sliding)
+        self._set_committed(q_new if moved is None else moved, xi_rows, rows, gamma_new)
         return capped or moved is not None or not np.array_equal(loose, self.gauge.loose)
 
     def _release_pushed(self, q: np.ndarray, rows: np.ndarray, gamma: float) -> np.ndarray | None:

@@ -104,7 +104,8 @@ def test_a_contact_sliding_through_steps_fires_no_event_at_their_start():
     no contact that slid into the committed state crosses its Coulomb margin from inside to
     outside (a second slip of a sliding contact: the rounding of the cap and the re-solve left
     it inside the cap, and the step was cut within 1e-9 of its start, 63 times in 80 points);
-    the shear ends and no two points are closer than 1e-12 in strain."""
+    the shear ends and no two points are closer than 1e-12 in strain. A problem started at the
+    end state flags the contacts on their cap as sliding."""
     import diskfriction.packings.equilibria as equilibria
 
     scene = PackingScene(N=24, seed=1, gamma_range=(0.0, 0.0015), mu=0.3)
@@ -126,6 +127,19 @@ def test_a_contact_sliding_through_steps_fires_no_event_at_their_start():
         equilibria.PackingEquilibria.commit = commit
     assert branch.status.reached and sum(slips) == 0, slips
     assert np.diff(branch.gamma).min() > 1e-12
+    # a problem started from a state (a new segment after a plastic event, a run's state)
+    # knows its sliding contacts from their histories: they fire no slip event either
+    network = network_of(scene, prepare_scene(scene))
+    k = len(branch) - 1
+    problem = PackingEquilibria(network, branch.q[k], branch.xi[k], branch.rows[k],
+                                float(branch.gamma[k]),
+                                mass_diagonal(network, scene.m, scene.inertia), scene.matrix)
+    m = problem.rows_c.shape[0]
+    delta = network.overlaps(problem.q_c, problem.rows_c, problem.gamma_c)
+    t_star = network.kernels.coulomb_limit(np.maximum(delta, 0.0), *network.constants[1:])
+    capped = problem.active & (delta > 0) & (np.abs(problem.xi_c) >= t_star * (1 - 1e-12))
+    margin = problem.event_functions(problem.q_c, problem.gamma_c)[2 * m:]
+    assert capped.any() and problem.sliding[capped].all() and (margin[capped] < 0).all()
 
 
 def test_a_plastic_event_is_passed_by_relaxing_with_friction():
