@@ -80,13 +80,14 @@ its reach there, plus WINDOW_EXTRA (the chain's 1.5 and 8 are too few: shear sof
 low spectrum, and 256 disks crowded a window sized so within 7e-4 of strain)."""
 
 SLIP_BAND = 1e-3
-"""A contact is sliding at the committed state where its history lies within this fraction of
-t* of the cap (capped there, or still there since: it stops sliding where it leaves the band),
-and it sticks again when its uncapped history falls further inside [1]. The re-solve after a
+"""A contact that the cap held at a commit is sliding while its history lies within this
+fraction of t* of the cap (a problem started from a state: every contact within it), and it
+sticks again when its uncapped history falls further inside [1]. The re-solve after a
 commit leaves sliding contacts slightly inside the cap (up to 1.8e-4 t* seen: 24 disks,
-mu = 0.3), and a smaller band fired a stick event, then a slip event, at the start of every step they slid
-through (64 disks at mu = 0.3 advanced 1e-12 in strain per step). Within the band the smoothed
-law's force is within 2 b^2 = 2e-6 of mu F_n (it peaks at the cap); the linear law's within b."""
+mu = 0.3), and a smaller band fired a stick event, then a slip event, at the start of every
+step they slid through (64 disks at mu = 0.3 advanced 1e-12 in strain per step). Within the
+band the smoothed law's force is within 2 b^2 = 2e-6 of mu F_n (it peaks at the cap); the
+linear law's within b."""
 
 DERIVATIVE_STEP = (1e-11, 1e-7)
 """Range of the finite-difference length along the branch, 0.1 of the smallest active overlap
@@ -149,16 +150,19 @@ class PackingEquilibria(Problem):
             self.window = sized(window, self.reduced(q, gamma), WINDOW_MARGIN, WINDOW_EXTRA)
 
     # -- the committed state
-    def _set_committed(self, q, xi, rows, gamma) -> None:
+    def _set_committed(self, q, xi, rows, gamma, sliding=None) -> None:
+        """Commit (q, xi, rows, gamma). sliding: the rows capped at this commit or sliding at the
+        last one (a contact approaching its cap from inside is not sliding), or None where the
+        state is all there is (a start): every row within the band of its cap."""
         self.q_c, self.xi_c, self.rows_c, self.gamma_c = q.copy(), xi.copy(), rows, float(gamma)
         delta = self.network.overlaps(q, rows, gamma)
         counts = np.bincount(rows[delta > self.delta_hold, :2].ravel(), minlength=self.network.N)
         self.gauge = Gauge.of(self.network.N, counts)
         on_loose = self.gauge.loose[rows[:, 0]] | self.gauge.loose[rows[:, 1]]
         self.active = ~on_loose  # rows whose forces act; the others are watched
-        t_star = self.network.kernels.coulomb_limit(np.maximum(delta, 0.0),
-                                                    *self.network.constants[1:])
-        self.sliding = (delta > 0) & (t_star - np.abs(xi) <= SLIP_BAND * t_star)
+        t_star = self.coulomb_limit(delta)
+        near = (delta > 0) & (t_star - np.abs(xi) <= SLIP_BAND * t_star)
+        self.sliding = near if sliding is None else near & sliding
         self._band = np.where(self.sliding, SLIP_BAND * t_star, 0.0)
         scale = np.median(delta[delta > 0]) if (delta > 0).any() else self.network.constants[0]
         self.kappa = float(self.network.kernels.normal_stiffness(scale, self.network.constants[1]))
@@ -169,6 +173,11 @@ class PackingEquilibria(Problem):
         self._embed = sp.csr_array((np.ones(kept.size), (kept, np.arange(kept.size))),
                                    shape=(n, kept.size))
         self._parked = sp.diags_array(parked)
+
+    def coulomb_limit(self, delta: np.ndarray) -> np.ndarray:
+        """t* of every row at overlaps delta (0 where open) [length]."""
+        return self.network.kernels.coulomb_limit(np.maximum(delta, 0.0),
+                                                  *self.network.constants[1:])
 
     def trial(self, q, gamma, cap: bool = True) -> tuple[np.ndarray, np.ndarray]:
         """History of every row at (q, gamma), reached by a straight step from the committed
@@ -263,8 +272,7 @@ class PackingEquilibria(Problem):
         _release_pushed)."""
         delta = self.network.overlaps(q, self.rows_c, gamma)
         xi = self.trial(q, gamma, cap=False)[0]
-        t_star = self.network.kernels.coulomb_limit(np.maximum(delta, 0.0),
-                                                    *self.network.constants[1:])
+        t_star = self.coulomb_limit(delta)
         margin = np.where(delta > 0, t_star - np.abs(xi) - self._band,
                           np.where(self.sliding, -1.0, 1.0))
         return np.concatenate([np.where(self.active, delta, 1.0),
@@ -272,7 +280,7 @@ class PackingEquilibria(Problem):
                                np.where(self.active, margin, 1.0)])
 
     def state(self) -> tuple:
-        return self.q_c.copy(), self.xi_c.copy(), self.rows_c.copy(), self.gamma_c
+        return self.q_c.copy(), self.xi_c.copy(), self.rows_c.copy(), self.gamma_c, self.sliding
 
     def restore(self, snapshot: tuple) -> None:
         self._set_committed(*snapshot)
@@ -293,7 +301,8 @@ class PackingEquilibria(Problem):
         loose, capped = self.gauge.loose, bool(slid[self.active].any())  # watched rows carry no force
         xi_rows[loose[rows[:, 0]] | loose[rows[:, 1]]] = 0.0  # nor any history: a disk joins afresh
         moved = self._release_pushed(q_new, rows, gamma_new)
-        self._set_committed(q_new if moved is None else moved, xi_rows, rows, gamma_new)
+        sliding = carried(self.rows_c, (slid | self.sliding) & self.active, rows) > 0
+        self._set_committed(q_new if moved is None else moved, xi_rows, rows, gamma_new, sliding)
         return capped or moved is not None or not np.array_equal(loose, self.gauge.loose)
 
     def _release_pushed(self, q: np.ndarray, rows: np.ndarray, gamma: float) -> np.ndarray | None:

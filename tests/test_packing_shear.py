@@ -136,7 +136,7 @@ def test_a_contact_sliding_through_steps_fires_no_event_at_their_start():
                                 mass_diagonal(network, scene.m, scene.inertia), scene.matrix)
     m = problem.rows_c.shape[0]
     delta = network.overlaps(problem.q_c, problem.rows_c, problem.gamma_c)
-    t_star = network.kernels.coulomb_limit(np.maximum(delta, 0.0), *network.constants[1:])
+    t_star = problem.coulomb_limit(delta)
     capped = problem.active & (delta > 0) & (np.abs(problem.xi_c) >= t_star * (1 - 1e-12))
     margin = problem.event_functions(problem.q_c, problem.gamma_c)[2 * m:]
     assert capped.any() and problem.sliding[capped].all() and (margin[capped] < 0).all()
