@@ -76,15 +76,15 @@ def parse_range(text: str, option: str = "fx", nonnegative: bool = True,
     return a, b
 
 
-def parse_window(text: str) -> tuple[float, float]:
-    """'LO:HI' -> (LO, HI), finite with LO < HI; else a one-line CommandError."""
+def parse_window(text: str, command: str = "bifurcate") -> tuple[float, float]:
+    """'LO:HI' -> (LO, HI), finite with LO < HI; else a one-line CommandError naming COMMAND."""
     parts = text.split(":")
     try:
         lo, hi = (float(p) for p in parts) if len(parts) == 2 else (None, None)
     except ValueError:
         lo = hi = None
     if lo is None or not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
-        raise CommandError(f"bifurcate error: --window: expected LO:HI with two numbers, LO < HI "
+        raise CommandError(f"{command} error: --window: expected LO:HI with two numbers, LO < HI "
                            f"(got {text!r})")
     return lo, hi
 

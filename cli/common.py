@@ -50,7 +50,7 @@ def chain_scene(command: str, file, scene: Scene | PackingScene) -> Scene:
     if isinstance(scene, PackingScene):
         raise CommandError(f"{command} error: {file}: geometry = \"packing\": {command} takes "
                            f"chain scenes only so far; `diskfriction scene`, `prepare`, "
-                           f"`bifurcate`, `simulate`, `verify` and `report` take packings "
+                           f"`bifurcate`, `simulate`, `verify`, `map` and `report` take packings "
                            f"(docs/packings.md)")
     return scene
 

@@ -47,9 +47,8 @@ def run_packing(args: argparse.Namespace, scene: PackingScene,
     from diskfriction.packings.plastic import RelaxationFailed
     from diskfriction.packings.prepare import save_packing
     from diskfriction.packings.prepared import prepare_scene
-    from diskfriction.packings.shear import ShearParams, shear
-    from diskfriction.reports.packing_outputs import (collision_records, plot_packing_diagram,
-                                                      save_packing_branch)
+    from diskfriction.packings.shear import ShearParams, collision_records, shear
+    from diskfriction.reports.packing_outputs import plot_packing_diagram, save_packing_branch
 
     scene = dataclasses.replace(scene, matrix=str(matrix))
     g0, g1 = scene.gamma_range

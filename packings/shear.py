@@ -88,6 +88,12 @@ class PackingBranch:
         return self.gamma.size
 
 
+def collision_records(branch: PackingBranch) -> list[dict]:
+    """One record per located collision: strain, kind, the double eigenvalue, the matrix."""
+    return [{"gamma": c.p, "kind": str(c.kind), "lambda_re": c.eigenvalue,
+             "lambda_im": 0.0, "matrix": str(branch.matrix)} for c in branch.collisions]
+
+
 def segment_columns(values: list, segments: np.ndarray, continued: dict, band: Window
                     ) -> np.ndarray:
     """The stored spectrum of a windowed shear: each segment's window columns

@@ -31,13 +31,15 @@ from diskfriction.files import save_json, save_text
 from diskfriction.reports.figures import OUTCOME_STYLE, new_figure, save_figure
 from diskfriction.reports.units import F_X_LABEL, PaperUnits
 from diskfriction.scenes import Scene
+from diskfriction.scenes.packing import PackingScene
 STATUS_MARK = {"failed": "F", "ended": "E"}
 """How the plane shows a cell without a value: failed (no branch) and ended (branch stopped)."""
 
 
-def table_rows(cells: list[Cell], records: list[dict]) -> list[dict]:
-    """One row per cell: its varied values, then its summary (studies.maps.COLUMNS)."""
-    return [dict(cell.values) | {c: record["summary"][c] for c in COLUMNS}
+def table_rows(cells: list[Cell], records: list[dict], columns: tuple = COLUMNS) -> list[dict]:
+    """One row per cell: its varied values, then its summary's `columns` (studies.maps.COLUMNS,
+    or a packing's studies.packing_maps.PACKING_COLUMNS)."""
+    return [dict(cell.values) | {c: record["summary"][c] for c in columns}
             for cell, record in zip(cells, records)]
 
 
@@ -48,9 +50,9 @@ def field(value) -> str:
     return repr(value) if isinstance(value, float) else str(value)
 
 
-def csv_text(axes: list[Axis], rows: list[dict]) -> str:
-    """The table as CSV: a header of the varied keys and COLUMNS, one line per row."""
-    header = [axis.key for axis in axes] + list(COLUMNS)
+def csv_text(axes: list[Axis], rows: list[dict], columns: tuple = COLUMNS) -> str:
+    """The table as CSV: a header of the varied keys and `columns`, one line per row."""
+    header = [axis.key for axis in axes] + list(columns)
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
     writer.writerow(header)
@@ -58,11 +60,12 @@ def csv_text(axes: list[Axis], rows: list[dict]) -> str:
     return buffer.getvalue()
 
 
-def save_map(out: Path, scene: Scene, axes: list[Axis], params: MapParams, version: str,
-             cells: list[Cell], records: list[dict]) -> None:
-    """OUT/map.csv and OUT/map.json (module docstring), each written atomically."""
-    rows = table_rows(cells, records)
-    save_text(Path(out) / "map.csv", csv_text(axes, rows))
+def save_map(out: Path, scene: Scene | PackingScene, axes: list[Axis], params, version: str,
+             cells: list[Cell], records: list[dict], columns: tuple = COLUMNS) -> None:
+    """OUT/map.csv and OUT/map.json (module docstring; a packing's params and `columns` are
+    studies/packing_maps.py's), each written atomically."""
+    rows = table_rows(cells, records, columns)
+    save_text(Path(out) / "map.csv", csv_text(axes, rows, columns))
     save_json(Path(out) / "map.json", {
         "scene": scene.physics_fields(), "scene_file": scene.source,
         "axes": [asdict(axis) for axis in axes], "params": asdict(params), "code": version,
@@ -71,11 +74,13 @@ def save_map(out: Path, scene: Scene, axes: list[Axis], params: MapParams, versi
 
 # ---- figures (plots only: every number comes from the records) --------------------------------
 
-def key_label(axis: Axis) -> str:
-    """Axis label of a varied key: its dotted name and its unit from the scene schema."""
-    from diskfriction.scenes.load import SCHEMA
+def key_label(axis: Axis, geometry: str = "chain") -> str:
+    """Axis label of a varied key: its dotted name and its unit from the geometry's scene
+    schema."""
+    from diskfriction.scenes.schema import SCHEMAS
 
-    return f"{axis.key} {SCHEMA[axis.key].unit}".strip() + (" (log grid)" if axis.log else "")
+    unit = SCHEMAS[geometry][axis.key].unit
+    return f"{axis.key} {unit}".strip() + (" (log grid)" if axis.log else "")
 
 
 def headline(reason: str, width: int = 150) -> str:
@@ -170,12 +175,12 @@ def plot_bands(axis: Axis, cells: list[Cell], records: list[dict], params: MapPa
     save_figure(fig, path)
 
 
-def plot_plane(axes: list[Axis], cells: list[Cell], records: list[dict], params: MapParams,
-               path: Path, title: str) -> None:
+def plot_plane(axes: list[Axis], cells: list[Cell], records: list[dict], what: str, label: str,
+               absent: str, path: Path, title: str, geometry: str = "chain") -> None:
     """The two-key figure (module docstring): the first key along x, the second along y, one
-    square per cell (evenly, whatever the spacing of the values) with its value, failed and
-    ended cells marked F and E."""
-    what = "F_slide" if params.slide is not None else "F_complex"
+    square per cell (evenly, whatever the spacing of the values) with the value of its summary's
+    `what` (colour bar `label`), failed and ended cells marked F and E, a cell without a value
+    "-" (`absent` says what that means)."""
     shape = tuple(len(axis.values) for axis in axes)
     value = np.full(shape, np.nan)
     fig, ax = new_figure(figsize=(max(6.0, 2.8 + 0.8 * shape[0]), max(4.0, 2.0 + 0.45 * shape[1])))
@@ -188,14 +193,12 @@ def plot_plane(axes: list[Axis], cells: list[Cell], records: list[dict], params:
                 bbox={"facecolor": "w", "alpha": 0.7, "linewidth": 0})
     mesh = ax.pcolormesh(np.arange(shape[0] + 1) - 0.5, np.arange(shape[1] + 1) - 0.5,
                          np.ma.masked_invalid(value).T, cmap="viridis", shading="flat")
-    label = "F_slide, the lowest load whose run slid" if what == "F_slide" else \
-        "F_x where the first complex window starts"
-    fig.colorbar(mesh, ax=ax, label=f"{label}\n[raw force, as the paper quotes it]")
+    fig.colorbar(mesh, ax=ax, label=label)
     ax.set(xticks=range(shape[0]), xticklabels=[f"{v:g}" for v in axes[0].values],
            yticks=range(shape[1]), yticklabels=[f"{v:g}" for v in axes[1].values],
-           xlabel=key_label(axes[0]), ylabel=key_label(axes[1]), facecolor="0.85")
-    ax.set_title(f"{title}\nF: failed (no branch), E: branch ended, -: "
-                 f"{'no run slid' if what == 'F_slide' else 'no complex window'}", fontsize=8)
+           xlabel=key_label(axes[0], geometry), ylabel=key_label(axes[1], geometry),
+           facecolor="0.85")
+    ax.set_title(f"{title}\nF: failed (no branch), E: branch ended, -: {absent}", fontsize=8)
     fig.tight_layout()
     save_figure(fig, path)
 
@@ -206,4 +209,9 @@ def plot_map(axes: list[Axis], cells: list[Cell], records: list[dict], params: M
     if len(axes) == 1:
         plot_bands(axes[0], cells, records, params, path, title)
     else:
-        plot_plane(axes, cells, records, params, path, title)
+        slide = params.slide is not None
+        label = ("F_slide, the lowest load whose run slid" if slide else
+                 "F_x where the first complex window starts")
+        plot_plane(axes, cells, records, "F_slide" if slide else "F_complex",
+                   f"{label}\n[raw force, as the paper quotes it]",
+                   "no run slid" if slide else "no complex window", path, title)

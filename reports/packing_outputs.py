@@ -7,15 +7,9 @@ from pathlib import Path
 import numpy as np
 
 from diskfriction.files import save_json, save_npz
-from diskfriction.packings.shear import PackingBranch
+from diskfriction.packings.shear import PackingBranch, collision_records
 from diskfriction.reports.figures import new_figure, save_figure
 from diskfriction.scenes.packing import PackingScene
-
-
-def collision_records(branch: PackingBranch) -> list[dict]:
-    """One record per located collision: strain, kind, the double eigenvalue, the matrix."""
-    return [{"gamma": c.p, "kind": str(c.kind), "lambda_re": c.eigenvalue,
-             "lambda_im": 0.0, "matrix": str(branch.matrix)} for c in branch.collisions]
 
 
 def save_packing_branch(out: Path, branch: PackingBranch, scene: PackingScene) -> None:

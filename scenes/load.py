@@ -227,19 +227,26 @@ def load_scene(path: str | os.PathLike[str]) -> Scene | PackingScene:
     return _scene(defaults | given, given, origin=file, source=file)
 
 
-def number_keys() -> dict[str, type]:
-    """The dotted keys that hold one number, each with the type a scene gives it (int for
-    disks.N, float for the others): the keys a parameter map may vary."""
-    return {key: type(value) for key, value in _values(Scene()).items()
+def number_keys(geometry: str = "chain") -> dict[str, type]:
+    """The dotted keys of a `geometry`'s scene ("chain" or "packing") that hold one number,
+    each with the type a scene gives it (int for disks.N, packing.N and packing.seed, float for
+    the others): the keys a parameter map may vary."""
+    values = _packing_values(PackingScene()) if geometry == "packing" else _values(Scene())
+    return {key: type(value) for key, value in values.items()
             if isinstance(value, (int, float)) and not isinstance(value, bool)}
 
 
-def with_values(scene: Scene, values: dict[str, Any], origin: str) -> Scene:
-    """``scene`` with the dotted keys of ``values`` set, each checked by the schema as if a
-    file ``origin`` held it. Raises SceneError, as load_scene does, for an unknown key or a
-    value the key does not take (``disks.N = 2.5``: expected an integer)."""
-    given = _checked((_entry(origin, *key.rpartition(".")[::2], value)
-                      for key, value in values.items()), origin)
+def with_values(scene: Scene | PackingScene, values: dict[str, Any], origin: str
+                ) -> Scene | PackingScene:
+    """``scene`` with the dotted keys of ``values`` set, each checked by the scene's schema as
+    if a file ``origin`` held it. Raises SceneError, as load_scene does, for an unknown key or
+    a value the key does not take (``disks.N = 2.5``: expected an integer)."""
+    schema = PACKING_SCHEMA if isinstance(scene, PackingScene) else SCHEMA
+    given = _checked((_entry(origin, *key.rpartition(".")[::2], value, schema)
+                      for key, value in values.items()), origin, schema)
+    if isinstance(scene, PackingScene):
+        return replace(_packing_scene(_packing_values(scene) | given, given, origin),
+                       name=scene.name, source=scene.source)
     return _scene(_values(scene) | given, given, origin=origin, source=scene.source)
 
 

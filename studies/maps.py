@@ -49,6 +49,7 @@ import numpy as np
 from diskfriction.studies.cluster import as_finished, code_version, dask_client, task_key
 from diskfriction.files import save_json
 from diskfriction.scenes import Scene
+from diskfriction.scenes.packing import PackingScene
 from diskfriction.scenes.load import number_keys, with_values
 
 COLUMNS = ("status", "F_end", "collisions", "windows", "complex_windows", "F_complex",
@@ -139,12 +140,12 @@ def grid_values(lo: float, hi: float, count: int, log: bool = False) -> tuple[fl
     return tuple(float(v) for v in values)
 
 
-def map_cells(scene: Scene, axes: list[Axis], origin: str) -> list[Cell]:
+def map_cells(scene: Scene | PackingScene, axes: list[Axis], origin: str) -> list[Cell]:
     """Every combination of the axes' values (the first axis slowest), each the scene with
     those values checked as if file `origin` held them (SceneError for the first bad one;
     a whole number for an integer key such as disks.N becomes an int, any other value is
     refused by the schema). ValueError for a key that holds no single number."""
-    kinds = number_keys()
+    kinds = number_keys("packing" if isinstance(scene, PackingScene) else "chain")
     for axis in axes:
         if axis.key not in kinds:
             raise ValueError(f"{axis.key} is not a numeric scene key ({', '.join(kinds)})")
@@ -268,16 +269,18 @@ def map_cell(scene: Scene, params: MapParams) -> dict:
 
 # ---- the grid on dask -------------------------------------------------------------------------
 
-def cell_path(out: Path, scene: Scene, params: MapParams, version: str) -> Path:
+def cell_path(out: Path, scene: Scene | PackingScene, params, version: str) -> Path:
     """OUT/cells/<key>.json, the key hashing the scene's physics, the parameters and the code."""
     return Path(out) / "cells" / f"{task_key(scene.physics_fields(), asdict(params), version)}.json"
 
 
-def run_map(cells: list[Cell], params: MapParams, out: Path, scheduler: Optional[str] = None,
+def run_map(cells: list[Cell], params, out: Path, scheduler: Optional[str] = None,
             workers: Optional[int] = None,
-            progress: Optional[Callable[[int, int], None]] = None) -> list[dict]:
+            progress: Optional[Callable[[int, int], None]] = None,
+            compute: Callable[..., dict] = map_cell) -> list[dict]:
     """The record of every cell, in the order of `cells`: read from OUT/cells where it is,
-    else computed on dask (the scheduler at `scheduler`, or a local cluster of `workers`
+    else computed (compute(scene, params): map_cell for chains, with MapParams;
+    studies.packing_maps.packing_cell for packings) on dask (the scheduler at `scheduler`, or a local cluster of `workers`
     processes, studies/cluster.py) and written the moment it arrives. progress(done, total)
     before the first cell and after every finished one."""
     version = code_version()
@@ -288,7 +291,7 @@ def run_map(cells: list[Cell], params: MapParams, out: Path, scheduler: Optional
     tasks = {cell.index: (cell.scene, params) for cell in cells if cell.index not in records}
     if tasks:
         with dask_client(scheduler, workers) as client:
-            for index, record in as_finished(client, map_cell, tasks):
+            for index, record in as_finished(client, compute, tasks):
                 save_json(paths[index], record)
                 records[index] = record
                 tick()

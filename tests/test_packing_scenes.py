@@ -91,9 +91,11 @@ def test_the_packing_scene_checks_its_effects():
     assert set(PACKING_SCHEMA) >= {"packing.N", "packing.pressure", "shear.gamma"}
 
 
-@pytest.mark.parametrize("command, extra", [("map", ["--vary", "contacts.mu=5:10:2"])])
-def test_commands_without_packings_refuse_a_packing_scene_in_one_line(tmp_path, command, extra):
-    result = run_cli(command, str(PACKAGED), *extra, "--out", str(tmp_path / "out"))
+@pytest.mark.parametrize("command", [["export", "lammps"],
+                                     ["crosscheck", "lammps", "--fx", "0", "--t-end", "1"]])
+def test_commands_without_packings_refuse_a_packing_scene_in_one_line(tmp_path, command):
+    result = run_cli(*command[:2], str(PACKAGED), *command[2:], "--out", str(tmp_path / "out"))
+    command = command[0]
     assert result.returncode == 2 and result.stderr.count("\n") == 1
     line = error_line(result, command)
     assert str(PACKAGED) in line and 'geometry = "packing"' in line

@@ -1,0 +1,139 @@
+"""Parameter maps of packings: in every cell of a grid of packing scene keys (contacts.mu,
+packing.pressure, packing.N, packing.seed, ...), the shear run `bifurcate` makes, summarised
+as docs/packings.md#what-the-tool-finds tabulates it (benchmarks/packing_physics.py's row).
+
+A cell (packing_cell, a dask task as studies/maps.py runs it, raw units) prepares the cell's
+packing, shears it over the scene's strain range passing up to `plastic_events` plastic events
+(packings/shear.py; with `window` only the eigenvalues with Re lambda in it, by sparse
+shift-invert) and summarises the branch (PACKING_COLUMNS):
+  * status: "ok" (the shear reached the range's end), "ended" (it stopped before: `reason`
+    says where and why) or "failed" (no branch: the preparation or the first segment failed;
+    `reason` is its own line);
+  * gamma_end, the strain reached; states, the accepted equilibria; complex_fraction, the
+    fraction of them with at least one complex pair of the matrix (in the window, if one);
+    pairs_mean, the mean number of pairs per state;
+  * sigma_median, sigma_max: the fastest pair's growth rate sigma = |Im sqrt(lambda)| of
+    M^-1 J [1 / time], median over the states with a complex pair, and largest; omega_c =
+    sqrt(k_c / m), k_c = dF_n/ddelta at the typical overlap delta_0 (PackingScene.delta_0), the
+    frequency of one small disk on one typical contact [1 / time], to read them against
+    (sigma / omega_c is comparable across pressures and stiffnesses). None for "J";
+  * collisions located, plastic_events passed, max_drop the largest relative drop of
+    sigma_xy at one, sigma_xy_end the shear stress at the end [force / length];
+  * wall_time [s], the only field that depends on the machine.
+A cell is a pure function of its scene and parameters, as a chain's is (studies/maps.py).
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+
+from diskfriction.scenes.packing import PackingScene
+
+PACKING_COLUMNS = ("status", "gamma_end", "states", "complex_fraction", "pairs_mean",
+                   "sigma_median", "sigma_max", "omega_c", "collisions", "plastic_events",
+                   "max_drop", "sigma_xy_end", "reason", "wall_time")
+"""A packing cell's summary, in table order (raw units; module docstring). None: not computed
+(no branch; no growth rate for J or without complex pairs)."""
+
+SECONDS_PER_STRAIN_N2 = 3.4
+"""A cell's shear costs about this times N^2 seconds per unit strain with full spectra (32
+disks: 21-51 s, 64 disks: 129-161 s to gamma = 0.01 at mu = 10, P = 0.1, docs/packings.md)."""
+
+CELL_START_SECONDS = 4.0
+"""What a cell costs besides its strain: loading the kernels in a fresh worker, the preparation,
+the first spectra (16 disks to gamma = 0.002: 4-9 s)."""
+
+
+@dataclass(frozen=True)
+class PackingMapParams:
+    """What every packing cell runs besides its scene: the shear's matrix ("J" or "M^-1 J"),
+    the spectral window (lo, hi) of Re lambda [raw] or None for every eigenvalue, and the
+    plastic events passed before a cell's shear stops at the next."""
+
+    matrix: str
+    window: Optional[tuple[float, float]] = None
+    plastic_events: int = 1000
+
+
+def packing_cell_seconds(scene: PackingScene, params: PackingMapParams) -> float:
+    """Rough wall time of one cell [s] (CELL_START_SECONDS + SECONDS_PER_STRAIN_N2 N^2 gamma;
+    without a window), for the
+    estimate `map` prints before it starts."""
+    g0, g1 = scene.gamma_range
+    return CELL_START_SECONDS + SECONDS_PER_STRAIN_N2 * scene.N ** 2 * g1
+
+
+def contact_frequency(scene: PackingScene) -> float:
+    """omega_c = sqrt(p k_n delta_0^(p - 1) / m): one small disk on one contact at the typical
+    overlap delta_0 [1 / time] (p = 3/2 for Hertz, 1 for Hooke)."""
+    from diskfriction.scenes.rules import NORMAL_LAWS
+
+    p = float(NORMAL_LAWS[scene.effects.normal])
+    return float(np.sqrt(p * scene.k_n * scene.delta_0 ** (p - 1.0) / scene.m))
+
+
+def growth_rates(branch) -> np.ndarray:
+    """The fastest pair's sigma = |Im sqrt(lambda)| at every state with a complex pair (the
+    tracked eigenvalues only: nan columns of a window left out) [1 / time]."""
+    from diskfriction.packings.dynamics import fastest_pair
+
+    return np.array([fastest_pair(e[np.isfinite(e)])[1]
+                     for e, n in zip(branch.eigenvalues, branch.n_complex) if n > 0])
+
+
+def branch_summary(scene: PackingScene, branch) -> dict:
+    """The PACKING_COLUMNS of a sheared branch but wall_time (module docstring)."""
+    from diskfriction.continuation.branch import StopCode
+
+    sigma = growth_rates(branch) if str(branch.matrix) == "M^-1 J" else np.array([])
+    drops = [(e.stress_before - e.stress_after) / e.stress_before for e in branch.plastic]
+    gamma_end = float(branch.gamma[-1])
+    reason = ""
+    if not branch.status.reached:
+        why = ("a plastic event (a fold in gamma) beyond the plastic events passed"
+               if branch.status.code is StopCode.FOLD else branch.status.sentence(len(branch)))
+        reason = f"shear ended at gamma = {gamma_end:.9g}: {why}"
+    return {"status": "ok" if branch.status.reached else "ended", "gamma_end": gamma_end,
+            "states": len(branch), "complex_fraction": float(np.mean(branch.n_complex > 0)),
+            "pairs_mean": float(np.mean(branch.n_complex)),
+            "sigma_median": float(np.median(sigma)) if sigma.size else None,
+            "sigma_max": float(sigma.max()) if sigma.size else None,
+            "omega_c": contact_frequency(scene), "collisions": len(branch.collisions),
+            "plastic_events": len(branch.plastic), "max_drop": float(max(drops, default=0.0)),
+            "sigma_xy_end": float(branch.stress[-1, 2]), "reason": reason}
+
+
+def packing_cell(scene: PackingScene, params: PackingMapParams) -> dict:
+    """The record of one packing cell (raw units): its scene (physics fields), summary
+    (PACKING_COLUMNS), the located collisions (as bifurcate's collisions.json) and the plastic
+    events [gamma, sigma_xy before, after]."""
+    from dataclasses import replace
+
+    from diskfriction.continuation.arclength import ContinuationError
+    from diskfriction.continuation.spectral_window import WindowCrowded
+    from diskfriction.errors import OneLineError
+    from diskfriction.packings.equilibria import MissedContact
+    from diskfriction.packings.plastic import RelaxationFailed
+    from diskfriction.packings.prepared import prepare_scene
+    from diskfriction.packings.shear import ShearParams, collision_records, shear
+
+    start = time.perf_counter()
+    summary = dict.fromkeys(PACKING_COLUMNS)
+    record = {"scene": scene.physics_fields(), "summary": summary, "collisions": [],
+              "plastic": []}
+    scene = replace(scene, matrix=params.matrix)
+    try:
+        branch = shear(scene, prepare_scene(scene), ShearParams(workers=0),
+                       plastic_events=params.plastic_events, window=params.window)
+    except (ContinuationError, MissedContact, RelaxationFailed, WindowCrowded, OneLineError,
+            np.linalg.LinAlgError) as error:
+        summary |= {"status": "failed", "reason": f"no branch: {error}"}
+    else:
+        summary |= branch_summary(scene, branch)
+        record |= {"collisions": collision_records(branch),
+                   "plastic": [[e.gamma, e.stress_before, e.stress_after] for e in branch.plastic]}
+    summary["wall_time"] = round(time.perf_counter() - start, 3)
+    return record
