@@ -53,7 +53,7 @@ def plot_packing_bands(axis: Axis, cells: list[Cell], records: list[dict], path:
     draw(pairs, [value(s, "pairs_mean") for s in summaries], "complex pairs per state (mean, right)",
          "C0", "s")
     frac.set(ylim=(-0.03, 1.03), ylabel="fraction of states")
-    pairs.set_ylabel("pairs per state")
+    pairs.set(ylim=(0, None), ylabel="pairs per state")
     frac.legend(handles=frac.lines[:1] + pairs.lines[:1], fontsize=7, loc="lower left")
     for column, color, label in (("sigma_median", "C3", "median"), ("sigma_max", "k", "largest")):
         draw(rate, [value(s, column, s["omega_c"] or 1.0) for s in summaries],
