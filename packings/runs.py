@@ -12,7 +12,7 @@ from diskfriction.packings.dynamics import (PackingRun, distance, fastest_pair, 
                                             simulate, time_step)
 from diskfriction.packings.equilibria import PackingEquilibria, row_keys
 from diskfriction.packings.network import Network
-from diskfriction.packings.plastic import relax
+from diskfriction.packings.plastic import RelaxationFailed, relax
 from diskfriction.packings.shear import PackingBranch
 
 KINDS = ("eigenvector", "random-position", "random-velocity", "none")
@@ -49,9 +49,13 @@ class StateRun:
 
     def settled(self, network: Network, f_tol: float) -> "AtRest":
         """Where the run's end relaxes at rest (FIRE on the frictional forces, the history
-        following: packings/plastic.relax), against the state (AtRest)."""
-        q, xi, rows, _ = relax(network, self.run.q[-1], self.run.xi, self.run.rows, self.gamma,
-                               f_tol)
+        following: packings/plastic.relax), against the state (AtRest; NOT_RELAXED where the
+        relaxation fails)."""
+        try:
+            q, xi, rows, _ = relax(network, self.run.q[-1], self.run.xi, self.run.rows,
+                                   self.gamma, f_tol)
+        except RelaxationFailed:
+            return NOT_RELAXED
         before = network.stress(self.q0, self.xi0, self.rows0, self.gamma)[2]
         after = network.stress(q, xi, rows, self.gamma)[2]
         N = network.N
@@ -77,23 +81,27 @@ on 24 disks the runs that only wobbled came back within 7.4e-8, the smallest sli
 class AtRest:
     """A run's end relaxed at rest against the state it started from: the relative change of
     sigma_xy, the largest displacement of a disk [R], and the contacts (delta > 0) that opened
-    and that formed (-1: the relaxation failed)."""
+    and that formed (None, and nan before them: the relaxation failed, NOT_RELAXED)."""
 
     stress_change: float
     moved: float
-    opened: int
-    formed: int
+    opened: int | None
+    formed: int | None
 
     @property
     def outcome(self) -> str:
         """'rearranged': the contact network changed, a plastic event; 'slipped': the same
         contacts, sigma_xy changed by more than SLIPPED (histories reset by sliding); 'came
         back': a wobble; 'not relaxed'."""
-        if self.opened < 0:
+        if self.opened is None:
             return "not relaxed"
         if self.opened + self.formed > 0:
             return "rearranged"
         return "slipped" if abs(self.stress_change) > SLIPPED else "came back"
+
+
+NOT_RELAXED = AtRest(float("nan"), float("nan"), None, None)
+"""Where a run's end did not relax at rest."""
 
 
 def touching(network: Network, q: np.ndarray, rows: np.ndarray, gamma: float) -> list[int]:

@@ -59,3 +59,12 @@ def test_a_complex_pair_grows_at_the_rate_of_the_spectrum(setting):
                    frames=2000)
     fitted, used = growth_rate(run.t, distance(run, branch.q[k], mass), 1e-11, 1e-6)
     assert used >= 20 and abs(fitted / sigma - 1) <= 0.02, (fitted, sigma)
+
+
+def test_a_run_at_rest_is_told_by_its_contacts_then_by_its_stress():
+    from diskfriction.packings.runs import NOT_RELAXED, SLIPPED, AtRest
+
+    assert AtRest(0.0, 0.0, 1, 0).outcome == AtRest(0.0, 0.0, 0, 2).outcome == "rearranged"
+    assert AtRest(-2 * SLIPPED, 1e-3, 0, 0).outcome == "slipped"
+    assert AtRest(0.5 * SLIPPED, 1e-6, 0, 0).outcome == "came back"
+    assert NOT_RELAXED.outcome == "not relaxed" and NOT_RELAXED.opened is None
