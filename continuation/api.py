@@ -28,7 +28,7 @@ import scipy.sparse as sp
 from diskfriction.errors import OneLineError
 
 from .arclength import Callback, ContinuationParams, continuation
-from .bifurcations import SpecialPoint, locate_folds, locate_hopf
+from .bifurcations import CONSERVATIVE, SpecialPoint, conservative, locate_folds, locate_hopf
 from .branch import Branch
 from .collisions import Collision, DetectionParams
 from .differences import (METHODS, ParameterDerivative, StateDerivative, check_complex_step,
@@ -258,6 +258,8 @@ def special_points(problem: Problem, branch: Branch, options: Options):
             found[kind] = tuple(locators[kind]())
         except SegmentSolveError as error:
             warnings.append(f"{kind} points not located: {error}")
+    if "hopf" in options.special_points and _stateless(problem) and conservative(branch.eigenvalues):
+        warnings.append(CONSERVATIVE)
     return found["fold"], found["hopf"], tuple(warnings)
 
 

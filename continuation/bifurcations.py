@@ -5,7 +5,10 @@ the Illinois method along the step's secant segment (segment.py):
   fold  (limit point):  psi(s) = t_p(s), the p component of the unit tangent at x(s)
                         (bordered with the secant), zero where the branch turns back in p;
   Hopf:                 psi(s) = Re lambda(s) of a complex pair (status +1 at both ends),
-                        lambda(s) the upper eigenvalue nearest to the interpolated one.
+                        lambda(s) the upper eigenvalue nearest to the interpolated one;
+                        only where Re goes from clearly below the imaginary axis to clearly
+                        above it or back (relative to max|lambda|, as Im tells complex from
+                        real), and never on a spectrum symmetric under lambda -> -lambda.
 Post hoc means the problem is evaluated after the whole run: only valid for problems whose
 commit hook does nothing (no history carried alongside u).
 """
@@ -20,7 +23,7 @@ from .branch import Branch
 from .newton import tangent
 from .problem import Problem
 from .segment import Segment, refine_sign_change
-from .spectra import DEFAULT_REL_TOL, eigen_status
+from .spectra import DEFAULT_REL_TOL, eigen_status, imag_threshold
 
 Array = np.ndarray
 
@@ -75,24 +78,86 @@ def locate_folds(problem: Problem, branch: Branch, tol_x: float = 1e-9,
     return found
 
 
+SYMMETRY_TOL = 1e-6
+"""A spectrum is taken as symmetric under lambda -> -lambda when every eigenvalue has a partner
+-lambda within SYMMETRY_TOL max|lambda|: above the rounding of a double eigenvalue on the
+imaginary axis (about sqrt(machine epsilon) = 1.5e-8 of the scale, a Jordan block's), far
+below any real part a physical spectrum would call small."""
+
+
+def real_signs(eigvals: Array, rel_tol: float = DEFAULT_REL_TOL) -> Array:
+    """Per eigenvalue: +1 if Re > thr, -1 if Re < -thr, 0 on the imaginary axis up to rounding,
+    thr = rel_tol max|lambda| (the threshold that tells complex from real, spectra.py)."""
+    thr = imag_threshold(eigvals, rel_tol)
+    re = np.real(eigvals)
+    return (re > thr).astype(np.int8) - (re < -thr).astype(np.int8)
+
+
+def symmetric(eigvals: Array, tol: float = SYMMETRY_TOL) -> bool:
+    """Whether lambda -> -lambda maps the spectrum onto itself within tol max|lambda|: the
+    spectrum of a conservative (Hamiltonian or reversible) system written as first order."""
+    lam = np.asarray(eigvals, dtype=complex)
+    lam = lam[np.isfinite(lam)]
+    thr = tol * max(float(np.abs(lam).max(initial=0.0)), np.finfo(float).tiny)
+    gap = np.abs(lam[:, None] + lam[None, :])  # |lambda_i - (-lambda_j)|
+    return bool((gap.min(axis=1) <= thr).all())
+
+
+def conservative(eigenvalues: Array) -> bool:
+    """Whether the branch's spectrum is symmetric under lambda -> -lambda at every point: there
+    a pair leaves the imaginary axis only by colliding with another (flutter), never by
+    crossing it, so a Hopf point is not defined."""
+    return all(symmetric(row) for row in eigenvalues)
+
+
+CONSERVATIVE = ("the tracked spectrum is symmetric under lambda -> -lambda at every point (a "
+                "conservative or reversible system written as first order): a pair leaves the "
+                "imaginary axis only by colliding with another, not by a Hopf crossing, so no "
+                "Hopf point is reported; to locate those collisions track the second-order "
+                "matrix (M^-1 K), whose eigenvalues omega^2 collide on the real axis")
+"""Why locate_hopf reports nothing on a conservative spectrum (a warning of the run)."""
+
+
+def hopf_steps(eigenvalues: Array, rel_tol: float = DEFAULT_REL_TOL) -> list[tuple[int, int]]:
+    """(step k, column i) of every crossing of Re = 0 by tracked eigenvalue i: the upper member
+    of a complex pair at every point from one real part clearly on one side of the imaginary
+    axis (real_signs) to the next clearly on the other; k is the first step of that span over
+    which Re changes sign. Sign changes of real parts within rounding of zero are none."""
+    ev = np.asarray(eigenvalues)
+    upper = np.array([eigen_status(row, rel_tol) > 0 for row in ev])
+    signs = np.array([real_signs(row, rel_tol) for row in ev])
+    found = []
+    for i in range(ev.shape[1]):
+        last = None  # (point, sign) of the last clear real part while the pair lasts
+        for k in range(ev.shape[0]):
+            if not upper[k, i]:
+                last = None
+            elif signs[k, i] != 0:
+                if last is not None and last[1] != signs[k, i]:
+                    re = ev[last[0]:k + 1, i].real
+                    found.append((last[0] + int(np.flatnonzero(re[:-1] * re[1:] <= 0)[0]), i))
+                last = (k, signs[k, i])
+    return sorted(found)
+
+
 def locate_hopf(problem: Problem, branch: Branch, tol_p: float = 1e-10, rel_tol: float = DEFAULT_REL_TOL,
                 newton_tol: float = 1e-12, max_newton: int = 10) -> list[SpecialPoint]:
-    """Hopf points: a tracked eigenvalue with Im > thr at both ends of a step whose real part
-    changes sign; refined until |dp| <= tol_p."""
+    """Hopf points: a tracked complex pair whose real part crosses zero (hopf_steps), refined
+    until |dp| <= tol_p. None on a conservative spectrum (conservative: see CONSERVATIVE)."""
     found = []
     ev = branch.eigenvalues
-    for k in range(len(branch) - 1):
-        upper = (eigen_status(ev[k], rel_tol) > 0) & (eigen_status(ev[k + 1], rel_tol) > 0)
-        for i in np.flatnonzero(upper & (np.sign(ev[k].real) * np.sign(ev[k + 1].real) < 0)):
-            lam_a, lam_b = ev[k, i], ev[k + 1, i]
+    if conservative(ev):
+        return found
+    for k, i in hopf_steps(ev, rel_tol):
+        lam_a, lam_b = ev[k, i], ev[k + 1, i]
 
-            def pair(x: Array, s: float) -> complex:
-                lam = problem.spectrum(x[:-1], x[-1])
-                lam = lam[lam.imag > 0]
-                return complex(lam[np.argmin(np.abs(lam - (lam_a + s * (lam_b - lam_a))))])
+        def pair(x: Array, s: float) -> complex:
+            lam = problem.spectrum(x[:-1], x[-1])
+            lam = lam[lam.imag > 0]
+            return complex(lam[np.argmin(np.abs(lam - (lam_a + s * (lam_b - lam_a))))])
 
-            x, bracket = _locate(problem, branch, k, lambda seg, x, s: pair(x, s).real,
-                                 tol_p, newton_tol, max_newton, by_x=False)
-            value = pair(x, 0.5)
-            found.append(SpecialPoint("hopf", float(x[-1]), x[:-1], bracket, k, value))
+        x, bracket = _locate(problem, branch, k, lambda seg, x, s: pair(x, s).real,
+                             tol_p, newton_tol, max_newton, by_x=False)
+        value = pair(x, 0.5)
+        found.append(SpecialPoint("hopf", float(x[-1]), x[:-1], bracket, k, value))
     return found
