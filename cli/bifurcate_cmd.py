@@ -32,7 +32,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_matrix_argument(parser, "stability matrix")
     parser.add_argument("--out", metavar="DIR", help="output directory (default: out/bifurcate/SCENE)")
     parser.add_argument("--ds-max", type=float, metavar="DS",
-                        help="largest arclength step (default: span / 60)")
+                        help="largest arclength step (default: a chain scene's F_x span / 60; "
+                             "with --problem the file's options.ds_max, else its p span / 50)")
     parser.add_argument("--detection", default="fast", metavar="fast|exhaustive",
                         help="collision detection: fast (eigenvalue slopes, Hermite "
                              "certification, Newton locator; the default) or exhaustive "

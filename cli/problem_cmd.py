@@ -56,7 +56,8 @@ def _error_line(path: Path, error: BaseException) -> str:
 def import_file(path: Path):
     """The module of the user's file `path`, imported under a name of its own; a CommandError
     (one line, exit 2) if it is missing, not .py, or raises while importing. Warnings it
-    raises are printed, one line each."""
+    raises are printed, one line each, but the DerivativeWarnings of its problems: only the
+    problem that runs says its own (run_problem)."""
     if not path.is_file():
         raise _fail(path, "no such file")
     if path.suffix != ".py":
@@ -77,8 +78,11 @@ def import_file(path: Path):
         raise _fail(path, f"failed to import: {_error_line(path, error)}") from None
     finally:
         sys.path.remove(str(path.resolve().parent))
-    for w in caught:
-        warn(f"{path}: {w.message}")
+    from diskfriction.continuation.differences import DerivativeWarning
+
+    for w in caught:  # a problem's derivative warning is said for the one that runs (run_problem)
+        if not issubclass(w.category, DerivativeWarning):
+            warn(f"{path}: {w.message}")
     return module
 
 
@@ -116,6 +120,10 @@ def run_problem(args: argparse.Namespace) -> int:
         number("bifurcate", "ds-max", args.ds_max)
     path, name, spec = load_problem(args.problem)
     label = f"{path}:{name}"
+    from diskfriction.continuation.differences import differenced
+
+    if differenced(spec.problem) is not None:
+        warn(f"{label}: {differenced(spec.problem)}")
     if span is None and spec.p_span is None:
         raise CommandError(f"bifurcate error: --p: needed, {label} has no p_span")
     span = span or spec.p_span

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
-from typing import Callable
+from typing import Callable, Optional
 
 import numpy as np
 
@@ -95,12 +95,25 @@ class ParameterDerivative:
         return partial(lambda z: self.G(u, z), float(p), self.method).reshape(-1)
 
 
+def differences_line(names: list[str], method: str) -> str:
+    """What a DerivativeWarning says: the derivatives computed by `method`, their accuracy."""
+    return (f"{' and '.join(names)} not given: computed by {method} differences, "
+            f"accurate {ACCURACY[method]} (docs/api.md, Derivatives)")
+
+
 def warn_differences(names: list[str], method: str) -> None:
     """One DerivativeWarning naming the derivatives computed by `method` and their accuracy."""
     if names:
-        warnings.warn(f"{' and '.join(names)} not given: computed by {method} differences, "
-                      f"accurate {ACCURACY[method]} (docs/api.md, Derivatives)",
-                      DerivativeWarning, stacklevel=3)
+        warnings.warn(differences_line(names, method), DerivativeWarning, stacklevel=3)
+
+
+def differenced(problem) -> Optional[str]:
+    """The DerivativeWarning's line of a problem whose dG/du or dG/dp are computed by
+    differences (problem_from_functions without them), or None."""
+    found = [(name, f.method) for name, f in (("dG/du", getattr(problem, "G_u", None)),
+                                              ("dG/dp", getattr(problem, "G_p", None)))
+             if isinstance(f, (StateDerivative, ParameterDerivative))]
+    return differences_line([n for n, _ in found], found[0][1]) if found else None
 
 
 def check_complex_step(G: Callable[[Array, float], Array], u: Array, p: float) -> None:

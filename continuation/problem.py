@@ -40,6 +40,7 @@ from dataclasses import dataclass
 from typing import Callable, Optional
 
 import numpy as np
+import scipy.sparse as sp
 
 from .linalg import dense
 from .spectra import Eigensystem, eigensystem
@@ -108,7 +109,7 @@ class FunctionProblem(Problem):
         return np.asarray(self.G(u, p), dtype=float)
 
     def jacobian(self, u, p):
-        return np.atleast_2d(np.asarray(self.G_u(u, p), dtype=float))
+        return matrix(self.G_u(u, p))
 
     def dG_dp(self, u, p):
         return np.asarray(self.G_p(u, p), dtype=float).reshape(-1)
@@ -116,4 +117,12 @@ class FunctionProblem(Problem):
     def stability_matrix(self, u, p):
         if self.A is None:
             return self.jacobian(u, p)
-        return np.atleast_2d(np.asarray(self.A(u, p), dtype=float))
+        return matrix(self.A(u, p))
+
+
+def matrix(M):
+    """A user's matrix as the core takes it: a scipy.sparse one as a float CSR matrix (SuperLU
+    factorizes it, spectra take it dense), anything else as a 2-D float ndarray."""
+    if sp.issparse(M):
+        return sp.csr_array(M, dtype=float)
+    return np.atleast_2d(np.asarray(M, dtype=float))

@@ -185,3 +185,41 @@ def test_a_branch_that_folds_back_out_of_its_span_exits_1_with_one_line(tmp_path
     assert " p 1 -> " in first and first.split(" -> ")[2].startswith("1,")  # back to 1
     assert abs(float(first.split(" -> ")[1])) < 1e-9  # through the located fold
     assert (out / "branch.npz").exists()
+
+
+def test_only_the_problem_that_runs_says_its_derivatives_are_differenced(tmp_path, capsys):
+    """Two problems without derivatives in one file: one warning line, naming the one run."""
+    path = tmp_path / "two.py"
+    path.write_text(HEADER + textwrap.dedent("""
+        def make():
+            return BifurcationProblem(problem_from_functions(lambda u, p: u - p),
+                                      u0=np.zeros(2), p_span=(0, 1))
+        first, second = make(), make()
+    """))
+    assert main(["bifurcate", "--problem", f"{path}:second", "--out", str(tmp_path / "o")]) == 0
+    lines = [line for line in capsys.readouterr().err.splitlines() if "warning" in line]
+    assert len(lines) == 1 and f"{path}:second: dG/du and dG/dp not given" in lines[0]
+
+
+def test_a_sparse_jacobian_gives_the_branch_of_the_dense_one():
+    """Bratu's discrete problem, u'' + lambda e^u = 0 on n = 40 points, with dG/du as a
+    scipy.sparse matrix (refused before, 'setting an array element with a sequence') and as
+    its dense array: the same points and the same fold."""
+    import scipy.sparse as sp
+
+    from diskfriction.continuation import Options, problem_from_functions, solve_branch
+
+    n = 40
+    L = sp.diags([np.ones(n - 1), -2.0 * np.ones(n), np.ones(n - 1)], [-1, 0, 1]) * (n + 1) ** 2
+
+    def run(dG_du):
+        problem = problem_from_functions(lambda u, lam: L @ u + lam * np.exp(u), dG_du=dG_du,
+                                         dG_dp=lambda u, lam: np.exp(u))
+        return solve_branch(problem, np.zeros(n), (0.0, 3.6),
+                            Options(ds_max=0.5, max_steps=40, special_points=("fold",)))
+
+    sparse = run(lambda u, lam: (L + sp.diags(lam * np.exp(u))).tocsr())
+    dense = run(lambda u, lam: (L + sp.diags(lam * np.exp(u))).toarray())
+    assert len(sparse.folds) == len(dense.folds) == 1 and 3.4 < sparse.folds[0].p < 3.6
+    assert abs(sparse.folds[0].p - dense.folds[0].p) <= 1e-10
+    assert sparse.p.size == dense.p.size and np.allclose(sparse.u, dense.u, rtol=0, atol=1e-9)
