@@ -52,6 +52,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--problem", metavar="FILE.py[:NAME]",
                         help="continue the BifurcationProblem NAME (default: problem) defined in "
                              "the Python file FILE.py instead of a scene (docs/api.md)")
+    parser.add_argument("--switch", metavar="K[:-1]",
+                        help="with --problem: follow the second branch through the run's K-th "
+                             "branch point (1: the first) toward B instead; :-1 takes its other "
+                             "half (docs/api.md, Branch points)")
     parser.add_argument("--p", metavar="A:B",
                         help="with --problem: continue the problem's parameter from A to B "
                              "(default: the problem's p_span)")
@@ -106,6 +110,8 @@ def run(args: argparse.Namespace) -> int:
         return run_problem(args)
     if args.p is not None:
         raise CommandError("bifurcate error: --p: only with --problem FILE.py (a scene's load is --fx)")
+    if args.switch is not None:
+        raise CommandError(f"bifurcate error: --switch: only with --problem FILE.py (got {args.switch!r})")
     window = parse_window(args.window) if args.window is not None else None
     if window is not None and not detector.window:
         raise CommandError("bifurcate error: --window: needs the fast detection (eigenvalue "

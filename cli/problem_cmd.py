@@ -116,6 +116,7 @@ def run_problem(args: argparse.Namespace) -> int:
     from diskfriction.cli.bifurcate_cmd import parse_range
 
     span = parse_range(args.p, "p", nonnegative=False) if args.p is not None else None
+    switch = parse_switch(args.switch) if args.switch is not None else None
     if args.ds_max is not None:
         number("bifurcate", "ds-max", args.ds_max)
     path, name, spec = load_problem(args.problem)
@@ -137,11 +138,26 @@ def run_problem(args: argparse.Namespace) -> int:
     options = replace(spec.options, detection=replace(spec.options.detection, mode=args.detection),
                       workers=spec.options.workers if args.workers is None else args.workers,
                       ds_max=args.ds_max or spec.options.ds_max)
-    return _continue(spec, label, span, options, out, args.json)
+    return _continue(spec, label, span, options, out, args.json, switch)
 
 
-def _continue(spec, label: str, span, options, out: Path, as_json: bool) -> int:
-    """Check the problem at the start, continue it, write and print the results."""
+def parse_switch(text: str) -> tuple[int, int]:
+    """'K' or 'K:-1' -> (K - 1, side), K >= 1; else a one-line CommandError."""
+    number_, _, side = text.partition(":")
+    try:
+        k, side = int(number_), int(side or 1)
+    except ValueError:
+        k = side = 0
+    if k < 1 or side not in (1, -1):
+        raise CommandError(f"bifurcate error: --switch: expected K or K:-1, K >= 1 the branch "
+                           f"point's number (got {text!r})")
+    return k - 1, side
+
+
+def _continue(spec, label: str, span, options, out: Path, as_json: bool,
+              switch: tuple[int, int] | None = None) -> int:
+    """Check the problem at the start, continue it (with `switch`, (k, side): then the second
+    branch through its branch point k, switch_branch), write and print the results."""
     import json
 
     from diskfriction.continuation.api import ProblemError, check_problem, solve_branch
@@ -169,8 +185,12 @@ def _continue(spec, label: str, span, options, out: Path, as_json: bool) -> int:
         progress.stage(f"continuation {spec.parameter} {a:g} -> {b:g}")
         try:
             result = solve_branch(spec.problem, u0, span, options, callback=on_point)
+            if switch is not None:
+                result = _switched(spec, label, result, switch, b, options, progress, on_point)
         except ContinuationError as error:
             raise CommandError(f"bifurcate error: {label}: {error}", EXIT_FAILED) from None
+        except CommandError:
+            raise
         except Exception as error:  # noqa: BLE001 - the user's functions run inside the core
             raise CommandError(f"bifurcate error: {label}: the run stopped at {spec.parameter} = "
                                f"{reached['p']:.10g}: {type(error).__name__}: {error}", EXIT_FAILED) from None
@@ -185,6 +205,9 @@ def _continue(spec, label: str, span, options, out: Path, as_json: bool) -> int:
         print(json.dumps([{k: r[k] for k in (spec.parameter, "kind", "lambda_re", "lambda_im", "matrix")}
                           for r in records], indent=1))
     else:
+        if switch is not None:
+            print(f"the second branch through branch point {switch[0] + 1}"
+                  f"{' (its other half)' if switch[1] < 0 else ''}:")
         _print_summary(result, spec, out)
     if not result.success:
         raise CommandError(f"bifurcate error: {label}: the branch did not reach {spec.parameter} = "
@@ -194,17 +217,37 @@ def _continue(spec, label: str, span, options, out: Path, as_json: bool) -> int:
     return 0
 
 
+def _switched(spec, label: str, result, switch: tuple[int, int], p_stop: float, options,
+              progress: Progress, on_point):
+    """The second branch through branch point switch[0] of `result`, toward p_stop; a one-line
+    CommandError (exit 1) when the run has no such branch point."""
+    from diskfriction.continuation.api import switch_branch
+
+    k, side = switch
+    points = result.branch_points
+    if k >= len(points):
+        raise CommandError(f"bifurcate error: --switch: the branch has {len(points)} branch "
+                           f"point{'s' if len(points) != 1 else ''}, so none numbered {k + 1} "
+                           f"({label})", EXIT_FAILED)
+    progress.stage(f"switching at the branch point {spec.parameter} = {points[k].p:.10g} "
+                   f"toward {p_stop:g}")
+    return switch_branch(spec.problem, result, k, p_stop, options, side=side, callback=on_point)
+
+
 def _print_summary(result, spec, out: Path) -> None:
     """What was reached and located, in the problem's names and units."""
+    from diskfriction.reports.problem import special_points
+
     units = f" {spec.units}" if spec.units else ""
     print(f"{count(len(result.p), 'point')}, {spec.parameter} {path(result.p, [f.p for f in result.folds])}{units}, max residual "
           f"{result.branch.residual.max():.1e}, status {result.message}")
     print(f"{count(len(result.collisions), 'collision')} ({spec.matrix}):")
     for c in result.collisions:
         print(f"  {c.kind:5s}  {spec.parameter} = {c.p:.12g}{units}  lambda = {c.eigenvalue:.9g}")
-    for s in result.folds + result.hopf:
-        value = "" if s.kind == "fold" else f"  lambda = {complex(s.value):.6g}"
-        print(f"  {s.kind:5s}  {spec.parameter} = {s.p:.12g}{units}{value}")
+    for s in special_points(result):
+        value = f"  lambda = {complex(s.value):.6g}" if s.kind == "hopf" else ""
+        what = "branch point" if s.kind == "branch" else s.kind
+        print(f"  {what:5s}  {spec.parameter} = {s.p:.12g}{units}{value}")
     for line in result.warnings[:SHOWN_WARNINGS]:
         print(f"  warning: {line}")
     if len(result.warnings) > SHOWN_WARNINGS:

@@ -11,7 +11,7 @@ The core underneath:
     branch = continuation(problem, u0, p0, ContinuationParams(...), DetectionParams(...))
 """
 from .api import (BifurcationProblem, BranchResult, Options, ProblemError, check_problem,
-                  problem_from_functions, problem_from_sympy, solve_branch)
+                  problem_from_functions, problem_from_sympy, solve_branch, switch_branch)
 from .arclength import ContinuationError, ContinuationParams, continuation
 from .bifurcations import SpecialPoint
 from .branch import Branch, Stop, StopCode
@@ -25,5 +25,5 @@ __all__ = [
     "ContinuationParams", "DerivativeWarning", "DetectionParams", "FunctionProblem", "Options",
     "Problem", "ProblemError", "SpecialPoint", "Stop", "StopCode", "check_problem", "continuation",
     "count_complex_pairs", "eigen_status", "match_eigenvalues", "problem_from_functions",
-    "problem_from_sympy", "solve_branch", "track",
+    "problem_from_sympy", "solve_branch", "switch_branch", "track",
 ]

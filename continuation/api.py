@@ -27,12 +27,14 @@ import scipy.sparse as sp
 
 from diskfriction.errors import OneLineError
 
-from .arclength import Callback, ContinuationParams, continuation
-from .bifurcations import CONSERVATIVE, SpecialPoint, conservative, locate_folds, locate_hopf
+from .arclength import Callback, ContinuationError, ContinuationParams, continuation
+from .bifurcations import (CONSERVATIVE, SpecialPoint, branch_point_steps, conservative,
+                           locate_branch_points, locate_folds, locate_hopf, other_direction)
 from .branch import Branch
 from .collisions import Collision, DetectionParams
 from .differences import (METHODS, ParameterDerivative, StateDerivative, check_complex_step,
                           warn_differences)
+from .newton import bordered_newton
 from .problem import FunctionProblem, Problem
 from .segment import SegmentSolveError
 
@@ -82,6 +84,10 @@ def problem_from_sympy(G: Sequence, u: Sequence, p, *, A=None,
     return FunctionProblem(kernels.residual, kernels.jacobian, kernels.dG_dp, kernels.stability)
 
 
+SPECIAL_POINTS = ("fold", "branch", "hopf")
+"""What solve_branch can locate after the run (Options.special_points)."""
+
+
 @dataclass(frozen=True)
 class Options:
     """Options of solve_branch (steps in the Euclidean arclength of x = (u, p)).
@@ -93,7 +99,8 @@ class Options:
     (collisions.DetectionParams: collisions located to |dp| <= tol_p = 1e-10); workers:
     processes scanning steps while the branch goes on (None: automatic; 0: inline;
     arclength.continuation);
-    special_points: what to locate after the run (bifurcations.py), "fold" and/or "hopf";
+    special_points: what to locate after the run (bifurcations.py): "fold", "branch" (simple
+    branch points, where a second branch crosses: switch_branch follows it) and/or "hopf";
     a Hopf point is where a complex pair of the tracked matrix crosses Re = 0, a Hopf
     bifurcation when that matrix is the Jacobian of u' = G(u, p): leave "hopf" out for any
     other (e.g. M^-1 K, whose eigenvalues are omega^2). Nothing is located for a problem with a
@@ -109,7 +116,7 @@ class Options:
     max_steps: int = ContinuationParams.max_steps
     detection: DetectionParams = DetectionParams()
     workers: Optional[int] = None
-    special_points: tuple[str, ...] = ("fold", "hopf")
+    special_points: tuple[str, ...] = ("fold", "branch", "hopf")
     stop_at_fold: bool = False
 
     def __post_init__(self):
@@ -119,8 +126,9 @@ class Options:
                 raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
         if self.max_newton < 1 or self.max_steps < 1:
             raise ValueError("max_newton and max_steps must be >= 1")
-        if not set(self.special_points) <= {"fold", "hopf"}:
-            raise ValueError(f"special_points may hold 'fold' and 'hopf', got {self.special_points!r}")
+        if not set(self.special_points) <= set(SPECIAL_POINTS):
+            raise ValueError(f"special_points may hold {', '.join(map(repr, SPECIAL_POINTS))}, "
+                             f"got {self.special_points!r}")
 
     def params(self, p_start: float, p_stop: float) -> ContinuationParams:
         """The core's ContinuationParams for the span p_start -> p_stop."""
@@ -141,7 +149,8 @@ class BranchResult:
     branch: the core's Branch (branch.py): one row per accepted point, p (m,), u (m, n),
     eigenvalues (m, n_A) tracked (column i is one eigenvalue followed along the branch),
     n_complex (m,), residual (m,), tangent, status (branch.Stop), and the located collisions;
-    folds, hopf: bifurcations.SpecialPoint (p, u, bracket, step, value) in branch order;
+    folds, hopf, branch_points: bifurcations.SpecialPoint (p, u, bracket, step, value) in
+    branch order;
     warnings: the detector's and the locators'.
     Shortcuts: p, u, eigenvalues, collisions (collisions.Collision: p, kind Kind.BIRTH | Kind.DEATH,
     the double eigenvalue, its Jordan chain, bracket), success (the branch reached the end
@@ -151,6 +160,7 @@ class BranchResult:
     folds: tuple[SpecialPoint, ...] = ()
     hopf: tuple[SpecialPoint, ...] = ()
     warnings: tuple[str, ...] = ()
+    branch_points: tuple[SpecialPoint, ...] = ()
 
     @property
     def p(self) -> Array:
@@ -244,23 +254,27 @@ def _stateless(problem: Problem) -> bool:
 
 
 def special_points(problem: Problem, branch: Branch, options: Options):
-    """(folds, hopf, warnings) of a finished branch of a stateless problem, as options.special_points
-    asks (bifurcations.py): folds to |dx| <= 1e-9, Hopf points to |dp| <= detection.tol_p, their
+    """(folds, hopf, warnings, branch_points) of a finished branch of a stateless problem, as
+    options.special_points asks (bifurcations.py): folds and branch points to |dx| <= 1e-9 (a
+    step over a branch point is none of its folds), Hopf points to |dp| <= detection.tol_p, their
     points solved to max|G| <= newton_tol / 100 (with the branch's own tolerance a fold's p
     would be off by up to ~newton_tol / |dG/dp|)."""
     tol = LOCATOR_TOL * options.newton_tol
-    locators = {"fold": lambda: locate_folds(problem, branch, newton_tol=tol),
+    asked = options.special_points if _stateless(problem) else ()
+    crossings = branch_point_steps(problem, branch) if "branch" in asked else []
+    locators = {"fold": lambda: locate_folds(problem, branch, newton_tol=tol, skip=tuple(crossings)),
+                "branch": lambda: locate_branch_points(problem, branch, crossings, newton_tol=tol),
                 "hopf": lambda: locate_hopf(problem, branch, tol_p=options.detection.tol_p,
                                             rel_tol=options.detection.rel_tol, newton_tol=tol)}
-    found, warnings = {"fold": (), "hopf": ()}, []
-    for kind in options.special_points if _stateless(problem) else ():
+    found, warnings = dict.fromkeys(SPECIAL_POINTS, ()), []
+    for kind in asked:
         try:
             found[kind] = tuple(locators[kind]())
         except SegmentSolveError as error:
             warnings.append(f"{kind} points not located: {error}")
-    if "hopf" in options.special_points and _stateless(problem) and conservative(branch.eigenvalues):
+    if "hopf" in asked and conservative(branch.eigenvalues):
         warnings.append(CONSERVATIVE)
-    return found["fold"], found["hopf"], tuple(warnings)
+    return found["fold"], found["hopf"], tuple(warnings), found["branch"]
 
 
 def solve_branch(problem: Problem, u0, p_span, options: Options = Options(), *,
@@ -280,8 +294,51 @@ def solve_branch(problem: Problem, u0, p_span, options: Options = Options(), *,
     u0 = check_problem(problem, u0, p_start)
     branch = continuation(problem, u0, p_start, params, options.detection, workers=options.workers,
                           callback=callback)
-    folds, hopf, warnings = special_points(problem, branch, options)
-    return BranchResult(branch, folds, hopf, branch.warnings + warnings)
+    folds, hopf, warnings, branch_points = special_points(problem, branch, options)
+    return BranchResult(branch, folds, hopf, branch.warnings + warnings, branch_points)
+
+
+def switch_branch(problem: Problem, result: BranchResult, k: int, p_stop: float,
+                  options: Options = Options(), *, side: int = 1,
+                  callback: Optional[Callback] = None) -> BranchResult:
+    """Follow the second branch through result.branch_points[k] from there to p_stop.
+
+    Its direction at the point is the null direction of [G_u, G_p] orthogonal to the found
+    branch (bifurcations.other_direction). A first point one step (options' ds) along it is
+    solved with the arclength constraint normal to that direction, on the half of the second
+    branch that moves p toward p_stop; where neither half does (a pitchfork: the second branch
+    leaves with dp = 0 and both halves bend the same way), the half toward the direction's
+    largest component, and with `side` = -1 the other. The branch is continued from that
+    point by solve_branch (the same options). ValueError for a k that names no branch point or
+    a side other than +-1; ContinuationError if no first point converges."""
+    if not 0 <= k < len(result.branch_points):
+        raise ValueError(f"branch point {k} asked for; the branch has "
+                         f"{len(result.branch_points)} (numbered from 0)")
+    if side not in (1, -1):
+        raise ValueError(f"side must be 1 or -1, got {side!r}")
+    point = result.branch_points[k]
+    x = result.branch.x
+    along = x[point.step + 1] - x[point.step]
+    phi = other_direction(problem, point, along / np.linalg.norm(along))
+    phi = side * (phi if phi[np.argmax(np.abs(phi))] > 0 else -phi)
+    params = options.params(point.p, p_stop)
+    x_star = np.append(point.u, point.p)
+    halves = [bordered_newton(problem, x_star + params.ds * d, d, params.newton_tol,
+                              params.max_newton) for d in (phi, -phi)]
+    ahead = [h for h in halves if h.converged and (h.x[-1] - point.p) * (p_stop - point.p)
+             > FLAT_IN_P * params.ds]
+    first = ahead[0] if ahead else halves[0]
+    if not first.converged:
+        raise ContinuationError(f"no point of the second branch one step (ds = {params.ds:g}) "
+                                f"from the branch point at p = {point.p:.12g}: the corrector "
+                                f"stopped at residual {first.residual:.2e}")
+    return solve_branch(problem, first.x[:-1], (float(first.x[-1]), p_stop), options,
+                        callback=callback)
+
+
+FLAT_IN_P = 1e-6
+"""A first point whose p moved by less than this times the step toward p_stop does not move p
+(a pitchfork's, which moves p by O(ds^2)): switch_branch then keeps the half `side` names."""
 
 
 Start = Union[Sequence[float], Array, Callable[[float], Array]]

@@ -1,9 +1,11 @@
-"""Folds and Hopf points of a finished branch, located post hoc.
+"""Folds, branch points and Hopf points of a finished branch, located post hoc.
 
 Both are sign changes of a smooth test function between accepted points k, k+1, refined by
 the Illinois method along the step's secant segment (segment.py):
   fold  (limit point):  psi(s) = t_p(s), the p component of the unit tangent at x(s)
                         (bordered with the secant), zero where the branch turns back in p;
+  branch point:         psi(s) = det [[G_u, G_p], [sigma^T]] at x(s), sigma the step's
+                        secant, zero where a second branch crosses (branch_point_steps);
   Hopf:                 psi(s) = Re lambda(s) of a complex pair (status +1 at both ends),
                         lambda(s) the upper eigenvalue nearest to the interpolated one;
                         only where Re goes from clearly below the imaginary axis to clearly
@@ -20,7 +22,8 @@ from typing import Callable
 import numpy as np
 
 from .branch import Branch
-from .newton import tangent
+from .linalg import dense, log_determinant
+from .newton import bordered_matrix, tangent
 from .problem import Problem
 from .segment import Segment, refine_sign_change
 from .spectra import DEFAULT_REL_TOL, eigen_status, imag_threshold
@@ -30,7 +33,7 @@ Array = np.ndarray
 
 @dataclass(frozen=True)
 class SpecialPoint:
-    """kind "fold" | "hopf"; p, u at the located point; bracket (p_lo, p_hi) of the final
+    """kind "fold" | "hopf" | "branch" (a simple branch point); p, u at the located point; bracket (p_lo, p_hi) of the final
     Illinois bracket; step k of the branch step containing it; value: 0 for a fold, the
     eigenvalue (~ i omega) for a Hopf point."""
 
@@ -64,15 +67,71 @@ def _locate(problem: Problem, branch: Branch, k: int, psi: Callable[[Segment, Ar
     return x, (min(pts[lo][-1], pts[hi][-1]), max(pts[lo][-1], pts[hi][-1]))
 
 
+def bordered_determinant(problem: Problem, x: Array, border: Array) -> float:
+    """det [[G_u, G_p], [b^T]] at x = (u, p), as sign |det|^(1 / (n + 1)): a continuous
+    function of x with the determinant's signs and zeros, of moderate size whatever n."""
+    sign, logabs = log_determinant(bordered_matrix(problem, x, border))
+    return float(sign * np.exp(logabs / x.size))
+
+
+def branch_point_steps(problem: Problem, branch: Branch) -> list[int]:
+    """The steps k over which the branch passes a simple branch point: the determinant of
+    [[G_u, G_p], [sigma^T]], sigma the step's unit secant, changes sign between its ends.
+    On a regular branch it is (sigma . t) det [[G_u, G_p], [t^T]] with t the oriented unit
+    tangent, of one sign along the branch and through a fold (where det G_u changes sign);
+    it changes sign where a second branch crosses (dim ker [G_u, G_p] = 2)."""
+    x = branch.x
+    steps = []
+    for k in range(len(branch) - 1):
+        d = x[k + 1] - x[k]
+        sigma = d / np.linalg.norm(d)
+        if bordered_determinant(problem, x[k], sigma) * bordered_determinant(problem, x[k + 1], sigma) < 0:
+            steps.append(k)
+    return steps
+
+
+def locate_branch_points(problem: Problem, branch: Branch, steps: list[int], tol_x: float = 1e-12,
+                         newton_tol: float = 1e-12, max_newton: int = 10) -> list[SpecialPoint]:
+    """Branch points: the sign change of bordered_determinant over each of `steps`
+    (branch_point_steps), refined until |x_hi - x_lo| <= tol_x (kind "branch", value 0)."""
+    def psi(seg: Segment, x: Array, s: float) -> float:
+        return bordered_determinant(problem, x, seg.sigma)
+
+    found = []
+    for k in steps:
+        x, bracket = _locate(problem, branch, int(k), psi, tol_x, newton_tol, max_newton, by_x=True)
+        found.append(SpecialPoint("branch", float(x[-1]), x[:-1], bracket, int(k), 0.0))
+    return found
+
+
+def other_direction(problem: Problem, point: SpecialPoint, along: Array) -> Array:
+    """The unit direction in x = (u, p) of the second branch through the branch point `point`:
+    the null space of [G_u, G_p] there is two-dimensional (its two right singular vectors of
+    smallest singular value), and the direction in it orthogonal to `along`, the tangent of
+    the branch that found the point. As AUTO and BifurcationKit start their branch switching:
+    exact for a pitchfork (the branches cross at right angles in the metric of x), the start of
+    a corrector that lands on the other branch for a transcritical crossing."""
+    u, p = point.u, point.p
+    G_x = np.column_stack([dense(problem.jacobian(u, p)), problem.dG_dp(u, p)])
+    kernel = np.linalg.svd(G_x)[2][-2:]  # rows: the two right singular vectors nearest null
+    c = kernel @ along
+    phi = kernel.T @ np.array([-c[1], c[0]])
+    return phi / np.linalg.norm(phi)
+
+
 def locate_folds(problem: Problem, branch: Branch, tol_x: float = 1e-9,
-                 newton_tol: float = 1e-12, max_newton: int = 10) -> list[SpecialPoint]:
+                 newton_tol: float = 1e-12, max_newton: int = 10,
+                 skip: tuple[int, ...] = ()) -> list[SpecialPoint]:
     """Folds: sign changes of t_p between accepted points, refined until |x_hi - x_lo| <= tol_x.
-    Since p is quadratic in arclength at a fold, |p - p_fold| ~ |p''| tol_x^2 / 2."""
+    Since p is quadratic in arclength at a fold, |p - p_fold| ~ |p''| tol_x^2 / 2. Steps in
+    `skip` are left out: a branch point where the branch also turns in p (a pitchfork seen
+    from its symmetric branch) is a branch point, not a fold."""
     def psi(seg: Segment, x: Array, s: float) -> float:
         return float(tangent(problem, x, seg.sigma)[-1])
 
     found = []
-    for k in np.flatnonzero(np.sign(branch.tangent[:-1, -1]) * np.sign(branch.tangent[1:, -1]) < 0):
+    turns = np.flatnonzero(np.sign(branch.tangent[:-1, -1]) * np.sign(branch.tangent[1:, -1]) < 0)
+    for k in (k for k in turns if k not in skip):
         x, bracket = _locate(problem, branch, int(k), psi, tol_x, newton_tol, max_newton, by_x=True)
         found.append(SpecialPoint("fold", float(x[-1]), x[:-1], bracket, int(k), 0.0))
     return found

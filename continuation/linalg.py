@@ -184,6 +184,32 @@ def _empty_line(M: sp.csc_array) -> Optional[str]:
     return None
 
 
+def log_determinant(M: Matrix) -> tuple[float, float]:
+    """(sign, log|det M|) of a dense or sparse square M by LU (sign 0 and -inf if singular)."""
+    if not sp.issparse(M):
+        sign, logabs = np.linalg.slogdet(np.asarray(M, dtype=float))
+        return float(sign), float(logabs)
+    try:
+        lu = spla.splu(sp.csc_array(M))
+    except RuntimeError:  # exactly singular
+        return 0.0, -np.inf
+    diagonal = lu.U.diagonal()
+    sign = np.prod(np.sign(diagonal)) * _parity(lu.perm_r) * _parity(lu.perm_c)
+    return float(sign), float(np.sum(np.log(np.abs(diagonal))))
+
+
+def _parity(permutation: Array) -> int:
+    """+1 for an even permutation, -1 for an odd one (from its cycles)."""
+    seen, sign = np.zeros(permutation.size, bool), 1
+    for start in range(permutation.size):
+        length, k = 0, start
+        while not seen[k]:
+            seen[k], k, length = True, permutation[k], length + 1
+        if length % 2 == 0 and length > 0:
+            sign = -sign
+    return sign
+
+
 def solve(M: Matrix, rhs: Array) -> Array:
     """M^-1 rhs by one factorization."""
     return factorize(M).solve(rhs)

@@ -5,7 +5,7 @@ The same files as the disks' (reports/bifurcation.py), with the parameter's name
 disks have F_x: branch.npz holds the parameter's values under its name, u, eigenvalues,
 n_complex, residual, and the strings parameter, units, matrix; collisions.json one record per
 collision keyed by the parameter's name (bifurcation.collision_record); special_points.json
-the folds and Hopf points.
+the folds, branch points and Hopf points.
 """
 from __future__ import annotations
 
@@ -24,8 +24,8 @@ BRANCH_KEYS = ("u", "eigenvalues", "n_complex", "residual", "parameter", "units"
 """The arrays of branch.npz besides the parameter's values."""
 RESERVED = frozenset(BRANCH_KEYS + RECORD_KEYS + ("value_re", "value_im"))
 """Names a parameter cannot have: they key the other entries of the files."""
-FOLD, HOPF = ("s", "k"), ("*", "C0")
-"""Marker and colour of a fold and of a Hopf point on the diagram."""
+FOLD, BRANCH, HOPF = ("s", "k"), ("D", "C2"), ("*", "C0")
+"""Marker and colour of a fold, a branch point and a Hopf point on the diagram."""
 
 
 def parameter_label(spec: BifurcationProblem) -> str:
@@ -34,8 +34,9 @@ def parameter_label(spec: BifurcationProblem) -> str:
 
 
 def special_point_record(point: SpecialPoint, parameter: str) -> dict:
-    """A fold or Hopf point as a JSON object: kind, the parameter's value, bracket, the value
-    (0 at a fold, the eigenvalue i omega at a Hopf point) and u."""
+    """A fold, branch point or Hopf point as a JSON object: kind ("fold", "branch", "hopf"),
+    the parameter's value, bracket, the value (0 at a fold or branch point, the eigenvalue
+    i omega at a Hopf point) and u."""
     return {parameter: float(point.p), "kind": point.kind,
             "bracket": [float(b) for b in point.bracket], "value_re": float(np.real(point.value)),
             "value_im": float(np.imag(point.value)), "u": np.asarray(point.u, dtype=float).tolist()}
@@ -50,14 +51,19 @@ def save_outputs(out: Path, result: BranchResult, spec: BifurcationProblem) -> N
     save_json(Path(out) / "collisions.json",
               [collision_record(c, name, spec.matrix) for c in result.collisions])
     save_json(Path(out) / "special_points.json",
-              [special_point_record(s, name) for s in result.folds + result.hopf])
+              [special_point_record(s, name) for s in special_points(result)])
+
+
+def special_points(result: BranchResult) -> list[SpecialPoint]:
+    """The folds, branch points and Hopf points of a run, in branch order."""
+    return sorted(result.folds + result.branch_points + result.hopf, key=lambda s: s.step)
 
 
 def plot_problem_diagram(result: BranchResult, spec: BifurcationProblem, title: str, path: Path) -> None:
     """Im and Re of every eigenvalue of the tracked matrix against the parameter
     (bifurcation.draw_spectrum), with the folds (open squares at Re = 0, where a real
-    eigenvalue passes zero) and Hopf points (stars at Re = 0 and at Im = omega) marked and a
-    dotted line at each."""
+    eigenvalue passes zero), branch points (open diamonds at Re = 0) and Hopf points (stars at
+    Re = 0 and at Im = omega) marked and a dotted line at each."""
     from matplotlib.lines import Line2D
 
     b = result.branch
@@ -66,7 +72,9 @@ def plot_problem_diagram(result: BranchResult, spec: BifurcationProblem, title: 
                             [(c.p, c.kind, c.eigenvalue) for c in result.collisions], spec.matrix,
                             x_label=parameter_label(spec), eig_unit=spec.eigenvalue_units)
     relabel(handles[0], f"branch {b.p[0]:.3g} -> {b.p[-1]:.3g}\n(one colour per eigenvalue)")
-    for points, (marker, color), what in ((result.folds, FOLD, "fold"), (result.hopf, HOPF, "Hopf point")):
+    for points, (marker, color), what in ((result.folds, FOLD, "fold"),
+                                          (result.branch_points, BRANCH, "branch point"),
+                                          (result.hopf, HOPF, "Hopf point")):
         for s in points:
             bottom.plot(s.p, 0.0, marker, color=color, ms=7, mfc="none")
             top.axvline(s.p, color=color, ls=":", lw=0.8)

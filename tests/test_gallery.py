@@ -107,6 +107,62 @@ def test_fitzhugh_nagumo_folds_hopf_points_and_collisions_match_the_closed_forms
         assert s.u[1] == pytest.approx((s.u[0] + a) / b, abs=1e-10)
 
 
+# ---- Lorenz: a pitchfork, a collision and a Hopf point ---------------------------------------
+
+LORENZ = {"sigma": 10.0, "b": 8.0 / 3.0}
+
+
+def lorenz_collision() -> float:
+    """The r > 1 where two real eigenvalues of the Jacobian on C+- collide: the root of the
+    discriminant of lambda^3 + (sigma + b + 1) lambda^2 + b (sigma + r) lambda + 2 b sigma (r - 1)
+    (sympy, then 30 digits by mpmath)."""
+    lam, r = sp.symbols("lambda r")
+    sigma, b = sp.Integer(10), sp.Rational(8, 3)
+    cubic = lam**3 + (sigma + b + 1) * lam**2 + b * (sigma + r) * lam + 2 * b * sigma * (r - 1)
+    roots = sp.Poly(sp.discriminant(cubic, lam), r).nroots(n=30)
+    (root,) = [v for v in roots if v.is_real and 1 < v < 2]
+    return float(root)
+
+
+def test_lorenz_origin_passes_its_pitchfork_at_r_1_a_branch_point_not_a_fold():
+    result = load_example("lorenz").problem.solve()
+    assert result.success and not result.folds and not result.hopf and not result.collisions
+    (point,) = result.branch_points
+    assert point.kind == "branch" and abs(point.p - 1.0) <= 1e-12
+    assert np.abs(point.u).max() <= 1e-12  # on the origin's branch
+
+
+@pytest.mark.parametrize("side", [1, -1])
+def test_lorenz_switched_branch_is_c_plus_or_minus_with_its_collision_and_hopf_point(side):
+    """From the branch point to r = 30: x = y = side sqrt(b (r - 1)), z = r - 1 at every point;
+    the birth at the discriminant's root and the Hopf point at 470/19, both to 1e-10."""
+    from diskfriction.continuation import switch_branch
+
+    example = load_example("lorenz").problem
+    first = example.solve()
+    new = switch_branch(example.problem, first, 0, 30.0, example.options, side=side)
+    assert new.success and new.p[0] > 1.0 and new.p[-1] == 30.0
+    x, y, z = new.u.T
+    expected = side * np.sqrt(LORENZ["b"] * (new.p - 1.0))
+    assert np.abs(x - expected).max() <= 1e-9 and np.abs(y - x).max() <= 1e-9
+    assert np.abs(z - (new.p - 1.0)).max() <= 1e-9
+    (birth,) = new.collisions
+    assert birth.kind == "birth" and abs(birth.p - lorenz_collision()) <= TOL_P
+    (hopf,) = new.hopf
+    assert abs(hopf.p - 470 / 19) <= TOL_P and not new.folds and not new.branch_points
+
+
+def test_lorenz_pitchfork_seen_from_c_plus_is_a_branch_point():
+    """C+ followed down from r = 2 turns back at r = 1 (onto C-): a branch point, no fold."""
+    from diskfriction.continuation import Options, solve_branch
+
+    example = load_example("lorenz").problem
+    x0 = np.sqrt(LORENZ["b"])
+    result = solve_branch(example.problem, [x0, x0, 1.0], (2.0, 0.5), Options(ds_max=0.05))
+    (point,) = result.branch_points
+    assert abs(point.p - 1.0) <= 1e-12 and not result.folds
+
+
 # ---- the disk chain -------------------------------------------------------------------------
 
 def test_disk_chain_through_the_public_api_is_bifurcate_in_fewer_than_30_lines():
