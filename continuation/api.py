@@ -19,7 +19,7 @@ The reference with a worked example is docs/api.md.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Callable, Mapping, Optional, Sequence, Union
 
 import numpy as np
@@ -36,6 +36,7 @@ from .differences import (METHODS, ParameterDerivative, StateDerivative, check_c
                           warn_differences)
 from .newton import bordered_newton
 from .problem import FunctionProblem, Problem
+from .weighting import Weighted, scale_of, unweighted
 from .segment import SegmentSolveError
 
 Array = np.ndarray
@@ -90,7 +91,8 @@ SPECIAL_POINTS = ("fold", "branch", "hopf")
 
 @dataclass(frozen=True)
 class Options:
-    """Options of solve_branch (steps in the Euclidean arclength of x = (u, p)).
+    """Options of solve_branch (steps in the arclength |dx|^2 = (theta / n) |du|^2 + dp^2 of
+    x = (u, p), n = u.size; theta None: the Euclidean |dx|^2 = |du|^2 + dp^2, weighting.py).
 
     ds_max: largest step (None: |p_stop - p_start| / 50); ds: first step (None: ds_max / 4);
     ds_min: the run stops when the step must shrink below it (None: 1e-8 ds_max);
@@ -118,12 +120,15 @@ class Options:
     workers: Optional[int] = None
     special_points: tuple[str, ...] = ("fold", "branch", "hopf")
     stop_at_fold: bool = False
+    theta: Optional[float] = 1.0
 
     def __post_init__(self):
         for name in ("ds_max", "ds", "ds_min", "newton_tol"):
             value = getattr(self, name)
             if value is not None and not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
+        if self.theta is not None and not (math.isfinite(self.theta) and self.theta > 0):
+            raise ValueError(f"theta must be a finite number > 0 or None, got {self.theta!r}")
         if self.max_newton < 1 or self.max_steps < 1:
             raise ValueError("max_newton and max_steps must be >= 1")
         if not set(self.special_points) <= set(SPECIAL_POINTS):
@@ -253,14 +258,14 @@ def _stateless(problem: Problem) -> bool:
     return type(problem).commit is Problem.commit
 
 
-def special_points(problem: Problem, branch: Branch, options: Options):
+def special_points(problem: Problem, branch: Branch, options: Options, stateless: bool):
     """(folds, hopf, warnings, branch_points) of a finished branch of a stateless problem, as
-    options.special_points asks (bifurcations.py): folds and branch points to |dx| <= 1e-9 (a
-    step over a branch point is none of its folds), Hopf points to |dp| <= detection.tol_p, their
+    options.special_points asks (bifurcations.py): folds to |dx| <= 1e-9 and branch points to
+    1e-12 in the run's metric (a step over a branch point is none of its folds), Hopf points to |dp| <= detection.tol_p, their
     points solved to max|G| <= newton_tol / 100 (with the branch's own tolerance a fold's p
     would be off by up to ~newton_tol / |dG/dp|)."""
     tol = LOCATOR_TOL * options.newton_tol
-    asked = options.special_points if _stateless(problem) else ()
+    asked = options.special_points if stateless else ()
     crossings = branch_point_steps(problem, branch) if "branch" in asked else []
     locators = {"fold": lambda: locate_folds(problem, branch, newton_tol=tol, skip=tuple(crossings)),
                 "branch": lambda: locate_branch_points(problem, branch, crossings, newton_tol=tol),
@@ -292,10 +297,17 @@ def solve_branch(problem: Problem, u0, p_span, options: Options = Options(), *,
     p_start, p_stop = _span(p_span)
     params = options.params(p_start, p_stop)
     u0 = check_problem(problem, u0, p_start)
-    branch = continuation(problem, u0, p_start, params, options.detection, workers=options.workers,
-                          callback=callback)
-    folds, hopf, warnings, branch_points = special_points(problem, branch, options)
-    return BranchResult(branch, folds, hopf, branch.warnings + warnings, branch_points)
+    s = scale_of(options.theta, u0.size)
+    core = problem if s == 1.0 else Weighted(problem, s)  # the metric of options.theta
+    told = None if callback is None else (lambda k, p, y, ev: callback(k, p, y / s, ev))
+    branch = continuation(core, u0 * s, p_start, params, options.detection,
+                          workers=options.workers, callback=told)
+    folds, hopf, warnings, branch_points = special_points(core, branch, options,
+                                                          _stateless(problem))
+    folds, hopf, branch_points = ([replace(point, u=point.u / s) for point in points]
+                                  for points in (folds, hopf, branch_points))
+    return BranchResult(unweighted(branch, s), tuple(folds), tuple(hopf),
+                        branch.warnings + warnings, tuple(branch_points))
 
 
 def switch_branch(problem: Problem, result: BranchResult, k: int, p_stop: float,

@@ -48,7 +48,8 @@ def bordered_newton(problem: Problem, x_target: Array, border: Array,
     """Solve G(u, p) = 0, b . (x - x_target) = 0 by Newton from x_target.
 
     Converged when max|G| <= tol (the border row is linear, so it holds to rounding after
-    the first update and exactly at the start). Fails on max_iter updates without
+    the first update and exactly at the start), or, for a problem with `rounding` > 0, when
+    max|G| <= rounding * term_size: where G is as close to zero as its evaluation rounds. Fails on max_iter updates without
     convergence, a non-finite residual or a singular bordered matrix.
     """
     x = np.array(x_target, dtype=float)
@@ -59,14 +60,25 @@ def bordered_newton(problem: Problem, x_target: Array, border: Array,
             return NewtonResult(x, it, r, False)
         if r <= tol:
             return NewtonResult(x, it, r, True)
+        M = bordered_matrix(problem, x, border)
+        if problem.rounding and r <= problem.rounding * term_size(M, x):
+            return NewtonResult(x, it, r, True)  # G is not computed closer to 0 than this
         if it == max_iter:
             break
         rhs = np.append(G, border @ (x - x_target))
         try:
-            x = x - factorize(bordered_matrix(problem, x, border)).solve(rhs)
+            x = x - factorize(M).solve(rhs)
         except SingularMatrix:
             return NewtonResult(x, it, r, False)
     return NewtonResult(x, max_iter, r, False)
+
+
+def term_size(M, x: Array) -> float:
+    """max_i sum_j |dG_i/dx_j| |x_j| from the bordered matrix M's first n rows [G_u, G_p]: the
+    size of the terms that cancel in G_i (exact for a linear G) [units of G]."""
+    n = x.size - 1
+    size = (abs(M) @ np.abs(x))[:n]
+    return float(np.max(size, initial=0.0))
 
 
 def fixed_p_newton(problem: Problem, u0: Array, p: float, tol: float, max_iter: int) -> NewtonResult:

@@ -37,7 +37,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from typing import Callable, Optional
+from typing import Callable, ClassVar, Optional
 
 import numpy as np
 import scipy.sparse as sp
@@ -47,9 +47,19 @@ from .spectra import Eigensystem, eigensystem
 
 Array = np.ndarray
 
+ROUNDING = 16 * np.finfo(float).eps
+"""A user's G rounds to about this times the size of its terms (a few roundings per term of a
+sum; 3.6e-15): FunctionProblem's rounding."""
+
 
 class Problem(ABC):
-    """Base class of a one-parameter problem G(u, p) = 0 (see the module docstring)."""
+    """Base class of a one-parameter problem G(u, p) = 0 (see the module docstring).
+
+    rounding: 0, or the relative rounding of G's evaluation: a Newton iterate with max|G| <=
+    rounding * max_i sum_j |dG_i/dx_j| |x_j| (the size of the terms that cancel in G,
+    newton.term_size) is converged whatever newton_tol asks (newton.bordered_newton)."""
+
+    rounding: float = 0.0
 
     @abstractmethod
     def residual(self, u: Array, p: float) -> Array:
@@ -98,12 +108,16 @@ class Problem(ABC):
 @dataclass(frozen=True)
 class FunctionProblem(Problem):
     """A stateless problem given by plain functions: G(u, p), G_u(u, p), G_p(u, p) and
-    optionally the stability matrix A(u, p) (default G_u)."""
+    optionally the stability matrix A(u, p) (default G_u). Its rounding is ROUNDING: an
+    absolute newton_tol below what G can be computed to (a discretised u'' with entries 1/h^2)
+    does not stop the run."""
 
     G: Callable[[Array, float], Array]
     G_u: Callable[[Array, float], Array]
     G_p: Callable[[Array, float], Array]
     A: Optional[Callable[[Array, float], Array]] = None
+
+    rounding: ClassVar[float] = ROUNDING
 
     def residual(self, u, p):
         return np.asarray(self.G(u, p), dtype=float)

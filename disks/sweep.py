@@ -47,7 +47,9 @@ class SweepParams(Options):
     1e-11: max|F| at every stored point [force], a tenth of Options' (the history follows q, so
     the corrector must hold the contacts' forces well below the Coulomb limit's resolution),
     max_steps 20 000 (N = 1000 takes up to 6000 points), and no special points (the disk
-    problem carries history: its folds cannot be located after the run). workers (Options):
+    problem carries history: its folds cannot be located after the run), theta None: steps in
+    the Euclidean arclength of (q, F_x), as before the weighted metric (Options: theta = 1, the
+    mesh-independent metric of a discretised problem). workers (Options):
     processes scanning steps while the sweep goes on (None: automatic; 0: inline). window:
     (lo, hi) of Re lambda [the matrix's raw units] to track instead of the whole spectrum
     (spectral_window.py); None: every eigenvalue.
@@ -57,6 +59,7 @@ class SweepParams(Options):
     newton_tol: float = 1e-11
     max_steps: int = 20_000
     special_points: tuple[str, ...] = ()
+    theta: Optional[float] = None
     window: Optional[tuple[float, float]] = None
 
 

@@ -38,7 +38,8 @@ arclength of an affine shear of unit strain, |(y_i, 0, 0)| over the disks [lengt
 class ShearParams(Options):
     """solve_branch's Options with the packing's defaults: ds_max from STEP_IN_STRAIN (None),
     newton_tol 1e-11 [force] (of a contact's force P 2R = 0.1 at the default pressure),
-    max_steps 20 000, no special points (the problem carries history), and the run ends at a
+    max_steps 20 000, no special points (the problem carries history), steps in the Euclidean
+    arclength of (q, gamma) (theta None: ds_max is set from the affine shear), and the run ends at a
     fold in gamma (stop_at_fold): the saddle-node where quasistatic shear loses the branch is a
     plastic event; beyond it the branch of unstable states it would follow back is no state
     the packing passes through."""
@@ -47,6 +48,7 @@ class ShearParams(Options):
     max_steps: int = 20_000
     special_points: tuple[str, ...] = ()
     stop_at_fold: bool = True
+    theta: Optional[float] = None
 
 
 @dataclass(frozen=True)
