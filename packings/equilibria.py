@@ -70,6 +70,12 @@ RELEASE_GAP = 1e-2
 way: a rattler's place in its cage is arbitrary, and without a gap the pusher would reach it again
 after every strain step of delta_hold / L."""
 
+RELEASE_PASSES = 50
+"""At most this many passes of the pushed loose disks giving way at one commit
+(_release_pushed): a push travels one disk further along a chain of loose disks per pass, and
+a disk caught in a cage by a loose disk is freed once that one moved. 24 disks, seed 3, at mu =
+0.3 and 1 took up to 8 and 18 passes (a disk and a loose neighbour giving way by turns)."""
+
 PARKED = 2.0
 """The gauge rows' diagonal in the tracked matrix A_g is -PARKED times A_red's largest absolute
 row sum at the committed state: below every eigenvalue of A_red (Gershgorin), so that a
@@ -321,15 +327,15 @@ class PackingEquilibria(Problem):
         """A loose disk (of the committed gauge) that a neighbour pushes into (a contact with
         delta > delta_hold among `rows` at gamma) carries no load, so it gives way
         (_give_way). A loose disk moved into another pushes it in turn: passes over the pushed
-        loose disks are repeated while one of them moved, at most once per loose disk and once
-        more, so that a push travels along a chain of loose disks. Only a disk caught between
+        loose disks are repeated while one of them moved (at most RELEASE_PASSES), so that a
+        push travels along a chain of loose disks. Only a disk caught between
         contacts whose normal forces balance stays where two of them hold it, and joins the
         network at this commit if both are with disks of the network (Gauge.of; a disk held by
         two contacts that do not face each other would escape as soon as the equations hold it:
         no equilibrium near, a failed commit). Returns the moved q, or None."""
         loose = np.flatnonzero(self.gauge.loose)
         moved = None
-        for _ in range(loose.size + 1):
+        for _ in range(RELEASE_PASSES):
             pushed = self.network.overlaps(q, rows, gamma) > self.delta_hold
             disks = [d for d in loose if pushed[(rows[:, 0] == d) | (rows[:, 1] == d)].any()]
             if not disks:

@@ -198,20 +198,23 @@ def test_a_disk_held_only_against_loose_disks_is_loose():
     assert gauge.ref in (1, 2)
 
 
-def test_a_loose_disk_caught_against_a_loose_disk_ends_no_segment():
-    """24 disks, seed 3, mu = 0.3 to gamma = 0.004: at 3.43e-3 a loose disk pushed by the
-    network was caught between its pusher and another loose disk. Counted as held by both, it
-    joined the network with one loaded contact (the other, with a loose disk, carries no
-    force): the re-solve's only root had that contact's delta at 0, the Hertz force's singular
-    point, where Newton divides delta by 3 per update, and every commit failed (1000 "plastic
-    events" 1e-7 apart in strain). Now the push travels on to the second loose disk and both
-    stay loose: the run reaches the end with no lost branch, every point in force balance, and
-    every disk's force with every row counted (the loose disks' included) within 1e-3 of a
-    contact's force P 2R."""
-    scene = PackingScene(N=24, seed=3, mu=0.3, gamma_range=(0.0, 0.004))
+@pytest.mark.parametrize("mu, gamma_end", [(0.3, 0.004), (1.0, 0.005)])
+def test_a_loose_disk_caught_against_a_loose_disk_ends_no_segment(mu, gamma_end):
+    """24 disks, seed 3. At mu = 0.3, gamma = 3.43e-3, a loose disk pushed by the network was
+    caught between its pusher and another loose disk. Counted as held by both, it joined the
+    network with one loaded contact (the other, with a loose disk, carries no force): the
+    re-solve's only root had that contact's delta at 0, the Hertz force's singular point,
+    where Newton divides delta by 3 per update, and every commit failed (1000 "plastic events"
+    1e-7 apart in strain). At mu = 1, gamma = 4.13e-3, the same disk stopped giving way in a
+    cage closed by a loose disk, its two network contacts a wedge that cannot hold it, joined,
+    and both contacts unloaded together in the re-solve. Now the push travels on to the loose
+    disks in the way: the run reaches the end with no lost branch, every point in force
+    balance, and every disk's force with every row counted (the loose disks' included) within
+    1e-3 of a contact's force P 2R."""
+    scene = PackingScene(N=24, seed=3, mu=mu, gamma_range=(0.0, gamma_end))
     packing = prepare_scene(scene)
     run = shear(scene, packing, ShearParams(workers=0), plastic_events=5)
-    assert run.status.reached and run.gamma[-1] == 0.004
+    assert run.status.reached and run.gamma[-1] == gamma_end
     assert run.plastic == ()
     assert run.residual.max() <= ShearParams().newton_tol
     network = network_of(scene, packing)
