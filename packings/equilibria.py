@@ -19,12 +19,14 @@ Two kinds of exact zero modes are handled explicitly:
   redundant. The reference disk (the one with most contacts) has its x and y equations
   replaced by gauge rows kappa (x - x_c) = 0, kappa (y - y_c) = 0.
 - **Loose disks** (rattlers): a disk with fewer than LOOSE_BELOW contacts that hold it
-  (delta > delta_hold, LOOSE_OVERLAP of the median overlap at the start) carries no load. Its
-  contacts are left out of the forces (their rows stay as watched rows: no events, no
-  history), its three equations are replaced by gauge rows holding it at its committed place.
-  At a commit, a loose disk a neighbour pushed into gives way (_release_pushed), and one caught
-  between facing contacts joins the network. The forces its own slight overlaps would exert
-  (below delta_hold, or of the preparation's force tolerance) are dropped.
+  (delta > delta_hold, LOOSE_OVERLAP of the median overlap at the start) with disks that are
+  not loose themselves (Gauge.of) carries no load. Its contacts are left out of the forces
+  (their rows stay as watched rows: no events, no history), its three equations are replaced
+  by gauge rows holding it at its committed place. At a commit, a loose disk a neighbour
+  pushed into gives way (_release_pushed), pushing on any loose disk in its way, and one
+  caught between facing contacts with the network joins it. The forces its own slight
+  overlaps would exert (below delta_hold, or of the preparation's force tolerance) are
+  dropped.
 
 The tracked matrix is the network's stability matrix A (J or M^-1 J) in coordinates relative to
 the reference disk, A_g: with P the map q -> (q_k - q_ref for x and y dofs, theta as it is) on
@@ -67,6 +69,12 @@ RELEASE_GAP = 1e-2
 """A pushed loose disk gives way this fraction of R beyond first contact, when nothing is in the
 way: a rattler's place in its cage is arbitrary, and without a gap the pusher would reach it again
 after every strain step of delta_hold / L."""
+
+RELEASE_PASSES = 50
+"""At most this many passes of the pushed loose disks giving way at one commit
+(_release_pushed): a push travels one disk further along a chain of loose disks per pass, and
+a disk caught in a cage by a loose disk is freed once that one moved. 24 disks, seed 3, at mu =
+0.3 and 1 took up to 8 and 18 passes (a disk and a loose neighbour giving way by turns)."""
 
 PARKED = 2.0
 """The gauge rows' diagonal in the tracked matrix A_g is -PARKED times A_red's largest absolute
@@ -114,8 +122,19 @@ class Gauge:
     P: sp.csr_array  # (kept, n): q -> coordinates relative to the reference disk
 
     @classmethod
-    def of(cls, N: int, counts: np.ndarray) -> "Gauge":
-        loose = counts < LOOSE_BELOW
+    def of(cls, N: int, holding: np.ndarray) -> "Gauge":
+        """The gauge of N disks whose contacts (i, j) in `holding` hold them (delta >
+        delta_hold): loose are the disks with fewer than LOOSE_BELOW holding contacts with
+        disks that are not loose, found by removing such disks until none is left (a contact
+        with a loose disk carries no force, so it holds nothing); the reference disk has the
+        most holding contacts."""
+        loose = np.zeros(N, bool)
+        while True:
+            kept = holding[~(loose[holding[:, 0]] | loose[holding[:, 1]])]
+            counts = np.bincount(kept.ravel(), minlength=N)
+            if not (~loose & (counts < LOOSE_BELOW)).any():
+                break
+            loose |= counts < LOOSE_BELOW
         if loose.all():
             raise NotJammed("every disk is loose (fewer than 2 contacts holding it): the packing "
                             "is not jammed, so there is no network to shear")
@@ -156,8 +175,7 @@ class PackingEquilibria(Problem):
         state is all there is (a start): every row within the band of its cap."""
         self.q_c, self.xi_c, self.rows_c, self.gamma_c = q.copy(), xi.copy(), rows, float(gamma)
         delta = self.network.overlaps(q, rows, gamma)
-        counts = np.bincount(rows[delta > self.delta_hold, :2].ravel(), minlength=self.network.N)
-        self.gauge = Gauge.of(self.network.N, counts)
+        self.gauge = Gauge.of(self.network.N, rows[delta > self.delta_hold, :2])
         on_loose = self.gauge.loose[rows[:, 0]] | self.gauge.loose[rows[:, 1]]
         self.active = ~on_loose  # rows whose forces act; the others are watched
         t_star = self.coulomb_limit(delta)
@@ -307,43 +325,54 @@ class PackingEquilibria(Problem):
 
     def _release_pushed(self, q: np.ndarray, rows: np.ndarray, gamma: float) -> np.ndarray | None:
         """A loose disk (of the committed gauge) that a neighbour pushes into (a contact with
-        delta > delta_hold among `rows` at gamma) carries no load, so it gives way: moved by
-        Newton steps along its net normal force, neighbours fixed, until no contact of it holds
-        it, and RELEASE_GAP further when nothing is in the way. Only a disk caught between
+        delta > delta_hold among `rows` at gamma) carries no load, so it gives way
+        (_give_way). A loose disk moved into another pushes it in turn: passes over the pushed
+        loose disks are repeated while one of them moved (at most RELEASE_PASSES), so that a
+        push travels along a chain of loose disks. Only a disk caught between
         contacts whose normal forces balance stays where two of them hold it, and joins the
-        network at this commit (a disk held by two contacts that do not face each other would
-        escape as soon as the equations hold it: no equilibrium near, a failed commit).
-        Returns the moved q, or None."""
-        delta = self.network.overlaps(q, rows, gamma)
-        N = self.network.N
-        pushed = delta > self.delta_hold
-        disks = [d for d in np.flatnonzero(self.gauge.loose) if
-                 pushed[(rows[:, 0] == d) | (rows[:, 1] == d)].any()]
-        if not disks:
-            return None
-        q = q.copy()
-        k_n, gap = self.network.constants[1], RELEASE_GAP * self.network.constants[0]
-        for d in disks:
-            mine = rows[(rows[:, 0] == d) | (rows[:, 1] == d)]
-            start = np.array([q[d], q[N + d]])
-            for _ in range(60):
-                dl = self.network.overlaps(q, mine, gamma)
-                touching = dl > 0
-                if not touching.any():
-                    break
-                F = self.network.forces(q, np.zeros(len(mine)), mine, gamma)
-                k = float(np.sum(self.network.kernels.normal_stiffness(dl[touching], k_n)))
-                step = np.array([F[d], F[N + d]]) / k
-                if np.abs(step).max() <= 1e-3 * self.delta_hold:
-                    break
-                q[d] += step[0]
-                q[N + d] += step[1]
-            away = np.array([q[d], q[N + d]]) - start
-            if np.any(away) and (self.network.overlaps(q, mine, gamma) <= self.delta_hold).all():
-                trial = q.copy()  # give way a little further, if nothing is in the way
-                trial[[d, N + d]] += gap * away / np.linalg.norm(away)
-                if (self.network.overlaps(trial, mine, gamma) < 0).all():
-                    q = trial
+        network at this commit if both are with disks of the network (Gauge.of; a disk held by
+        two contacts that do not face each other would escape as soon as the equations hold it:
+        no equilibrium near, a failed commit). Returns the moved q, or None."""
+        loose = np.flatnonzero(self.gauge.loose)
+        moved = None
+        for _ in range(RELEASE_PASSES):
+            pushed = self.network.overlaps(q, rows, gamma) > self.delta_hold
+            disks = [d for d in loose if pushed[(rows[:, 0] == d) | (rows[:, 1] == d)].any()]
+            if not disks:
+                break
+            before, q = q, q.copy()
+            for d in disks:
+                q = self._give_way(q, d, rows[(rows[:, 0] == d) | (rows[:, 1] == d)], gamma)
+            moved = q
+            if np.abs(q - before).max() <= 1e-3 * self.delta_hold:
+                break
+        return moved
+
+    def _give_way(self, q: np.ndarray, d: int, mine: np.ndarray, gamma: float) -> np.ndarray:
+        """q with loose disk d moved by Newton steps along the net normal force of its rows
+        `mine`, its neighbours fixed, until no contact of it holds it (or the forces balance),
+        and RELEASE_GAP further when nothing is in the way (q is changed in place)."""
+        N, k_n = self.network.N, self.network.constants[1]
+        start = np.array([q[d], q[N + d]])
+        for _ in range(60):
+            dl = self.network.overlaps(q, mine, gamma)
+            touching = dl > 0
+            if not touching.any():
+                break
+            F = self.network.forces(q, np.zeros(len(mine)), mine, gamma)
+            k = float(np.sum(self.network.kernels.normal_stiffness(dl[touching], k_n)))
+            step = np.array([F[d], F[N + d]]) / k
+            if np.abs(step).max() <= 1e-3 * self.delta_hold:
+                break
+            q[d] += step[0]
+            q[N + d] += step[1]
+        away = np.array([q[d], q[N + d]]) - start
+        if np.any(away) and (self.network.overlaps(q, mine, gamma) <= self.delta_hold).all():
+            trial = q.copy()  # give way a little further, if nothing is in the way
+            gap = RELEASE_GAP * self.network.constants[0]
+            trial[[d, N + d]] += gap * away / np.linalg.norm(away)
+            if (self.network.overlaps(trial, mine, gamma) < 0).all():
+                q = trial
         return q
 
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from invariants import unaccounted_pair_changes
 
-from diskfriction.packings.equilibria import PackingEquilibria, mass_diagonal, start
+from diskfriction.packings.equilibria import Gauge, PackingEquilibria, mass_diagonal, start
 from diskfriction.packings.prepared import prepare_scene
 from diskfriction.packings.shear import ShearParams, network_of, shear
 from diskfriction.scenes.packing import PackingScene
@@ -184,6 +184,44 @@ def test_a_loose_disk_pushed_into_gives_way(packing):
     assert problem.network.overlaps(moved, mine, 0.0).max() <= problem.delta_hold
     force = problem.network.forces(moved, np.zeros(len(mine)), mine, 0.0)
     assert np.abs(force).max() <= 1e-3 * SCENE.pressure * 2 * SCENE.R
+
+
+def test_a_disk_held_only_against_loose_disks_is_loose():
+    """Disks 0, 1, 2 hold each other; disk 3 has two holding contacts, with 0 and with disk 4,
+    whose only holding contact is 3: 4 is loose, so its contact holds nothing and 3 is loose
+    too (its equations would keep one loaded contact, whose only equilibrium is at delta = 0);
+    disk 5, held by 1 and 2, is not. The reference disk is one of most contacts in the
+    network."""
+    holding = np.array([[0, 1], [1, 2], [0, 2], [0, 3], [3, 4], [1, 5], [2, 5]])
+    gauge = Gauge.of(6, holding)
+    assert gauge.loose.tolist() == [False, False, False, True, True, False]
+    assert gauge.ref in (1, 2)
+
+
+@pytest.mark.parametrize("mu, gamma_end", [(0.3, 0.004), (1.0, 0.005)])
+def test_a_loose_disk_caught_against_a_loose_disk_ends_no_segment(mu, gamma_end):
+    """24 disks, seed 3. At mu = 0.3, gamma = 3.43e-3, a loose disk pushed by the network was
+    caught between its pusher and another loose disk. Counted as held by both, it joined the
+    network with one loaded contact (the other, with a loose disk, carries no force): the
+    re-solve's only root had that contact's delta at 0, the Hertz force's singular point,
+    where Newton divides delta by 3 per update, and every commit failed (1000 "plastic events"
+    1e-7 apart in strain). At mu = 1, gamma = 4.13e-3, the same disk stopped giving way in a
+    cage closed by a loose disk, its two network contacts a wedge that cannot hold it, joined,
+    and both contacts unloaded together in the re-solve. Now the push travels on to the loose
+    disks in the way: the run reaches the end with no lost branch, every point in force
+    balance, and every disk's force with every row counted (the loose disks' included) within
+    1e-3 of a contact's force P 2R."""
+    scene = PackingScene(N=24, seed=3, mu=mu, gamma_range=(0.0, gamma_end))
+    packing = prepare_scene(scene)
+    run = shear(scene, packing, ShearParams(workers=0), plastic_events=5)
+    assert run.status.reached and run.gamma[-1] == gamma_end
+    assert run.plastic == ()
+    assert run.residual.max() <= ShearParams().newton_tol
+    network = network_of(scene, packing)
+    largest = max(np.abs(network.forces(q, np.where(network.overlaps(q, rows, g) > 0, xi, 0.0),
+                                        rows, g)).max()
+                  for g, q, rows, xi in zip(run.gamma, run.q, run.rows, run.xi))
+    assert largest <= 1e-3 * scene.pressure * 2 * scene.R
 
 
 def test_a_spectral_window_finds_the_full_spectrums_collisions_in_it(packing, branch):
