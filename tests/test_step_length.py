@@ -1,0 +1,52 @@
+"""solve_branch on discretised problems (issue 27 items 3-4): steps in the weighted arclength
+(theta / n)|du|^2 + dp^2, so that the step count does not grow with n, and a residual at the
+rounding of G's terms converged (Bratu's u'' + lambda e^u, entries 1/h^2)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from scipy.optimize import fsolve
+
+from diskfriction.continuation import Options, problem_from_functions, solve_branch
+
+
+def line(n: int):
+    """u = p on n unknowns: a straight branch."""
+    return problem_from_functions(lambda u, p: u - p, dG_du=lambda u, p: sp.eye(n, format="csr"),
+                                  dG_dp=lambda u, p: -np.ones(n))
+
+
+def bratu(n: int):
+    """u'' + lambda e^u = 0 on n interior points of (0, 1), u = 0 at both ends."""
+    L = sp.diags([np.ones(n - 1), -2.0 * np.ones(n), np.ones(n - 1)], [-1, 0, 1]) * (n + 1) ** 2
+    G = lambda u, lam: L @ u + lam * np.exp(u)  # noqa: E731
+    J = lambda u, lam: (L + sp.diags(lam * np.exp(u))).tocsr()  # noqa: E731
+    return problem_from_functions(G, dG_du=J, dG_dp=lambda u, lam: np.exp(u)), G, J
+
+
+def test_a_straight_branch_takes_as_many_steps_on_any_mesh():
+    weighted = [len(solve_branch(line(n), np.zeros(n), (0.0, 1.0)).p) for n in (20, 80)]
+    euclidean = [len(solve_branch(line(n), np.zeros(n), (0.0, 1.0), Options(theta=None)).p)
+                 for n in (20, 80)]
+    assert weighted[0] == weighted[1] <= 80  # |dx| = sqrt(2) dp: about 50 sqrt(2) steps
+    assert euclidean[1] > 1.8 * euclidean[0]  # ~ sqrt(n)
+
+
+def test_bratu_fold_is_located_though_g_rounds_above_the_tolerance():
+    """n = 50: terms of G up to 3e3 |u| round to ~1e-12, where the fold's locator asks 1e-12;
+    the fold against an independent solve of G = 0, J v = 0, |v| = 1."""
+    n = 50
+    problem, G, J = bratu(n)
+    result = solve_branch(problem, np.zeros(n), (0.01, 4.0), Options(special_points=("fold",)))
+    assert result.warnings == () and result.p[-1] <= 0.01 < 3.5 < result.p.max()  # and back
+    (fold,) = result.folds
+
+    def extended(z):
+        u, v, lam = z[:n], z[n:2 * n], z[-1]
+        return np.concatenate([G(u, lam), J(u, lam) @ v, [v @ v - 1.0]])
+
+    v0 = np.sin(np.pi * np.arange(1, n + 1) / (n + 1))
+    z = fsolve(extended, np.concatenate([fold.u, v0 / np.linalg.norm(v0), [fold.p]]), xtol=1e-14)
+    assert np.abs(extended(z)).max() <= 1e-8 and 3.5 < z[-1] < 3.52
+    assert fold.p == pytest.approx(z[-1], abs=1e-10)
