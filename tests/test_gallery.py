@@ -163,6 +163,30 @@ def test_lorenz_pitchfork_seen_from_c_plus_is_a_branch_point():
     assert abs(point.p - 1.0) <= 1e-12 and not result.folds
 
 
+# ---- Brusselator and Bratu ------------------------------------------------------------------
+
+def test_brusselator_birth_hopf_and_death_are_the_closed_forms():
+    """A = 1.5: complex for (1 - A)^2 < B < (1 + A)^2, Hopf at 1 + A^2 with omega = A."""
+    a = load_example("brusselator").a
+    result = load_example("brusselator").problem.solve()
+    assert result.success and not result.folds and not result.branch_points
+    birth, death = result.collisions
+    assert (birth.kind, death.kind) == ("birth", "death")
+    assert abs(birth.p - (1 - a) ** 2) <= TOL_P and abs(death.p - (1 + a) ** 2) <= TOL_P
+    (hopf,) = result.hopf
+    assert abs(hopf.p - (1 + a * a)) <= TOL_P and abs(hopf.value - 1j * a) <= 1e-9
+
+
+def test_bratu_discrete_folds_converge_at_second_order_to_the_continuous_one():
+    """lambda_n on n = 24, 49, 99 interior points (h = 1/25, 1/50, 1/100) against
+    lambda* = 3.513830719125162: errors shrinking as h^2 (observed order within 0.05 of 2)."""
+    folds = [load_example("bratu").bratu(n).solve().folds for n in (24, 49, 99)]
+    assert all(len(f) == 1 for f in folds)
+    errors = np.array([3.513830719125162 - f[0].p for f in folds])
+    orders = np.log2(errors[:-1] / errors[1:])
+    assert (errors > 0).all() and np.abs(orders - 2).max() <= 0.05
+
+
 # ---- the disk chain -------------------------------------------------------------------------
 
 def test_disk_chain_through_the_public_api_is_bifurcate_in_fewer_than_30_lines():

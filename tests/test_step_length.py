@@ -9,20 +9,13 @@ import scipy.sparse as sp
 from scipy.optimize import fsolve
 
 from diskfriction.continuation import Options, problem_from_functions, solve_branch
+from gallery import load_example
 
 
 def line(n: int):
     """u = p on n unknowns: a straight branch."""
     return problem_from_functions(lambda u, p: u - p, dG_du=lambda u, p: sp.eye(n, format="csr"),
                                   dG_dp=lambda u, p: -np.ones(n))
-
-
-def bratu(n: int):
-    """u'' + lambda e^u = 0 on n interior points of (0, 1), u = 0 at both ends."""
-    L = sp.diags([np.ones(n - 1), -2.0 * np.ones(n), np.ones(n - 1)], [-1, 0, 1]) * (n + 1) ** 2
-    G = lambda u, lam: L @ u + lam * np.exp(u)  # noqa: E731
-    J = lambda u, lam: (L + sp.diags(lam * np.exp(u))).tocsr()  # noqa: E731
-    return problem_from_functions(G, dG_du=J, dG_dp=lambda u, lam: np.exp(u)), G, J
 
 
 def test_a_straight_branch_takes_as_many_steps_on_any_mesh():
@@ -34,11 +27,12 @@ def test_a_straight_branch_takes_as_many_steps_on_any_mesh():
 
 
 def test_bratu_fold_is_located_though_g_rounds_above_the_tolerance():
-    """n = 50: terms of G up to 3e3 |u| round to ~1e-12, where the fold's locator asks 1e-12;
-    the fold against an independent solve of G = 0, J v = 0, |v| = 1."""
+    """examples/bratu.py, n = 50: terms of G up to 3e3 |u| round to ~1e-12, where the fold's
+    locator asks 1e-12; the fold against an independent solve of G = 0, J v = 0, |v| = 1."""
     n = 50
-    problem, G, J = bratu(n)
-    result = solve_branch(problem, np.zeros(n), (0.01, 4.0), Options(special_points=("fold",)))
+    spec = load_example("bratu").bratu(n)
+    G, J = spec.problem.G, spec.problem.G_u
+    result = solve_branch(spec.problem, spec.u0, spec.p_span, spec.options)
     assert result.warnings == () and result.p[-1] <= 0.01 < 3.5 < result.p.max()  # and back
     (fold,) = result.folds
 
