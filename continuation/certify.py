@@ -18,6 +18,11 @@ interpolant H(t) = c0 + c1 t + c2 t^2 + c3 t^3. The pair is certified if
 
 i.e. the cubic model stays above a fraction rho of the smaller end value even after taking a
 quarter of its cubic term as uncertain (a model whose cubic term matters is trusted less).
+Two real eigenvalues that pass through each other (modes that do not interact) never pass
+that test: their y touches 0. Their signed gap g = lambda_i - lambda_j does not touch 0, it
+crosses it: where its cubic model is transversal (slope >= rho times the secant's), the split
+goes to its root, and an interval with the pair resolved at an end (|g| <= 2 thr) is certified
+(_crossing).
 floor = 4 thr^2 (thr the status threshold): below it nothing can be resolved. A uniformly moving
 pair (y quadratic in t) is certified however far it moves; a pair approaching, narrowly missing or
 passing through each other is not. The labels themselves are checked: an eigenvalue whose end
@@ -86,6 +91,41 @@ def _pair_margin(la: complex, lb: complex, da: complex, db: complex, rho: float,
 
 
 @numba.njit(cache=True, error_model="numpy")
+def _crossing(g_a: float, g_b: float, dg_a: float, dg_b: float, rho: float,
+              resolution: float) -> tuple[bool, float]:
+    """Two real eigenvalues passing through each other (modes that do not interact): their
+    signed gap g = lambda_i - lambda_j (not its square) has a cubic Hermite model G on [0, 1]
+    from g, g' at both ends. If G is transversal (|G'| >= rho |g_b - g_a| throughout: one
+    simple root at most, no turning back) and the end nearer the crossing is resolved (|g| <=
+    resolution there), no collision can hide inside: (True, nan). If G is transversal and
+    changes sign inside, (False, the root of G): a sample there resolves the crossing. Else
+    (False, nan)."""
+    c0, c1 = g_a, dg_a
+    c2, c3 = 3.0 * (g_b - g_a) - 2.0 * dg_a - dg_b, 2.0 * (g_a - g_b) + dg_a + dg_b
+    least = min(c1, c1 + 2.0 * c2 + 3.0 * c3)  # G' at the ends and at its extremum inside
+    most = max(c1, c1 + 2.0 * c2 + 3.0 * c3)
+    if abs(c3) > 1e-300:
+        t = -c2 / (3.0 * c3)
+        if 0.0 < t < 1.0:
+            inside = c1 + t * (2.0 * c2 + 3.0 * c3 * t)
+            least, most = min(least, inside), max(most, inside)
+    if least * most <= 0.0 or min(abs(least), abs(most)) < rho * abs(g_b - g_a):
+        return False, math.nan
+    if min(abs(g_a), abs(g_b)) <= resolution:
+        return True, math.nan
+    if g_a * g_b >= 0.0:
+        return False, math.nan
+    lo, hi = 0.0, 1.0  # G is monotone: bisect its sign change
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if (c0 + mid * (c1 + mid * (c2 + mid * c3))) * g_a > 0.0:
+            lo = mid
+        else:
+            hi = mid
+    return False, 0.5 * (lo + hi)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def worst_uncertified_pair(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, real: Array,
                            upper: Array, partner: Array, rho: float, floor: float,
                            doubt: float = 0.25) -> tuple[float, Array]:
@@ -101,9 +141,10 @@ def worst_uncertified_pair(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, r
     Returns (t of the model minimum of the uncertified pair with the smallest min(y_a, y_b)
     (the first such), or nan if every pair is certified; the mask of labels in any uncertified
     pair). O(pairs) time, no pair arrays."""
-    worst_y, worst_t = math.inf, math.nan
+    worst_y, worst_t, worst_crossing = math.inf, math.nan, False
     trouble = np.zeros(lam_a.size, np.bool_)
     n_real = real.size
+    resolution = math.sqrt(floor)
     for a in range(n_real):
         i = real[a]
         for b in range(a + 1, n_real):
@@ -111,9 +152,15 @@ def worst_uncertified_pair(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, r
             bad, y, t = _pair_margin(lam_a[i] - lam_a[j], lam_b[i] - lam_b[j], d_a[i] - d_a[j],
                                      d_b[i] - d_b[j], rho, floor, doubt)
             if bad:
+                passed, root = _crossing((lam_a[i] - lam_a[j]).real, (lam_b[i] - lam_b[j]).real,
+                                         (d_a[i] - d_a[j]).real, (d_b[i] - d_b[j]).real, rho,
+                                         resolution)
+                if passed:
+                    continue
                 trouble[i] = trouble[j] = True
                 if y < worst_y:
-                    worst_y, worst_t = y, t
+                    worst_y, worst_t = y, (t if math.isnan(root) else root)
+                    worst_crossing = not math.isnan(root)
     for i in upper:
         for j in real:
             bad, y, t = _pair_margin(lam_a[i] - lam_a[j], lam_b[i] - lam_b[j], d_a[i] - d_a[j],
@@ -121,7 +168,7 @@ def worst_uncertified_pair(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, r
             if bad:
                 trouble[i] = trouble[j] = True
                 if y < worst_y:
-                    worst_y, worst_t = y, t
+                    worst_y, worst_t, worst_crossing = y, t, False
     for k in range(partner.size):
         i, j = upper[k], partner[k]
         bad, y, t = _pair_margin(lam_a[i] - lam_a[j], lam_b[i] - lam_b[j], d_a[i] - d_a[j],
@@ -129,8 +176,8 @@ def worst_uncertified_pair(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, r
         if bad:
             trouble[i] = trouble[j] = True
             if y < worst_y:
-                worst_y, worst_t = y, t
-    return worst_t, trouble
+                worst_y, worst_t, worst_crossing = y, t, False
+    return worst_t, trouble, worst_crossing
 
 
 def cubic_roots_in_unit(c: tuple[float, ...]) -> list[float]:

@@ -40,6 +40,10 @@ Array = np.ndarray
 SPLIT_OFF_ENDS = 0.125
 """A fast split is placed at least this fraction of the interval away from either end (the
 worst pair's model minimum may sit at an end: a sample there would teach nothing new)."""
+CROSSING_OFF_ENDS = 1e-6
+"""A split at the root of a crossing real pair's gap model (certify._crossing) keeps only this
+far off the interval's ends: the model is transversal, so its root is where the pair resolves,
+and a sample there certifies both sides in one step."""
 
 
 class VerdictKind(StrEnum):
@@ -128,20 +132,21 @@ def hermite_split(a: Sample, b: Sample, events: list, active: Array, segment: Se
     d_a, d_b = scaled_slopes(a, b, segment)
     real, upper, partner = _fast_candidates(a, b, active)
     thr = max(a.thr, b.thr)
-    t_worst, pairs = certify.worst_uncertified_pair(a.eigvals, b.eigvals, d_a, d_b, real, upper,
-                                                    partner, rho, 4.0 * thr * thr, doubt)
+    t_worst, pairs, crossing = certify.worst_uncertified_pair(a.eigvals, b.eigvals, d_a, d_b, real,
+                                                              upper, partner, rho, 4.0 * thr * thr,
+                                                              doubt)
     labels = ~(a.excluded | b.excluded) & (a.status == b.status) & active
     wrong = labels & certify.inconsistent_labels(a.eigvals, b.eigvals, d_a, d_b, a.gaps, b.gaps,
                                                  rho, 2.0 * thr)
     in_events = event_labels(events, active.size)
 
-    def split(t: float, trouble: Array):
-        return float(np.clip(t, SPLIT_OFF_ENDS, 1.0 - SPLIT_OFF_ENDS)), _with_partners(a, b, trouble | in_events)
+    def split(t: float, trouble: Array, off: float = SPLIT_OFF_ENDS):
+        return float(np.clip(t, off, 1.0 - off)), _with_partners(a, b, trouble | in_events)
 
     if _enters_past_guard(a, b).any():
         return 0.5, None
     if not math.isnan(t_worst):
-        return split(t_worst, pairs)
+        return split(t_worst, pairs, CROSSING_OFF_ENDS if crossing else SPLIT_OFF_ENDS)
     if wrong.any():
         return split(0.5, _near_path(a, b, wrong))
     others = np.flatnonzero((a.status == b.status) & (a.status >= 0) & ~a.excluded & ~b.excluded & active)

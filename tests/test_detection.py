@@ -8,6 +8,7 @@ import pytest
 from diskfriction.continuation import ContinuationParams, DetectionParams, FunctionProblem, continuation
 from diskfriction.continuation.branch import Stop, StopCode
 from diskfriction.disks.equilibria import DiskEquilibria, relax
+from diskfriction.continuation.linalg import measured
 from diskfriction.continuation.locate import locate_double_eigenvalue
 from diskfriction.continuation.newton import bordered_newton, tangent
 from diskfriction.continuation.spectra import eigenvalue_slopes
@@ -69,7 +70,6 @@ def test_fast_and_exhaustive_agree_on_a_core_problem_with_a_bubble(ds):
 def test_fast_detection_spends_about_one_spectrum_per_point():
     """The fast detection's point: full eigendecompositions per accepted point on the paper
     scene, against the exhaustive one's (measured: 2.1 and 14)."""
-    from diskfriction.continuation.linalg import measured
 
     system = System.from_scene(Scene())
     spent = {}
@@ -257,7 +257,6 @@ def test_a_spectral_window_lists_the_full_detection_s_collisions_in_it(partial_f
     1e-9, and counts the complex pairs there; also with every split sample partial where it
     can be (partial_from = 0: at N = 40 the default, n >= 240, takes none), which then takes
     partial samples."""
-    from diskfriction.continuation.linalg import measured
 
     system = System.from_scene(Scene(N=40, eps=1e-4))
     lo, hi = 0.0553 * system.scene.k_n, 0.0562 * system.scene.k_n
@@ -275,11 +274,13 @@ def test_a_spectral_window_lists_the_full_detection_s_collisions_in_it(partial_f
 def test_pair_certifier_flags_exactly_the_pairs_whose_model_dips():
     """certify.worst_uncertified_pair against a brute-force reading of its own rule on a fine
     grid: the Hermite cubic of y = |lambda_i - lambda_j|^2 from the end data, its minimum, and
-    the margin rho min(y_a, y_b) - floor after a quarter of the cubic term."""
+    the margin rho min(y_a, y_b) - floor after a quarter of the cubic term; a flagged pair that
+    crosses transversally (the signed gap's cubic monotone, slope >= rho |g_b - g_a|) is split
+    where that cubic crosses zero, any other at the minimum."""
     from diskfriction.continuation import certify
     rng = np.random.default_rng(3)
     t = np.linspace(0.0, 1.0, 200001)
-    flagged = 0
+    flagged = crossings = 0
     for _ in range(200):
         lam_a, lam_b = rng.normal(size=2), rng.normal(size=2)
         d_a, d_b = 0.3 * rng.normal(size=2), 0.3 * rng.normal(size=2)
@@ -298,8 +299,35 @@ def test_pair_certifier_flags_exactly_the_pairs_whose_model_dips():
         assert got[1].tolist() == [margin < 0] * 2
         if margin < 0:
             flagged += 1
-            assert got[0] == pytest.approx(t[np.argmin(H)], abs=1e-4)
+            G = certify.cubic_at(certify.hermite_coefficients(g, h, dg, dh), t)
+            slope = np.diff(G) / np.diff(t)
+            transversal = g * h < 0 and (np.sign(slope) == np.sign(h - g)).all() and \
+                np.abs(slope).min() >= 0.5 * abs(h - g) * (1 + 1e-6)
+            if transversal:  # a crossing: split where the signed gap's model crosses zero
+                crossings += 1
+                assert got[2] and got[0] == pytest.approx(t[np.argmin(np.abs(G))], abs=1e-4)
+            elif np.abs(slope).min() < 0.5 * abs(h - g) * (1 - 1e-6) or g * h > 0:
+                assert not got[2] and got[0] == pytest.approx(t[np.argmin(H)], abs=1e-4)
     assert 20 < flagged < 180, flagged  # both outcomes exercised
+    assert crossings >= 1, crossings
+
+
+def test_two_real_eigenvalues_crossing_are_split_at_the_crossing_then_certified():
+    """lambda = (t, 1 - t) over [0, 1]: they cross at 0.5 (modes that do not interact), so the
+    split goes there, not 1/8 off an end; over [0, 0.5], whose end has them equal to within the
+    resolution sqrt(floor), the pair is certified; a pair that turns back is not a crossing."""
+    from diskfriction.continuation import certify
+    none, real, d = np.zeros(0, np.int64), np.arange(2), np.array([1.0, -1.0], complex)
+    crossing = certify.worst_uncertified_pair(np.array([0.0, 1.0], complex), np.array([1.0, 0.0], complex),
+                                              d, d, real, none, none, 0.5, 1e-12)
+    assert crossing[0] == pytest.approx(0.5, abs=1e-12) and crossing[2] and crossing[1].all()
+    resolved = certify.worst_uncertified_pair(np.array([0.0, 1.0], complex),
+                                              np.array([0.5, 0.5 + 1e-7], complex),
+                                              0.5 * d, 0.5 * d, real, none, none, 0.5, 1e-12)
+    assert np.isnan(resolved[0]) and not resolved[1].any()
+    touching = certify.worst_uncertified_pair(np.array([0.0, 1.0], complex), np.array([0.0, 1.0], complex),
+                                              d, -d, real, none, none, 0.5, 1e-12)
+    assert not touching[2] and touching[1].all()  # they approach and part: no crossing
 
 
 def test_pair_certifier_covers_conjugate_and_complex_real_pairs():
@@ -332,7 +360,6 @@ def test_partial_split_samples_find_the_collisions_of_full_ones(scene, matrix, k
     """Split samples as partial spectra (forced at every size: partial_from = 0) give the same
     collisions as full ones, to 1e-9, on the same branch, with fewer full spectra; k_max = 8
     sends more splits to the fallbacks (a full sample, upgrading the partial ones)."""
-    from diskfriction.continuation.linalg import measured
 
     system = System.from_scene(scene)
     runs, spent = {}, {}
@@ -433,3 +460,19 @@ def test_settled_samples_drop_their_vectors_and_the_scan_finds_the_same(monkeypa
     assert sum(released) == 0
     assert np.array_equal(lean.F_x, kept.F_x) and np.array_equal(lean.eigenvalues, kept.eigenvalues)
     assert [(c.p, c.kind, c.pair) for c in lean.collisions] == [(c.p, c.kind, c.pair) for c in kept.collisions]
+
+
+def test_modes_that_cross_without_interacting_cost_few_spectra():
+    """Twelve real eigenvalues k p and 3 - k p (k = 1..6), decoupled, cross each other 27
+    times over p in [0, 1]: no collision, and about one extra spectrum per crossing or less
+    (the old rule split each crossing 1/8 off the ends down to tol_p: 74 extra spectra)."""
+    from diskfriction.continuation import Options, problem_from_functions, solve_branch
+
+    k = np.arange(1, 7, dtype=float)
+    problem = problem_from_functions(lambda u, p: u - p, dG_du=lambda u, p: np.eye(1),
+                                     dG_dp=lambda u, p: -np.ones(1),
+                                     A=lambda u, p: np.diag(np.concatenate([k * p, 3.0 - k * p])))
+    with measured() as spent:
+        result = solve_branch(problem, [0.0], (0.0, 1.0), Options(workers=0))
+    assert result.success and result.collisions == () and result.branch.n_complex.max() == 0
+    assert spent.spectra - len(result.p) <= 27, spent.spectra - len(result.p)
