@@ -152,7 +152,7 @@ def _attempt(problem: Problem, x: Array, t: Array, ds: float, par: ContinuationP
     """One predictor-corrector step of length ds; raises StepRejected."""
     res = bordered_newton(problem, x + ds * t, t, par.newton_tol, par.max_newton)
     if not res.converged:
-        raise StepRejected(f"corrector failed (residual {res.residual:.3g})")
+        raise StepRejected(f"corrector failed ({res.failure()})")
     x_new, last = res.x, False
     try:
         t_new = tangent(problem, x_new, t)

@@ -17,19 +17,30 @@ from dataclasses import dataclass
 import numpy as np
 
 from .linalg import SingularMatrix, bordered, factorize
-from .problem import Problem
+from .problem import ROUNDING, Problem
 
 Array = np.ndarray
 
 
 @dataclass(frozen=True)
 class NewtonResult:
-    """x: last iterate; iterations: Newton updates made; residual: max|G(x)|."""
+    """x: last iterate; iterations: Newton updates made; residual: max|G(x)|; rounding: what
+    G rounds to at x, ROUNDING times the size of its terms (term_size; 0 if not evaluated)."""
 
     x: Array
     iterations: int
     residual: float
     converged: bool
+    rounding: float = 0.0
+
+    def failure(self) -> str:
+        """Why the corrector failed, in words: its residual, and, where that is within 10 times
+        what G rounds to, that the tolerance is below G's rounding."""
+        line = f"residual {self.residual:.3g}"
+        if 0.0 < self.residual <= 10.0 * self.rounding:
+            line += (f", at the rounding of G's terms there (about {self.rounding:.2g}): "
+                     f"newton_tol asks more than G can be computed to")
+        return line
 
 
 def bordered_matrix(problem: Problem, x: Array, border: Array):
@@ -49,8 +60,9 @@ def bordered_newton(problem: Problem, x_target: Array, border: Array,
 
     Converged when max|G| <= tol (the border row is linear, so it holds to rounding after
     the first update and exactly at the start), or, for a problem with `rounding` > 0, when
-    max|G| <= rounding * term_size: where G is as close to zero as its evaluation rounds. Fails on max_iter updates without
-    convergence, a non-finite residual or a singular bordered matrix.
+    max|G| <= rounding * term_size: where G is as close to zero as its evaluation rounds.
+    Fails on max_iter updates without convergence (saying what G rounds to there,
+    NewtonResult.failure), a non-finite residual or a singular bordered matrix.
     """
     x = np.array(x_target, dtype=float)
     for it in range(max_iter + 1):
@@ -61,16 +73,17 @@ def bordered_newton(problem: Problem, x_target: Array, border: Array,
         if r <= tol:
             return NewtonResult(x, it, r, True)
         M = bordered_matrix(problem, x, border)
-        if problem.rounding and r <= problem.rounding * term_size(M, x):
+        size = term_size(M, x)
+        if problem.rounding and r <= problem.rounding * size:
             return NewtonResult(x, it, r, True)  # G is not computed closer to 0 than this
         if it == max_iter:
-            break
+            return NewtonResult(x, max_iter, r, False, ROUNDING * size)
         rhs = np.append(G, border @ (x - x_target))
         try:
             x = x - factorize(M).solve(rhs)
         except SingularMatrix:
             return NewtonResult(x, it, r, False)
-    return NewtonResult(x, max_iter, r, False)
+    # the loop returns at it == max_iter at the latest
 
 
 def term_size(M, x: Array) -> float:

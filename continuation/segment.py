@@ -64,7 +64,7 @@ class Segment:
             return self.x_b.copy()
         res = bordered_newton(self.problem, self.secant_point(s), self.sigma, self.tol, self.max_iter)
         if not res.converged:
-            raise SegmentSolveError(f"corrector failed at s={s:.6g} (residual {res.residual:.3g})")
+            raise SegmentSolveError(f"corrector failed at s={s:.6g} ({res.failure()})")
         return res.x
 
 

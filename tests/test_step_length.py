@@ -44,3 +44,18 @@ def test_bratu_fold_is_located_though_g_rounds_above_the_tolerance():
     z = fsolve(extended, np.concatenate([fold.u, v0 / np.linalg.norm(v0), [fold.p]]), xtol=1e-14)
     assert np.abs(extended(z)).max() <= 1e-8 and 3.5 < z[-1] < 3.52
     assert fold.p == pytest.approx(z[-1], abs=1e-10)
+
+
+def test_a_problem_without_rounding_says_when_its_tolerance_is_below_g_s_rounding():
+    """The same Bratu problem with rounding 0 (a Problem subclass's default): the fold's
+    locator stalls, and its warning says the residual is at G's rounding."""
+    from diskfriction.continuation.problem import FunctionProblem
+
+    class Absolute(FunctionProblem):
+        rounding = 0.0
+
+    spec = load_example("bratu").bratu(50)
+    f = spec.problem
+    result = solve_branch(Absolute(f.G, f.G_u, f.G_p), spec.u0, spec.p_span, spec.options)
+    assert result.folds == () and len(result.warnings) == 1
+    assert "at the rounding of G's terms there" in result.warnings[0]
