@@ -73,11 +73,10 @@ def bordered_newton(problem: Problem, x_target: Array, border: Array,
         if r <= tol:
             return NewtonResult(x, it, r, True)
         M = bordered_matrix(problem, x, border)
-        size = term_size(M, x)
-        if problem.rounding and r <= problem.rounding * size:
+        if problem.rounding and r <= problem.rounding * term_size(M, x):
             return NewtonResult(x, it, r, True)  # G is not computed closer to 0 than this
         if it == max_iter:
-            return NewtonResult(x, max_iter, r, False, ROUNDING * size)
+            return NewtonResult(x, max_iter, r, False, ROUNDING * term_size(M, x))
         rhs = np.append(G, border @ (x - x_target))
         try:
             x = x - factorize(M).solve(rhs)
