@@ -198,10 +198,9 @@ def chain_params(args: argparse.Namespace, scene):
                      SlideParams(t_end, amplitude) if args.slide else None)
 
 
+NO_DYNAMICS = "a packing map runs no dynamics; `verify` runs them on one scene"
 PACKING_REFUSES = {"fx": "a packing's load is its strain: [shear] gamma in the scene",
-                   "slide": "a packing map runs no dynamics; `verify` runs them on one scene",
-                   "t_end": "a packing map runs no dynamics; `verify` runs them on one scene",
-                   "amplitude": "a packing map runs no dynamics; `verify` runs them on one scene"}
+                   "slide": NO_DYNAMICS, "t_end": NO_DYNAMICS, "amplitude": NO_DYNAMICS}
 """map's options a packing scene does not take, and why."""
 
 

@@ -123,8 +123,8 @@ def run_problem(args: argparse.Namespace) -> int:
     label = f"{path}:{name}"
     from diskfriction.continuation.differences import differenced
 
-    if differenced(spec.problem) is not None:
-        warn(f"{label}: {differenced(spec.problem)}")
+    if (line := differenced(spec.problem)) is not None:
+        warn(f"{label}: {line}")
     if span is None and spec.p_span is None:
         raise CommandError(f"bifurcate error: --p: needed, {label} has no p_span")
     span = span or spec.p_span

@@ -261,9 +261,10 @@ def _stateless(problem: Problem) -> bool:
 def special_points(problem: Problem, branch: Branch, options: Options, stateless: bool):
     """(folds, hopf, warnings, branch_points) of a finished branch of a stateless problem, as
     options.special_points asks (bifurcations.py): folds to |dx| <= 1e-9 and branch points to
-    1e-12 in the run's metric (a step over a branch point is none of its folds), Hopf points to |dp| <= detection.tol_p, their
-    points solved to max|G| <= newton_tol / 100 (with the branch's own tolerance a fold's p
-    would be off by up to ~newton_tol / |dG/dp|)."""
+    1e-12 in the run's metric (a step over a branch point is none of its folds), Hopf points
+    to |dp| <= detection.tol_p, their points solved to max|G| <= newton_tol / 100 (with the
+    branch's own tolerance a fold's p would be off by up to ~newton_tol / |dG/dp|); where no
+    Hopf point was found on a conservative spectrum, a warning says why."""
     tol = LOCATOR_TOL * options.newton_tol
     asked = options.special_points if stateless else ()
     crossings = branch_point_steps(problem, branch) if "branch" in asked else []
@@ -277,7 +278,7 @@ def special_points(problem: Problem, branch: Branch, options: Options, stateless
             found[kind] = tuple(locators[kind]())
         except SegmentSolveError as error:
             warnings.append(f"{kind} points not located: {error}")
-    if "hopf" in asked and conservative(branch.eigenvalues):
+    if "hopf" in asked and not found["hopf"] and conservative(branch.eigenvalues):
         warnings.append(CONSERVATIVE)
     return found["fold"], found["hopf"], tuple(warnings), found["branch"]
 
@@ -343,7 +344,7 @@ def switch_branch(problem: Problem, result: BranchResult, k: int, p_stop: float,
     if not first.converged:
         raise ContinuationError(f"no point of the second branch one step (ds = {params.ds:g}) "
                                 f"from the branch point at p = {point.p:.12g}: the corrector "
-                                f"stopped at residual {first.residual:.2e}")
+                                f"failed ({first.failure()})")
     return solve_branch(problem, first.x[:-1], (float(first.x[-1]), p_stop), options,
                         callback=callback)
 

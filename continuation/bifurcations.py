@@ -26,16 +26,16 @@ from .linalg import dense, log_determinant
 from .newton import bordered_matrix, tangent
 from .problem import Problem
 from .segment import Segment, refine_sign_change
-from .spectra import DEFAULT_REL_TOL, eigen_status, imag_threshold
+from .spectra import DEFAULT_REL_TOL, eigen_status, imag_threshold, status_at
 
 Array = np.ndarray
 
 
 @dataclass(frozen=True)
 class SpecialPoint:
-    """kind "fold" | "hopf" | "branch" (a simple branch point); p, u at the located point; bracket (p_lo, p_hi) of the final
-    Illinois bracket; step k of the branch step containing it; value: 0 for a fold, the
-    eigenvalue (~ i omega) for a Hopf point."""
+    """kind "fold" | "hopf" | "branch" (a simple branch point); p, u at the located point;
+    bracket (p_lo, p_hi) of the final Illinois bracket; step k of the branch step containing
+    it; value: 0 for a fold or a branch point, the eigenvalue (~ i omega) for a Hopf point."""
 
     kind: str
     p: float
@@ -147,9 +147,7 @@ below any real part a physical spectrum would call small."""
 def real_signs(eigvals: Array, rel_tol: float = DEFAULT_REL_TOL) -> Array:
     """Per eigenvalue: +1 if Re > thr, -1 if Re < -thr, 0 on the imaginary axis up to rounding,
     thr = rel_tol max|lambda| (the threshold that tells complex from real, spectra.py)."""
-    thr = imag_threshold(eigvals, rel_tol)
-    re = np.real(eigvals)
-    return (re > thr).astype(np.int8) - (re < -thr).astype(np.int8)
+    return status_at(1j * np.asarray(eigvals), imag_threshold(eigvals, rel_tol))  # Im(i lambda) = Re lambda
 
 
 def symmetric(eigvals: Array, tol: float = SYMMETRY_TOL) -> bool:

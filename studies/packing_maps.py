@@ -6,9 +6,10 @@ A cell (packing_cell, a dask task as studies/maps.py runs it, raw units) prepare
 packing, shears it over the scene's strain range passing up to `plastic_events` plastic events
 (packings/shear.py; with `window` only the eigenvalues with Re lambda in it, by sparse
 shift-invert) and summarises the branch (PACKING_COLUMNS):
-  * status: "ok" (the shear reached the range's end), "ended" (it stopped before: `reason`
-    says where and why) or "failed" (no branch: the preparation or the first segment failed;
-    `reason` is its own line);
+  * status: "ok" (the shear reached the range's end), "ended" (it stopped before, at a
+    plastic event it may not pass or where the branch ended: `reason` says where and why) or
+    "failed" (the preparation or the shear raised, e.g. a spectral window crowded: `reason`
+    is its line, and nothing of the branch is kept);
   * gamma_end, the strain reached; states, the accepted equilibria; complex_fraction, the
     fraction of them with at least one complex pair of the matrix (in the window, if one);
     pairs_mean, the mean number of pairs per state;
@@ -62,8 +63,7 @@ def packing_cell_seconds(scene: PackingScene, params: PackingMapParams) -> float
     """Rough wall time of one cell [s] (CELL_START_SECONDS + SECONDS_PER_STRAIN_N2 N^2 gamma;
     without a window), for the
     estimate `map` prints before it starts."""
-    g0, g1 = scene.gamma_range
-    return CELL_START_SECONDS + SECONDS_PER_STRAIN_N2 * scene.N ** 2 * g1
+    return CELL_START_SECONDS + SECONDS_PER_STRAIN_N2 * scene.N ** 2 * scene.gamma_range[1]
 
 
 def contact_frequency(scene: PackingScene) -> float:
@@ -130,7 +130,7 @@ def packing_cell(scene: PackingScene, params: PackingMapParams) -> dict:
                        plastic_events=params.plastic_events, window=params.window)
     except (ContinuationError, MissedContact, RelaxationFailed, WindowCrowded, OneLineError,
             np.linalg.LinAlgError) as error:
-        summary |= {"status": "failed", "reason": f"no branch: {error}"}
+        summary |= {"status": "failed", "reason": f"the shear stopped: {error}"}
     else:
         summary |= branch_summary(scene, branch)
         record |= {"collisions": collision_records(branch),
