@@ -410,7 +410,7 @@ def _commit(problem: Problem, x: Array, step: _Step, end: Sample, par: Continuat
     if not changed:
         if step.event and detection.slopes:
             dA = matrix_derivative(problem, step.x, step.tangent, +1)
-            end = end.with_slopes(eigenvalue_slopes(end.system, dA))
+            end = end.with_slopes(eigenvalue_slopes(end.system, dA), dA)
         return step, end
     res = fixed_p_newton(problem, step.x[:-1], float(step.x[-1]), par.newton_tol, par.max_newton)
     if not res.converged:

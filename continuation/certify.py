@@ -126,23 +126,26 @@ def _crossing(g_a: float, g_b: float, dg_a: float, dg_b: float, rho: float,
 
 
 @numba.njit(cache=True, error_model="numpy")
-def worst_uncertified_pair(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, real: Array,
-                           upper: Array, partner: Array, rho: float, floor: float,
-                           doubt: float = 0.25) -> tuple[float, Array]:
-    """Certify every pair that could collide over the interval (t in [0, 1]); lam_*: complex
-    eigenvalues at the ends in tracked order, d_*: their slopes d lambda / dt. Pairs: two real
-    eigenvalues (labels `real`), an upper complex one with a real one (`upper` x `real`), and
-    each upper one with its conjugate partner (`upper[k]`, `partner[k]`; partner is empty
-    when there is no lower one); in that order.
+def uncertified_pairs(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, real: Array,
+                      upper: Array, partner: Array, rho: float, floor: float,
+                      doubt: float) -> tuple[Array, Array, Array, Array, Array]:
+    """Every pair that could collide over the interval (t in [0, 1]) and is not certified;
+    lam_*: complex eigenvalues at the ends in tracked order, d_*: their slopes d lambda / dt.
+    Pairs: two real eigenvalues (labels `real`), an upper complex one with a real one (`upper`
+    x `real`), and each upper one with its conjugate partner (`upper[k]`, `partner[k]`;
+    partner is empty when there is no lower one); in that order.
 
     A pair is uncertified if its cubic Hermite model H of y = |lambda_i - lambda_j|^2 (y and
     y' = 2 Re(conj(lambda_i - lambda_j)(lambda_i' - lambda_j')) at both ends) has
-        min_[0,1] H - doubt |c3| < rho min(y_a, y_b) - floor.
-    Returns (t of the model minimum of the uncertified pair with the smallest min(y_a, y_b)
-    (the first such), or nan if every pair is certified; the mask of labels in any uncertified
-    pair). O(pairs) time, no pair arrays."""
-    worst_y, worst_t, worst_crossing = math.inf, math.nan, False
-    trouble = np.zeros(lam_a.size, np.bool_)
+        min_[0,1] H - doubt |c3| < rho min(y_a, y_b) - floor,
+    and, for two real ones, _crossing does not certify them either. Returns arrays (i, j,
+    min(y_a, y_b), where to split: the model minimum or a crossing's root, crossing?) in pair
+    order. O(pairs) time, no pair arrays."""
+    I = []
+    J = []
+    Y = []
+    T = []
+    C = []
     n_real = real.size
     resolution = math.sqrt(floor)
     for a in range(n_real):
@@ -155,29 +158,62 @@ def worst_uncertified_pair(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, r
                 passed, root = _crossing((lam_a[i] - lam_a[j]).real, (lam_b[i] - lam_b[j]).real,
                                          (d_a[i] - d_a[j]).real, (d_b[i] - d_b[j]).real, rho,
                                          resolution)
-                if passed:
-                    continue
-                trouble[i] = trouble[j] = True
-                if y < worst_y:
-                    worst_y, worst_t = y, (t if math.isnan(root) else root)
-                    worst_crossing = not math.isnan(root)
-    for i in upper:
-        for j in real:
-            bad, y, t = _pair_margin(lam_a[i] - lam_a[j], lam_b[i] - lam_b[j], d_a[i] - d_a[j],
-                                     d_b[i] - d_b[j], rho, floor, doubt)
-            if bad:
-                trouble[i] = trouble[j] = True
-                if y < worst_y:
-                    worst_y, worst_t, worst_crossing = y, t, False
-    for k in range(partner.size):
-        i, j = upper[k], partner[k]
+                if not passed:
+                    I.append(i)
+                    J.append(j)
+                    Y.append(y)
+                    T.append(t if math.isnan(root) else root)
+                    C.append(not math.isnan(root))
+    n_upper, n_partner = upper.size, partner.size
+    for k in range(n_upper * n_real + n_partner):  # upper x real, then upper with partner
+        if k < n_upper * n_real:
+            i, j = upper[k // n_real], real[k % n_real]
+        else:
+            i, j = upper[k - n_upper * n_real], partner[k - n_upper * n_real]
         bad, y, t = _pair_margin(lam_a[i] - lam_a[j], lam_b[i] - lam_b[j], d_a[i] - d_a[j],
                                  d_b[i] - d_b[j], rho, floor, doubt)
         if bad:
-            trouble[i] = trouble[j] = True
-            if y < worst_y:
-                worst_y, worst_t, worst_crossing = y, t, False
-    return worst_t, trouble, worst_crossing
+            I.append(i)
+            J.append(j)
+            Y.append(y)
+            T.append(t)
+            C.append(False)
+    return (np.array(I, np.int64), np.array(J, np.int64), np.array(Y, np.float64),
+            np.array(T, np.float64), np.array(C, np.bool_))
+
+
+def worst_uncertified_pair(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, real: Array,
+                           upper: Array, partner: Array, rho: float, floor: float,
+                           doubt: float = 0.25, spared=None) -> tuple[float, Array, bool]:
+    """Of the uncertified_pairs (same arguments), the pairs not spared (a function of the
+    arrays (i, j) giving a mask of pairs to leave out, or None): (where to split, at the pair
+    with the smallest min(y_a, y_b) (the first such), or nan if none is left; the mask of
+    labels in any of them; whether that split is at a crossing's root)."""
+    I, J, Y, T, C = uncertified_pairs(lam_a, lam_b, d_a, d_b, real, upper, partner, rho, floor,
+                                      doubt)
+    if spared is not None and I.size:
+        keep = ~spared(I, J)
+        I, J, Y, T, C = I[keep], J[keep], Y[keep], T[keep], C[keep]
+    trouble = np.zeros(lam_a.size, bool)
+    if not I.size:
+        return math.nan, trouble, False
+    trouble[I] = trouble[J] = True
+    k = int(np.argmin(Y))
+    return float(T[k]), trouble, bool(C[k])
+
+
+def decoupled(g: Array, dg: Array, coupling: Array, thr: float) -> Array:
+    """Mask of pairs that do not interact near a sample, by their 2 x 2 model there: in the
+    eigenbasis at the sample, A(tau) ~ diag(lambda_i, lambda_j) + tau M (M = L dA/dtau R), the
+    pair's discriminant is D(tau) = (g + tau g')^2 + 4 tau^2 m_ij m_ji (g = lambda_i -
+    lambda_j, g' its slope, `coupling` = m_ij m_ji). If D dips below 0, the imaginary part of
+    the pair born there reaches at most |g| sqrt|c| / sqrt(g'^2 - 4|c|) (c the coupling); the
+    pair is decoupled if that bound is within the status threshold thr (an excursion no sample
+    could see as complex) and g'^2 > 4|c|. Modes of different symmetry (Fourier modes of a
+    homogeneous state) have c at rounding level and pass through each other."""
+    c = np.abs(coupling)
+    slope2 = np.abs(dg) ** 2
+    return (slope2 > 4.0 * c) & (np.abs(g) ** 2 * c <= thr * thr * (slope2 - 4.0 * c))
 
 
 def cubic_roots_in_unit(c: tuple[float, ...]) -> list[float]:

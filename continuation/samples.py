@@ -47,7 +47,9 @@ class Sample:
     the point, its labels or its slopes change (at, relabel, with_slopes; any replace() that
     changes the data must pass uid=object()), the same one when only the vectors are released
     (without_vectors). A token of its own, not a number from a shared counter: no state is
-    shared between samples, and none collides between a scan worker and this process."""
+    shared between samples, and none collides between a scan worker and this process.
+    dA: the stability matrix's derivative d A / d tau along the tangent that gave the slopes
+    (dense or sparse), kept with the vectors for pair_coupling."""
 
     s: float
     x: Array
@@ -62,6 +64,7 @@ class Sample:
     gaps: Optional[Array] = None
     known: Optional[Array] = None
     disc: Optional[tuple[float, float]] = None
+    dA: object = None
     uid: object = field(default_factory=object, repr=False, compare=False)
 
     @property
@@ -72,14 +75,15 @@ class Sample:
         """The same point at another segment coordinate (a new step starts at its old end)."""
         return replace(self, s=s, uid=object())
 
-    def with_slopes(self, dlam: Array) -> "Sample":
-        """The same point with other eigenvalue slopes d lambda / d tau (after an event)."""
-        return replace(self, dlam=dlam, uid=object())
+    def with_slopes(self, dlam: Array, dA=None) -> "Sample":
+        """The same point with other eigenvalue slopes d lambda / d tau (after an event), from
+        the matrix derivative dA."""
+        return replace(self, dlam=dlam, dA=dA, uid=object())
 
     def without_vectors(self) -> "Sample":
         """The same sample without its eigenvectors (the slopes stay), under the same uid: the
         verdicts cached on it stay valid (collisions.StepScan.release_vectors)."""
-        return replace(self, system=None)
+        return replace(self, system=None, dA=None)
 
     def relabel(self, perm: Array) -> "Sample":
         """Labels permuted: new[i] = old[perm[i]]."""
@@ -116,6 +120,29 @@ def matrix_derivative(problem: Problem, x: Array, t: Array, side: int = 0):
         return (A(x + h * t) - A(x - h * t)) * (0.5 / h)
     d = h * side
     return (A(x + d * t) * 4.0 - A(x) * 3.0 - A(x + 2.0 * d * t)) * (0.5 / d)
+
+
+def pair_coupling(sample: Sample, I: Array, J: Array) -> Array:
+    """m_ij m_ji for the label pairs (I[k], J[k]), m_ij = l_i^H (dA/dtau) r_j the coupling of
+    eigenvalue j into i along the branch (in the sample's eigenbasis, with l_i^H r_i = 1); nan
+    where the sample holds no vectors or matrix derivative for a label (certify.decoupled)."""
+    out = np.full(I.size, np.nan, complex)
+    system = sample.system
+    if system is None or sample.dA is None or not I.size:
+        return out
+    labels = np.union1d(I, J)
+    columns = labels if system.columns is None else system.columns[labels]
+    have = columns >= 0
+    if not have.any():
+        return out
+    right = system.right[:, columns[have]]
+    m = system.left[columns[have]] @ (sample.dA @ right)
+    at = np.full(labels.size, -1)
+    at[have] = np.arange(int(have.sum()))
+    i, j = at[np.searchsorted(labels, I)], at[np.searchsorted(labels, J)]
+    ok = (i >= 0) & (j >= 0)
+    out[ok] = m[i[ok], j[ok]] * m[j[ok], i[ok]]
+    return out
 
 
 def prediction_cost(ref_values: Array, ref_dlam: Array, values: Array, dlam: Array,
@@ -296,16 +323,18 @@ def label_gaps(values: Array, excluded: Array, guard: Optional[Array],
 
 def make_sample(s: float, x: Array, system: Eigensystem, rel_tol: float,
                 reference: Optional[Sample] = None, tangent: Optional[Array] = None,
-                dlam: Optional[Array] = None) -> Sample:
+                dlam: Optional[Array] = None, dA=None) -> Sample:
     """Sample at s, labels continuing `reference` when given (by prediction when both carry
-    slopes, else by nearest eigenvalue: spectra.match_eigenvalues)."""
+    slopes, else by nearest eigenvalue: spectra.match_eigenvalues); dA: the matrix derivative
+    that gave the slopes."""
     values = np.asarray(system.values, dtype=complex)
     excluded = system.excluded if system.excluded is not None else np.zeros(values.size, bool)
     system = replace(system, values=values, excluded=excluded)
     gaps = None if dlam is None else label_gaps(values, excluded, system.guard, system.disc)
     sample = Sample(s, x, values, eigen_status(values, rel_tol), imag_threshold(values, rel_tol),
                     excluded, tangent, dlam, system if system.right is not None else None,
-                    system.guard, gaps, disc=system.disc)
+                    system.guard, gaps, disc=system.disc,
+                    dA=dA if system.right is not None else None)
     return sample if reference is None else sample.relabel(continuation_perm(reference, sample))
 
 
@@ -317,8 +346,8 @@ def sample_at(problem: Problem, s: float, x: Array, rel_tol: float, reference: O
     if tangent is None:
         return make_sample(s, x, problem.eigensystem(u, p), rel_tol, reference)
     system = problem.eigensystem(u, p, vectors=True)
-    dlam = eigenvalue_slopes(system, matrix_derivative(problem, x, tangent, side))
-    return make_sample(s, x, system, rel_tol, reference, tangent, dlam)
+    dA = matrix_derivative(problem, x, tangent, side)
+    return make_sample(s, x, system, rel_tol, reference, tangent, eigenvalue_slopes(system, dA), dA)
 
 
 def partial_sample_at(problem: Problem, s: float, x: Array, left: Sample, clusters: list,
@@ -374,4 +403,4 @@ def partial_sample_at(problem: Problem, s: float, x: Array, left: Sample, cluste
     guard = None if left.guard is None else left.guard.copy()
     return Sample(s, x, eigvals, status, left.thr, excluded, tangent, dlam_all,
                   Eigensystem(eigvals, np.hstack(rights), np.vstack(lefts), excluded, guard, columns),
-                  guard, gaps, known)
+                  guard, gaps, known, dA=dA)

@@ -31,7 +31,7 @@ from typing import Optional
 import numpy as np
 
 from . import certify
-from .samples import Sample, known
+from .samples import Sample, known, pair_coupling
 from .segment import Segment
 from .spectra import Kind, conjugate_pairing
 
@@ -134,7 +134,7 @@ def hermite_split(a: Sample, b: Sample, events: list, active: Array, segment: Se
     thr = max(a.thr, b.thr)
     t_worst, pairs, crossing = certify.worst_uncertified_pair(a.eigvals, b.eigvals, d_a, d_b, real,
                                                               upper, partner, rho, 4.0 * thr * thr,
-                                                              doubt)
+                                                              doubt, lambda I, J: _decoupled(a, b, I, J))
     labels = ~(a.excluded | b.excluded) & (a.status == b.status) & active
     wrong = labels & certify.inconsistent_labels(a.eigvals, b.eigvals, d_a, d_b, a.gaps, b.gaps,
                                                  rho, 2.0 * thr)
@@ -151,11 +151,14 @@ def hermite_split(a: Sample, b: Sample, events: list, active: Array, segment: Se
         return split(0.5, _near_path(a, b, wrong))
     others = np.flatnonzero((a.status == b.status) & (a.status >= 0) & ~a.excluded & ~b.excluded & active)
     models = [event_model(a, b, i, j, d_a, d_b) for i, j, _ in events]
-    for m, D in models:  # one sign change of D per event, and each pair apart from the rest
+    for (i, j, _), (m, D) in zip(events, models):  # one sign change of D per event, each pair apart
         if len(certify.cubic_roots_in_unit(D)) != 1:
             return split(0.5, in_events)
         bad, t_min = certify.event_pair_clearance(m, D, a.eigvals[others], b.eigvals[others],
                                                   d_a[others], d_b[others], rho, 4.0 * thr * thr)
+        if bad.any():  # an eigenvalue decoupled from both members may pass them
+            k = others[bad]
+            bad[bad] = ~(_decoupled(a, b, np.full(k.size, i), k) & _decoupled(a, b, np.full(k.size, j), k))
         if bad.any():
             near = np.zeros(active.size, bool)
             near[others[bad]] = True
@@ -165,6 +168,23 @@ def hermite_split(a: Sample, b: Sample, events: list, active: Array, segment: Se
         if not apart:
             return split(t_worst, in_events)
     return None
+
+
+def _decoupled(a: Sample, b: Sample, I: Array, J: Array) -> Array:
+    """Mask of the label pairs (I[k], J[k]) that are not conjugate partners and are decoupled
+    at both ends (certify.decoupled on each end's pair_coupling, against the larger status
+    threshold): modes that do not interact, which may pass through each other without a sample
+    between. False where an end holds no vectors."""
+    out = (a.status[I] * a.status[J] >= 0) & (b.status[I] * b.status[J] >= 0)
+    thr = max(a.thr, b.thr)
+    for smp in (a, b):
+        if not out.any():
+            break
+        c = pair_coupling(smp, I[out], J[out])
+        g, dg = smp.eigvals[I[out]] - smp.eigvals[J[out]], smp.dlam[I[out]] - smp.dlam[J[out]]
+        with np.errstate(invalid="ignore"):
+            out[out] = ~np.isnan(c) & certify.decoupled(g, dg, c, thr)
+    return out
 
 
 def event_model(a: Sample, b: Sample, i: int, j: int, d_a: Array, d_b: Array):

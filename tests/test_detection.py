@@ -462,11 +462,12 @@ def test_settled_samples_drop_their_vectors_and_the_scan_finds_the_same(monkeypa
     assert [(c.p, c.kind, c.pair) for c in lean.collisions] == [(c.p, c.kind, c.pair) for c in kept.collisions]
 
 
-def test_modes_that_cross_without_interacting_cost_few_spectra():
+def test_modes_that_cross_without_interacting_cost_no_extra_spectrum():
     """Twelve real eigenvalues k p and 3 - k p (k = 1..6), decoupled, cross each other 33
-    times inside p in (0, 1) (at p = 3 / (k + k'), 9 values): no collision, and fewer extra
-    spectra than crossings (9 measured; the old rule split each crossing 1/8 off the ends
-    down to tol_p: 74 extra spectra)."""
+    times inside p in (0, 1) (at p = 3 / (k + k'), 9 values): no collision, and no spectrum
+    beyond one per point (their coupling l_i^H dA r_j is 0: certify.decoupled). Splitting at
+    each crossing's root cost 9 extra spectra, the older rule (1/8 off the ends down to tol_p)
+    74."""
     from diskfriction.continuation import Options, problem_from_functions, solve_branch
 
     k = np.arange(1, 7, dtype=float)
@@ -476,4 +477,48 @@ def test_modes_that_cross_without_interacting_cost_few_spectra():
     with measured() as spent:
         result = solve_branch(problem, [0.0], (0.0, 1.0), Options(workers=0))
     assert result.success and result.collisions == () and result.branch.n_complex.max() == 0
-    assert spent.spectra - len(result.p) <= 27, spent.spectra - len(result.p)
+    assert spent.spectra == len(result.p), spent.spectra - len(result.p)
+
+
+def test_decoupled_bounds_the_imaginary_part_of_the_pairs_two_by_two_model():
+    """certify.decoupled against the exact eigenvalues of diag(g, 0) + tau M on a fine grid of
+    tau: where it says decoupled, the largest |Im| stays within thr; where the model's largest
+    |Im| exceeds thr, it says coupled (the bound |g| sqrt|c| / sqrt(g'^2 - 4|c|) is exact for
+    the linear model, c = m_12 m_21, g' = m_11 - m_22)."""
+    from diskfriction.continuation import certify
+    rng = np.random.default_rng(5)
+    tau = np.linspace(-40.0, 40.0, 400001)
+    thr, said = 1e-3, {True: 0, False: 0}
+    for _ in range(300):
+        g = rng.normal()
+        m = rng.normal(size=(2, 2)) * np.array([[1.0, 10.0 ** rng.uniform(-5, 0)],
+                                                 [10.0 ** rng.uniform(-5, 0), 1.0]])
+        m[0, 1] *= rng.choice([-1.0, 1.0])
+        c, dg = m[0, 1] * m[1, 0], m[0, 0] - m[1, 1]
+        D = (g + tau * dg) ** 2 + 4.0 * tau * tau * c  # the model's discriminant
+        top = 0.5 * np.sqrt(np.maximum(-D, 0.0)).max()
+        verdict = bool(certify.decoupled(np.array([g]), np.array([dg]), np.array([c]), thr)[0])
+        said[verdict] += 1
+        if verdict:
+            assert top <= thr * (1 + 1e-6), (g, m, top)
+        if top > 1.01 * thr and dg * dg > 4.0 * abs(c):
+            assert not verdict, (g, m, top)
+    assert min(said.values()) >= 30, said  # both outcomes exercised
+
+
+def test_a_crossing_through_a_narrow_complex_bubble_is_not_taken_for_decoupled():
+    """[[p - p0, e], [-e, p0 - p]] has eigenvalues +-sqrt((p - p0)^2 - e^2): from afar two real
+    eigenvalues that cross (the labels p - p0 and p0 - p), but complex on |p - p0| < e. Their
+    coupling is not zero, so the pair is split, not certified: the birth at p0 - e and the
+    death at p0 + e are found with steps 700 times the bubble's width."""
+    from diskfriction.continuation import Options, problem_from_functions, solve_branch
+
+    p0, e = 0.4123, 1e-5
+    problem = problem_from_functions(lambda u, p: u - p, dG_du=lambda u, p: np.eye(1),
+                                     dG_dp=lambda u, p: -np.ones(1),
+                                     A=lambda u, p: np.array([[p - p0, e], [-e, p0 - p]]))
+    result = solve_branch(problem, [0.0], (0.0, 1.0), Options(workers=0))
+    assert result.success and np.diff(result.p).max() >= 500 * 2 * e
+    kinds = [(c.kind, c.p) for c in result.collisions]
+    assert [k for k, _ in kinds] == ["birth", "death"]
+    assert [p for _, p in kinds] == pytest.approx([p0 - e, p0 + e], abs=1e-10)

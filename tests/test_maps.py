@@ -208,5 +208,5 @@ def test_the_estimate_printed_first_grows_with_what_a_cell_does(tmp_path):
     small, large = Scene(N=10, eps=1e-4), Scene(N=100, eps=1e-4)
     assert cell_seconds(small, sweep) < cell_seconds(small, slide) < cell_seconds(small, longer)
     assert cell_seconds(small, slide) < cell_seconds(large, slide)
-    cells = map_cells(Scene(), [Axis("contacts.mu", grid_values(5.0, 10.0, 100_000))], "x")
+    cells = map_cells(Scene(), [Axis("contacts.mu", grid_values(5.0, 10.0, 10_000))], "x")
     assert estimate(cells, slide, tmp_path, 2, False).endswith("h on 2 workers (a rough estimate)")
