@@ -28,7 +28,7 @@ import scipy.sparse as sp
 from diskfriction.errors import OneLineError
 
 from .arclength import Callback, ContinuationError, ContinuationParams, continuation
-from .bifurcations import (CONSERVATIVE, SpecialPoint, branch_point_steps, conservative,
+from .bifurcations import (CONSERVATIVE, SpecialPoint, branch_point_brackets, conservative,
                            locate_branch_points, locate_folds, locate_hopf, other_direction)
 from .branch import Branch
 from .collisions import Collision, DetectionParams
@@ -267,8 +267,10 @@ def special_points(problem: Problem, branch: Branch, options: Options, stateless
     Hopf point was found on a conservative spectrum, a warning says why."""
     tol = LOCATOR_TOL * options.newton_tol
     asked = options.special_points if stateless else ()
-    crossings = branch_point_steps(problem, branch) if "branch" in asked else []
-    locators = {"fold": lambda: locate_folds(problem, branch, newton_tol=tol, skip=tuple(crossings)),
+    crossings = branch_point_brackets(problem, branch, tol, rel_tol=options.detection.rel_tol) \
+        if "branch" in asked else []
+    steps = tuple(sorted({k for k, _, _ in crossings}))
+    locators = {"fold": lambda: locate_folds(problem, branch, newton_tol=tol, skip=steps),
                 "branch": lambda: locate_branch_points(problem, branch, crossings, newton_tol=tol),
                 "hopf": lambda: locate_hopf(problem, branch, tol_p=options.detection.tol_p,
                                             rel_tol=options.detection.rel_tol, newton_tol=tol)}

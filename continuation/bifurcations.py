@@ -5,7 +5,7 @@ the Illinois method along the step's secant segment (segment.py):
   fold  (limit point):  psi(s) = t_p(s), the p component of the unit tangent at x(s)
                         (bordered with the secant), zero where the branch turns back in p;
   branch point:         psi(s) = det [[G_u, G_p], [sigma^T]] at x(s), sigma the step's
-                        secant, zero where a second branch crosses (branch_point_steps);
+                        secant, zero where a second branch crosses (branch_point_brackets);
   Hopf:                 psi(s) = Re lambda(s) of a complex pair (status +1 at both ends),
                         lambda(s) the upper eigenvalue nearest to the interpolated one;
                         only where Re goes from clearly below the imaginary axis to clearly
@@ -46,11 +46,12 @@ class SpecialPoint:
 
 
 def _locate(problem: Problem, branch: Branch, k: int, psi: Callable[[Segment, Array, float], float],
-            done_tol: float, newton_tol: float, max_newton: int, by_x: bool):
-    """Refine the sign change of psi over step k; returns (x at the interpolated root, p bracket)."""
+            done_tol: float, newton_tol: float, max_newton: int, by_x: bool,
+            span: tuple[float, float] = (0.0, 1.0)):
+    """Refine the sign change of psi over step k, between segment coordinates span (default the
+    whole step); returns (x at the interpolated root, p bracket)."""
     seg = Segment(problem, branch.x[k], branch.x[k + 1], newton_tol, max_newton)
-    pts = {0.0: seg.x_a, 1.0: seg.x_b}
-    vals = {0.0: psi(seg, seg.x_a, 0.0), 1.0: psi(seg, seg.x_b, 1.0)}
+    pts, vals = {}, {}
 
     def f(s: float) -> float:
         pts[s] = seg.point(s)
@@ -61,7 +62,7 @@ def _locate(problem: Problem, branch: Branch, k: int, psi: Callable[[Segment, Ar
         d = pts[hi] - pts[lo]
         return (np.linalg.norm(d) if by_x else abs(d[-1])) <= done_tol or hi - lo <= 1e-14
 
-    lo, hi = refine_sign_change(f, 0.0, vals[0.0], 1.0, vals[1.0], done)
+    lo, hi = refine_sign_change(f, span[0], f(span[0]), span[1], f(span[1]), done)
     t = 0.0 if lo == hi else vals[lo] / (vals[lo] - vals[hi])
     x = pts[lo] + t * (pts[hi] - pts[lo])
     return x, (min(pts[lo][-1], pts[hi][-1]), max(pts[lo][-1], pts[hi][-1]))
@@ -74,32 +75,46 @@ def bordered_determinant(problem: Problem, x: Array, border: Array) -> float:
     return float(sign * np.exp(logabs / x.size))
 
 
-def branch_point_steps(problem: Problem, branch: Branch) -> list[int]:
-    """The steps k over which the branch passes a simple branch point: the determinant of
-    [[G_u, G_p], [sigma^T]], sigma the step's unit secant, changes sign between its ends.
-    On a regular branch it is (sigma . t) det [[G_u, G_p], [t^T]] with t the oriented unit
-    tangent, of one sign along the branch and through a fold (where det G_u changes sign);
-    it changes sign where a second branch crosses (dim ker [G_u, G_p] = 2)."""
-    x = branch.x
-    steps = []
+def branch_point_brackets(problem: Problem, branch: Branch, newton_tol: float = 1e-12,
+                          max_newton: int = 10,
+                          rel_tol: float = DEFAULT_REL_TOL) -> list[tuple[int, float, float]]:
+    """Where the branch passes simple branch points: (step k, s_lo, s_hi), a bracket in the
+    step's segment coordinate over which the determinant of [[G_u, G_p], [sigma^T]] (sigma the
+    step's unit secant) changes sign. On a regular branch it is (sigma . t) det [[G_u, G_p],
+    [t^T]] with t the oriented unit tangent, of one sign along the branch and through a fold
+    (where det G_u changes sign); it changes sign where a second branch crosses (dim ker
+    [G_u, G_p] = 2). Two branch points in one step leave the ends' signs alike: where the
+    tracked spectrum has two or more real eigenvalues changing sign over the step (Turing
+    points of neighbouring modes), the determinant is also taken between their estimated
+    crossings (linear in the step), and each sign change there is a bracket."""
+    x, lam = branch.x, branch.eigenvalues
+    found = []
     for k in range(len(branch) - 1):
-        d = x[k + 1] - x[k]
-        sigma = d / np.linalg.norm(d)
-        if bordered_determinant(problem, x[k], sigma) * bordered_determinant(problem, x[k + 1], sigma) < 0:
-            steps.append(k)
-    return steps
+        seg = Segment(problem, x[k], x[k + 1], newton_tol, max_newton)
+        ends = lam[k:k + 2]
+        real = (eigen_status(ends[0], rel_tol) == 0) & (eigen_status(ends[1], rel_tol) == 0)
+        re0, re1 = ends[0].real[real], ends[1].real[real]
+        turning = re0 * re1 < 0.0
+        crossings = np.sort(re0[turning] / (re0[turning] - re1[turning]))
+        nodes = np.concatenate([[0.0], 0.5 * (crossings[1:] + crossings[:-1]), [1.0]])
+        signs = [np.sign(bordered_determinant(problem, seg.point(s), seg.sigma)) for s in nodes]
+        found += [(k, float(nodes[m]), float(nodes[m + 1])) for m in range(nodes.size - 1)
+                  if signs[m] * signs[m + 1] < 0]
+    return found
 
 
-def locate_branch_points(problem: Problem, branch: Branch, steps: list[int], tol_x: float = 1e-12,
-                         newton_tol: float = 1e-12, max_newton: int = 10) -> list[SpecialPoint]:
-    """Branch points: the sign change of bordered_determinant over each of `steps`
-    (branch_point_steps), refined until |x_hi - x_lo| <= tol_x (kind "branch", value 0)."""
+def locate_branch_points(problem: Problem, branch: Branch, brackets: list[tuple[int, float, float]],
+                         tol_x: float = 1e-12, newton_tol: float = 1e-12,
+                         max_newton: int = 10) -> list[SpecialPoint]:
+    """Branch points: the sign change of bordered_determinant over each of `brackets`
+    (branch_point_brackets), refined until |x_hi - x_lo| <= tol_x (kind "branch", value 0)."""
     def psi(seg: Segment, x: Array, s: float) -> float:
         return bordered_determinant(problem, x, seg.sigma)
 
     found = []
-    for k in steps:
-        x, bracket = _locate(problem, branch, int(k), psi, tol_x, newton_tol, max_newton, by_x=True)
+    for k, s_lo, s_hi in brackets:
+        x, bracket = _locate(problem, branch, int(k), psi, tol_x, newton_tol, max_newton, by_x=True,
+                             span=(s_lo, s_hi))
         found.append(SpecialPoint("branch", float(x[-1]), x[:-1], bracket, int(k), 0.0))
     return found
 

@@ -10,9 +10,13 @@ Jacobian decouples into one 2 x 2 block per Fourier mode k = 1..N,
 
 so real eigenvalues of different modes pass through each other as B moves (they do not
 interact), while each mode's pair collides where its block's discriminant vanishes
-(collision_points) and may cross the imaginary axis. The certifier sees those crossings as
-decoupled pairs (certify.decoupled) and spends no spectrum on them (docs/api.md, Limits).
-A = 2, D_u = 1.6e-3, D_v = 8e-3, B from 1 to 5.5, N = 50: three collisions, two Hopf points.
+(collision_points), crosses the imaginary axis where its trace vanishes with a positive
+determinant (hopf_points), and a real eigenvalue crosses zero where the determinant vanishes
+(turing_points: simple branch points, where patterned branches leave the homogeneous one;
+two modes' points 0.014 apart at N = 50). The certifier sees the crossings of different modes
+as decoupled pairs (certify.decoupled) and spends no spectrum on them (docs/api.md, Limits).
+A = 2, D_u = 1.6e-3, D_v = 8e-3, B from 1 to 5.5, N = 50: three collisions, two Hopf points,
+twelve branch points.
 
     diskfriction bifurcate --problem examples/brusselator_chain.py
 """
@@ -33,18 +37,41 @@ def wavenumbers(N: int) -> np.ndarray:
 
 def collision_points(N: int, span=SPAN) -> np.ndarray:
     """The B in span where some mode's block has a double eigenvalue: its discriminant
-    (B - 1 - A^2 - (D_u + D_v) q)^2 - 4 ((B - 1 - D_u q)(-A^2 - D_v q) + A^2 B) changes sign
+    trace^2 - 4 det changes sign
     (roots by brentq to 1e-15 on a grid of 20001), sorted."""
     roots = []
     for q in wavenumbers(N):
         def disc(B):
-            a, d = B - 1.0 - D_U * q, -A * A - D_V * q
-            return (a + d) ** 2 - 4.0 * (a * d + A * A * B)
+            trace, det = _block(B, q)
+            return trace * trace - 4.0 * det
         grid = np.linspace(*span, 20001)
         values = disc(grid)
         for m in np.flatnonzero(np.sign(values[:-1]) != np.sign(values[1:])):
             roots.append(brentq(disc, grid[m], grid[m + 1], xtol=1e-15))
     return np.sort(roots)
+
+
+def _block(B: float, q):
+    """Trace and determinant of mode q's block."""
+    a, d = B - 1.0 - D_U * q, -A * A - D_V * q
+    return a + d, a * d + A * A * B
+
+
+def hopf_points(N: int, span=SPAN) -> np.ndarray:
+    """The B in span where a mode's trace vanishes, B = 1 + A^2 + (D_u + D_v) q, with a positive
+    determinant (a pair on the imaginary axis), sorted."""
+    q = wavenumbers(N)
+    B = 1.0 + A * A + (D_U + D_V) * q
+    inside = (B > span[0]) & (B < span[1]) & (_block(B, q)[1] > 0.0)
+    return np.sort(B[inside])
+
+
+def turing_points(N: int, span=SPAN) -> np.ndarray:
+    """The B in span where a mode's determinant vanishes, B = (1 + D_u q)(A^2 + D_v q) / (D_v q)
+    (a real eigenvalue through zero), sorted."""
+    q = wavenumbers(N)
+    B = (1.0 + D_U * q) * (A * A + D_V * q) / (D_V * q)
+    return np.sort(B[(B > span[0]) & (B < span[1])])
 
 
 def brusselator_chain(N: int = 50) -> BifurcationProblem:
