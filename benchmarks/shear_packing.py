@@ -10,7 +10,8 @@ Plastic events (folds) are passed up to PLASTIC_EVENTS times (packings/plastic.p
 "plastic" counts them and "ended" says how the last segment ended.
 
 With a window LO:HI (raw units of M^-1 J) only Re lambda in [LO, HI] is tracked, by sparse
-shift-invert (bifurcate --window): "collisions" and "complex" then count the window's.
+shift-invert (bifurcate --window): "collisions" and "complex" then count the window's, and
+"widened" how often the window crowded and was sized anew (packings/shear.py).
 
 Run: python benchmarks/shear_packing.py [N:SEEDS:GAMMA_END[:LO:HI] ...]
      (default: 32:3:0.01 64:3:0.01)
@@ -55,13 +56,15 @@ def run(N: int, seed: int, gamma_end: float, window=None) -> str:
             f"{end:>12} {len(branch):>6} {branch.events:>6} {len(branch.collisions):>10} "
             f"{np.mean(branch.n_complex > 0):>8.2f} {np.mean(branch.n_complex):>7.1f} "
             f"{branch.residual.max():>9.1e} {int(branch.loose[0]):>5} {fell:>9.1e} "
-            f"{len(branch.plastic):>7} {branch.stress[-1, 2]:>9.4f}  {kinds(branch)}")
+            f"{len(branch.plastic):>7} {branch.stress[-1, 2]:>9.4f} {branch.widenings:>7}  "
+            f"{kinds(branch)}")
 
 
 def main(runs: list[str]) -> None:
     print(f"{'N':>5} {'seed':>4} {'prep s':>7} {'shear s':>7} {'gamma end':>10} {'ended':>12} "
           f"{'points':>6} {'events':>6} {'collisions':>10} {'complex':>8} {'pairs':>7} "
-          f"{'max |F|':>9} {'loose':>5} {'min/start':>9} {'plastic':>7} {'sigma_xy':>9}  kinds")
+          f"{'max |F|':>9} {'loose':>5} {'min/start':>9} {'plastic':>7} {'sigma_xy':>9} "
+          f"{'widened':>7}  kinds")
     for spec in runs:
         N, seeds, gamma_end, *band = spec.split(":")
         window = tuple(float(w) for w in band) if band else None

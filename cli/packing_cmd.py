@@ -88,6 +88,8 @@ def run_packing(args: argparse.Namespace, scene: PackingScene,
                   f"{e.stress_after:.6g}")
         inside = ("" if branch.window is None else f", Re lambda in [{branch.window[0]:.6g}, "
                   f"{branch.window[1]:.6g}] (raw)")
+        if branch.widenings:
+            inside += f" (the window crowded and was widened {count(branch.widenings, 'time')})"
         print(f"{count(len(records), 'collision')} ({matrix}) with gamma >= {g0:g}{inside}; "
               f"complex pairs at {100 * (branch.n_complex > 0).mean():.0f} % of the equilibria, "
               f"at most {branch.n_complex.max()}")

@@ -44,6 +44,7 @@ from .samples import Sample, make_sample, matrix_derivative, sample_at
 from .scans import ScanJob, default_workers, pending_full, scans_for
 from .segment import Segment, SegmentSolveError, refine_sign_change
 from .spectra import Eigensystem, eigenvalue_slopes
+from .spectral_window import WindowCrowded
 
 Array = np.ndarray
 
@@ -267,7 +268,9 @@ def _follow(problem: Problem, scans, workers: int, here: _Start, rec: "BranchRec
                 pending.clear()
                 problem.restore(item.state)
                 here, stopped = replace(item.start, ds=0.5 * item.start.ds), False
-                if here.ds < params.ds_min:
+                if outcome.crowded:
+                    status, stopped = Stop(StopCode.WINDOW, outcome.failure, float(here.x[-1])), True
+                elif here.ds < params.ds_min:
                     status, stopped = Stop(StopCode.DS_MIN, outcome.failure, float(here.x[-1])), True
                 break
             scan = outcome.result
@@ -322,10 +325,17 @@ def _advance(problem, scans, here: _Start, index: int, pending: deque, previous,
         return _rejected(here, f"collision scan: {err}", params)
     except SingularMatrix as err:
         return _rejected(here, f"singular matrix: {err}", params)
+    except WindowCrowded as err:
+        return here, Stop(StopCode.WINDOW, str(err), float(here.x[-1]))
     state = problem.state()
     ticket = scans.submit(ScanJob(state, here.x, step.x, params.newton_tol, params.max_newton, here.sample,
                                   end, detection, index, previous, step.event))
-    committed, end = _commit(problem, here.x, step, end, params, detection)
+    try:
+        committed, end = _commit(problem, here.x, step, end, params, detection)
+    except WindowCrowded as err:  # the spectrum after a commit's change: the step is not taken
+        scans.discard([ticket])
+        problem.restore(state)
+        return here, Stop(StopCode.WINDOW, str(err), float(here.x[-1]))
     pending.append(_Pending(ticket, here, state, step if committed is None else committed,
                             None if committed is None else end))
     if committed is None:

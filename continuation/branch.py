@@ -18,8 +18,11 @@ Array = np.ndarray
 class StopCode(StrEnum):
     """Why a run stopped (arclength.py): it reached the end of the span it heads for, the
     branch folded and left the span on its starting side, the step limit, a step that had to
-    shrink below ds_min, a commit (Problem.commit) after which no equilibrium was found, or
-    (with stop_at_fold) a step that would have turned p back."""
+    shrink below ds_min, a commit (Problem.commit) after which no equilibrium was found,
+    (with stop_at_fold) a step that would have turned p back, or a spectral window that no
+    longer holds every eigenvalue its guard bands reach (spectral_window.WindowCrowded: the
+    branch ends at the last point whose step was certified; a caller may size the window
+    anew there and go on)."""
 
     REACHED = "p_end"
     TURNED_BACK = "turned back"
@@ -27,6 +30,7 @@ class StopCode(StrEnum):
     DS_MIN = "ds_min"
     COMMIT = "commit"
     FOLD = "fold"
+    WINDOW = "window"
 
 
 MESSAGES = {
@@ -36,6 +40,7 @@ MESSAGES = {
     StopCode.COMMIT: "commit: {reason} at p={p:.12g}",
     StopCode.TURNED_BACK: "turned back: {reason} at p={p:.12g}",
     StopCode.FOLD: "fold: {reason} at p={p:.12g}",
+    StopCode.WINDOW: "window: {reason} at p={p:.12g}",
 }
 """The status line of each code (str(Stop)): the text Branch.status had before it was a Stop."""
 

@@ -37,6 +37,7 @@ from .linalg import SingularMatrix, blas_threads, book_counts, measured
 from .problem import Problem
 from .samples import Sample
 from .segment import Segment, SegmentSolveError
+from .spectral_window import WindowCrowded
 
 Array = np.ndarray
 
@@ -71,16 +72,19 @@ class ScanJob:
 @dataclass(frozen=True)
 class ScanOutcome:
     """A scan's result, or why it failed (failure: the step is rejected, as when its corrector
-    fails); spent: the linalg.Work counts the scan spent (linalg.measured)."""
+    fails); spent: the linalg.Work counts the scan spent (linalg.measured); crowded: the
+    failure is a spectral window that no longer covers its guard bands (WindowCrowded: the run
+    ends at the step's start, a shorter step would not help)."""
 
     result: Optional[ScanResult]
     failure: Optional[str]
     spent: tuple
+    crowded: bool = False
 
 
 def run_scan(problem: Problem, job: ScanJob) -> ScanOutcome:
     """Scan job's step on `problem`, which is in job.state."""
-    result, failure = None, None
+    result, failure, crowded = None, None, False
     with measured() as spent:
         try:
             result = scan_step(problem, Segment(problem, job.x_a, job.x_b, job.tol, job.max_iter),
@@ -90,7 +94,9 @@ def run_scan(problem: Problem, job: ScanJob) -> ScanOutcome:
             failure = f"collision scan: {err}"
         except SingularMatrix as err:
             failure = f"singular matrix: {err}"
-    return ScanOutcome(result, failure, spent.counts())
+        except WindowCrowded as err:
+            failure, crowded = str(err), True
+    return ScanOutcome(result, failure, spent.counts(), crowded)
 
 
 def default_workers(problem: Problem, n: int, detection: DetectionParams,

@@ -23,6 +23,11 @@ from diskfriction.packings.prepared import prepare_scene
 from diskfriction.scenes.packing import PackingScene
 
 PLASTIC = (StopCode.FOLD, StopCode.COMMIT, StopCode.DS_MIN, StopCode.TURNED_BACK)
+
+WIDENINGS = 3
+"""A crowded window is sized anew (PackingEquilibria.widen_window) and the shear goes on from
+the last certified state; after this many restarts in a row that reach no further point, the
+shear ends there (StopCode.WINDOW)."""
 """How a segment ends at a plastic event, the branch lost: a fold in gamma (a saddle-node); a
 commit after which no equilibrium is near (a contact sliding or a disk turning loose took the
 state's stability with it); a step that had to shrink below ds_min (a singular point the
@@ -66,7 +71,8 @@ class PackingBranch:
     its own); status of the last segment; events: steps cut at a contact event; segment (m,)
     the segment of each point: the branch between two plastic events; plastic: the plastic
     events (folds in gamma) passed, one between each two segments; window: (lo, hi) of Re
-    lambda tracked (collisions then only those with lo <= lambda <= hi), or None."""
+    lambda tracked (collisions then only those with lo <= lambda <= hi), or None; widenings:
+    how often the window crowded and was sized anew, wider, at the last certified state."""
 
     gamma: np.ndarray
     q: np.ndarray
@@ -85,6 +91,7 @@ class PackingBranch:
     segment: np.ndarray
     plastic: tuple[PlasticEvent, ...] = ()
     window: Optional[tuple[float, float]] = None
+    widenings: int = 0
 
     def __len__(self) -> int:
         return self.gamma.size
@@ -96,22 +103,23 @@ def collision_records(branch: PackingBranch) -> list[dict]:
              "lambda_im": 0.0, "matrix": str(branch.matrix)} for c in branch.collisions]
 
 
-def segment_columns(values: list, segments: np.ndarray, continued: dict, band: Window
+def segment_columns(values: list, blocks: np.ndarray, continued: dict, band: Window
                     ) -> np.ndarray:
-    """The stored spectrum of a windowed shear: each segment's window columns
-    (spectral_window.window_columns; its k eigenvalues per point, continued[segment] from its
-    branch) side by side, nan at the other segments' points (a window is sized anew for each
-    segment, and a plastic event continues no eigenvalue)."""
-    blocks = []
-    for segment in np.unique(segments):
-        on = np.flatnonzero(segments == segment)
-        block = np.array([values[i] for i in on])
-        blocks.append((on, window_columns(block, continued[segment], band.tracked(block))))
-    out = np.full((segments.size, sum(b.shape[1] for _, b in blocks)), np.nan, dtype=complex)
+    """The stored spectrum of a windowed shear: each block's window columns
+    (spectral_window.window_columns; its k eigenvalues per point, continued[block] from its
+    branch) side by side, nan at the other blocks' points. A block is a stretch of branch with
+    one window size: a window is sized anew for each segment (a plastic event continues no
+    eigenvalue) and where it crowds (its eigenvalues start new columns there)."""
+    parts = []
+    for b in np.unique(blocks):
+        on = np.flatnonzero(blocks == b)
+        rows = np.array([values[i] for i in on])
+        parts.append((on, window_columns(rows, continued[b], band.tracked(rows))))
+    out = np.full((blocks.size, sum(part.shape[1] for _, part in parts)), np.nan, dtype=complex)
     start = 0
-    for on, block in blocks:
-        out[on, start:start + block.shape[1]] = block
-        start += block.shape[1]
+    for on, part in parts:
+        out[on, start:start + part.shape[1]] = part
+        start += part.shape[1]
     return out
 
 
@@ -129,8 +137,9 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
     event) the run ends, unless plastic_events > 0: then up to that many events are passed
     (packings/plastic.py: strained past the fold, relaxed with friction) and the shear goes on
     from each relaxed state as a new segment. window: (lo, hi) of Re lambda tracked by sparse
-    shift-invert (continuation/spectral_window.py; its k sized at the start of every segment),
-    or None: every eigenvalue, a dense spectrum per sample."""
+    shift-invert (continuation/spectral_window.py; its k sized at the start of every segment,
+    and where it crowds sized anew, wider, at the last certified state: WIDENINGS), or None:
+    every eigenvalue, a dense spectrum per sample."""
     network = network_of(scene, packing)
     mass = mass_diagonal(network, scene.m, scene.inertia)
     g0, g1 = scene.gamma_range
@@ -138,30 +147,41 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
     ds_max = params.ds_max or STEP_IN_STRAIN * affine
     options = replace(params, ds_max=ds_max, ds=params.ds or ds_max / 4,
                       ds_min=params.ds_min or 1e-8 * ds_max)
-    records, collisions, events, passed, continued = [], [], 0, [], {}
+    records, collisions, events, passed, continued, widenings = [], [], 0, [], {}, 0
     q, xi, rows = start(network, packing.positions)
     gamma_start = 0.0
     while True:  # a window is sized again for every segment: its columns start anew there
         problem = PackingEquilibria(network, q, xi, rows, gamma_start, mass, scene.matrix,
                                     params.newton_tol, None if window is None else Window(*window))
-        segment = len(passed)
+        segment, stuck, first = len(passed), 0, len(continued)
+        while True:  # the window's blocks: where it crowds, sized anew at the last state
+            block = len(continued)
+            restart = block > first  # its first point ends the block before
 
-        def record(k, gamma, q_k, eigvals, problem=problem, segment=segment):
-            xi_all = problem.trial(q_k, gamma)[0]
-            xi_k, rows_k = xi_all[problem.active], problem.rows_c[problem.active]
-            delta = network.overlaps(q_k, rows_k, gamma)
-            records.append((gamma, q_k.copy(), problem.rows_c.copy(), xi_all, eigvals,
-                            largest_force(problem, q_k, gamma),
-                            int((delta > 0).sum()), int(problem.gauge.loose.sum()),
-                            network.stress(q_k, xi_k, rows_k, gamma), segment))
-            if progress is not None:
-                progress(gamma)
+            def record(k, gamma, q_k, eigvals, problem=problem, segment=segment, block=block,
+                       restart=restart):
+                if k == 0 and restart:
+                    return
+                xi_all = problem.trial(q_k, gamma)[0]
+                xi_k, rows_k = xi_all[problem.active], problem.rows_c[problem.active]
+                delta = network.overlaps(q_k, rows_k, gamma)
+                records.append((gamma, q_k.copy(), problem.rows_c.copy(), xi_all, eigvals,
+                                largest_force(problem, q_k, gamma),
+                                int((delta > 0).sum()), int(problem.gauge.loose.sum()),
+                                network.stress(q_k, xi_k, rows_k, gamma), segment, block))
+                if progress is not None:
+                    progress(gamma)
 
-        branch = solve_branch(problem, q, (gamma_start, g1), options, callback=record).branch
-        collisions += branch.collisions
-        events += branch.events
-        if window is not None:
-            continued[segment] = branch.continued
+            branch = solve_branch(problem, q, (gamma_start, g1), options, callback=record).branch
+            collisions += branch.collisions
+            events += branch.events
+            continued[block] = branch.continued[1:] if restart else branch.continued
+            stuck = stuck + 1 if len(branch) == 1 else 0
+            if branch.status.code is not StopCode.WINDOW or stuck > WIDENINGS:
+                break
+            problem.widen_window()
+            widenings += 1
+            q, gamma_start = branch.u[-1], float(branch.p[-1])
         if branch.status.code not in PLASTIC or len(passed) >= plastic_events:
             break
         gamma_f, q_f, rows_f, xi_f = records[-1][0], records[-1][1], records[-1][2], records[-1][3]
@@ -170,7 +190,7 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
         after = network.stress(q, xi, rows, gamma_start)[2]
         passed.append(PlasticEvent(gamma_f, float(records[-1][8][2]), float(after),
                                    float(np.linalg.norm(q - q_f)), steps, str(branch.status.code)))
-    gamma, q_all, rows, xi, eig, res, contacts, loose, stress, segments = zip(*records)
+    gamma, q_all, rows, xi, eig, res, contacts, loose, stress, segments, blocks = zip(*records)
     gamma, q_all, res, contacts, loose, stress, segments = (
         np.array(c) for c in (gamma, q_all, res, contacts, loose, stress, segments))
     rel_tol = params.detection.rel_tol
@@ -182,10 +202,10 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
         band = Window(*window)
         n_complex = np.array([count_complex_pairs(e[band.inside(e)], rel_tol) for e in eig])
         kept = [c for c in kept if band.lo <= c.eigenvalue <= band.hi]
-        eig = segment_columns(eig, segments, continued, band)
+        eig = segment_columns(eig, np.array(blocks), continued, band)
     return PackingBranch(gamma, q_all, rows, xi, eig, n_complex, res, contacts, loose, stress,
                          tuple(kept), Matrix(scene.matrix), branch.status, events, segments,
-                         tuple(passed), window)
+                         tuple(passed), window, widenings)
 
 
 def shear_scene(scene: PackingScene, plastic_events: int,

@@ -404,3 +404,28 @@ def test_a_detector_added_by_one_registry_entry_finds_the_collisions(monkeypatch
     assert all(c.resolved and c.bracket[1] - c.bracket[0] <= TOL_P for c in branch.collisions)
     with pytest.raises(ValueError, match="mode must be one of"):
         DetectionParams(mode="bisect")
+
+
+def test_a_crowded_spectral_window_ends_the_run_at_its_last_certified_point():
+    """A spectrum that raises WindowCrowded past p = 0.5 (at a step's end or a split sample)
+    ends the run there with StopCode.WINDOW and the branch reached so far, its collisions
+    kept, not an exception that loses the run."""
+    from diskfriction.continuation import Options, problem_from_functions, solve_branch
+    from diskfriction.continuation.branch import StopCode
+    from diskfriction.continuation.spectral_window import WindowCrowded
+
+    p1 = 0.21
+
+    def A(u, p):
+        if p > 0.5:
+            raise WindowCrowded("the 2 eigenvalues nearest 0 all lie within 1 of it")
+        return pair_block(-0.7, p1 - p)
+
+    problem = problem_from_functions(lambda u, p: u - p, dG_du=lambda u, p: np.eye(1),
+                                     dG_dp=lambda u, p: -np.ones(1), A=A)
+    result = solve_branch(problem, [0.0], (0.0, 1.0), Options(workers=0))
+    status = result.branch.status
+    assert status.code is StopCode.WINDOW and "all lie within" in str(status)
+    assert 0.4 < result.p[-1] <= 0.5 and status.p == result.p[-1]
+    assert [c.kind for c in result.collisions] == ["birth"]
+    assert result.collisions[0].p == pytest.approx(p1, abs=1e-10)
