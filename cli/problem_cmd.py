@@ -164,8 +164,7 @@ def _continue(spec, label: str, span, options, out: Path, as_json: bool,
     from diskfriction.continuation.arclength import ContinuationError
     from diskfriction.disks.memory import sweep_bytes
     from diskfriction.memory import NotEnoughMemory, require_memory
-    from diskfriction.disks.records import collision_record
-    from diskfriction.reports.problem import plot_problem_diagram, save_outputs
+    from diskfriction.reports.problem import collision_json, plot_problem_diagram, save_outputs
 
     a, b = span
     try:
@@ -200,7 +199,7 @@ def _continue(spec, label: str, span, options, out: Path, as_json: bool,
         plot_problem_diagram(result, spec, f"{label}: spectrum of {spec.matrix}", out / "diagram.png")
     finally:
         progress.close()
-    records = [collision_record(c, spec.parameter, spec.matrix) for c in result.collisions]
+    records = collision_json(result, spec)
     if as_json:
         print(json.dumps([{k: r[k] for k in (spec.parameter, "kind", "lambda_re", "lambda_im", "matrix")}
                           for r in records], indent=1))

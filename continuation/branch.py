@@ -10,7 +10,7 @@ import numpy as np
 from .detectors import Collision
 from .newton import NewtonResult
 from .samples import Sample, continued_labels
-from .spectra import count_complex_pairs
+from .spectra import condition_numbers, count_complex_pairs
 
 Array = np.ndarray
 
@@ -87,7 +87,10 @@ class Branch:
     warnings; events: steps cut at an event (problem.event_functions); continued (m, n) bool,
     with a spectral window only (else None): label i at point k is certified to hold the
     eigenvalue it held at point k - 1 (False at k = 0): it stayed in the tracked set throughout
-    the step (the detection certified it), or samples.certified_labels certifies the step.
+    the step (the detection certified it), or samples.certified_labels certifies the step;
+    condition (m, n): each tracked eigenvalue's condition number |l| |r| / |l^H r|
+    (spectra.condition_numbers; nan where the point's sample holds no vectors: exhaustive
+    detection, or no spectra).
     """
 
     p: Array
@@ -104,6 +107,7 @@ class Branch:
     warnings: tuple[str, ...] = ()
     events: int = 0
     continued: Optional[Array] = None
+    condition: Optional[Array] = None
 
     def __len__(self) -> int:
         return self.p.size
@@ -137,8 +141,10 @@ class BranchRecorder:
             tracked: Optional[Array] = None) -> None:
         """Record an accepted point (with a spectral window, Branch.continued too)."""
         u, p = sample.x[:-1].copy(), float(sample.x[-1])
+        kappa = (np.full(sample.eigvals.size, np.nan) if sample.system is None
+                 else condition_numbers(sample.system))
         self.rows.append((p, u, sample.eigvals, count_complex_pairs(sample.eigvals, self.rel_tol),
-                          ds, newton.iterations, newton.residual, t, solves))
+                          ds, newton.iterations, newton.residual, t, solves, kappa))
         if sample.disc is not None:
             self.continued.append(continued_labels(self.last, sample, tracked, self.rho))
             self.last = sample.without_vectors()
@@ -152,4 +158,5 @@ class BranchRecorder:
                       newton_iterations=np.array(cols[5]), residual=np.array(cols[6]),
                       tangent=np.array(cols[7]), detection_solves=np.array(cols[8]),
                       collisions=tuple(self.collisions), status=status, warnings=tuple(self.warnings),
-                      events=self.events, continued=np.array(self.continued) if self.continued else None)
+                      events=self.events, continued=np.array(self.continued) if self.continued else None,
+                      condition=np.array(cols[9]))

@@ -198,6 +198,23 @@ def eigensystem(A: Array, vectors: bool) -> Eigensystem:
     return Eigensystem(lam.astype(complex), vr, left / scale[:, None])
 
 
+def condition_numbers(system: Eigensystem) -> Array:
+    """kappa_i = |l_i| |r_i| / |l_i^H r_i| of every eigenvalue (|l_i| |r_i| with the vectors'
+    normalisation l_i^H r_i = 1): the eigenvalue's sensitivity to a perturbation of the matrix,
+    |d lambda_i| <= kappa_i |dA| (Wilkinson); 1 for a normal matrix, and growing like
+    |p - p_c|^(-1/2) towards a collision, where the pair's left and right vectors become
+    orthogonal. nan for an eigenvalue without vectors (Eigensystem.columns -1) or a system
+    without them."""
+    kappa = np.full(system.values.size, np.nan)
+    if system.right is None:
+        return kappa
+    columns = np.arange(system.values.size) if system.columns is None else system.columns
+    have = columns >= 0
+    c = columns[have]
+    kappa[have] = np.linalg.norm(system.right[:, c], axis=0) * np.linalg.norm(system.left[c], axis=1)
+    return kappa
+
+
 def eigenvalue_slopes(system: Eigensystem, dA: Array) -> Array:
     """d lambda_i = l_i^H dA r_i for a perturbation dA of the matrix (first-order perturbation
     of simple eigenvalues; infinite at a collision, where the pair's discriminant stays smooth).

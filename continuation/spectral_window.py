@@ -131,7 +131,12 @@ def window_columns(values: Array, continued: Array, shown: Array) -> Array:
     where `shown` (the window and its guard bands, Window.tracked), nan elsewhere (not
     tracked there, or not yet or no more this column's eigenvalue); the columns in order of
     first appearance (point, then label), those never shown left out."""
-    m, k = values.shape
+    return in_columns(values, column_layout(continued, shown))
+
+
+def column_layout(continued: Array, shown: Array) -> tuple[Array, Array, Array, int]:
+    """Where window_columns puts each shown (point, label): (rows, labels, columns, C)."""
+    m, k = continued.shape
     ids = np.empty((m, k), dtype=np.int64)
     ids[0] = np.arange(k)
     start = k
@@ -144,6 +149,13 @@ def window_columns(values: Array, continued: Array, shown: Array) -> Array:
     used, first = np.unique(ids[rows, labels], return_index=True)
     rank = np.empty(used.size, dtype=np.int64)
     rank[np.argsort(first)] = np.arange(used.size)
-    out = np.full((m, used.size), np.nan, dtype=complex)
-    out[rows, rank[np.searchsorted(used, ids[rows, labels])]] = values[rows, labels]
+    return rows, labels, rank[np.searchsorted(used, ids[rows, labels])], used.size
+
+
+def in_columns(values: Array, layout: tuple[Array, Array, Array, int]) -> Array:
+    """values (m, k) per (point, label) placed in the columns of column_layout (nan
+    elsewhere), in values' dtype (complex eigenvalues, real condition numbers)."""
+    rows, labels, columns, C = layout
+    out = np.full((values.shape[0], C), np.nan, dtype=values.dtype)
+    out[rows, columns] = values[rows, labels]
     return out

@@ -2,13 +2,16 @@
 each cell's file, and `bifurcate --problem` to its collisions.json (raw units)."""
 from __future__ import annotations
 
+from typing import Optional
+
 import numpy as np
 
 from diskfriction.continuation.collisions import Collision
 from diskfriction.disks.sweep import DiskBranch
 
 
-def collision_record(c: Collision, parameter: str, matrix: str, window=None) -> dict:
+def collision_record(c: Collision, parameter: str, matrix: str, window=None,
+                     condition=None) -> dict:
     """One located collision as a JSON object, keyed by the parameter's name.
 
     At a collision the two eigenvalues coincide on the real axis: lambda_im is 0 by definition
@@ -16,23 +19,51 @@ def collision_record(c: Collision, parameter: str, matrix: str, window=None) -> 
     across which the count of complex pairs changes; `eigenvector` and `jordan_vector` form the
     Jordan chain (A - lambda) v = 0, (A - lambda) w = v of the stability matrix A. `window`: the
     band [lo, hi] of Re lambda the sweep tracked and certified (only collisions there are
-    listed), or null when it covered the whole spectrum.
+    listed), or null when it covered the whole spectrum. `condition` (pair_condition): the
+    pair's condition number at the accepted points before and after the collision, and
+    `condition_amplitude` its amplitude a in kappa ~ a |p - p_c|^(-1/2) there; null where not
+    known (a window's columns, the exhaustive detection).
     """
+    kappa, amplitude = (None, None) if condition is None else condition
     return {parameter: float(c.p), "kind": c.kind, "lambda_re": float(c.eigenvalue),
             "lambda_im": 0.0, "matrix": matrix, "window": None if window is None else list(window),
             "bracket": [float(b) for b in c.bracket],
             "resolved": bool(c.resolved), "residual": float(c.residual),
             "eigenvector": np.asarray(c.eigenvector, dtype=float).tolist(),
-            "jordan_vector": np.asarray(c.generalized_eigenvector, dtype=float).tolist()}
+            "jordan_vector": np.asarray(c.generalized_eigenvector, dtype=float).tolist(),
+            "condition": kappa, "condition_amplitude": amplitude}
 
 
 RECORD_KEYS = ("kind", "lambda_re", "lambda_im", "matrix", "window", "bracket", "resolved",
-               "residual", "eigenvector", "jordan_vector")
+               "residual", "eigenvector", "jordan_vector", "condition", "condition_amplitude")
 """The keys of a collision record besides the parameter's name."""
+
+
+def pair_condition(p: np.ndarray, condition: Optional[np.ndarray], c: Collision):
+    """([kappa before, kappa after], [amplitude before, amplitude after]) of collision c's
+    pair at the accepted points p[k], p[k + 1] around it: kappa the larger condition number of
+    its two members there (Branch.condition, columns = labels), amplitude = kappa sqrt|p -
+    p_c| (kappa diverges like |p - p_c|^(-1/2) at a collision: the amplitude is the pair's
+    non-normality, nearly the same on both sides for points close to p_c). None if the
+    condition numbers are not known (None, or nan at either point) or no interval holds p_c."""
+    if condition is None:
+        return None
+    around = np.flatnonzero((p[:-1] - c.p) * (p[1:] - c.p) <= 0.0)
+    if not around.size:
+        return None
+    k = int(around[0])
+    kappa = [float(np.max(condition[r, list(c.pair)])) for r in (k, k + 1)]
+    if not np.all(np.isfinite(kappa)):
+        return None
+    return kappa, [float(kap * np.sqrt(abs(p[r] - c.p))) for kap, r in zip(kappa, (k, k + 1))]
 
 
 def collision_records(branch: DiskBranch) -> list[dict]:
     """One JSON object per located collision of the requested leg, raw units, keyed F_x
-    (collision_record)."""
+    (collision_record; the condition numbers from the leg's points, without a window)."""
     window = None if branch.window is None else tuple(float(w) for w in branch.window)
-    return [collision_record(c, "F_x", branch.matrix, window) for c in branch.collisions]
+    leg = branch.leg == 1
+    condition = None if window is not None or branch.condition is None else branch.condition[leg]
+    return [collision_record(c, "F_x", branch.matrix, window,
+                             pair_condition(branch.F_x[leg], condition, c))
+            for c in branch.collisions]

@@ -25,7 +25,7 @@ from diskfriction.continuation.api import Options, solve_branch
 from diskfriction.continuation.collisions import Collision
 from diskfriction.disks.equilibria import DiskEquilibria, relax
 from diskfriction.continuation.branch import Branch, Stop
-from diskfriction.continuation.spectral_window import Window, window_columns
+from diskfriction.continuation.spectral_window import Window, column_layout, in_columns
 from diskfriction.continuation.spectra import count_complex_pairs, match_eigenvalues
 from diskfriction.matrices import Matrix
 from diskfriction.symbolic import System
@@ -78,7 +78,10 @@ class DiskBranch:
     guard bands (spectral_window.window_columns: its value where lo - g <= Re lambda <= hi + g,
     nan elsewhere and before and after it is this column's), of which those with Re lambda in
     [lo, hi] are certified, n_complex counts the pairs there and only collisions there are
-    listed.
+    listed. condition (m, n), as eigenvalues: each eigenvalue's condition number |l| |r| /
+    |l^H r| (spectra.condition_numbers: 1 for a normal matrix, diverging like
+    |F_x - F_c|^(-1/2) at a collision F_c; nan where no vectors were computed: the exhaustive
+    detection, a free disk's mode).
     """
 
     F_x: np.ndarray
@@ -94,6 +97,7 @@ class DiskBranch:
     status: tuple[Stop, ...]
     events: int
     window: Optional[tuple[float, float]] = None
+    condition: Optional[np.ndarray] = None
 
     def __len__(self) -> int:
         return self.F_x.size
@@ -117,7 +121,7 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
     q, xi = relax(system, *system.rest_state(), F_1)
     window = None if params.window is None else Window(*params.window)
     problem = DiskEquilibria(system, q, xi, F_1, matrix, params.newton_tol, window=window)
-    rows, collisions, status, events, continued = [], (), [], 0, []
+    rows, collisions, status, events, continued, condition = [], (), [], 0, [], []
     F_start = F_1
     for leg, _, b in legs:
         first = len(rows)
@@ -136,6 +140,7 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
 
         branch = solve_branch(problem, problem.q_c, (F_start, b), options, callback=record).branch
         branch = _continue_leg(rows, first, branch)
+        condition += list(branch.condition if first == 0 else branch.condition[1:])
         if window is not None:
             continued += list(branch.continued if first == 0 else branch.continued[1:])
         status.append(branch.status)
@@ -146,15 +151,17 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
         if not branch.status.reached:
             break  # a leg that ended short: the next would start from a load never asked for
     F_x, q, xi, eig, res, leg, free = (np.array(c) for c in zip(*rows))
+    condition = np.array(condition)
     rel_tol = params.detection.rel_tol
     if window is None:
         n_complex = np.array([count_complex_pairs(e, rel_tol) for e in eig])
     else:  # the pairs in the window; collisions with their double eigenvalue there
         n_complex = np.array([count_complex_pairs(e[window.inside(e)], rel_tol) for e in eig])
         collisions = tuple(c for c in collisions if window.lo <= c.eigenvalue <= window.hi)
-        eig = window_columns(eig, np.array(continued), window.tracked(eig))
+        layout = column_layout(np.array(continued), window.tracked(eig))
+        eig, condition = in_columns(eig, layout), in_columns(condition, layout)
     return DiskBranch(F_x, q, xi, eig, n_complex, res, leg, free, tuple(collisions), matrix,
-                      tuple(status), events, params.window)
+                      tuple(status), events, params.window, condition)
 
 
 def _continue_leg(rows: list, first: int, branch: Branch) -> Branch:
@@ -172,4 +179,4 @@ def _continue_leg(rows: list, first: int, branch: Branch) -> Branch:
     pairs = tuple(replace(c, pair=(int(of_label[c.pair[0]]), int(of_label[c.pair[1]])))
                   for c in branch.collisions)
     continued = None if branch.continued is None else branch.continued[:, perm]
-    return replace(branch, collisions=pairs, continued=continued)
+    return replace(branch, collisions=pairs, continued=continued, condition=branch.condition[:, perm])

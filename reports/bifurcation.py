@@ -21,11 +21,11 @@ from diskfriction.scenes import Scene
 
 
 def save_branch(out: Path, branch: DiskBranch, scene: Scene) -> None:
-    """DIR/branch.npz (every accepted point: F_x, q, xi, eigenvalues, n_complex, residual,
-    leg, free rolling modes; window: the band of Re lambda tracked, nan nan for the whole
-    spectrum) and DIR/collisions.json, each written atomically."""
+    """DIR/branch.npz (every accepted point: F_x, q, xi, eigenvalues, their condition numbers,
+    n_complex, residual, leg, free rolling modes; window: the band of Re lambda tracked, nan
+    nan for the whole spectrum) and DIR/collisions.json, each written atomically."""
     save_npz(Path(out) / "branch.npz", F_x=branch.F_x, q=branch.q, xi=branch.xi,
-             eigenvalues=branch.eigenvalues, n_complex=branch.n_complex,
+             eigenvalues=branch.eigenvalues, condition=branch.condition, n_complex=branch.n_complex,
              residual=branch.residual, leg=branch.leg, free=branch.free,
              window=np.array(branch.window if branch.window is not None else (np.nan, np.nan)),
              matrix=np.array(branch.matrix),

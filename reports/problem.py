@@ -3,7 +3,7 @@ collisions.json, special_points.json and the diagram, in the problem's own names
 
 The same files as the disks' (reports/bifurcation.py), with the parameter's name where the
 disks have F_x: branch.npz holds the parameter's values under its name, u, eigenvalues,
-n_complex, residual, and the strings parameter, units, matrix; collisions.json one record per
+condition, n_complex, residual, and the strings parameter, units, matrix; collisions.json one record per
 collision keyed by the parameter's name (bifurcation.collision_record); special_points.json
 the folds, branch points and Hopf points.
 """
@@ -16,11 +16,12 @@ import numpy as np
 from diskfriction.continuation.api import BifurcationProblem, BranchResult
 from diskfriction.continuation.bifurcations import SpecialPoint
 from diskfriction.files import save_json, save_npz
-from diskfriction.disks.records import RECORD_KEYS, collision_record
+from diskfriction.disks.records import RECORD_KEYS, collision_record, pair_condition
 from diskfriction.reports.bifurcation import diagram_axes, draw_spectrum, save_diagram
 from diskfriction.reports.figures import relabel
 
-BRANCH_KEYS = ("u", "eigenvalues", "n_complex", "residual", "parameter", "units", "matrix")
+BRANCH_KEYS = ("u", "eigenvalues", "condition", "n_complex", "residual", "parameter", "units",
+               "matrix")
 """The arrays of branch.npz besides the parameter's values."""
 RESERVED = frozenset(BRANCH_KEYS + RECORD_KEYS + ("value_re", "value_im"))
 """Names a parameter cannot have: they key the other entries of the files."""
@@ -46,12 +47,18 @@ def save_outputs(out: Path, result: BranchResult, spec: BifurcationProblem) -> N
     """DIR/branch.npz, DIR/collisions.json, DIR/special_points.json, each written atomically."""
     b, name = result.branch, spec.parameter
     save_npz(Path(out) / "branch.npz", **{name: b.p}, u=b.u, eigenvalues=b.eigenvalues,
-             n_complex=b.n_complex, residual=b.residual, parameter=np.array(name),
-             units=np.array(spec.units), matrix=np.array(spec.matrix))
-    save_json(Path(out) / "collisions.json",
-              [collision_record(c, name, spec.matrix) for c in result.collisions])
+             condition=b.condition, n_complex=b.n_complex, residual=b.residual,
+             parameter=np.array(name), units=np.array(spec.units), matrix=np.array(spec.matrix))
+    save_json(Path(out) / "collisions.json", collision_json(result, spec))
     save_json(Path(out) / "special_points.json",
               [special_point_record(s, name) for s in special_points(result)])
+
+
+def collision_json(result: BranchResult, spec: BifurcationProblem) -> list[dict]:
+    """collisions.json's records of a problem's run, with the pairs' condition numbers."""
+    b = result.branch
+    return [collision_record(c, spec.parameter, spec.matrix, None,
+                             pair_condition(b.p, b.condition, c)) for c in result.collisions]
 
 
 def special_points(result: BranchResult) -> list[SpecialPoint]:

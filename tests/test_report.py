@@ -45,7 +45,8 @@ def test_builder_writes_every_figure_and_the_table(first):
     report = (root / "out" / "report.md").read_text()
     for section in SECTIONS:
         assert f"## {section.title}" in report
-    for name in ("fig2", "fig3", "fig4", "fig5", "fig6", "fig7", "readings", "lammps", "accuracy"):
+    for name in ("fig2", "condition", "fig3", "fig4", "fig5", "fig6", "fig7", "readings", "lammps",
+                 "accuracy"):
         png = root / "out" / "tiny" / f"{name}.png"
         assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", name
         assert f"(tiny/{name}.png)" in report

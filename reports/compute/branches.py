@@ -39,13 +39,15 @@ def sweep_span(scene: Scene) -> float:
 def branch(scene: Scene, matrix: str, ds_divisions: int, tol_p: float | None = None) -> dict:
     """The branch over the scene's F_x range with every collision located (disks.sweep,
     ds_max = span / ds_divisions). Rows: F_x, tracked eigenvalues of `matrix` [raw], n_complex,
-    leg; collisions: F_x, kind, double eigenvalue [raw], resolved."""
+    leg; condition: each tracked eigenvalue's condition number (nan without vectors);
+    collisions: F_x, kind, double eigenvalue [raw], resolved."""
     import time
 
     t0 = time.perf_counter()
     b = _sweep(scene, *scene.F_x_range, matrix, sweep_span(scene) / ds_divisions, tol_p=tol_p)
     seconds = time.perf_counter() - t0
-    return {"F_x": b.F_x, "eigenvalues": b.eigenvalues, "n_complex": b.n_complex, "leg": b.leg,
+    return {"F_x": b.F_x, "eigenvalues": b.eigenvalues, "condition": b.condition,
+            "n_complex": b.n_complex, "leg": b.leg,
             "residual": b.residual, "x1": b.q[:, 0],
             "collision_F_x": np.array([c.p for c in b.collisions], dtype=float),
             "collision_eigenvalue": np.array([c.eigenvalue for c in b.collisions], dtype=float),
