@@ -224,12 +224,19 @@ def test_a_loose_disk_caught_against_a_loose_disk_ends_no_segment(mu, gamma_end)
     assert largest <= 1e-3 * scene.pressure * 2 * scene.R
 
 
-def test_a_spectral_window_finds_the_full_spectrums_collisions_in_it(packing, branch):
+WINDOW = (0.0, 50.0)
+
+
+@pytest.fixture(scope="module")
+def windowed(packing):
+    return shear(SCENE, packing, ShearParams(workers=0), window=WINDOW)
+
+
+def test_a_spectral_window_finds_the_full_spectrums_collisions_in_it(branch, windowed):
     """Shear tracking only Re lambda in [0, 50] (sparse shift-invert, its k sized at the start):
     the same collisions as the dense spectra's with their double eigenvalue in the window, each
     at the same strain within 1e-9; every change of the window's complex pairs is one of them."""
-    window = (0.0, 50.0)
-    windowed = shear(SCENE, packing, ShearParams(workers=0), window=window)
+    window = WINDOW
     inside = sorted(c.p for c in branch.collisions if window[0] <= c.eigenvalue <= window[1])
     assert windowed.status.reached and len(inside) >= 4
     assert len(windowed.collisions) == len(inside)
@@ -239,18 +246,18 @@ def test_a_spectral_window_finds_the_full_spectrums_collisions_in_it(packing, br
     assert windowed.window == window and windowed.eigenvalues.shape[1] < 3 * SCENE.N
 
 
-def test_a_window_that_crowds_is_widened_and_finds_the_same_collisions(packing, monkeypatch):
+def test_a_window_that_crowds_is_widened_and_finds_the_same_collisions(packing, windowed,
+                                                                       monkeypatch):
     """A window sized with k = the eigenvalues within reach + 2 crowds as the shear softens the
     packing: the run is not lost (256 disks lost 205 s so), the window is sized anew, wider, at
     the last certified state and the shear goes on; the collisions equal a generous window's
     within 1e-12, and each strain is recorded once."""
     from diskfriction.packings import equilibria
 
-    window = (0.0, 50.0)
-    generous = shear(SCENE, packing, ShearParams(workers=0), window=window)
+    generous = windowed
     monkeypatch.setattr(equilibria, "WINDOW_MARGIN", 1.0)
     monkeypatch.setattr(equilibria, "WINDOW_EXTRA", 2)
-    tight = shear(SCENE, packing, ShearParams(workers=0), window=window)
+    tight = shear(SCENE, packing, ShearParams(workers=0), window=WINDOW)
     assert generous.widenings == 0 and tight.widenings >= 1
     assert tight.status.reached and np.all(np.diff(tight.gamma) > 0)
     assert len(tight.collisions) == len(generous.collisions) >= 4

@@ -18,6 +18,12 @@ def branch_need(scene: Scene, settings: Settings, matrix: str, label: str | None
                 {"matrix": matrix, "ds_divisions": settings.ds_divisions})
 
 
+def computed_branches(ctx) -> list[tuple[str, dict]]:
+    """(matrix, its branch result) for each of MATRICES whose branch need was computed."""
+    found = [(m, ctx.get(f"branch[{m}]")) for m in MATRICES]
+    return [(m, b) for m, b in found if b is not None]
+
+
 def spectra_need(scene: Scene, settings: Settings, matrix: str, label: str | None = None) -> Need:
     return Need(label or f"spectra_at_loads[{matrix}]", "spectra_at", scene,
                 {"matrix": matrix, "loads": list(settings.loads)})

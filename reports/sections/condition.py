@@ -13,7 +13,8 @@ import numpy as np
 
 from diskfriction.reports.figures import legend, new_figure
 from diskfriction.reports.registry import Section
-from diskfriction.reports.sections.common import MATRICES, branch_need, failures, fmt, table
+from diskfriction.reports.sections.common import (MATRICES, branch_need, computed_branches,
+                                                  failures, fmt, table)
 
 
 def needs(scene, settings):
@@ -65,10 +66,7 @@ def render(ctx):
     text = [ctx.figure(plot(ctx), "condition", "Condition numbers of the complex pairs against "
                        "F_x (log scale): how far the matrix is from normal where the pairs live")]
     rows = []
-    for matrix in MATRICES:
-        b = ctx.get(f"branch[{matrix}]")
-        if b is None:
-            continue
+    for matrix, b in computed_branches(ctx):
         kappa, leg = b["condition"], b["leg"] == 1
         for label, mask in pair_curves(b):
             k = int(np.argmax(np.where(mask, kappa[:, label], -np.inf)))

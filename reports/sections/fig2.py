@@ -6,7 +6,8 @@ from diskfriction.disks.windows import complex_spans, leg_windows
 from diskfriction.reports.bifurcation import draw_spectrum
 from diskfriction.reports.figures import legend, new_figure
 from diskfriction.reports.registry import Section
-from diskfriction.reports.sections.common import MATRICES, branch_need, failures, table
+from diskfriction.reports.sections.common import (MATRICES, branch_need, computed_branches,
+                                                  failures, table)
 from diskfriction.words import count
 
 
@@ -51,10 +52,7 @@ def render(ctx):
     text = [ctx.figure(plot(ctx), "fig2", "Fig. 2: Im and Re of every eigenvalue of J (left, "
                        "the paper's matrix) and M^-1 J (right) against F_x, paper units")]
     rows = []
-    for matrix in MATRICES:
-        b = ctx.get(f"branch[{matrix}]")
-        if b is None:
-            continue
+    for matrix, b in computed_branches(ctx):
         unit = ctx.units.eigenvalue(matrix)
         spans = complex_spans(leg_windows(b["F_x"], b["n_complex"], b["leg"],
                                           zip(b["collision_F_x"], b["collision_kind"])))
