@@ -190,7 +190,9 @@ def run(args: argparse.Namespace) -> int:
         print(f"{count(len(records), 'collision')} ({matrix})" + (
             "" if branch.window is None else f" with Re lambda in [{branch.window[0]:.6g}, "
             f"{branch.window[1]:.6g}] (raw; {branch.eigenvalues.shape[1]} eigenvalues tracked "
-            "through it and its guard bands, a column each in branch.npz)") + ":")
+            "through it and its guard bands, a column each in branch.npz"
+            + (f"; it crowded and was widened {count(branch.widenings, 'time')}"
+               if branch.widenings else "") + ")") + ":")
         for r in records:
             print(f"  {r['kind']:5s}  F_x = {r['F_x']:.10f}  lambda = {r['lambda_re']:.6g}  "
                   f"(lambda/k_n = {r['lambda_re'] / scene.k_n:.5g})")

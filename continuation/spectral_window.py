@@ -28,6 +28,7 @@ column. A column holds its eigenvalue while it is in W or its guard bands, nan e
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -45,6 +46,12 @@ GUARD = 0.25
 MARGIN = 1.5
 """k is set at the first sample to MARGIN times the eigenvalues within reach, plus EXTRA."""
 EXTRA = 8
+WIDENING = 1.5
+"""Where a window crowds, a caller may size it anew (widened) with k at least this factor
+times the old k."""
+WIDENINGS = 3
+"""A caller that widens a crowded window and goes on from the last certified point gives up
+after this many widenings in a row that reach no further point (StopCode.WINDOW)."""
 
 
 class WindowCrowded(RuntimeError):
@@ -97,6 +104,13 @@ def sized(window: Window, A: Matrix, margin: float = MARGIN, extra: int = EXTRA)
         if not near.all() or k >= n - 2:
             return Window(window.lo, window.hi, min(n - 2, int(margin * near.sum()) + extra))
         k *= 2
+
+
+def widened(window: Window, A: Matrix, margin: float = MARGIN, extra: int = EXTRA) -> Window:
+    """The window sized anew at A (sized), with k at least WIDENING times its old k, at most
+    A's size less 2 (ARPACK's limit): where it crowded, so that the run can go on."""
+    k = max(sized(Window(window.lo, window.hi), A, margin, extra).k, math.ceil(WIDENING * window.k))
+    return Window(window.lo, window.hi, min(k, A.shape[0] - 2))
 
 
 def window_eigensystem(A: Matrix, window: Window, vectors: bool) -> Eigensystem:
@@ -159,3 +173,30 @@ def in_columns(values: Array, layout: tuple[Array, Array, Array, int]) -> Array:
     out = np.full((values.shape[0], C), np.nan, dtype=values.dtype)
     out[rows, columns] = values[rows, labels]
     return out
+
+
+def block_columns(values: list, blocks: Array, continued: dict, band: Window,
+                  *more: list) -> tuple[Array, ...]:
+    """The stored spectrum of a windowed branch made of blocks, stretches with one window size
+    (a window sized anew where it crowded, a packing's segment after a plastic event): values
+    [m] the eigenvalues of each point (k per point within a block), blocks (m,) each point's
+    block, continued {block: its points' Branch.continued rows}. Each block's window_columns
+    side by side, nan at the other blocks' points (no eigenvalue continues a column across
+    blocks). Returns that array, then each of `more` (per-point arrays aligned with values,
+    e.g. condition numbers) placed in the same columns."""
+    parts, total = [], 0
+    for b in np.unique(blocks):
+        on = np.flatnonzero(blocks == b)
+        rows = np.array([values[i] for i in on])
+        layout = column_layout(np.asarray(continued[b]), band.tracked(rows))
+        placed = [in_columns(rows, layout)] + [in_columns(np.array([m[i] for i in on]), layout)
+                                               for m in more]
+        parts.append((on, total, placed))
+        total += layout[3]
+    out = []
+    for a, first in enumerate([values] + list(more)):
+        array = np.full((blocks.size, total), np.nan, dtype=np.asarray(first[0]).dtype)
+        for on, start, placed in parts:
+            array[on, start:start + placed[a].shape[1]] = placed[a]
+        out.append(array)
+    return tuple(out)

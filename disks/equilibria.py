@@ -52,7 +52,7 @@ import scipy.sparse as sp
 from diskfriction.continuation.linalg import SingularMatrix, dense, solve
 from diskfriction.continuation.problem import Problem
 from diskfriction.continuation.spectra import Eigensystem, eigensystem
-from diskfriction.continuation.spectral_window import Window, sized, window_eigensystem
+from diskfriction.continuation.spectral_window import Window, sized, widened, window_eigensystem
 from diskfriction.matrices import Matrix
 from diskfriction.symbolic import System
 
@@ -130,6 +130,11 @@ class DiskEquilibria(Problem):
         self._set_committed(q, xi, F_x)
         if window is not None and window.k == 0:  # sized once, here, at the start state
             self.window = sized(window, self.stability_matrix(q, F_x))
+
+    def widen_window(self) -> None:
+        """Size the window anew at the committed state (spectral_window.widened), where it
+        crowded."""
+        self.window = widened(self.window, self.stability_matrix(self.q_c, self.F_c))
 
     # -- the committed state
     def _set_committed(self, q: np.ndarray, xi: np.ndarray, F_x: float) -> None:

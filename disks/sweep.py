@@ -24,8 +24,8 @@ import numpy as np
 from diskfriction.continuation.api import Options, solve_branch
 from diskfriction.continuation.collisions import Collision
 from diskfriction.disks.equilibria import DiskEquilibria, relax
-from diskfriction.continuation.branch import Branch, Stop
-from diskfriction.continuation.spectral_window import Window, column_layout, in_columns
+from diskfriction.continuation.branch import Branch, Stop, StopCode
+from diskfriction.continuation.spectral_window import WIDENINGS, Window, block_columns
 from diskfriction.continuation.spectra import count_complex_pairs, match_eigenvalues
 from diskfriction.matrices import Matrix
 from diskfriction.symbolic import System
@@ -81,7 +81,8 @@ class DiskBranch:
     listed. condition (m, n), as eigenvalues: each eigenvalue's condition number |l| |r| /
     |l^H r| (spectra.condition_numbers: 1 for a normal matrix, diverging like
     |F_x - F_c|^(-1/2) at a collision F_c; nan where no vectors were computed: the exhaustive
-    detection, a free disk's mode).
+    detection, a free disk's mode). widenings: how often the window crowded and was sized
+    anew, wider, at the last point (its eigenvalues start new columns there).
     """
 
     F_x: np.ndarray
@@ -98,6 +99,7 @@ class DiskBranch:
     events: int
     window: Optional[tuple[float, float]] = None
     condition: Optional[np.ndarray] = None
+    widenings: int = 0
 
     def __len__(self) -> int:
         return self.F_x.size
@@ -121,47 +123,63 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
     q, xi = relax(system, *system.rest_state(), F_1)
     window = None if params.window is None else Window(*params.window)
     problem = DiskEquilibria(system, q, xi, F_1, matrix, params.newton_tol, window=window)
-    rows, collisions, status, events, continued, condition = [], (), [], 0, [], []
+    rows, collisions, status, events, widenings = [], [], [], 0, 0
+    continued, condition, block = {}, [], 0
     F_start = F_1
     for leg, _, b in legs:
-        first = len(rows)
         b = max(b, F_1)  # unloading ends where loading started: F_x = 0 is the singular rest state
         ds = min(F_1, ds_max) if leg == legs[0][0] else ds_max / 2  # graded away from rest
         options = replace(params, ds_max=ds_max, ds=ds, ds_min=min(params.ds_min, ds))
+        restart, stuck = False, 0
+        while True:  # the leg's runs: where the window crowds, widened at the last point
+            first = len(rows)
+            if restart or (rows and rows[-1][3].size != _tracked_size(problem)):
+                block += 1  # a widened window: its eigenvalues start new columns
 
-        def record(k, F_x, q_k, eigvals, leg=leg):
-            if leg == 1 and k == 0 and rows:
-                return  # the first point of leg 1 is the last of leg 0
-            xi_k = problem.trial(q_k)[0]
-            res = np.abs(system.forces(q_k, xi_k, F_x)).max()
-            rows.append((F_x, q_k.copy(), xi_k, eigvals, res, leg, problem.free_count))
-            if progress is not None:
-                progress(F_x)
+            def record(k, F_x, q_k, eigvals, leg=leg, block=block):
+                if k == 0 and rows:
+                    return  # the run starts at the last point recorded
+                xi_k = problem.trial(q_k)[0]
+                res = np.abs(system.forces(q_k, xi_k, F_x)).max()
+                rows.append((F_x, q_k.copy(), xi_k, eigvals, res, leg, problem.free_count, block))
+                if progress is not None:
+                    progress(F_x)
 
-        branch = solve_branch(problem, problem.q_c, (F_start, b), options, callback=record).branch
-        branch = _continue_leg(rows, first, branch)
-        condition += list(branch.condition if first == 0 else branch.condition[1:])
-        if window is not None:
-            continued += list(branch.continued if first == 0 else branch.continued[1:])
+            branch = solve_branch(problem, problem.q_c, (F_start, b), options, callback=record).branch
+            if first and rows[first - 1][7] == block:
+                branch = _continue_leg(rows, first, branch)
+            condition += list(branch.condition if first == 0 else branch.condition[1:])
+            if window is not None:
+                continued.setdefault(block, []).extend(branch.continued if first == 0 else branch.continued[1:])
+            events += branch.events
+            if leg == 1:
+                collisions += branch.collisions
+            F_start = float(branch.p[-1])
+            stuck = stuck + 1 if len(branch) == 1 else 0
+            if branch.status.code is not StopCode.WINDOW or stuck > WIDENINGS:
+                break
+            problem.widen_window()
+            restart, widenings = True, widenings + 1
         status.append(branch.status)
-        events += branch.events
-        if leg == 1:
-            collisions = branch.collisions
-        F_start = float(branch.p[-1])
         if not branch.status.reached:
             break  # a leg that ended short: the next would start from a load never asked for
-    F_x, q, xi, eig, res, leg, free = (np.array(c) for c in zip(*rows))
-    condition = np.array(condition)
+    F_x, q, xi, eig, res, leg, free, blocks = (list(c) for c in zip(*rows))
+    F_x, q, xi, res, leg, free, blocks = (np.array(c) for c in (F_x, q, xi, res, leg, free, blocks))
     rel_tol = params.detection.rel_tol
     if window is None:
+        eig, condition = np.array(eig), np.array(condition)
         n_complex = np.array([count_complex_pairs(e, rel_tol) for e in eig])
     else:  # the pairs in the window; collisions with their double eigenvalue there
         n_complex = np.array([count_complex_pairs(e[window.inside(e)], rel_tol) for e in eig])
-        collisions = tuple(c for c in collisions if window.lo <= c.eigenvalue <= window.hi)
-        layout = column_layout(np.array(continued), window.tracked(eig))
-        eig, condition = in_columns(eig, layout), in_columns(condition, layout)
+        collisions = [c for c in collisions if window.lo <= c.eigenvalue <= window.hi]
+        eig, condition = block_columns(eig, blocks, continued, window, condition)
     return DiskBranch(F_x, q, xi, eig, n_complex, res, leg, free, tuple(collisions), matrix,
-                      tuple(status), events, params.window, condition)
+                      tuple(status), events, params.window, condition, widenings)
+
+
+def _tracked_size(problem: DiskEquilibria) -> int:
+    """The number of eigenvalues a sample of the problem holds (its window's k, or all)."""
+    return problem.system.ndof if problem.window is None else problem.window.k
 
 
 def _continue_leg(rows: list, first: int, branch: Branch) -> Branch:

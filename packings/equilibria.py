@@ -41,7 +41,6 @@ crowd a window at 0.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, replace
 import numpy as np
 import scipy.sparse as sp
@@ -49,7 +48,7 @@ import scipy.sparse as sp
 from diskfriction.continuation.problem import Problem
 from diskfriction.errors import OneLineError
 from diskfriction.continuation.spectra import Eigensystem, eigensystem
-from diskfriction.continuation.spectral_window import Window, sized, window_eigensystem
+from diskfriction.continuation.spectral_window import Window, sized, widened, window_eigensystem
 from diskfriction.matrices import Matrix
 from diskfriction.packings.network import D, Network
 
@@ -87,11 +86,6 @@ WINDOW_MARGIN, WINDOW_EXTRA = 2.0, 16
 """A spectral window's k at the start of a segment: WINDOW_MARGIN times the eigenvalues within
 its reach there, plus WINDOW_EXTRA (the chain's 1.5 and 8 are too few: shear softens a packing's
 low spectrum, and 256 disks crowded a window sized so within 7e-4 of strain)."""
-
-WINDOW_WIDENING = 1.5
-"""Where a window crowds (more eigenvalues reach its guard bands than its k), the shear sizes
-it anew at the last certified state, with k at least this factor times the old k
-(PackingEquilibria.widen_window, shear.py)."""
 
 SLIP_BAND = 1e-3
 """A contact that the cap held at a commit is sliding while its history lies within this
@@ -175,12 +169,9 @@ class PackingEquilibria(Problem):
             self.window = sized(window, self.reduced(q, gamma), WINDOW_MARGIN, WINDOW_EXTRA)
 
     def widen_window(self) -> None:
-        """Size the window anew at the committed state, with k at least WINDOW_WIDENING times
-        the old k (at most the reduced matrix's size less 2, ARPACK's limit)."""
-        A = self.reduced(self.q_c, self.gamma_c)
-        fresh = sized(Window(self.window.lo, self.window.hi), A, WINDOW_MARGIN, WINDOW_EXTRA)
-        k = max(fresh.k, math.ceil(WINDOW_WIDENING * self.window.k))
-        self.window = Window(self.window.lo, self.window.hi, min(k, A.shape[0] - 2))
+        """Size the window anew at the committed state (spectral_window.widened)."""
+        self.window = widened(self.window, self.reduced(self.q_c, self.gamma_c), WINDOW_MARGIN,
+                              WINDOW_EXTRA)
 
     # -- the committed state
     def _set_committed(self, q, xi, rows, gamma, sliding=None) -> None:

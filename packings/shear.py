@@ -13,7 +13,7 @@ from diskfriction.continuation.api import Options, solve_branch
 from diskfriction.continuation.branch import Stop, StopCode
 from diskfriction.continuation.collisions import Collision
 from diskfriction.continuation.spectra import count_complex_pairs
-from diskfriction.continuation.spectral_window import Window, window_columns
+from diskfriction.continuation.spectral_window import WIDENINGS, Window, block_columns
 from diskfriction.matrices import Matrix
 from diskfriction.packings.equilibria import PackingEquilibria, largest_force, mass_diagonal, start
 from diskfriction.packings.network import Network
@@ -23,11 +23,6 @@ from diskfriction.packings.prepared import prepare_scene
 from diskfriction.scenes.packing import PackingScene
 
 PLASTIC = (StopCode.FOLD, StopCode.COMMIT, StopCode.DS_MIN, StopCode.TURNED_BACK)
-
-WIDENINGS = 3
-"""A crowded window is sized anew (PackingEquilibria.widen_window) and the shear goes on from
-the last certified state; after this many restarts in a row that reach no further point, the
-shear ends there (StopCode.WINDOW)."""
 """How a segment ends at a plastic event, the branch lost: a fold in gamma (a saddle-node); a
 commit after which no equilibrium is near (a contact sliding or a disk turning loose took the
 state's stability with it); a step that had to shrink below ds_min (a singular point the
@@ -103,26 +98,6 @@ def collision_records(branch: PackingBranch) -> list[dict]:
              "lambda_im": 0.0, "matrix": str(branch.matrix)} for c in branch.collisions]
 
 
-def segment_columns(values: list, blocks: np.ndarray, continued: dict, band: Window
-                    ) -> np.ndarray:
-    """The stored spectrum of a windowed shear: each block's window columns
-    (spectral_window.window_columns; its k eigenvalues per point, continued[block] from its
-    branch) side by side, nan at the other blocks' points. A block is a stretch of branch with
-    one window size: a window is sized anew for each segment (a plastic event continues no
-    eigenvalue) and where it crowds (its eigenvalues start new columns there)."""
-    parts = []
-    for b in np.unique(blocks):
-        on = np.flatnonzero(blocks == b)
-        rows = np.array([values[i] for i in on])
-        parts.append((on, window_columns(rows, continued[b], band.tracked(rows))))
-    out = np.full((blocks.size, sum(part.shape[1] for _, part in parts)), np.nan, dtype=complex)
-    start = 0
-    for on, part in parts:
-        out[on, start:start + part.shape[1]] = part
-        start += part.shape[1]
-    return out
-
-
 def network_of(scene: PackingScene, packing: Packing) -> Network:
     """The packing's disks bound to the scene's kernels."""
     return Network.build(packing.radii, packing.L, scene.k_n, scene.k_t, scene.mu,
@@ -138,7 +113,8 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
     (packings/plastic.py: strained past the fold, relaxed with friction) and the shear goes on
     from each relaxed state as a new segment. window: (lo, hi) of Re lambda tracked by sparse
     shift-invert (continuation/spectral_window.py; its k sized at the start of every segment,
-    and where it crowds sized anew, wider, at the last certified state: WIDENINGS), or None:
+    and where it crowds sized anew, wider, at the last certified state:
+    spectral_window.widened), or None:
     every eigenvalue, a dense spectrum per sample."""
     network = network_of(scene, packing)
     mass = mass_diagonal(network, scene.m, scene.inertia)
@@ -202,7 +178,7 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
         band = Window(*window)
         n_complex = np.array([count_complex_pairs(e[band.inside(e)], rel_tol) for e in eig])
         kept = [c for c in kept if band.lo <= c.eigenvalue <= band.hi]
-        eig = segment_columns(eig, np.array(blocks), continued, band)
+        (eig,) = block_columns(eig, np.array(blocks), continued, band)
     return PackingBranch(gamma, q_all, rows, xi, eig, n_complex, res, contacts, loose, stress,
                          tuple(kept), Matrix(scene.matrix), branch.status, events, segments,
                          tuple(passed), window, widenings)
