@@ -29,6 +29,7 @@ from multiprocessing.connection import wait
 from typing import Optional
 
 import numpy as np
+import scipy.sparse
 
 from diskfriction.errors import OneLineError
 
@@ -143,7 +144,8 @@ def has_snapshots(problem: Problem) -> bool:
 def pending_full(workers: int, ends: list) -> bool:
     """Whether the continuation must wait for the oldest pending scan: the end samples of the
     pending steps (`ends`; None for a step whose commit found no equilibrium) are more than 2
-    per worker (one running, one queued) and hold more than PENDING_BYTES of eigenvectors,
+    per worker (one running, one queued) and hold more than PENDING_BYTES of eigenvectors
+    (with their matrix derivatives),
     counted as they are (a sample at eps = 0 grows as the load reaches more disks). A deep
     queue lets the continuation run ahead through quiet steps while the workers are on crowded
     ones: at N = 100 (2.9 MB a sample) 4, 8 and unbounded pending steps took 9.8, 9.5 and
@@ -152,8 +154,15 @@ def pending_full(workers: int, ends: list) -> bool:
 
 
 def _vector_bytes(sample: Sample) -> int:
-    system = sample.system
-    return 0 if system is None or system.right is None else system.right.nbytes + system.left.nbytes
+    """The bytes of the sample's eigenvectors and of the matrix derivative kept with them."""
+    system, dA = sample.system, sample.dA
+    vectors = 0 if system is None or system.right is None else system.right.nbytes + system.left.nbytes
+    if dA is None:
+        return vectors
+    if scipy.sparse.issparse(dA):
+        parts = ("data", "indices", "indptr", "row", "col", "offsets")
+        return vectors + sum(getattr(dA, k).nbytes for k in parts if hasattr(dA, k))
+    return vectors + dA.nbytes
 
 
 class InlineScans:
