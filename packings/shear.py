@@ -67,7 +67,10 @@ class PackingBranch:
     the segment of each point: the branch between two plastic events; plastic: the plastic
     events (folds in gamma) passed, one between each two segments; window: (lo, hi) of Re
     lambda tracked (collisions then only those with lo <= lambda <= hi), or None; widenings:
-    how often the window crowded and was sized anew, wider, at the last certified state."""
+    how often the window crowded and was sized anew, wider, at the last certified state;
+    condition, as eigenvalues: each eigenvalue's condition number |l| |r| / |l^H r|
+    (spectra.condition_numbers; nan for the zeros of the translations and loose disks, which
+    carry no vectors)."""
 
     gamma: np.ndarray
     q: np.ndarray
@@ -87,6 +90,7 @@ class PackingBranch:
     plastic: tuple[PlasticEvent, ...] = ()
     window: Optional[tuple[float, float]] = None
     widenings: int = 0
+    condition: Optional[np.ndarray] = None
 
     def __len__(self) -> int:
         return self.gamma.size
@@ -123,7 +127,7 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
     ds_max = params.ds_max or STEP_IN_STRAIN * affine
     options = replace(params, ds_max=ds_max, ds=params.ds or ds_max / 4,
                       ds_min=params.ds_min or 1e-8 * ds_max)
-    records, collisions, events, passed, continued, widenings = [], [], 0, [], {}, 0
+    records, collisions, events, passed, continued, widenings, kappas = [], [], 0, [], {}, 0, []
     q, xi, rows = start(network, packing.positions)
     gamma_start = 0.0
     while True:  # a window is sized again for every segment: its columns start anew there
@@ -152,6 +156,7 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
             collisions += branch.collisions
             events += branch.events
             continued[block] = branch.continued[1:] if restart else branch.continued
+            kappas += list(branch.condition[1:] if restart else branch.condition)
             stuck = stuck + 1 if len(branch) == 1 else 0
             if branch.status.code is not StopCode.WINDOW or stuck > WIDENINGS:
                 break
@@ -172,16 +177,16 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
     rel_tol = params.detection.rel_tol
     kept = [c for c in collisions if c.p >= g0]
     if window is None:
-        eig = np.array(eig)
+        eig, condition = np.array(eig), np.array(kappas)
         n_complex = np.array([count_complex_pairs(e[e != 0], rel_tol) for e in eig])
     else:  # the pairs in the window; collisions with their double eigenvalue there
         band = Window(*window)
         n_complex = np.array([count_complex_pairs(e[band.inside(e)], rel_tol) for e in eig])
         kept = [c for c in kept if band.lo <= c.eigenvalue <= band.hi]
-        (eig,) = block_columns(eig, np.array(blocks), continued, band)
+        eig, condition = block_columns(eig, np.array(blocks), continued, band, kappas)
     return PackingBranch(gamma, q_all, rows, xi, eig, n_complex, res, contacts, loose, stress,
                          tuple(kept), Matrix(scene.matrix), branch.status, events, segments,
-                         tuple(passed), window, widenings)
+                         tuple(passed), window, widenings, condition)
 
 
 def shear_scene(scene: PackingScene, plastic_events: int,

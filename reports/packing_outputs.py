@@ -15,6 +15,7 @@ from diskfriction.scenes.packing import PackingScene
 def save_packing_branch(out: Path, branch: PackingBranch, scene: PackingScene) -> None:
     """branch.npz (every PackingBranch array, raw units) and collisions.json."""
     save_npz(out / "branch.npz", gamma=branch.gamma, q=branch.q, eigenvalues=branch.eigenvalues,
+             condition=branch.condition,
              segment=branch.segment, plastic_gamma=np.array([e.gamma for e in branch.plastic]),
              n_complex=branch.n_complex, residual=branch.residual, contacts=branch.contacts,
              loose=branch.loose, stress=branch.stress, matrix=np.array(str(branch.matrix)),

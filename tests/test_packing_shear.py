@@ -265,3 +265,13 @@ def test_a_window_that_crowds_is_widened_and_finds_the_same_collisions(packing, 
                   - [c.p for c in generous.collisions]).max() <= 1e-12
     kinds = [(c.p, c.kind) for c in tight.collisions]
     assert unaccounted_pair_changes(tight.gamma, tight.n_complex, kinds) == []
+
+
+def test_the_condition_numbers_follow_the_eigenvalues_columns(branch, windowed):
+    """branch.condition has the eigenvalues' shape: nan exactly at the translations' and loose
+    disks' zeros (no vectors), at least 1 elsewhere (|l| |r| >= |l^H r|); with a window, nan
+    exactly where the window's columns are."""
+    zero = branch.eigenvalues == 0
+    assert branch.condition.shape == branch.eigenvalues.shape
+    assert np.isnan(branch.condition[zero]).all() and (branch.condition[~zero] >= 1 - 1e-12).all()
+    assert np.array_equal(np.isnan(windowed.condition), np.isnan(windowed.eigenvalues))
