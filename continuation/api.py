@@ -30,7 +30,7 @@ from diskfriction.errors import OneLineError
 from .arclength import Callback, ContinuationError, ContinuationParams, continuation
 from .bifurcations import (CONSERVATIVE, SpecialPoint, branch_point_brackets, conservative,
                            locate_branch_points, locate_folds, locate_hopf, other_direction)
-from .branch import Branch
+from .branch import Branch, StopCode
 from .collisions import Collision, DetectionParams
 from .differences import (METHODS, ParameterDerivative, StateDerivative, check_complex_step,
                           warn_differences)
@@ -38,6 +38,7 @@ from .newton import bordered_newton
 from .problem import FunctionProblem, Problem
 from .weighting import Weighted, scale_of, unweighted
 from .segment import SegmentSolveError
+from .spectral_window import WIDENINGS
 
 Array = np.ndarray
 Function = Callable[[Array, float], Array]
@@ -311,6 +312,36 @@ def solve_branch(problem: Problem, u0, p_span, options: Options = Options(), *,
                                   for points in (folds, hopf, branch_points))
     return BranchResult(unweighted(branch, s), tuple(folds), tuple(hopf),
                         branch.warnings + warnings, tuple(branch_points))
+
+
+def solve_in_runs(problem: Problem, u0, p_span, options: Options,
+                  callback_of: Callable[[int], Optional[Callback]]) -> list[Branch]:
+    """solve_branch, where a crowded spectral window (StopCode.WINDOW) does not end the work:
+    the problem's window is sized anew, wider, at the last certified point
+    (Problem.widen_window) and a new run goes on from there, until a run ends otherwise or
+    WIDENINGS runs in a row reach no further point. callback_of(r) is run r's callback (None:
+    none); a run after the first starts at the last point of the one before, which its
+    callback does not get again. Returns the runs' branches in order (their eigenvalues
+    under each run's own labels: a widened window holds more of them)."""
+    runs, stuck, (p_start, p_stop) = [], 0, p_span
+    while True:
+        callback = callback_of(len(runs))
+        if runs and callback is not None:
+            callback = _after_start(callback)
+        branch = solve_branch(problem, u0, (p_start, p_stop), options, callback=callback).branch
+        runs.append(branch)
+        stuck = stuck + 1 if len(branch) == 1 else 0
+        if branch.status.code is not StopCode.WINDOW or stuck > WIDENINGS or not problem.widen_window():
+            return runs
+        u0, p_start = branch.u[-1], float(branch.p[-1])
+
+
+def _after_start(callback: Callback) -> Callback:
+    """callback for every point but a run's first (k = 0)."""
+    def call(k, p, u, eigenvalues):
+        if k:
+            callback(k, p, u, eigenvalues)
+    return call
 
 
 def switch_branch(problem: Problem, result: BranchResult, k: int, p_stop: float,

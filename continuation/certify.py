@@ -140,7 +140,7 @@ def uncertified_pairs(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, real: 
         min_[0,1] H - doubt |c3| < rho min(y_a, y_b) - floor,
     and, for two real ones, _crossing does not certify them either. Returns arrays (i, j,
     min(y_a, y_b), where to split: the model minimum or a crossing's root, crossing?) in pair
-    order. O(pairs) time, no pair arrays."""
+    order. O(pairs) time; arrays only of the uncertified pairs."""
     I = []
     J = []
     Y = []

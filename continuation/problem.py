@@ -100,6 +100,11 @@ class Problem(ABC):
         """All eigenvalues of A(u, p) (complex array, any order)."""
         return self.eigensystem(u, p).values
 
+    def widen_window(self) -> bool:
+        """Size the tracked spectral window anew at the committed state, wider, where it
+        crowded (spectral_window.widened; solve_in_runs); False: the problem tracks no window."""
+        return False
+
     def derivative_step(self, x: Array) -> float:
         """Finite-difference length along a unit direction in x = (u, p)."""
         return 1e-6 * (1.0 + float(np.max(np.abs(x))))

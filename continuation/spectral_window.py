@@ -194,8 +194,8 @@ def block_columns(values: list, blocks: Array, continued: dict, band: Window,
         parts.append((on, total, placed))
         total += layout[3]
     out = []
-    for a, first in enumerate([values] + list(more)):
-        array = np.full((blocks.size, total), np.nan, dtype=np.asarray(first[0]).dtype)
+    for a in range(1 + len(more)):
+        array = np.full((blocks.size, total), np.nan, dtype=parts[0][2][a].dtype)
         for on, start, placed in parts:
             array[on, start:start + placed[a].shape[1]] = placed[a]
         out.append(array)

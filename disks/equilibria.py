@@ -131,10 +131,13 @@ class DiskEquilibria(Problem):
         if window is not None and window.k == 0:  # sized once, here, at the start state
             self.window = sized(window, self.stability_matrix(q, F_x))
 
-    def widen_window(self) -> None:
+    def widen_window(self) -> bool:
         """Size the window anew at the committed state (spectral_window.widened), where it
-        crowded."""
+        crowded; False without a window."""
+        if self.window is None:
+            return False
         self.window = widened(self.window, self.stability_matrix(self.q_c, self.F_c))
+        return True
 
     # -- the committed state
     def _set_committed(self, q: np.ndarray, xi: np.ndarray, F_x: float) -> None:

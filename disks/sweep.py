@@ -21,11 +21,11 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from diskfriction.continuation.api import Options, solve_branch
+from diskfriction.continuation.api import Options, solve_in_runs
 from diskfriction.continuation.collisions import Collision
 from diskfriction.disks.equilibria import DiskEquilibria, relax
-from diskfriction.continuation.branch import Branch, Stop, StopCode
-from diskfriction.continuation.spectral_window import WIDENINGS, Window, block_columns
+from diskfriction.continuation.branch import Branch, Stop
+from diskfriction.continuation.spectral_window import Window, block_columns
 from diskfriction.continuation.spectra import count_complex_pairs, match_eigenvalues
 from diskfriction.matrices import Matrix
 from diskfriction.symbolic import System
@@ -124,44 +124,41 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
     window = None if params.window is None else Window(*params.window)
     problem = DiskEquilibria(system, q, xi, F_1, matrix, params.newton_tol, window=window)
     rows, collisions, status, events, widenings = [], [], [], 0, 0
-    continued, condition, block = {}, [], 0
+    continued, condition, blocks_used = {}, [], 0
     F_start = F_1
     for leg, _, b in legs:
         b = max(b, F_1)  # unloading ends where loading started: F_x = 0 is the singular rest state
         ds = min(F_1, ds_max) if leg == legs[0][0] else ds_max / 2  # graded away from rest
         options = replace(params, ds_max=ds_max, ds=ds, ds_min=min(params.ds_min, ds))
-        restart, stuck = False, 0
-        while True:  # the leg's runs: where the window crowds, widened at the last point
-            first = len(rows)
-            if restart or (rows and rows[-1][3].size != _tracked_size(problem)):
-                block += 1  # a widened window: its eigenvalues start new columns
+        first, base = len(rows), max(blocks_used - 1, 0)  # a leg continues the last block
 
-            def record(k, F_x, q_k, eigvals, leg=leg, block=block):
+        def record_of(run, leg=leg, base=base):
+            def record(k, F_x, q_k, eigvals):
                 if k == 0 and rows:
-                    return  # the run starts at the last point recorded
+                    return  # the leg starts at the last point of the one before
                 xi_k = problem.trial(q_k)[0]
                 res = np.abs(system.forces(q_k, xi_k, F_x)).max()
-                rows.append((F_x, q_k.copy(), xi_k, eigvals, res, leg, problem.free_count, block))
+                rows.append((F_x, q_k.copy(), xi_k, eigvals, res, leg, problem.free_count, base + run))
                 if progress is not None:
                     progress(F_x)
+            return record
 
-            branch = solve_branch(problem, problem.q_c, (F_start, b), options, callback=record).branch
-            if first and rows[first - 1][7] == block:
+        runs = solve_in_runs(problem, problem.q_c, (F_start, b), options, record_of)
+        for run, branch in enumerate(runs):  # a run after the first follows a widened window
+            skipped = run > 0 or first > 0  # its first point was recorded before
+            if run == 0 and first > 0:
                 branch = _continue_leg(rows, first, branch)
-            condition += list(branch.condition if first == 0 else branch.condition[1:])
+            condition += list(branch.condition[1:] if skipped else branch.condition)
             if window is not None:
-                continued.setdefault(block, []).extend(branch.continued if first == 0 else branch.continued[1:])
+                continued.setdefault(base + run, []).extend(
+                    branch.continued[1:] if skipped else branch.continued)
             events += branch.events
             if leg == 1:
                 collisions += branch.collisions
-            F_start = float(branch.p[-1])
-            stuck = stuck + 1 if len(branch) == 1 else 0
-            if branch.status.code is not StopCode.WINDOW or stuck > WIDENINGS:
-                break
-            problem.widen_window()
-            restart, widenings = True, widenings + 1
-        status.append(branch.status)
-        if not branch.status.reached:
+        blocks_used, widenings = base + len(runs), widenings + len(runs) - 1
+        status.append(runs[-1].status)
+        F_start = float(runs[-1].p[-1])
+        if not runs[-1].status.reached:
             break  # a leg that ended short: the next would start from a load never asked for
     F_x, q, xi, eig, res, leg, free, blocks = (list(c) for c in zip(*rows))
     F_x, q, xi, res, leg, free, blocks = (np.array(c) for c in (F_x, q, xi, res, leg, free, blocks))
@@ -177,22 +174,17 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
                       tuple(status), events, params.window, condition, widenings)
 
 
-def _tracked_size(problem: DiskEquilibria) -> int:
-    """The number of eigenvalues a sample of the problem holds (its window's k, or all)."""
-    return problem.system.ndof if problem.window is None else problem.window.k
-
-
 def _continue_leg(rows: list, first: int, branch: Branch) -> Branch:
     """A leg after another starts at that one's last point with its labels in order of value
-    (arclength._sorted), and its first point is not recorded again: its rows rows[first:] are
-    relabelled (in place) to continue the last point's labels, the same eigenvalues at the same
+    (arclength._sorted), and its first point is not recorded again: its rows (from rows[first])
+    are relabelled (in place) to continue the last point's labels, the same eigenvalues at the same
     point matched by value (spectra.match_eigenvalues), and the branch's collision pairs and
     window columns (Branch.continued) with them. The first leg is returned as it is."""
     if first == 0:
         return branch
     perm = match_eigenvalues(rows[first - 1][3], branch.eigenvalues[0])  # new label i holds old perm[i]
     of_label = np.argsort(perm)
-    for r in range(first, len(rows)):
+    for r in range(first, first + len(branch) - 1):  # this branch's rows, not a later run's
         rows[r] = rows[r][:3] + (rows[r][3][perm],) + rows[r][4:]
     pairs = tuple(replace(c, pair=(int(of_label[c.pair[0]]), int(of_label[c.pair[1]])))
                   for c in branch.collisions)

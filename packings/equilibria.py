@@ -168,10 +168,14 @@ class PackingEquilibria(Problem):
         if window is not None and window.k == 0:  # sized once, here, at the start state
             self.window = sized(window, self.reduced(q, gamma), WINDOW_MARGIN, WINDOW_EXTRA)
 
-    def widen_window(self) -> None:
-        """Size the window anew at the committed state (spectral_window.widened)."""
+    def widen_window(self) -> bool:
+        """Size the window anew at the committed state (spectral_window.widened); False
+        without a window."""
+        if self.window is None:
+            return False
         self.window = widened(self.window, self.reduced(self.q_c, self.gamma_c), WINDOW_MARGIN,
                               WINDOW_EXTRA)
+        return True
 
     # -- the committed state
     def _set_committed(self, q, xi, rows, gamma, sliding=None) -> None:

@@ -9,11 +9,11 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from diskfriction.continuation.api import Options, solve_branch
+from diskfriction.continuation.api import Options, solve_in_runs
 from diskfriction.continuation.branch import Stop, StopCode
 from diskfriction.continuation.collisions import Collision
 from diskfriction.continuation.spectra import count_complex_pairs
-from diskfriction.continuation.spectral_window import WIDENINGS, Window, block_columns
+from diskfriction.continuation.spectral_window import Window, block_columns
 from diskfriction.matrices import Matrix
 from diskfriction.packings.equilibria import PackingEquilibria, largest_force, mass_diagonal, start
 from diskfriction.packings.network import Network
@@ -133,36 +133,29 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
     while True:  # a window is sized again for every segment: its columns start anew there
         problem = PackingEquilibria(network, q, xi, rows, gamma_start, mass, scene.matrix,
                                     params.newton_tol, None if window is None else Window(*window))
-        segment, stuck, first = len(passed), 0, len(continued)
-        while True:  # the window's blocks: where it crowds, sized anew at the last state
-            block = len(continued)
-            restart = block > first  # its first point ends the block before
+        segment, base = len(passed), len(continued)  # a segment starts a window block
 
-            def record(k, gamma, q_k, eigvals, problem=problem, segment=segment, block=block,
-                       restart=restart):
-                if k == 0 and restart:
-                    return
+        def record_of(run, problem=problem, segment=segment, base=base):
+            def record(k, gamma, q_k, eigvals):
                 xi_all = problem.trial(q_k, gamma)[0]
                 xi_k, rows_k = xi_all[problem.active], problem.rows_c[problem.active]
                 delta = network.overlaps(q_k, rows_k, gamma)
                 records.append((gamma, q_k.copy(), problem.rows_c.copy(), xi_all, eigvals,
                                 largest_force(problem, q_k, gamma),
                                 int((delta > 0).sum()), int(problem.gauge.loose.sum()),
-                                network.stress(q_k, xi_k, rows_k, gamma), segment, block))
+                                network.stress(q_k, xi_k, rows_k, gamma), segment, base + run))
                 if progress is not None:
                     progress(gamma)
+            return record
 
-            branch = solve_branch(problem, q, (gamma_start, g1), options, callback=record).branch
+        runs = solve_in_runs(problem, q, (gamma_start, g1), options, record_of)
+        for run, branch in enumerate(runs):  # a run after the first follows a widened window
             collisions += branch.collisions
             events += branch.events
-            continued[block] = branch.continued[1:] if restart else branch.continued
-            kappas += list(branch.condition[1:] if restart else branch.condition)
-            stuck = stuck + 1 if len(branch) == 1 else 0
-            if branch.status.code is not StopCode.WINDOW or stuck > WIDENINGS:
-                break
-            problem.widen_window()
-            widenings += 1
-            q, gamma_start = branch.u[-1], float(branch.p[-1])
+            continued[base + run] = branch.continued if run == 0 else branch.continued[1:]
+            kappas += list(branch.condition if run == 0 else branch.condition[1:])
+        widenings += len(runs) - 1
+        branch = runs[-1]
         if branch.status.code not in PLASTIC or len(passed) >= plastic_events:
             break
         gamma_f, q_f, rows_f, xi_f = records[-1][0], records[-1][1], records[-1][2], records[-1][3]
