@@ -1,11 +1,15 @@
 """What one full spectrum costs: LAPACK's dgeev on the chain's stability matrix, the floor
-under the fast detection's cost (issue 8; docs/continuation.md, Cost).
+under the fast detection's cost (issue 8; docs/continuation.md, Cost), and cuSOLVER's geev on a
+GPU (issue 26; --spectra cpu,gpu).
 
 For each N: the dense J (n = 3N) of the paper's scene with N disks at F_x = 0.002 (eps = 1e-4),
 and the median time of its eigenvalues alone, with right vectors, and with left and right
 vectors (what a full sample computes: spectra.eigensystem), one BLAS thread. Every accepted
-point and every full split sample costs one of the last. Run:
-python benchmarks/dense_spectrum.py [--N 10,100,200] [--repeat 7]
+point and every full split sample costs one of the last. With gpu among --spectra, also
+spectra.eigensystem's eigenvalues alone and with both vectors on the GPU (copies to and from the
+device included), the CPU's time over the GPU's, and the largest distance of the GPU's
+eigenvalues from LAPACK's over the spectral radius. Run:
+python benchmarks/dense_spectrum.py [--N 10,100,200] [--repeat 7] [--spectra cpu,gpu]
 """
 from __future__ import annotations
 
@@ -15,8 +19,9 @@ import time
 import numpy as np
 import scipy.linalg as sla
 
-from diskfriction.disks.equilibria import DiskEquilibria, relax
 from diskfriction.continuation.linalg import blas_threads, dense
+from diskfriction.continuation.spectra import eigensystem, spectra_on, track
+from diskfriction.disks.equilibria import DiskEquilibria, relax
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
 
@@ -32,24 +37,42 @@ def median_ms(fn, repeat: int) -> float:
     return float(np.median(times)) * 1e3
 
 
+def shown(ms: float) -> str:
+    return f"{ms:.3g} ms" if ms < 1e3 else f"{ms / 1e3:.3g} s"
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--N", default="10,100,200")
     ap.add_argument("--repeat", type=int, default=7)
+    ap.add_argument("--spectra", default="cpu", help="cpu, or cpu,gpu")
     args = ap.parse_args()
+    gpu = "gpu" in args.spectra.split(",")
     print(f"{time.strftime('%Y-%m-%d %H:%M')}, load average {open('/proc/loadavg').read().split()[0]}")
-    print("| N | n | eigenvalues | with right vectors | with left and right vectors |")
-    print("|---|---|---|---|---|")
+    head = "| N | n | eigenvalues | with right vectors | with left and right vectors |"
+    if gpu:
+        head += " GPU eigenvalues | GPU with both vectors | CPU / GPU (both vectors) | GPU - LAPACK |"
+    print(head)
+    print("|---" * (head.count("|") - 1) + "|")
     for N in [int(v) for v in args.N.split(",") if v]:
         system = System.from_scene(Scene(N=N, eps=1e-4))
         q, xi = relax(system, *system.rest_state(), 0.002)
         A = dense(DiskEquilibria(system, q, xi, 0.002, "J").stability_matrix(q, 0.002))
-        with blas_threads():
+        with blas_threads(), spectra_on("cpu"):
             ms = [median_ms(lambda: sla.eigvals(A, check_finite=False), args.repeat),
                   median_ms(lambda: sla.eig(A, check_finite=False), args.repeat),
-                  median_ms(lambda: sla.eig(A, left=True, check_finite=False), args.repeat)]
-        print(f"| {N} | {A.shape[0]} | " + " | ".join(f"{t:.3g} ms" if t < 1e3 else f"{t / 1e3:.3g} s" for t in ms)
-              + " |", flush=True)
+                  median_ms(lambda: eigensystem(A, True), args.repeat)]
+            lapack = eigensystem(A, False).values
+        row = f"| {N} | {A.shape[0]} | " + " | ".join(shown(t) for t in ms) + " |"
+        if gpu:
+            with spectra_on("gpu"):
+                on_gpu = [median_ms(lambda: eigensystem(A, False), args.repeat),
+                          median_ms(lambda: eigensystem(A, True), args.repeat)]
+                values = eigensystem(A, True).values
+            error = np.abs(track(lapack, values) - lapack).max()
+            row += (" " + " | ".join(shown(t) for t in on_gpu)
+                    + f" | {ms[2] / on_gpu[1]:.3g} | {error / np.abs(lapack).max():.1e} |")
+        print(row, flush=True)
 
 
 if __name__ == "__main__":

@@ -13,8 +13,10 @@ even inside a step), prints how far it got (the last accepted F_x) and is left o
 Run: python benchmarks/scaling.py [--N 10,20,40,100,200,400,1000] [--budget 600]
                                   [--exhaustive-up-to 100] [--eps 1e-4,0]
                                   [--window-N 1000 --window 0.0715:0.08] [--workers K]
+                                  [--spectra cpu|gpu|auto[,...]]
 With --window-N, also a run tracking only that spectral window (bifurcate --window; lambda / k_n)
-at each of those N.
+at each of those N. --spectra: where the dense spectra run (bifurcate --spectra; default auto);
+with several, each fast run is repeated for each and compared with the first.
 """
 from __future__ import annotations
 
@@ -32,6 +34,7 @@ from diskfriction.continuation.collisions import DetectionParams
 from diskfriction.disks.equilibria import DiskEquilibria
 from diskfriction.continuation.linalg import measured
 from diskfriction.continuation.scans import default_workers
+from diskfriction.continuation.spectra import spectra_on
 from diskfriction.disks.sweep import SweepParams, sweep
 from diskfriction.reports.units import PaperUnits
 from diskfriction.scenes import Scene
@@ -42,6 +45,7 @@ scene = Scene(N=N, eps=eps)
 unit = PaperUnits.of(scene).eigenvalue("J")
 window = None if sys.argv[5] == "-" else tuple(float(w) * unit for w in sys.argv[5].split(":"))
 workers = None if sys.argv[6] == "auto" else int(sys.argv[6])
+spectra_on(sys.argv[7]).__enter__()  # for the whole child process
 system = System.from_scene(scene)
 reached = {"F_x": 0.0}
 
@@ -84,16 +88,20 @@ print(json.dumps(out))
 """
 
 
-def run(N: int, eps: float, mode: str, budget: float, window: str = "-", workers: str = "auto") -> dict:
-    proc = subprocess.run([sys.executable, "-c", CHILD, str(N), str(eps), mode, str(budget), window, workers],
-                          capture_output=True, text=True)
+def run(N: int, eps: float, mode: str, budget: float, window: str = "-", workers: str = "auto",
+        spectra: str = "auto") -> dict:
+    proc = subprocess.run([sys.executable, "-c", CHILD, str(N), str(eps), mode, str(budget), window, workers,
+                           spectra], capture_output=True, text=True)
     if proc.returncode != 0:
         return {"N": N, "eps": eps, "mode": mode, "done": False,
                 "error": proc.stderr.strip().splitlines()[-1] if proc.stderr else "failed"}
     return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
-def row(r: dict) -> str:
+def row(r: dict, spectra: str = "auto") -> str:
+    """A table row; the detection column names the spectra's device unless it is "auto"."""
+    if spectra != "auto":
+        r = dict(r, mode=f"{r['mode']}, spectra {spectra}")
     if "error" in r:
         return f"| {r['N']} | {r['eps']:g} | {r['mode']} | failed: {r['error']} |"
     coll = "-" if r["collisions"] is None else len(r["collisions"])
@@ -124,7 +132,9 @@ def main() -> None:
     ap.add_argument("--window-N", default="", help="N values for a spectral-window run")
     ap.add_argument("--window", default="0.0715:0.08", help="LO:HI in lambda / k_n")
     ap.add_argument("--workers", default="auto", help="scan workers of the fast detection (auto: the sweep's choice)")
+    ap.add_argument("--spectra", default="auto", help="cpu, gpu or auto; several (gpu,cpu): each fast run for each")
     args = ap.parse_args()
+    devices = args.spectra.split(",")
     sizes = [int(n) for n in args.N.split(",") if n]
     eps_values = [float(e) for e in args.eps.split(",")]
     print(f"{time.strftime('%Y-%m-%d %H:%M')}, load average {open('/proc/loadavg').read().split()[0]}")
@@ -136,8 +146,12 @@ def main() -> None:
         print(row(run(N, eps_values[0], "fast", args.budget, args.window, args.workers)), flush=True)
     for eps in eps_values:
         for N in sizes:
-            r = results[(N, eps, "fast")] = run(N, eps, "fast", args.budget, workers=args.workers)
-            print(row(r), flush=True)
+            r = results[(N, eps, "fast")] = run(N, eps, "fast", args.budget, workers=args.workers,
+                                                 spectra=devices[0])
+            print(row(r, devices[0]), flush=True)
+            for device in devices[1:]:
+                other = run(N, eps, "fast", args.budget, workers=args.workers, spectra=device)
+                print(row(other, device) + f" {agreement(other, r)}", flush=True)
             if eps and N <= args.exhaustive_up_to:
                 e = results[(N, eps, "exhaustive")] = run(N, eps, "exhaustive", args.budget)
                 print(row(e) + f" {agreement(r, e)}", flush=True)

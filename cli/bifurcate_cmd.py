@@ -48,6 +48,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              "shift-invert, for chains and packings too large for full spectra; "
                              "collisions are certified and listed in the window only (fast "
                              "detection)")
+    parser.add_argument("--spectra", default="auto", metavar="cpu|gpu|auto",
+                        help="where dense spectra run: cpu (LAPACK), gpu (CuPy's cuSOLVER; "
+                             "scans then run inline), auto (the GPU from n = 1000 where CuPy "
+                             "and a CUDA device are present; the default)")
     parser.add_argument("--json", action="store_true", help="print the collision list to stdout")
     parser.add_argument("--problem", metavar="FILE.py[:NAME]",
                         help="continue the BifurcationProblem NAME (default: problem) defined in "
@@ -95,6 +99,21 @@ def parse_window(text: str, command: str = "bifurcate") -> tuple[float, float]:
 
 
 def run(args: argparse.Namespace) -> int:
+    """bifurcate with its dense spectra where --spectra says (continuation/spectra.py)."""
+    from diskfriction.continuation.spectra import NoGpu, SpectraDevice, spectra_on
+
+    names = [device.value for device in SpectraDevice]
+    if args.spectra not in names:
+        raise CommandError(f"bifurcate error: --spectra: must be {', '.join(names[:-1])} or "
+                           f"{names[-1]} (got {args.spectra!r})")
+    try:
+        with spectra_on(args.spectra):
+            return _run(args)
+    except NoGpu as err:
+        raise CommandError(f"bifurcate error: --spectra gpu: {err}") from None
+
+
+def _run(args: argparse.Namespace) -> int:
     from diskfriction.continuation.detectors import DETECTORS
 
     if args.detection not in DETECTORS:

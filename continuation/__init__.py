@@ -5,6 +5,7 @@ The public front end (api.py, docs/api.md):
 
     problem = problem_from_functions(G, A=A)          # or problem_from_sympy, or a Problem
     result = solve_branch(problem, u0, (p_start, p_stop), Options(...))
+    with spectra_on("gpu"): ...                       # dense spectra on a GPU (CuPy)
 
 The core underneath:
 
@@ -18,12 +19,13 @@ from .branch import Branch, Stop, StopCode
 from .collisions import Collision, DetectionParams
 from .differences import DerivativeWarning
 from .problem import FunctionProblem, Problem
-from .spectra import count_complex_pairs, eigen_status, match_eigenvalues, track
+from .spectra import (NoGpu, SpectraDevice, count_complex_pairs, eigen_status, match_eigenvalues,
+                      spectra_on, track)
 
 __all__ = [
     "BifurcationProblem", "Branch", "BranchResult", "Collision", "ContinuationError",
-    "ContinuationParams", "DerivativeWarning", "DetectionParams", "FunctionProblem", "Options",
-    "Problem", "ProblemError", "SpecialPoint", "Stop", "StopCode", "check_problem", "continuation",
+    "ContinuationParams", "DerivativeWarning", "DetectionParams", "FunctionProblem", "NoGpu",
+    "Options", "Problem", "ProblemError", "SpectraDevice", "SpecialPoint", "Stop", "StopCode", "check_problem", "continuation",
     "count_complex_pairs", "eigen_status", "match_eigenvalues", "problem_from_functions",
-    "problem_from_sympy", "solve_branch", "switch_branch", "track",
+    "problem_from_sympy", "solve_branch", "spectra_on", "switch_branch", "track",
 ]

@@ -38,6 +38,7 @@ from .linalg import SingularMatrix, blas_threads, book_counts, measured
 from .problem import Problem
 from .samples import Sample
 from .segment import Segment, SegmentSolveError
+from .spectra import GPU_FROM, on_gpu
 from .spectral_window import WindowCrowded
 
 Array = np.ndarray
@@ -100,6 +101,12 @@ def run_scan(problem: Problem, job: ScanJob) -> ScanOutcome:
     return ScanOutcome(result, failure, spent.counts(), crowded)
 
 
+class WorkersOnGpu(OneLineError, ValueError):
+    """Scan workers asked for where the spectra run on a GPU (planned_workers)."""
+
+    exit_code = 2
+
+
 def default_workers(problem: Problem, n: int, detection: DetectionParams,
                     asked: Optional[int] = None) -> int:
     """Workers for `problem`, whose stability matrix is n x n: planned_workers, or 0 (inline)
@@ -119,10 +126,18 @@ def planned_workers(n: int, detection: DetectionParams, asked: Optional[int] = N
     independent (Detector.parallel: the exhaustive one's stencil is a sample of the previous
     step, known only once that step's scan is done); then `asked` if given (0: every scan
     inline), else 2 from n = PARALLEL_FROM on, on Linux, when this process may use 2 cores or
-    more and is not daemonic. ValueError for asked < 0."""
+    more and is not daemonic. Always 0 where the spectra run on a GPU (spectra.on_gpu): the
+    GPU does the heavy part, and a forked worker cannot use the CUDA context this process
+    started. ValueError for asked < 0, or asked > 0 with spectra on a GPU."""
     if asked is not None and asked < 0:
         raise ValueError(f"workers must be >= 0 (or None: automatic), got {asked}")
     if not (detection.enabled and detection.detector.parallel):
+        return 0
+    if on_gpu(n):
+        if asked:
+            raise WorkersOnGpu(f"--workers: the spectra run on the GPU (--spectra gpu, or auto from "
+                               f"n = {GPU_FROM}), where the scans run inline; ask for --spectra cpu "
+                               f"to scan on workers (got {asked})")
         return 0
     if asked is not None:
         return asked

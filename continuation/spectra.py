@@ -18,9 +18,15 @@ sum_i |lambda_i(prev) - lambda_perm(i)(new)| (scipy.optimize.linear_sum_assignme
 every eigenvalue's nearest new eigenvalue is distinct, that nearest-neighbour map is already
 optimal and the assignment solve is skipped. Column i of a branch's eigenvalue array is then
 one continuous eigenvalue (up to the arbitrary choice at a collision).
+
+Devices. Every dense spectrum of the core is taken by eigensystem(): LAPACK's dgeev on the CPU,
+or cuSOLVER's geev on a GPU (gpu_spectra.py) inside `with spectra_on("gpu" | "auto"):`. The
+default, "auto", sends an n x n matrix to the GPU from n = GPU_FROM on where CuPy and a CUDA
+device are present, and keeps everything on the CPU elsewhere (CI, any machine without one).
 """
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass
 from enum import StrEnum
 from typing import Optional
@@ -29,6 +35,9 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.optimize import linear_sum_assignment
 
+from diskfriction.errors import OneLineError
+
+from . import gpu_spectra
 from .linalg import book
 
 Array = np.ndarray
@@ -186,10 +195,57 @@ class Eigensystem:
                            columns, self.disc)
 
 
+class SpectraDevice(StrEnum):
+    """Where eigensystem() takes dense spectra: "cpu" (LAPACK), "gpu" (cuSOLVER, every size;
+    gpu_spectra.py) or "auto" (the GPU from n = GPU_FROM on where one is usable, else the CPU)."""
+
+    CPU = "cpu"
+    GPU = "gpu"
+    AUTO = "auto"
+
+
+GPU_FROM = 1000
+"""Matrix size from which "auto" takes dense spectra on a GPU (benchmarks/dense_spectrum.py
+--spectra cpu,gpu; docs/continuation.md, GPU spectra)."""
+
+_DEVICE = [SpectraDevice.AUTO]
+
+
+class NoGpu(OneLineError, RuntimeError):
+    """spectra_on("gpu") where no GPU spectra can run (gpu_spectra.unavailable says why)."""
+
+    exit_code = 2
+
+
+@contextlib.contextmanager
+def spectra_on(device: str):
+    """Dense spectra on `device` (a SpectraDevice or its name) inside the block. NoGpu for
+    "gpu" where CuPy or a CUDA device is missing; ValueError for an unknown name."""
+    device = SpectraDevice(device)
+    if device is SpectraDevice.GPU and (why := gpu_spectra.unavailable()) is not None:
+        raise NoGpu(why)
+    before, _DEVICE[0] = _DEVICE[0], device
+    try:
+        yield
+    finally:
+        _DEVICE[0] = before
+
+
+def on_gpu(n: int) -> bool:
+    """Whether eigensystem() takes an n x n spectrum on the GPU under the current device."""
+    device = _DEVICE[0]
+    if device is SpectraDevice.AUTO:
+        return n >= GPU_FROM and gpu_spectra.unavailable() is None
+    return device is SpectraDevice.GPU
+
+
 def eigensystem(A: Array, vectors: bool) -> Eigensystem:
-    """All eigenvalues of the dense matrix A (LAPACK dgeev), with left and right vectors
-    normalised to l_i^H r_i = 1 if `vectors`; booked as a full spectrum (linalg.book)."""
+    """All eigenvalues of the dense matrix A (LAPACK dgeev, or cuSOLVER's geev where on_gpu:
+    gpu_spectra.py; LAPACK where the GPU's right vectors are singular), with left and right
+    vectors normalised to l_i^H r_i = 1 if `vectors`; booked as a full spectrum (linalg.book)."""
     book("spectra")
+    if on_gpu(A.shape[0]) and (arrays := gpu_spectra.eigensystem_arrays(A, vectors)) is not None:
+        return Eigensystem(*arrays)
     if not vectors:
         return Eigensystem(np.linalg.eigvals(A).astype(complex))
     lam, vl, vr = sla.eig(A, left=True, right=True, check_finite=False)

@@ -1,0 +1,154 @@
+"""Dense spectra on a GPU (issue 26 item 2): gpu_spectra's formulas (checked with numpy as the
+array module, where no GPU is), the device switch, and, where CuPy and a CUDA device are
+present, cuSOLVER against LAPACK."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from diskfriction.continuation import gpu_spectra, scans, spectra
+from diskfriction.continuation.collisions import DetectionParams
+from diskfriction.continuation.spectra import NoGpu, eigensystem, spectra_on
+
+WHY_NO_GPU = gpu_spectra.unavailable()
+
+
+def relaxed_jacobian(N: int, F_x: float = 0.002):
+    """The stability matrix J of the paper's scene with N disks and eps = 1e-4, relaxed from
+    rest to F_x (benchmarks/dense_spectrum.py's matrix)."""
+    from diskfriction.continuation.linalg import dense
+    from diskfriction.disks.equilibria import DiskEquilibria, relax
+    from diskfriction.scenes import Scene
+    from diskfriction.symbolic import System
+
+    system = System.from_scene(Scene(N=N, eps=1e-4))
+    q, xi = relax(system, *system.rest_state(), F_x)
+    return dense(DiskEquilibria(system, q, xi, F_x, "J").stability_matrix(q, F_x))
+
+
+@pytest.fixture(scope="module")
+def paper():
+    """The paper's scene and its CPU sweep 0 -> 0.12 (22 collisions)."""
+    from diskfriction.disks.sweep import sweep
+    from diskfriction.scenes import Scene
+    from diskfriction.symbolic import System
+
+    system = System.from_scene(Scene())
+    with spectra_on("cpu"):
+        return system, sweep(system, 0.0, 0.12)
+
+
+def complex_jacobian(paper):
+    """J at the paper branch's first accepted point with three complex pairs."""
+    system, branch = paper
+    k = int(np.flatnonzero(branch.n_complex >= 3)[0])
+    return system.stability_matrix(system.jacobian(branch.q[k], branch.xi[k]), "J")
+
+
+def same_spectrum(a: np.ndarray, b: np.ndarray) -> float:
+    """Largest |a_i - b_perm(i)| / max|a| over the best matching of the two spectra."""
+    return float(np.abs(a - spectra.track(a, b)).max() / np.abs(a).max())
+
+
+@pytest.fixture
+def fake_gpu(monkeypatch):
+    """A 'GPU' that runs gpu_spectra.decompose with numpy: counts its calls."""
+    calls = []
+
+    def arrays(A, vectors):
+        calls.append(A.shape[0])
+        return gpu_spectra.decompose(np, A, vectors)
+
+    monkeypatch.setattr(gpu_spectra, "unavailable", lambda: None)
+    monkeypatch.setattr(gpu_spectra, "eigensystem_arrays", arrays)
+    return calls
+
+
+@pytest.mark.parametrize("which", ["random", "paper"])
+def test_left_vectors_from_the_inverse_of_the_right_ones_are_lapacks(which, paper):
+    """decompose's left vectors (rows of R^-1) are left eigenvectors with l_i^H r_i = 1, and
+    give LAPACK's eigenvalues, condition numbers and slopes."""
+    rng = np.random.default_rng(3)
+    A = rng.standard_normal((60, 60)) if which == "random" else complex_jacobian(paper)
+    lam, right, left = gpu_spectra.decompose(np, A, vectors=True)
+    assert np.abs(left @ A - lam[:, None] * left).max() <= 1e-11 * np.abs(A).max() * np.abs(left).max()
+    assert np.abs(np.einsum("ij,ji->i", left, right) - 1.0).max() <= 1e-12
+    cpu = eigensystem(A, vectors=True)
+    perm = spectra.match_eigenvalues(cpu.values, lam)
+    assert same_spectrum(cpu.values, lam) <= 1e-12
+    gpu = spectra.Eigensystem(lam, right, left).permuted(perm)
+    kappa_cpu, kappa_gpu = spectra.condition_numbers(cpu), spectra.condition_numbers(gpu)
+    assert np.abs(kappa_gpu / kappa_cpu - 1.0).max() <= 1e-9
+    dA = rng.standard_normal(A.shape)
+    slopes_cpu, slopes_gpu = spectra.eigenvalue_slopes(cpu, dA), spectra.eigenvalue_slopes(gpu, dA)
+    assert np.abs(slopes_gpu - slopes_cpu).max() <= 1e-9 * np.abs(slopes_cpu).max()
+    values, none, also_none = gpu_spectra.decompose(np, A, vectors=False)
+    assert none is None and also_none is None and same_spectrum(cpu.values, values) <= 1e-12
+
+
+def test_the_device_decides_where_each_spectrum_runs(fake_gpu, monkeypatch):
+    monkeypatch.setattr(spectra, "GPU_FROM", 40)
+    small, large = np.diag(np.arange(30.0)) + np.triu(np.ones((30, 30)), 1), relaxed_jacobian(N=14)  # n = 30, 42
+    with spectra_on("cpu"):
+        eigensystem(large, vectors=True)
+    assert fake_gpu == []
+    eigensystem(small, vectors=False)  # "auto", the default: below GPU_FROM on the CPU
+    eigensystem(large, vectors=False)
+    assert fake_gpu == [42]
+    with spectra_on("gpu"):
+        system = eigensystem(small, vectors=True)
+    assert fake_gpu == [42, 30] and system.left is not None
+    jordan = np.eye(30) + np.diag(np.ones(29), 1)  # defective: R is singular, LAPACK's vectors
+    with spectra_on("gpu"), np.errstate(invalid="ignore", divide="ignore"):  # LAPACK: l^H r = 0
+        system = eigensystem(jordan, vectors=True)
+    assert fake_gpu == [42, 30, 30] and np.isfinite(system.values).all() and system.left is not None
+    with pytest.raises(ValueError):
+        with spectra_on("tpu"):
+            pass
+
+
+def test_scans_run_inline_where_the_spectra_run_on_the_gpu(fake_gpu, monkeypatch):
+    monkeypatch.setattr(scans.os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
+    detection = DetectionParams()
+    assert scans.planned_workers(300, detection) == 2
+    with spectra_on("gpu"):
+        assert scans.planned_workers(300, detection) == 0
+        with pytest.raises(scans.WorkersOnGpu, match="--spectra cpu"):
+            scans.planned_workers(300, detection, asked=2)
+
+
+def test_a_sweep_with_its_spectra_on_the_gpu_formulas_finds_the_same_collisions(fake_gpu, paper):
+    """The paper's scene swept with every dense spectrum from decompose (left vectors from
+    R^-1): the same 22 collisions as with LAPACK, within 1e-12 in F_x, at the same points."""
+    from diskfriction.disks.sweep import sweep
+
+    system, cpu = paper
+    with spectra_on("gpu"):
+        gpu = sweep(system, 0.0, 0.12)
+    assert len(fake_gpu) >= len(gpu)
+    assert len(cpu.collisions) == 22
+    assert [c.kind for c in gpu.collisions] == [c.kind for c in cpu.collisions]
+    assert np.abs(np.array([c.p for c in gpu.collisions]) - [c.p for c in cpu.collisions]).max() <= 1e-12
+    assert gpu.F_x.shape == cpu.F_x.shape and np.abs(gpu.F_x - cpu.F_x).max() <= 1e-12
+
+
+@pytest.mark.skipif(WHY_NO_GPU is None, reason="a GPU is present: spectra_on('gpu') runs")
+def test_asking_for_gpu_spectra_without_a_gpu_says_why_in_one_line():
+    with pytest.raises(NoGpu) as error:
+        with spectra_on("gpu"):
+            pass
+    assert "\n" not in str(error.value) and str(error.value) == WHY_NO_GPU
+
+
+@pytest.mark.skipif(WHY_NO_GPU is not None, reason=f"no GPU spectra here: {WHY_NO_GPU}")
+def test_cusolver_gives_lapacks_spectrum_at_n_1020():
+    """cuSOLVER's geev on the paper's scene with 340 disks (n = 1020): LAPACK's eigenvalues
+    within 1e-12 of the spectral radius, and left vectors with l_i^H A = lambda_i l_i^H."""
+    A = relaxed_jacobian(N=340)
+    with spectra_on("cpu"):
+        cpu = eigensystem(A, vectors=True)
+    with spectra_on("gpu"):
+        gpu = eigensystem(A, vectors=True)
+    assert same_spectrum(cpu.values, gpu.values) <= 1e-12
+    residual = gpu.left @ A - gpu.values[:, None] * gpu.left
+    assert np.abs(residual).max() <= 1e-10 * np.abs(A).max() * np.abs(gpu.left).max()
