@@ -45,7 +45,8 @@ scene = Scene(N=N, eps=eps)
 unit = PaperUnits.of(scene).eigenvalue("J")
 window = None if sys.argv[5] == "-" else tuple(float(w) * unit for w in sys.argv[5].split(":"))
 workers = None if sys.argv[6] == "auto" else int(sys.argv[6])
-spectra_on(sys.argv[7]).__enter__()  # for the whole child process
+DEVICE = spectra_on(sys.argv[7])  # held for the whole child process (a dropped one restores "auto")
+DEVICE.__enter__()
 system = System.from_scene(scene)
 reached = {"F_x": 0.0}
 
@@ -59,6 +60,7 @@ def progress(F_x):
 
 
 def out_of_time(signum, frame):
+    reached["out of time"] = True
     raise OutOfTime
 
 
@@ -77,7 +79,9 @@ with measured() as work:
         branch = sweep(system, 0.0, 0.12, "J", params, progress)
         out.update(done=branch.status[-1].reached, points=len(branch),
                    collisions=[c.p for c in branch.collisions], free=int(branch.free[-1]))
-    except OutOfTime:
+    except Exception:  # OutOfTime, or what a compiled function makes of it (SystemError)
+        if not reached.get("out of time"):
+            raise
         out.update(done=False, points=None, collisions=None)
 signal.alarm(0)
 out.update(seconds=time.perf_counter() - t0, reached=reached["F_x"], spectra=work.spectra,
