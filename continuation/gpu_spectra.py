@@ -6,9 +6,10 @@ implemented), so the left vectors are the rows of R^-1: with A R = R Lambda,
     R^-1 A = Lambda R^-1,      row i of R^-1 = l_i^H,      l_i^H r_j = delta_ij,
 
 the normalisation spectra.Eigensystem asks for, exact for the computed R. Its error is
-eps cond(R) |l_i|, the same order as LAPACK's left vectors from the Schur form (both grow like
-the eigenvalue's condition number towards a collision, where R becomes singular). One LU of R
-on the device adds about a third of a geev's flops.
+eps cond(R) |l_i|: it grows like the eigenvalues' condition numbers towards a collision, where
+R becomes singular, as LAPACK's left vectors from the Schur form do (the tests find the same
+condition numbers and slopes within 1e-9). On an H100 at n = 3000 the eigenvalues alone take
+0.84 s, with both vectors (geev and the inverse) 1.25 s (docs/continuation.md).
 
 decompose() takes the array module as an argument: cupy on a GPU, numpy in the tests that
 check the formulas on a machine without one (tests/test_gpu_spectra.py).
@@ -67,6 +68,10 @@ def unavailable() -> Optional[str]:
 
 
 def eigensystem_arrays(A: Array, vectors: bool):
-    """decompose(cupy, A, vectors): call only where unavailable() is None."""
+    """decompose(cupy, A, vectors), or None where the GPU's memory does not hold the matrix and
+    its vectors (the caller takes LAPACK's); call only where unavailable() is None."""
     import cupy
-    return decompose(cupy, A, vectors)
+    try:
+        return decompose(cupy, A, vectors)
+    except cupy.cuda.memory.OutOfMemoryError:
+        return None

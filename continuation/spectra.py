@@ -206,7 +206,8 @@ class SpectraDevice(StrEnum):
 
 GPU_FROM = 1000
 """Matrix size from which "auto" takes dense spectra on a GPU (benchmarks/dense_spectrum.py
---spectra cpu,gpu; docs/continuation.md, GPU spectra)."""
+--spectra cpu,gpu; docs/continuation.md, Dense spectra on a GPU: one spectrum 4.6 times faster
+on an H100 at n = 1002, while at n = 600 two CPU scan workers match the GPU's inline sweep)."""
 
 _DEVICE = [SpectraDevice.AUTO]
 
@@ -241,8 +242,9 @@ def on_gpu(n: int) -> bool:
 
 def eigensystem(A: Array, vectors: bool) -> Eigensystem:
     """All eigenvalues of the dense matrix A (LAPACK dgeev, or cuSOLVER's geev where on_gpu:
-    gpu_spectra.py; LAPACK where the GPU's right vectors are singular), with left and right
-    vectors normalised to l_i^H r_i = 1 if `vectors`; booked as a full spectrum (linalg.book)."""
+    gpu_spectra.py; LAPACK where the GPU's right vectors are singular or its memory is too
+    small), with left and right vectors normalised to l_i^H r_i = 1 if `vectors`; booked as a
+    full spectrum (linalg.book)."""
     book("spectra")
     if on_gpu(A.shape[0]) and (arrays := gpu_spectra.eigensystem_arrays(A, vectors)) is not None:
         return Eigensystem(*arrays)
