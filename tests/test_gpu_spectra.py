@@ -152,3 +152,26 @@ def test_cusolver_gives_lapacks_spectrum_at_n_1020():
     assert same_spectrum(cpu.values, gpu.values) <= 1e-12
     residual = gpu.left @ A - gpu.values[:, None] * gpu.left
     assert np.abs(residual).max() <= 1e-10 * np.abs(A).max() * np.abs(gpu.left).max()
+
+
+def test_a_matrix_too_large_for_the_gpu_goes_to_lapack(monkeypatch):
+    """gpu_spectra.eigensystem_arrays with a CuPy whose allocation fails: None, and
+    eigensystem takes LAPACK's spectrum instead."""
+    import sys
+    import types
+
+    class OutOfMemoryError(Exception):
+        pass
+
+    def asarray(*args, **kwargs):
+        raise OutOfMemoryError("out of memory allocating 144,000,000 bytes")
+
+    cupy = types.SimpleNamespace(asarray=asarray, float64=np.float64,
+                                 cuda=types.SimpleNamespace(memory=types.SimpleNamespace(OutOfMemoryError=OutOfMemoryError)))
+    monkeypatch.setitem(sys.modules, "cupy", cupy)
+    monkeypatch.setattr(gpu_spectra, "unavailable", lambda: None)
+    A = np.diag(np.arange(1.0, 7.0)) + np.triu(np.ones((6, 6)), 1)
+    assert gpu_spectra.eigensystem_arrays(A, True) is None
+    with spectra_on("gpu"):
+        system = eigensystem(A, vectors=True)
+    assert np.allclose(np.sort(system.values.real), np.arange(1.0, 7.0)) and system.left is not None
