@@ -58,7 +58,8 @@ def collision_json(result: BranchResult, spec: BifurcationProblem) -> list[dict]
     """collisions.json's records of a problem's run, with the pairs' condition numbers."""
     b = result.branch
     return [collision_record(c, spec.parameter, spec.matrix, None,
-                             pair_condition(b.p, b.condition, c)) for c in result.collisions]
+                             pair_condition(b.p, b.condition, c, result.collisions))
+            for c in result.collisions]
 
 
 def special_points(result: BranchResult) -> list[SpecialPoint]:
