@@ -15,43 +15,53 @@ from diskfriction.scenes import Effects
 from diskfriction.symbolic import generated, kernels
 
 
-@pytest.fixture
-def fresh_cache(tmp_path, monkeypatch):
-    monkeypatch.setenv("DISKFRICTION_CACHE", str(tmp_path))
-    return tmp_path
-
-
 def forget(effects: Effects) -> None:
     sys.modules.pop(f"diskfriction_kernels_{kernels.module_hash(effects)}", None)
 
 
-def test_same_effects_reuse_the_generated_module(fresh_cache, monkeypatch):
-    effects = Effects("mindlin-linear", True, False, False)
-    forget(effects)
-    module = kernels.load_kernels(effects)
-    path = kernels.module_path(effects)
-    assert path.parent == fresh_cache / "kernels" and path.exists()
+GENERATED = Effects("mindlin-linear", True, True, True)
+"""The effects whose module `generated_here` generates (one of the variants below)."""
+
+
+@pytest.fixture(scope="module")
+def generated_here(tmp_path_factory):
+    """(cache, module, path, mtime): a fresh cache in which this process generated and
+    compiled the kernels of GENERATED. Shared by the two tests below that need a module
+    generated in a fresh cache: numba compiles it once (~5 s) instead of once per test."""
+    cache = tmp_path_factory.mktemp("generated")
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv("DISKFRICTION_CACHE", str(cache))
+        forget(GENERATED)
+        module = kernels.load_kernels(GENERATED)
+        path = kernels.module_path(GENERATED)
+    return cache, module, path, path.stat().st_mtime_ns
+
+
+def test_same_effects_reuse_the_generated_module(generated_here, monkeypatch):
+    cache, module, path, stamp = generated_here
+    monkeypatch.setenv("DISKFRICTION_CACHE", str(cache))
+    assert kernels.module_path(GENERATED) == path
+    assert path.parent == cache / "kernels" and path.exists()
     assert path.stat().st_mode & 0o777 == 0o644
-    stamp = path.stat().st_mtime_ns
-    forget(effects)
+    forget(GENERATED)
 
     def no_generation(*args):
         raise AssertionError("regenerated although cached")
 
     monkeypatch.setattr(kernels, "generate_source", no_generation)
-    again = kernels.load_kernels(effects)
+    again = kernels.load_kernels(GENERATED)
     assert again is not module and path.stat().st_mtime_ns == stamp
-    assert kernels.module_hash(effects) in path.read_text().splitlines()[3]  # header names it
+    assert kernels.module_hash(GENERATED) in path.read_text().splitlines()[3]  # header names it
 
 
-def test_changing_an_effect_or_the_generator_regenerates(fresh_cache, monkeypatch):
+def test_changing_an_effect_or_the_generator_regenerates(generated_here, monkeypatch):
+    monkeypatch.setenv("DISKFRICTION_CACHE", str(generated_here[0]))
     base = Effects("mindlin-smooth", True, True, True)
     variants = [Effects("mindlin-linear", True, True, True), Effects("mindlin-smooth", False, True, True),
                 Effects("mindlin-smooth", True, False, True), Effects("mindlin-smooth", True, True, False)]
     paths = {kernels.module_path(e) for e in [base, *variants]}
     assert len(paths) == 5
-    forget(variants[0])
-    kernels.load_kernels(variants[0])
+    assert variants[0] == GENERATED  # loaded in the fresh cache by generated_here
     assert kernels.module_path(variants[0]).exists()
     assert not kernels.module_path(base).exists()
     monkeypatch.setattr(kernels, "GENERATOR_VERSION", kernels.GENERATOR_VERSION + 1)
@@ -74,14 +84,6 @@ def test_conventions_regenerate_only_where_they_change_something():
         assert "conventions" not in kernels.effects_key(model)
     frictionless = [Effects("none", False, False, True, c) for c in ("model", "lammps")]
     assert kernels.module_hash(frictionless[0]) == kernels.module_hash(frictionless[1])
-
-
-def test_compiled_code_is_cached_for_the_next_process(fresh_cache):
-    """numba cache=True: after one process ran the kernels, their index files exist."""
-    code = ("from diskfriction.scenes import Scene; from diskfriction.symbolic import System;"
-            "s = System.from_scene(Scene(N=3)); q, xi = s.rest_state(); s.forces_and_jacobian(q, xi, 0.0)")
-    subprocess.run([sys.executable, "-c", code], check=True, env=dict(os.environ))
-    assert list((fresh_cache / "kernels").rglob("*.nbi"))
 
 
 # ---- damage and repair ----------------------------------------------------------------------
@@ -128,6 +130,14 @@ def seeded(tmp_path_factory):
     run = use(cache)
     assert run.returncode == 0 and run.stderr == "", run.stderr
     return cache
+
+
+def test_compiled_code_is_cached_for_the_next_process(seeded):
+    """numba cache=True: after one process ran the kernels (USE, in the fresh cache `seeded`),
+    their index files exist, the kernel module's and the stepper's. (The seeded cache serves:
+    a process of its own in a fresh cache would compile the same kernels again, ~7 s.)"""
+    assert list((seeded / "kernels").rglob("kernels_*.nbi"))
+    assert list((seeded / "kernels").rglob("stepper_*.nbi"))
 
 
 def damaged_copy(seeded: Path, tmp_path: Path, pattern: str, damage) -> tuple[Path, Path]:
