@@ -28,14 +28,31 @@ def assert_same_collisions(fast, exhaustive):
     assert np.max(np.abs(np.array([p for _, p in fast]) - [p for _, p in exhaustive])) <= AGREE
 
 
+_SWEEPS = {}
+
+
+def shared_sweep(scene: Scene, matrix: str, detection: DetectionParams | None = None):
+    """(branch, full spectra it took) of sweep(scene's system, 0, 0.12, matrix) with
+    `detection` (None: sweep's defaults), run once per module: several tests here check other
+    properties of the same sweep (the N = 40 and N = 20 ones cost 1.5 s and 0.8 s, the paper's
+    exhaustive one 1.5 s). The branch is read, never changed."""
+    key = (scene, matrix, detection)
+    if key not in _SWEEPS:
+        system = System.from_scene(scene)
+        params = () if detection is None else (SweepParams(detection=detection),)
+        with measured() as work:
+            branch = sweep(system, 0.0, 0.12, matrix, *params)
+        _SWEEPS[key] = branch, work.spectra
+    return _SWEEPS[key]
+
+
 @pytest.mark.parametrize("scene, matrix, count", [(Scene(), "J", 22), (Scene(), "M^-1 J", 17),
                                                   (Scene(N=20, eps=1e-4), "J", 50)],
                          ids=["paper-J", "paper-M^-1J", "N20-eps1e-4"])
 def test_fast_detection_finds_the_exhaustive_collisions(scene, matrix, count):
     """Same kinds in the same order, locations within 1e-9, on one branch (the detection does
     not change the steps); the counts are the version 0.1 lists (docs/continuation.md)."""
-    system = System.from_scene(scene)
-    runs = {mode: sweep(system, 0.0, 0.12, matrix, SweepParams(detection=DetectionParams(mode=mode)))
+    runs = {mode: shared_sweep(scene, matrix, DetectionParams(mode=mode))[0]
             for mode in ("fast", "exhaustive")}
     assert np.array_equal(runs["fast"].F_x, runs["exhaustive"].F_x)
     assert len(runs["fast"].collisions) == count
@@ -71,12 +88,10 @@ def test_fast_detection_spends_about_one_spectrum_per_point():
     """The fast detection's point: full eigendecompositions per accepted point on the paper
     scene, against the exhaustive one's (measured: 2.1 and 14)."""
 
-    system = System.from_scene(Scene())
     spent = {}
-    for mode in ("fast", "exhaustive"):
-        with measured() as work:
-            branch = sweep(system, 0.0, 0.12, "J", SweepParams(detection=DetectionParams(mode=mode)))
-        spent[mode] = work.spectra / len(branch)
+    for mode in ("fast", "exhaustive"):  # the sweeps of test_fast_detection_finds_...[paper-J]
+        branch, spectra = shared_sweep(Scene(), "J", DetectionParams(mode=mode))
+        spent[mode] = spectra / len(branch)
     assert spent["fast"] <= 3.0 and spent["exhaustive"] >= 4 * spent["fast"]
 
 
@@ -145,7 +160,7 @@ def test_eps_zero_runs_to_the_end_with_free_rolling_modes_excluded():
     below the stiffness a rounding-size overlap can give, their number falls as the load
     spreads, and the branch reaches F_x = 0.12."""
     system = System.from_scene(Scene(N=20))
-    branch = sweep(system, 0.0, 0.12, "J")
+    branch = shared_sweep(Scene(N=20), "J")[0]
     assert branch.status == (Stop(StopCode.REACHED),) and branch.F_x[-1] == 0.12
     assert branch.free[0] > 0 and branch.free[-1] < branch.free[0]
     problem = DiskEquilibria(system, branch.q[0], branch.xi[0], branch.F_x[0], "J")
@@ -162,7 +177,7 @@ def test_eps_zero_long_sparse_chain_finds_the_collisions_of_the_short_one():
     """At eps = 0 the load reaches about 29 disks by F_x = 0.12, so N = 100 (sparse J, 70 and
     more disks free throughout) and N = 20 (dense J) find the same collisions, kind by kind,
     within 1e-9 in F_x; N = 100 runs to 0.12 with its free modes counted and falling."""
-    branches = {N: sweep(System.from_scene(Scene(N=N)), 0.0, 0.12, "J") for N in (20, 100)}
+    branches = {N: shared_sweep(Scene(N=N), "J")[0] for N in (20, 100)}
     long, short = branches[100], branches[20]
     assert long.status == (Stop(StopCode.REACHED),) and long.F_x[-1] == 0.12
     assert long.free[-1] > 0 and long.free[-1] < long.free[0]
@@ -260,7 +275,7 @@ def test_a_spectral_window_lists_the_full_detection_s_collisions_in_it(partial_f
 
     system = System.from_scene(Scene(N=40, eps=1e-4))
     lo, hi = 0.0553 * system.scene.k_n, 0.0562 * system.scene.k_n
-    full = sweep(system, 0.0, 0.12, "J")
+    full = shared_sweep(Scene(N=40, eps=1e-4), "J")[0]  # the same for both cases
     detection = DetectionParams() if partial_from is None else DetectionParams(partial_from=partial_from)
     with measured() as work:
         window = sweep(system, 0.0, 0.12, "J", SweepParams(window=(lo, hi), detection=detection))
