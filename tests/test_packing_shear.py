@@ -18,36 +18,14 @@ SCENE = PackingScene(N=24, seed=3, gamma_range=(0.0, 0.002))
 
 
 @pytest.fixture(scope="module")
-def packing():
-    return prepare_scene(SCENE)
+def packing(sheared):
+    return sheared(SCENE)[0]
 
 
 @pytest.fixture(scope="module")
-def recorded(packing):
-    """(branch, ends): SCENE sheared once, with PackingEquilibria.commit wrapped to record the
-    ends of the steps cut at an event (test_contact_events_are_located_on_the_branch_to_1e_12).
-    The wrapper only evaluates the event functions; the branch is the plain run's bit for bit,
-    so the tests of the branch use this run instead of a second shear (~3 s)."""
-    import diskfriction.packings.equilibria as equilibria
-
-    ends = []
-    commit = equilibria.PackingEquilibria.commit
-
-    def recording(self, q_old, g_old, q_new, g_new):
-        before = self.event_functions(q_old, g_old)
-        after = self.event_functions(q_new, g_new)
-        crossed = ((before > 0) & (after <= 0)) | ((before < 0) & (after > 0))
-        if crossed.any():
-            slope = np.abs(after[crossed] - before[crossed]) / abs(g_new - g_old)
-            ends.append(float(np.min(np.abs(after[crossed]) / slope)))
-        return commit(self, q_old, g_old, q_new, g_new)
-
-    equilibria.PackingEquilibria.commit = recording
-    try:
-        branch = shear(SCENE, packing, ShearParams(workers=0))
-    finally:
-        equilibria.PackingEquilibria.commit = commit
-    return branch, ends
+def recorded(sheared):
+    """(branch, ends) of SCENE's shear (conftest.sheared: shared with test_packing_dynamics)."""
+    return sheared(SCENE)[1:]
 
 
 @pytest.fixture(scope="module")
