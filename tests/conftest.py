@@ -1,6 +1,8 @@
 """Session fixtures: computations that several test modules check, done once per session."""
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -42,5 +44,35 @@ def sheared():
                 equilibria.PackingEquilibria.commit = commit
             done[scene] = packing, branch, ends
         return done[scene]
+
+    return run
+
+
+@pytest.fixture(scope="session")
+def chain_sweep():
+    """chain_sweep(scene, matrix=None, F_from=0.0, F_to=0.12, params=None) -> (branch, spectra):
+    sweep(System.from_scene(scene), F_from, F_to, matrix, params) and the full spectra it took
+    (linalg.measured), once per session and arguments: the paper's sweep of J alone was run by
+    six tests in five modules (0.3 s each; N = 20 and 40 ones up to 1.5 s). Its arrays are
+    made read-only, so that a test changing a shared branch fails instead of passing on others."""
+    from diskfriction.continuation.linalg import measured
+    from diskfriction.disks.sweep import SweepParams, sweep
+    from diskfriction.matrices import Matrix
+    from diskfriction.symbolic import System
+
+    done = {}
+
+    def run(scene, matrix=None, F_from=0.0, F_to=0.12, params=None):
+        params = SweepParams() if params is None else params
+        key = (scene, str(Matrix(matrix or scene.matrix)), F_from, F_to, params)
+        if key not in done:
+            with measured() as work:
+                branch = sweep(System.from_scene(scene), F_from, F_to, key[1], params)
+            for field in dataclasses.fields(branch):
+                value = getattr(branch, field.name)
+                if isinstance(value, np.ndarray):
+                    value.flags.writeable = False
+            done[key] = branch, work.spectra
+        return done[key]
 
     return run
