@@ -42,10 +42,16 @@ def effects_id(e: Effects) -> str:
             f"{normal}")
 
 
-def reference(effects: Effects, N: int, L: float) -> ref.Ref:
-    return ref.Ref(N=N, L=L, pair_law=effects.pair_law, wall_law=effects.wall_law,
+def reference(effects: Effects, N: int, L: float, exact: bool = False) -> ref.Ref:
+    """The reference model of the chain; exact: its parameters as mpf (the same values: floats
+    convert exactly, and every operation has an mpf operand), converted once instead of at
+    each operation (a sixth of the finite differences' time)."""
+    params = {**PARAMS, "L": L}
+    if exact:
+        params = {k: mp.mpf(v) for k, v in params.items()}
+    return ref.Ref(N=N, pair_law=effects.pair_law, wall_law=effects.wall_law,
                    rotation=effects.rotation, conventions=effects.contact_conventions,
-                   normal=effects.normal, **PARAMS)
+                   normal=effects.normal, **params)
 
 
 def random_state(rng: np.random.Generator, N: int, rotation: bool, case: int,
@@ -129,14 +135,16 @@ def worst_errors(effects: Effects, states: int, seed: int = 20200124) -> dict[st
     worst = {"assembled": 0.0, "contact": 0.0, "tiny": 0.0, "tiny_contacts": 0}
     for case in range(states):
         q, xi, L = random_state(rng, N, effects.rotation, case, effects.normal)
-        m = reference(effects, N, L)
+        m = reference(effects, N, L, exact=True)
         delta = np.array([float(d) for d in ref.overlaps(m, q)])
         h = mp.mpf(1e-8) * mp.mpf(delta[delta > 0].min())
         F, J, vals, rows, cols = generated(kernels, q, xi, L)
-        worst["assembled"] = max(worst["assembled"],
-                                 row_relative_error(J, to_array(ref.stiffness_fd(m, q, xi, h))))
+        states = ref.displaced_states(m, q, xi, h)  # shared by the assembled and contact matrices
+        worst["assembled"] = max(worst["assembled"], row_relative_error(
+            J, to_array(ref.stiffness_fd(m, q, xi, h, states=states))))
         for contact, J_c in contact_blocks(vals, rows, cols, q.size, kernels.D).items():
-            err = row_relative_error(J_c, to_array(ref.stiffness_fd(m, q, xi, h, contacts={contact})))
+            err = row_relative_error(J_c, to_array(ref.stiffness_fd(m, q, xi, h, contacts={contact},
+                                                                    states=states)))
             worst["contact"] = max(worst["contact"], err)
             index = contact[1] + (0 if contact[0] == "pair" else N)
             if abs(delta[index] - TINY_DELTA) < 1e-12:

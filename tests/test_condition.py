@@ -35,16 +35,15 @@ def test_condition_numbers_are_the_closed_form_on_both_sides_of_a_collision():
     assert amplitude == pytest.approx((1.0 + c[k:k + 2]) / 2.0, rel=1e-10)  # -> 1/2 at P1
 
 
-def test_the_chains_condition_numbers_match_a_direct_decomposition():
+def test_the_chains_condition_numbers_match_a_direct_decomposition(chain_sweep):
     """The paper's scene: at every fifth accepted point each tracked eigenvalue's kappa equals
     |l| |r| / |l^H r| from scipy's eig of the stability matrix (matched by value) within
     1e-6; each collision's pair has a finite amplitude on both sides, of one order."""
-    from diskfriction.disks.sweep import sweep
     from diskfriction.scenes import Scene
     from diskfriction.symbolic import System
 
     system = System.from_scene(Scene())
-    branch = sweep(system, 0.0, 0.12)
+    branch = chain_sweep(Scene())[0]  # conftest: the paper's sweep, shared
     for k in range(0, len(branch), 5):
         xi = branch.xi[k]
         A = system.stability_matrix(system.jacobian(branch.q[k], xi), str(branch.matrix))

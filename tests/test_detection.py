@@ -28,14 +28,14 @@ def assert_same_collisions(fast, exhaustive):
     assert np.max(np.abs(np.array([p for _, p in fast]) - [p for _, p in exhaustive])) <= AGREE
 
 
+
 @pytest.mark.parametrize("scene, matrix, count", [(Scene(), "J", 22), (Scene(), "M^-1 J", 17),
                                                   (Scene(N=20, eps=1e-4), "J", 50)],
                          ids=["paper-J", "paper-M^-1J", "N20-eps1e-4"])
-def test_fast_detection_finds_the_exhaustive_collisions(scene, matrix, count):
+def test_fast_detection_finds_the_exhaustive_collisions(scene, matrix, count, chain_sweep):
     """Same kinds in the same order, locations within 1e-9, on one branch (the detection does
     not change the steps); the counts are the version 0.1 lists (docs/continuation.md)."""
-    system = System.from_scene(scene)
-    runs = {mode: sweep(system, 0.0, 0.12, matrix, SweepParams(detection=DetectionParams(mode=mode)))
+    runs = {mode: chain_sweep(scene, matrix, params=SweepParams(detection=DetectionParams(mode=mode)))[0]
             for mode in ("fast", "exhaustive")}
     assert np.array_equal(runs["fast"].F_x, runs["exhaustive"].F_x)
     assert len(runs["fast"].collisions) == count
@@ -67,16 +67,14 @@ def test_fast_and_exhaustive_agree_on_a_core_problem_with_a_bubble(ds):
     assert_same_collisions(locations(runs[0]), locations(runs[1]))
 
 
-def test_fast_detection_spends_about_one_spectrum_per_point():
+def test_fast_detection_spends_about_one_spectrum_per_point(chain_sweep):
     """The fast detection's point: full eigendecompositions per accepted point on the paper
     scene, against the exhaustive one's (measured: 2.1 and 14)."""
 
-    system = System.from_scene(Scene())
     spent = {}
-    for mode in ("fast", "exhaustive"):
-        with measured() as work:
-            branch = sweep(system, 0.0, 0.12, "J", SweepParams(detection=DetectionParams(mode=mode)))
-        spent[mode] = work.spectra / len(branch)
+    for mode in ("fast", "exhaustive"):  # the sweeps of test_fast_detection_finds_...[paper-J]
+        branch, spectra = chain_sweep(Scene(), "J", params=SweepParams(detection=DetectionParams(mode=mode)))
+        spent[mode] = spectra / len(branch)
     assert spent["fast"] <= 3.0 and spent["exhaustive"] >= 4 * spent["fast"]
 
 
@@ -138,14 +136,14 @@ def test_jordan_chain_near_a_double_eigenvalue_dense_or_sparse(sparse, offset, m
     assert np.allclose(w / np.linalg.norm(w), e1, atol=tol)
 
 
-def test_eps_zero_runs_to_the_end_with_free_rolling_modes_excluded():
+def test_eps_zero_runs_to_the_end_with_free_rolling_modes_excluded(chain_sweep):
     """N = 20 at eps = 0: disks beyond the load front touch their neighbours at overlaps of
     rounding size and are held by the substrate alone. Their rolling modes are counted at
     every point, their modes are excluded from detection (3 per disk), the rolling one is
     below the stiffness a rounding-size overlap can give, their number falls as the load
     spreads, and the branch reaches F_x = 0.12."""
     system = System.from_scene(Scene(N=20))
-    branch = sweep(system, 0.0, 0.12, "J")
+    branch = chain_sweep(Scene(N=20), "J")[0]
     assert branch.status == (Stop(StopCode.REACHED),) and branch.F_x[-1] == 0.12
     assert branch.free[0] > 0 and branch.free[-1] < branch.free[0]
     problem = DiskEquilibria(system, branch.q[0], branch.xi[0], branch.F_x[0], "J")
@@ -158,11 +156,11 @@ def test_eps_zero_runs_to_the_end_with_free_rolling_modes_excluded():
     assert branch.residual.max() <= 1e-10 and len(branch.collisions) > 0
 
 
-def test_eps_zero_long_sparse_chain_finds_the_collisions_of_the_short_one():
+def test_eps_zero_long_sparse_chain_finds_the_collisions_of_the_short_one(chain_sweep):
     """At eps = 0 the load reaches about 29 disks by F_x = 0.12, so N = 100 (sparse J, 70 and
     more disks free throughout) and N = 20 (dense J) find the same collisions, kind by kind,
     within 1e-9 in F_x; N = 100 runs to 0.12 with its free modes counted and falling."""
-    branches = {N: sweep(System.from_scene(Scene(N=N)), 0.0, 0.12, "J") for N in (20, 100)}
+    branches = {N: chain_sweep(Scene(N=N), "J")[0] for N in (20, 100)}
     long, short = branches[100], branches[20]
     assert long.status == (Stop(StopCode.REACHED),) and long.F_x[-1] == 0.12
     assert long.free[-1] > 0 and long.free[-1] < long.free[0]
@@ -251,7 +249,7 @@ def test_compiled_substitution_solves_like_superlu():
 
 
 @pytest.mark.parametrize("partial_from", [None, 0], ids=["default", "partial-splits"])
-def test_a_spectral_window_lists_the_full_detection_s_collisions_in_it(partial_from):
+def test_a_spectral_window_lists_the_full_detection_s_collisions_in_it(partial_from, chain_sweep):
     """N = 40, eps = 1e-4: tracking only 0.0553 <= Re lambda / k_n <= 0.0562 by shift-invert
     gives the collisions of the full detection whose eigenvalue lies in the window, within
     1e-9, and counts the complex pairs there; also with every split sample partial where it
@@ -260,7 +258,7 @@ def test_a_spectral_window_lists_the_full_detection_s_collisions_in_it(partial_f
 
     system = System.from_scene(Scene(N=40, eps=1e-4))
     lo, hi = 0.0553 * system.scene.k_n, 0.0562 * system.scene.k_n
-    full = sweep(system, 0.0, 0.12, "J")
+    full = chain_sweep(Scene(N=40, eps=1e-4), "J")[0]  # the same for both cases
     detection = DetectionParams() if partial_from is None else DetectionParams(partial_from=partial_from)
     with measured() as work:
         window = sweep(system, 0.0, 0.12, "J", SweepParams(window=(lo, hi), detection=detection))

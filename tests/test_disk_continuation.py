@@ -20,8 +20,8 @@ def paper_system():
 
 
 @pytest.fixture(scope="module", params=["J", "M^-1 J"])
-def paper_branch(request, paper_system):
-    return sweep(paper_system, 0.0, 0.12, request.param)
+def paper_branch(request, chain_sweep):
+    return chain_sweep(PAPER, request.param)[0]  # conftest: the paper's sweeps, shared
 
 
 def test_a_matrix_name_other_than_J_or_M_inv_J_is_refused(paper_system):

@@ -52,12 +52,27 @@ def test_fronts_need_three_disks_and_missing_values_are_skipped():
     assert sliding_speed(s) == pytest.approx(1.0)
 
 
-def test_resumed_ensemble_equals_an_uninterrupted_one(tmp_path):
+@pytest.fixture(scope="module")
+def scheduler():
+    """The address of one local dask cluster for the three ensembles of the resume test (the
+    scheduler a run may be given, as --scheduler does): a cluster of each run's own costs ~2-4 s
+    to start and warm its workers, against 0.1 s for the realizations themselves. The local
+    cluster each command starts is exercised by test_outputs and test_commands."""
+    import logging
+
+    from dask.distributed import LocalCluster
+
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
+                      silence_logs=logging.CRITICAL) as cluster:
+        yield cluster.scheduler_address
+
+
+def test_resumed_ensemble_equals_an_uninterrupted_one(tmp_path, scheduler):
     """Run 1 realization, then rerun asking for 3: the first is reused from disk, and the
     result equals a run of 3 in one go (the integrator is deterministic). F_x = 0.087 on the
     paper's scene breaches and slides within t = 150, so the fronts are real numbers."""
     scene = Scene()
-    kw = dict(t_end=150.0, amplitude=1e-5)
+    kw = dict(t_end=150.0, amplitude=1e-5, scheduler=scheduler)
     whole = run_ensemble(scene, [0.087], 3, out=tmp_path / "whole", **kw)
     assert whole.V1[0.087].n == 3 and whole.V2.n == 3
     run_ensemble(scene, [0.087], 1, out=tmp_path / "resumed", **kw)

@@ -11,49 +11,86 @@ from pathlib import Path
 import pytest
 
 from diskfriction import files
-from diskfriction.scenes import Effects
+from diskfriction.scenes import Effects, Scene
 from diskfriction.symbolic import generated, kernels
-
-
-@pytest.fixture
-def fresh_cache(tmp_path, monkeypatch):
-    monkeypatch.setenv("DISKFRICTION_CACHE", str(tmp_path))
-    return tmp_path
 
 
 def forget(effects: Effects) -> None:
     sys.modules.pop(f"diskfriction_kernels_{kernels.module_hash(effects)}", None)
 
 
-def test_same_effects_reuse_the_generated_module(fresh_cache, monkeypatch):
-    effects = Effects("mindlin-linear", True, False, False)
-    forget(effects)
-    module = kernels.load_kernels(effects)
-    path = kernels.module_path(effects)
-    assert path.parent == fresh_cache / "kernels" and path.exists()
+# ---- one process generates and compiles: a cache seeded by it ---------------------------------
+
+USE = """
+from diskfriction.scenes import Scene
+from diskfriction.symbolic import System
+from diskfriction.dynamics.stepper import load_stepper
+s = System.from_scene(Scene(N=2, mu=0.0))
+load_stepper(s.kernels)
+q, xi = s.rest_state()
+print(abs(s.forces(q, xi, 0.0)).max())
+"""
+"""Loads the kernels and the stepper of a small frictionless scene and prints max|F| at rest."""
+
+
+def use(cache: Path, code: str = USE) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=300, env={**os.environ, "DISKFRICTION_CACHE": str(cache)})
+
+
+@pytest.fixture(scope="module")
+def seeded(tmp_path_factory):
+    """A cache holding the generated and compiled modules of USE, made by one process (each
+    test that loads from it or damages it works on a copy)."""
+    cache = tmp_path_factory.mktemp("seed")
+    run = use(cache)
+    assert run.returncode == 0 and run.stderr == "", run.stderr
+    return cache
+
+
+USED = Scene(N=2, mu=0.0).resolved_effects
+"""The effects of USE's scene, whose kernel module `seeded` holds."""
+
+
+def seeded_copy(seeded: Path, tmp_path: Path) -> Path:
+    cache = tmp_path / "cache"
+    shutil.copytree(seeded, cache)
+    return cache
+
+
+def test_same_effects_reuse_the_generated_module(seeded, tmp_path, monkeypatch):
+    """The module USE's process generated (in a copy of `seeded`: a cache of its own would
+    generate and compile the same kernels again, 5-9 s) is found by its effects: loading them
+    twice in this process generates nothing and leaves the file as it was."""
+    cache = seeded_copy(seeded, tmp_path)
+    monkeypatch.setenv("DISKFRICTION_CACHE", str(cache))
+    path = kernels.module_path(USED)
+    assert path.parent == cache / "kernels" and path.exists()
     assert path.stat().st_mode & 0o777 == 0o644
     stamp = path.stat().st_mtime_ns
-    forget(effects)
 
     def no_generation(*args):
         raise AssertionError("regenerated although cached")
 
     monkeypatch.setattr(kernels, "generate_source", no_generation)
-    again = kernels.load_kernels(effects)
+    forget(USED)
+    module = kernels.load_kernels(USED)
+    forget(USED)
+    again = kernels.load_kernels(USED)
     assert again is not module and path.stat().st_mtime_ns == stamp
-    assert kernels.module_hash(effects) in path.read_text().splitlines()[3]  # header names it
+    assert kernels.module_hash(USED) in path.read_text().splitlines()[3]  # header names it
 
 
-def test_changing_an_effect_or_the_generator_regenerates(fresh_cache, monkeypatch):
+def test_changing_an_effect_or_the_generator_regenerates(seeded, tmp_path, monkeypatch):
+    monkeypatch.setenv("DISKFRICTION_CACHE", str(seeded_copy(seeded, tmp_path)))
     base = Effects("mindlin-smooth", True, True, True)
     variants = [Effects("mindlin-linear", True, True, True), Effects("mindlin-smooth", False, True, True),
                 Effects("mindlin-smooth", True, False, True), Effects("mindlin-smooth", True, True, False)]
     paths = {kernels.module_path(e) for e in [base, *variants]}
     assert len(paths) == 5
-    forget(variants[0])
-    kernels.load_kernels(variants[0])
-    assert kernels.module_path(variants[0]).exists()
-    assert not kernels.module_path(base).exists()
+    # a cache in which the kernels of USED were generated holds their module, and no other
+    assert kernels.module_path(USED).exists() and USED.pair_law == "none"
+    assert not any(path.exists() for path in paths)
     monkeypatch.setattr(kernels, "GENERATOR_VERSION", kernels.GENERATOR_VERSION + 1)
     assert kernels.module_path(variants[0]) not in paths
 
@@ -76,12 +113,12 @@ def test_conventions_regenerate_only_where_they_change_something():
     assert kernels.module_hash(frictionless[0]) == kernels.module_hash(frictionless[1])
 
 
-def test_compiled_code_is_cached_for_the_next_process(fresh_cache):
-    """numba cache=True: after one process ran the kernels, their index files exist."""
-    code = ("from diskfriction.scenes import Scene; from diskfriction.symbolic import System;"
-            "s = System.from_scene(Scene(N=3)); q, xi = s.rest_state(); s.forces_and_jacobian(q, xi, 0.0)")
-    subprocess.run([sys.executable, "-c", code], check=True, env=dict(os.environ))
-    assert list((fresh_cache / "kernels").rglob("*.nbi"))
+def test_compiled_code_is_cached_for_the_next_process(seeded):
+    """numba cache=True: after one process ran the kernels (USE, in the fresh cache `seeded`),
+    their index files exist, the kernel module's and the stepper's. (The seeded cache serves:
+    a process of its own in a fresh cache would compile the same kernels again, ~7 s.)"""
+    assert list((seeded / "kernels").rglob("kernels_*.nbi"))
+    assert list((seeded / "kernels").rglob("stepper_*.nbi"))
 
 
 # ---- damage and repair ----------------------------------------------------------------------
@@ -104,35 +141,8 @@ def test_a_damaged_module_is_told_by_its_content_hash(tmp_path, damage, says):
     assert generated.damage(tmp_path / "absent.py") == "missing"
 
 
-USE = """
-from diskfriction.scenes import Scene
-from diskfriction.symbolic import System
-from diskfriction.dynamics.stepper import load_stepper
-s = System.from_scene(Scene(N=2, mu=0.0))
-load_stepper(s.kernels)
-q, xi = s.rest_state()
-print(abs(s.forces(q, xi, 0.0)).max())
-"""
-"""Loads the kernels and the stepper of a small frictionless scene and prints max|F| at rest."""
-
-
-def use(cache: Path, code: str = USE) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          timeout=300, env={**os.environ, "DISKFRICTION_CACHE": str(cache)})
-
-
-@pytest.fixture(scope="module")
-def seeded(tmp_path_factory):
-    """A cache holding the generated and compiled modules of USE (copied by each test)."""
-    cache = tmp_path_factory.mktemp("seed")
-    run = use(cache)
-    assert run.returncode == 0 and run.stderr == "", run.stderr
-    return cache
-
-
 def damaged_copy(seeded: Path, tmp_path: Path, pattern: str, damage) -> tuple[Path, Path]:
-    cache = tmp_path / "cache"
-    shutil.copytree(seeded, cache)
+    cache = seeded_copy(seeded, tmp_path)
     (path,) = (cache / "kernels").glob(pattern)
     damage(path)
     return cache, path

@@ -8,17 +8,15 @@ import pytest
 
 from diskfriction.packings.dynamics import distance, fastest_pair, growth_rate, simulate, time_step
 from diskfriction.packings.equilibria import PackingEquilibria, mass_diagonal
-from diskfriction.packings.prepared import prepare_scene
-from diskfriction.packings.shear import ShearParams, network_of, shear
+from diskfriction.packings.shear import network_of
 from diskfriction.scenes.packing import PackingScene
 
 SCENE = PackingScene(N=24, seed=3, gamma_range=(0.0, 0.002))
 
 
 @pytest.fixture(scope="module")
-def setting():
-    packing = prepare_scene(SCENE)
-    branch = shear(SCENE, packing, ShearParams(workers=0))
+def setting(sheared):
+    packing, branch, _ = sheared(SCENE)  # conftest.sheared: shared with test_packing_shear
     network = network_of(SCENE, packing)
     return branch, network, mass_diagonal(network, SCENE.m, SCENE.inertia)
 

@@ -18,13 +18,19 @@ SCENE = PackingScene(N=24, seed=3, gamma_range=(0.0, 0.002))
 
 
 @pytest.fixture(scope="module")
-def packing():
-    return prepare_scene(SCENE)
+def packing(sheared):
+    return sheared(SCENE)[0]
 
 
 @pytest.fixture(scope="module")
-def branch(packing):
-    return shear(SCENE, packing, ShearParams(workers=0))
+def recorded(sheared):
+    """(branch, ends) of SCENE's shear (conftest.sheared: shared with test_packing_dynamics)."""
+    return sheared(SCENE)[1:]
+
+
+@pytest.fixture(scope="module")
+def branch(recorded):
+    return recorded[0]
 
 
 def problem_at_start(packing) -> PackingEquilibria:
@@ -71,30 +77,12 @@ def test_shear_stress_grows_with_strain(branch):
     assert branch.stress[-1, 2] > branch.stress[0, 2]
 
 
-def test_contact_events_are_located_on_the_branch_to_1e_12(packing):
+def test_contact_events_are_located_on_the_branch_to_1e_12(recorded):
     """Every step cut at an event ends where an event function vanishes: a contact opening or
     closing (delta), starting or ending to hold its disk (delta - delta_hold) or reaching its
     Coulomb limit. The crossed component's |g| at the step's end over its mean slope in gamma
     across the step, the strain between the end and the zero, is at most 1e-12."""
-    import diskfriction.packings.equilibria as equilibria
-
-    ends = []
-    commit = equilibria.PackingEquilibria.commit
-
-    def recording(self, q_old, g_old, q_new, g_new):
-        before = self.event_functions(q_old, g_old)
-        after = self.event_functions(q_new, g_new)
-        crossed = ((before > 0) & (after <= 0)) | ((before < 0) & (after > 0))
-        if crossed.any():
-            slope = np.abs(after[crossed] - before[crossed]) / abs(g_new - g_old)
-            ends.append(float(np.min(np.abs(after[crossed]) / slope)))
-        return commit(self, q_old, g_old, q_new, g_new)
-
-    equilibria.PackingEquilibria.commit = recording
-    try:
-        branch = shear(SCENE, packing, ShearParams(workers=0))
-    finally:
-        equilibria.PackingEquilibria.commit = commit
+    branch, ends = recorded
     assert branch.events >= 2 and len(ends) >= branch.events
     assert max(ends) <= 1e-12, ends
 
@@ -120,16 +108,17 @@ def test_a_contact_sliding_through_steps_fires_no_event_at_their_start():
         slips.append(int(slid.sum()))
         return commit(self, q_old, g_old, q_new, g_new)
 
+    packing = prepare_scene(scene)  # once: the problem below starts from the same packing
     equilibria.PackingEquilibria.commit = recording
     try:
-        branch = shear(scene, prepare_scene(scene), ShearParams(workers=0))
+        branch = shear(scene, packing, ShearParams(workers=0))
     finally:
         equilibria.PackingEquilibria.commit = commit
     assert branch.status.reached and sum(slips) == 0, slips
     assert np.diff(branch.gamma).min() > 1e-12
     # a problem started from a state (a new segment after a plastic event, a run's state)
     # knows its sliding contacts from their histories: they fire no slip event either
-    network = network_of(scene, prepare_scene(scene))
+    network = network_of(scene, packing)
     k = len(branch) - 1
     problem = PackingEquilibria(network, branch.q[k], branch.xi[k], branch.rows[k],
                                 float(branch.gamma[k]),

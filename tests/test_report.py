@@ -2,6 +2,7 @@
 bad input."""
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import subprocess
 import sys
@@ -33,10 +34,30 @@ def build(out: Path, cache: Path, settings: Settings = QUICK, only=None):
     return log, lines
 
 
+@contextlib.contextmanager
+def one_local_cluster():
+    """The report's ensembles (fig5, fig7 and the LAMMPS section's two) on one local dask
+    cluster instead of a new one each: every new cluster's workers import and load the kernels
+    again (~2 s each). What an ensemble returns does not depend on its cluster (seeded runs);
+    dask_client itself is tested where ensembles and maps are (test_ensemble, test_maps)."""
+    from diskfriction.studies import cluster, ensemble
+
+    with cluster.dask_client() as client:
+        @contextlib.contextmanager
+        def shared(scheduler=None, workers=None):
+            assert scheduler is None and workers is None
+            yield client
+
+        with pytest.MonkeyPatch.context() as patch:
+            patch.setattr(ensemble, "dask_client", shared)
+            yield
+
+
 @pytest.fixture(scope="module")
 def first(tmp_path_factory):
     root = tmp_path_factory.mktemp("report")
-    log, lines = build(root / "out", root / "cache")
+    with one_local_cluster():
+        log, lines = build(root / "out", root / "cache")
     return root, log, lines
 
 

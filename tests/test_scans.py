@@ -72,7 +72,7 @@ class Deferred(InlineScans):
         return self.is_ready
 
 
-def test_a_failed_scan_rejects_its_step_after_the_branch_went_on(monkeypatch):
+def test_a_failed_scan_rejects_its_step_after_the_branch_went_on(monkeypatch, chain_sweep):
     """Step 20's scan fails. Inline, the step is retried at once with half the arclength; with
     the scans deferred, the continuation has reached the end by then and returns to step 20's
     committed state. Both give the same branch: points, histories (the callback sees each
@@ -95,7 +95,7 @@ def test_a_failed_scan_rejects_its_step_after_the_branch_went_on(monkeypatch):
     assert unaccounted_pair_changes(inline.F_x, inline.n_complex, [(c.p, c.kind) for c in inline.collisions]) == []
     assert_same_branch(inline, deferred)
     monkeypatch.undo()
-    plain = sweep(system, 0.0, 0.12, "J")
+    plain = chain_sweep(Scene(), "J")[0]  # conftest: the paper's sweep, shared
     # up to step 20's start as without the failure, then a shorter step
     assert np.array_equal(plain.F_x[:21], inline.F_x[:21]) and inline.F_x[21] < plain.F_x[21]
 

@@ -14,14 +14,9 @@ SCENES = {"paper": Scene(), "N20-eps1e-4": Scene(N=20, eps=1e-4)}
 MATCH = 1e-8
 """Windowed (shift-invert) and full (dense) eigenvalues agree to this fraction of max|lambda|."""
 
-_full: dict = {}
-
-
-def full_sweep(name: str, F_from: float = 0.0, F_to: float = 0.12):
-    key = (name, F_from, F_to)
-    if key not in _full:
-        _full[key] = sweep(System.from_scene(SCENES[name]), F_from, F_to, "J")
-    return _full[key]
+def full_sweep(chain_sweep, name: str, F_from: float = 0.0, F_to: float = 0.12):
+    """The full sweep of J (conftest.chain_sweep: once per session)."""
+    return chain_sweep(SCENES[name], "J", F_from, F_to)[0]
 
 
 def windowed_sweep(name: str, lo: float, hi: float, F_from: float = 0.0, F_to: float = 0.12):
@@ -69,7 +64,7 @@ def jumps(window, full, rows: np.ndarray) -> list:
 
 @pytest.mark.parametrize("name, lo, hi", [("paper", 0.05, 0.08), ("paper", 0.055, 0.06),
                                           ("N20-eps1e-4", 0.05, 0.08), ("paper", 0.0, 0.02)])
-def test_windowed_columns_follow_the_full_spectrum(name, lo, hi):
+def test_windowed_columns_follow_the_full_spectrum(name, lo, hi, chain_sweep):
     """Where a column lies inside the window, from one point to the next it holds one
     eigenvalue of the full sweep (same F_x), or passes through a collision located between
     them; it holds values in the window and its guard bands only; and every eigenvalue of the
@@ -77,7 +72,7 @@ def test_windowed_columns_follow_the_full_spectrum(name, lo, hi):
     entries and exits, at the paper's F_x = 0.0537 -> 0.0557 (window 0.05:0.08) one
     eigenvalue left the k nearest the centre and another joined, and the assignment shifted a
     chain of labels: 0.0695 -> 0.0599, 0.0584 -> 0.0554 inside the window."""
-    full, window = full_sweep(name), windowed_sweep(name, lo, hi)
+    full, window = full_sweep(chain_sweep, name), windowed_sweep(name, lo, hi)
     assert np.max(np.abs(window.F_x - full.F_x)) <= 1e-12  # the same points
     assert jumps(window, full, np.arange(len(window))) == []
     W, band = window.eigenvalues, Window(*window.window)
@@ -88,11 +83,11 @@ def test_windowed_columns_follow_the_full_spectrum(name, lo, hi):
         assert all(np.nanmin(np.abs(W[r] - v)) <= tol for v in inside)
 
 
-def test_a_window_holding_all_but_two_eigenvalues_locates_the_full_sweeps_collisions():
+def test_a_window_holding_all_but_two_eigenvalues_locates_the_full_sweeps_collisions(chain_sweep):
     """Window 0:0.02 of the paper's scene tracks k = n - 2 = 28 of its 30 eigenvalues, where
     ARPACK's Krylov space may be no smaller than n (it was cut to n - 1, a traceback): the
     collisions it locates are the full sweep's with Re lambda in the window, to 1e-10 in F_x."""
-    full, window = full_sweep("paper"), windowed_sweep("paper", 0.0, 0.02)
+    full, window = full_sweep(chain_sweep, "paper"), windowed_sweep("paper", 0.0, 0.02)
     lo, hi = window.window
     expected = [(c.kind, c.p) for c in full.collisions if lo <= c.eigenvalue <= hi]
     found = [(c.kind, c.p) for c in window.collisions]
@@ -100,11 +95,11 @@ def test_a_window_holding_all_but_two_eigenvalues_locates_the_full_sweeps_collis
     assert np.max(np.abs(np.subtract([p for _, p in found], [p for _, p in expected]))) <= 1e-10
 
 
-def test_windowed_columns_continue_across_the_legs():
+def test_windowed_columns_continue_across_the_legs(chain_sweep):
     """Loading to 0.06 and unloading to 0.03: the unloading leg starts with its labels in order
     of value; its columns continue the loading leg's (each moves to the nearest value at the
     first unloading point), and inside the unloading leg they follow the full spectrum."""
-    full, window = full_sweep("paper", 0.06, 0.03), windowed_sweep("paper", 0.05, 0.08, 0.06, 0.03)
+    full, window = full_sweep(chain_sweep, "paper", 0.06, 0.03), windowed_sweep("paper", 0.05, 0.08, 0.06, 0.03)
     W = window.eigenvalues
     last = np.flatnonzero(window.leg == 0)[-1]
     both = np.flatnonzero(~np.isnan(W[last]) & ~np.isnan(W[last + 1]))
@@ -114,12 +109,12 @@ def test_windowed_columns_continue_across_the_legs():
     assert jumps(window, full, np.flatnonzero(window.leg == 1)) == []
 
 
-def test_full_columns_and_collision_pairs_continue_across_the_legs():
+def test_full_columns_and_collision_pairs_continue_across_the_legs(chain_sweep):
     """The full spectrum of the same sweep: each column at the first unloading point is the
     nearest to its value at the last loading point (the unloading leg's labels, sorted by
     value at its start, used to jump by up to 14 raw there), and each collision's pair names
     the two columns that meet: at the point nearest it they are each other's nearest."""
-    full = full_sweep("paper", 0.06, 0.03)
+    full = full_sweep(chain_sweep, "paper", 0.06, 0.03)
     E, last = full.eigenvalues, np.flatnonzero(full.leg == 0)[-1]
     nearest = np.argmin(np.abs(E[last + 1][None, :] - E[last][:, None]), axis=1)
     assert nearest.tolist() == list(range(E.shape[1]))
