@@ -27,15 +27,13 @@ def relaxed_jacobian(N: int, F_x: float = 0.002):
 
 
 @pytest.fixture(scope="module")
-def paper():
-    """The paper's scene and its CPU sweep 0 -> 0.12 (22 collisions)."""
-    from diskfriction.disks.sweep import sweep
+def paper(chain_sweep):
+    """The paper's scene and its sweep 0 -> 0.12 (22 collisions; on the CPU wherever the test
+    suite runs without a GPU, and "auto" keeps n = 30 there anyway)."""
     from diskfriction.scenes import Scene
     from diskfriction.symbolic import System
 
-    system = System.from_scene(Scene())
-    with spectra_on("cpu"):
-        return system, sweep(system, 0.0, 0.12)
+    return System.from_scene(Scene()), chain_sweep(Scene())[0]
 
 
 def complex_jacobian(paper):
