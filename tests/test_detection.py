@@ -36,7 +36,7 @@ def test_fast_detection_finds_the_exhaustive_collisions(scene, matrix, count, ch
     """Same kinds in the same order, locations within 1e-9, on one branch (the detection does
     not change the steps); the counts are the version 0.1 lists (docs/continuation.md)."""
     runs = {mode: chain_sweep(scene, matrix, params=SweepParams(detection=DetectionParams(mode=mode)))[0]
-            for mode in ("fast", "exhaustive")}
+            for mode in ("fast", "exhaustive")}  # conftest: run once, shared with the tests below
     assert np.array_equal(runs["fast"].F_x, runs["exhaustive"].F_x)
     assert len(runs["fast"].collisions) == count
     assert_same_collisions(locations(runs["fast"]), locations(runs["exhaustive"]))
@@ -73,7 +73,8 @@ def test_fast_detection_spends_about_one_spectrum_per_point(chain_sweep):
 
     spent = {}
     for mode in ("fast", "exhaustive"):  # the sweeps of test_fast_detection_finds_...[paper-J]
-        branch, spectra = chain_sweep(Scene(), "J", params=SweepParams(detection=DetectionParams(mode=mode)))
+        detection = SweepParams(detection=DetectionParams(mode=mode))
+        branch, spectra = chain_sweep(Scene(), "J", params=detection)
         spent[mode] = spectra / len(branch)
     assert spent["fast"] <= 3.0 and spent["exhaustive"] >= 4 * spent["fast"]
 
