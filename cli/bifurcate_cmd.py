@@ -158,8 +158,8 @@ def _run(args: argparse.Namespace) -> int:
     from diskfriction.symbolic import System
 
     detection = DetectionParams(mode=args.detection)
-    check_memory("bifurcate", scene, 1 + planned_workers(scene.ndof, detection, args.workers),
-                 dense=window is None and scene.eps > 0)
+    workers = planned_workers(scene.ndof, detection, args.workers, dense=window is None)
+    check_memory("bifurcate", scene, 1 + workers, dense=window is None and scene.eps > 0)
 
     progress = Progress("bifurcate")
     total = F_from + abs(F_to - F_from)  # preparation leg plus the sweep

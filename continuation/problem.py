@@ -30,6 +30,9 @@ Optional hooks (defaults below):
     eigensystem(u, p, vectors) -> spectra.Eigensystem of A(u, p); default LAPACK dgeev of the
         dense A. Override to exclude exactly decoupled modes from detection or to use a faster
         solver for the same matrix.
+    dense_spectra() -> bool: whether eigensystem() takes dense spectra (spectra.eigensystem,
+        which may run on a GPU); default True. A problem that tracks a spectral window returns
+        False: its scans may then run on workers whatever device the dense spectra use.
     derivative_step(x) -> h: length in x = (u, p) of the finite differences of A along a
         direction (eigenvalue slopes, the collision locator); default 1e-6 (1 + max|x|).
 """
@@ -95,6 +98,10 @@ class Problem(ABC):
     def eigensystem(self, u: Array, p: float, vectors: bool = False) -> Eigensystem:
         """Eigenvalues (and, with `vectors`, normalised left and right vectors) of A(u, p)."""
         return eigensystem(dense(self.stability_matrix(u, p)), vectors)
+
+    def dense_spectra(self) -> bool:
+        """Whether eigensystem() takes dense spectra (spectra.eigensystem); True by default."""
+        return True
 
     def spectrum(self, u: Array, p: float) -> Array:
         """All eigenvalues of A(u, p) (complex array, any order)."""

@@ -112,7 +112,7 @@ def default_workers(problem: Problem, n: int, detection: DetectionParams,
     """Workers for `problem`, whose stability matrix is n x n: planned_workers, or 0 (inline)
     for a problem whose committed state cannot be shipped (has_snapshots); asking for workers
     explicitly for such a problem raises ValueError."""
-    workers = planned_workers(n, detection, asked)
+    workers = planned_workers(n, detection, asked, dense=problem.dense_spectra())
     if workers and not has_snapshots(problem):
         if asked is not None:
             raise ValueError(f"{type(problem).__name__} commits a state but has no state()/restore(): "
@@ -121,19 +121,21 @@ def default_workers(problem: Problem, n: int, detection: DetectionParams,
     return workers
 
 
-def planned_workers(n: int, detection: DetectionParams, asked: Optional[int] = None) -> int:
+def planned_workers(n: int, detection: DetectionParams, asked: Optional[int] = None,
+                    dense: bool = True) -> int:
     """Scan workers for an n x n stability matrix: 0 (inline) unless the detector's scans are
     independent (Detector.parallel: the exhaustive one's stencil is a sample of the previous
     step, known only once that step's scan is done); then `asked` if given (0: every scan
     inline), else 2 from n = PARALLEL_FROM on, on Linux, when this process may use 2 cores or
-    more and is not daemonic. Always 0 where the spectra run on a GPU (spectra.on_gpu): the
+    more and is not daemonic. Always 0 where dense spectra are taken (`dense`: the problem
+    tracks no spectral window, Problem.dense_spectra) and run on a GPU (spectra.on_gpu): the
     GPU does the heavy part, and a forked worker cannot use the CUDA context this process
-    started. ValueError for asked < 0, or asked > 0 with spectra on a GPU."""
+    started. ValueError for asked < 0, or asked > 0 with dense spectra on a GPU."""
     if asked is not None and asked < 0:
         raise ValueError(f"workers must be >= 0 (or None: automatic), got {asked}")
     if not (detection.enabled and detection.detector.parallel):
         return 0
-    if on_gpu(n):
+    if dense and on_gpu(n):
         if asked:
             raise WorkersOnGpu(f"--workers: the spectra run on the GPU (--spectra gpu, or auto from "
                                f"n = {GPU_FROM}), where the scans run inline; ask for --spectra cpu "

@@ -61,6 +61,9 @@ class Weighted(Problem):
     def eigensystem(self, y, p, vectors: bool = False):
         return self.inner.eigensystem(self.u(y), p, vectors)
 
+    def dense_spectra(self) -> bool:
+        return self.inner.dense_spectra()
+
     def derivative_step(self, x: Array) -> float:
         """The inner step, times s: a unit direction in y moves u by up to 1 / s."""
         return self.inner.derivative_step(np.append(self.u(x[:-1]), x[-1])) * self.s

@@ -240,6 +240,10 @@ class DiskEquilibria(Problem):
         columns[coupled] = np.arange(coupled.size)
         return Eigensystem(values, right, left, excluded, columns=columns)
 
+    def dense_spectra(self) -> bool:
+        """Dense spectra unless a spectral window is tracked (eigensystem)."""
+        return self.window is None
+
     def _window_eigensystem(self, q, F_x, vectors: bool) -> Eigensystem:
         """The spectral window's eigenvalues (spectral_window.py; its k fixed at the start state,
         __init__); the modes of free disks (right vectors on their dofs alone) also excluded."""

@@ -257,6 +257,10 @@ class PackingEquilibria(Problem):
         gauge rows' diagonal, zeros elsewhere (module docstring)."""
         return (self._embed @ self.reduced(q, gamma) @ self._embed.T + self._parked).tocsr()
 
+    def dense_spectra(self) -> bool:
+        """Dense spectra unless a spectral window is tracked (eigensystem)."""
+        return self.window is None
+
     def eigensystem(self, q, gamma, vectors: bool = False) -> Eigensystem:
         """A_red's eigensystem at the kept dofs, the gauge rows' zeros excluded, without
         vectors; or with a spectral window, the window's k eigenvalues of A_red."""

@@ -8,7 +8,9 @@ import pytest
 
 from diskfriction.continuation import gpu_spectra, scans, spectra
 from diskfriction.continuation.collisions import DetectionParams
+from diskfriction.continuation.problem import FunctionProblem
 from diskfriction.continuation.spectra import NoGpu, eigensystem, spectra_on
+from commandline import error_line, run_cli
 
 WHY_NO_GPU = gpu_spectra.unavailable()
 
@@ -113,21 +115,32 @@ def test_scans_run_inline_where_the_spectra_run_on_the_gpu(fake_gpu, monkeypatch
         assert scans.planned_workers(300, detection) == 0
         with pytest.raises(scans.WorkersOnGpu, match="--spectra cpu"):
             scans.planned_workers(300, detection, asked=2)
+        # a problem that tracks a spectral window takes no dense spectra: its scans stay on workers
+        assert scans.planned_workers(300, detection, dense=False) == 2
+        assert scans.planned_workers(300, detection, asked=3, dense=False) == 3
+        assert scans.default_workers(Windowed(np.subtract, None, None), 300, detection) == 2
 
 
-def test_a_sweep_with_its_spectra_on_the_gpu_formulas_finds_the_same_collisions(fake_gpu, paper):
-    """The paper's scene swept with every dense spectrum from decompose (left vectors from
-    R^-1): the same 22 collisions as with LAPACK, within 1e-12 in F_x, at the same points."""
-    from diskfriction.disks.sweep import sweep
+class Windowed(FunctionProblem):
+    """A stateless problem whose eigensystem tracks a window (no dense spectra)."""
 
-    system, cpu = paper
-    with spectra_on("gpu"):
-        gpu = sweep(system, 0.0, 0.12)
-    assert len(fake_gpu) >= len(gpu)
-    assert len(cpu.collisions) == 22
-    assert [c.kind for c in gpu.collisions] == [c.kind for c in cpu.collisions]
-    assert np.abs(np.array([c.p for c in gpu.collisions]) - [c.p for c in cpu.collisions]).max() <= 1e-12
-    assert gpu.F_x.shape == cpu.F_x.shape and np.abs(gpu.F_x - cpu.F_x).max() <= 1e-12
+    def dense_spectra(self) -> bool:
+        return False
+
+
+def test_windowed_chains_take_no_dense_spectra():
+    """DiskEquilibria takes dense spectra unless given a window; Weighted asks its inner problem."""
+    from diskfriction.continuation.weighting import Weighted
+    from diskfriction.disks.equilibria import DiskEquilibria
+    from diskfriction.continuation.spectral_window import Window
+    from diskfriction.scenes import Scene
+    from diskfriction.symbolic import System
+
+    system = System.from_scene(Scene(N=4, eps=1e-4))
+    for window, dense in [(None, True), (Window(-1.0, 0.0), False)]:
+        problem = DiskEquilibria(system, *system.rest_state(), 0.0, window=window)
+        assert problem.dense_spectra() is dense
+        assert Weighted(problem, 1.0).dense_spectra() is dense
 
 
 @pytest.mark.skipif(WHY_NO_GPU is None, reason="a GPU is present: spectra_on('gpu') runs")
@@ -136,6 +149,20 @@ def test_asking_for_gpu_spectra_without_a_gpu_says_why_in_one_line():
         with spectra_on("gpu"):
             pass
     assert "\n" not in str(error.value) and str(error.value) == WHY_NO_GPU
+
+
+@pytest.mark.skipif(WHY_NO_GPU is not None, reason=f"no GPU spectra here: {WHY_NO_GPU}")
+def test_bifurcate_asked_for_gpu_spectra_without_a_gpu_says_why_in_one_line(tmp_path):
+    result = run_cli("bifurcate", "--spectra", "gpu", "--out", str(tmp_path / "out"))
+    assert result.returncode == 2 and result.stderr.count("\n") == 1, result.stderr
+    assert error_line(result, "bifurcate") == f"bifurcate error: --spectra gpu: {WHY_NO_GPU}"
+    assert not (tmp_path / "out").exists()
+
+
+def test_bifurcate_refuses_an_unknown_device_in_one_line(tmp_path):
+    result = run_cli("bifurcate", "--spectra", "xpu", "--out", str(tmp_path / "out"))
+    assert result.returncode == 2 and result.stderr.count("\n") == 1, result.stderr
+    assert error_line(result, "bifurcate") == "bifurcate error: --spectra: must be cpu, gpu or auto (got 'xpu')"
 
 
 @pytest.mark.skipif(WHY_NO_GPU is not None, reason=f"no GPU spectra here: {WHY_NO_GPU}")
