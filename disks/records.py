@@ -41,7 +41,7 @@ RECORD_KEYS = ("kind", "lambda_re", "lambda_im", "matrix", "window", "bracket", 
 
 
 def pair_condition(p: np.ndarray, condition: Optional[np.ndarray], c: Collision,
-                   collisions: Sequence[Collision] = ()):
+                   collisions: Sequence[Collision]):
     """([kappa before, kappa after], [amplitude before, amplitude after]) of collision c's
     pair at the accepted points p[k], p[k + 1] around it: kappa the larger condition number of
     its two members there (Branch.condition, columns = labels), amplitude = kappa sqrt|p -

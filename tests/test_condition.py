@@ -29,7 +29,7 @@ def test_condition_numbers_are_the_closed_form_on_both_sides_of_a_collision():
     assert kappa.shape == (len(result.p), 2)
     assert np.abs(kappa / exact[:, None] - 1.0).max() <= 1e-12
     (birth,) = result.collisions
-    around, amplitude = pair_condition(result.p, kappa, birth)
+    around, amplitude = pair_condition(result.p, kappa, birth, result.collisions)
     k = int(np.flatnonzero(result.p < birth.p)[-1])
     assert around == pytest.approx(exact[k:k + 2], rel=1e-12)
     assert amplitude == pytest.approx((1.0 + c[k:k + 2]) / 2.0, rel=1e-10)  # -> 1/2 at P1
