@@ -93,7 +93,7 @@ class PeriodicBlocks:
     def solve(self, sigma: complex, rhs: Array, transpose: bool = False) -> Array:
         """x with (A - sigma I) x = rhs (or its transpose), rhs (n,): one factorization."""
         N, b = self.diag.shape[:2]
-        factors, scratch, columns = _work(N, b)
+        factors, scratch, columns = _work(N, b, np.zeros(1, np.complex128))
         ok = _factor(self.diag, self.lower, self.upper, complex(sigma), *factors, *scratch)
         x = np.empty((N, b), np.complex128)
         _solve(self.lower, self.upper, np.asarray(rhs, np.complex128).reshape(N, b), transpose, x,
@@ -115,23 +115,26 @@ def disk_major(N: int, b: int) -> Array:
 
 
 @numba.njit(cache=True)
-def _work(N, b):
-    """A factorization's arrays: the pivot blocks' inverses P^-1, the multipliers G, T^-1 E
-    and T^-T F^T (m, b, b), S^-1 (b, b), m = N - 1; then _factor's scratch (e, ft, w, block)
-    and _solve's (head, y, w1, tail)."""
+def _work(N, b, proto):
+    """A factorization's arrays, of proto's dtype (real for a real shift): the pivot blocks'
+    inverses P^-1, the multipliers G, T^-1 E and T^-T F^T (m, b, b), S^-1 (b, b), m = N - 1;
+    then _factor's scratch (e, ft, w, block) and _solve's (head, y, w1, tail)."""
     m = N - 1
-    full = lambda: np.empty((m, b, b), np.complex128)  # noqa: E731
-    column = lambda: np.empty((m, b, 1), np.complex128)  # noqa: E731
-    factors = (full(), full(), full(), full(), np.empty((b, b), np.complex128))
-    return factors, (full(), full(), full(), np.empty((b, b), np.complex128)), \
-        (column(), column(), column(), np.empty(b, np.complex128))
+    dtype = proto.dtype
+    factors = (np.empty((m, b, b), dtype), np.empty((m, b, b), dtype), np.empty((m, b, b), dtype),
+               np.empty((m, b, b), dtype), np.empty((b, b), dtype))
+    scratch = (np.empty((m, b, b), dtype), np.empty((m, b, b), dtype), np.empty((m, b, b), dtype),
+               np.empty((b, b), dtype))
+    columns = (np.empty((m, b, 1), dtype), np.empty((m, b, 1), dtype), np.empty((m, b, 1), dtype),
+               np.empty(b, dtype))
+    return factors, scratch, columns
 
 
 @numba.njit(cache=True)
 def _invert(a, out):
     """out = a^-1 (b x b complex) by Gauss-Jordan with partial pivoting; False if singular."""
     b = a.shape[0]
-    aug = np.empty((b, 2 * b), np.complex128)
+    aug = np.empty((b, 2 * b), out.dtype)
     for i in range(b):
         for j in range(b):
             aug[i, j] = a[i, j]
@@ -166,7 +169,7 @@ def _mul_sub(c, a, bmat, transpose_b):
     b = c.shape[0]
     for i in range(b):
         for j in range(b):
-            s = 0j
+            s = 0.0
             for k in range(b):
                 s += a[i, k] * (bmat[j, k] if transpose_b else bmat[k, j])
             c[i, j] -= s
@@ -196,7 +199,7 @@ def _tsolve(pinv, mult, upper, rhs, transpose, out, w):
                     w[k, i, c] = s
             for i in range(b):
                 for c in range(ncol):
-                    s = 0j
+                    s = 0.0
                     for j in range(b):
                         s += pinv[k, i, j] * w[k, j, c]
                     out[k, i, c] = s
@@ -211,7 +214,7 @@ def _tsolve(pinv, mult, upper, rhs, transpose, out, w):
                     out[k, i, c] = s
             for i in range(b):
                 for c in range(ncol):
-                    s = 0j
+                    s = 0.0
                     for j in range(b):
                         s += pinv[k, j, i] * out[k, j, c]
                     w[k, i, c] = s
@@ -240,7 +243,7 @@ def _factor(diag, lower, upper, sigma, pinv, mult, z, zt, sinv, e, ft, w, block)
         if k > 0:
             for i in range(b):  # G_k = lower[k] P_{k-1}^-1
                 for j in range(b):
-                    s = 0j
+                    s = 0.0
                     for t in range(b):
                         s += lower[k, i, t] * pinv[k - 1, t, j]
                     mult[k, i, j] = s
@@ -292,7 +295,7 @@ def _solve(lower, upper, rhs, transpose, out, pinv, mult, z, zt, sinv, head, y, 
                 s -= upper[N - 1, i, t] * y[0, t, 0] + lower[N - 1, i, t] * y[m - 1, t, 0]
         tail[i] = s
     for i in range(b):
-        s = 0j
+        s = 0.0
         for t in range(b):
             s += (sinv[t, i] if transpose else sinv[i, t]) * tail[t]
         out[N - 1, i] = s
@@ -312,7 +315,7 @@ def _matvec(diag, lower, upper, x, y):
     for k in range(N):
         prev, nxt = (k - 1) % N, (k + 1) % N
         for i in range(b):
-            s = 0j
+            s = 0.0
             for j in range(b):
                 s += diag[k, i, j] * x[k, j] + lower[k, i, j] * x[prev, j] + upper[k, i, j] * x[nxt, j]
             y[k, i] = s
@@ -341,7 +344,7 @@ def _refine(diag, lower, upper, values, right, left, starts, members, iterations
         k = idx.size
         if k > largest:
             continue
-        factors, scratch, columns = _work(N, b)
+        factors, scratch, columns = _work(N, b, np.zeros(1, np.complex128))
         X = np.empty((k, n), np.complex128)  # right vectors, one per row
         Y = np.empty((k, n), np.complex128)  # conj(left vectors): l^H x = sum(Y[j] * x)
         for j in range(k):
@@ -398,11 +401,80 @@ def _refine(diag, lower, upper, values, right, left, starts, members, iterations
                 break
         if failed:
             continue
+        if k > 1 and res.max() > tol:
+            # the cluster's one shift converges linearly; each member's own shift cubically
+            for j in range(k):
+                for _ in range(2):
+                    if res[j] <= tol or not _factor(diag, lower, upper, theta[j], *factors, *scratch):
+                        break
+                    _solve(lower, upper, X[j].reshape(N, b), False, x, *factors, *columns)
+                    xr = x.ravel().copy()
+                    _solve(lower, upper, Y[j].reshape(N, b), True, x, *factors, *columns)
+                    yr = x.ravel().copy()
+                    norm = np.sqrt(np.sum(np.abs(xr) ** 2))
+                    overlap = np.sum(yr * xr) / norm
+                    if not (np.isfinite(norm) and norm > 0.0 and np.isfinite(abs(overlap)) and overlap != 0.0):
+                        break
+                    X[j] = xr / norm
+                    Y[j] = yr / overlap
+                    _matvec(diag, lower, upper, X[j].reshape(N, b), ax)
+                    theta[j] = np.sum(Y[j] * ax.ravel())
+                    res[j] = np.sqrt(np.sum(np.abs(ax.ravel() - theta[j] * X[j]) ** 2))
         for j in range(k):
             residual[idx[j]] = res[j]
             values[idx[j]] = theta[j]
             right[:, idx[j]] = X[j]
             left[idx[j]] = Y[j]
+    return residual
+
+
+@numba.njit(cache=True)
+def _rqi_many(diag, lower, upper, values, right, left, iterations, tol):
+    """Two-sided Rayleigh quotient iteration of each pair alone, in place, in the dtype of
+    `right` (real pairs in real arithmetic, four times cheaper): values (k,), right (n, k)
+    columns, left (k, n) rows (conj(l) entries: l^H x = sum(left[j] * x)). Returns the
+    residuals (inf where a factorization failed)."""
+    N, b = diag.shape[0], diag.shape[1]
+    n, k = right.shape
+    factors, scratch, columns = _work(N, b, right[:1, 0])
+    r = np.empty((N, b), right.dtype)
+    lc = np.empty((N, b), right.dtype)
+    x = np.empty((N, b), right.dtype)
+    ax = np.empty((N, b), right.dtype)
+    residual = np.full(k, np.inf)
+    for p in range(k):
+        for t in range(n):
+            r[t // b, t % b] = right[t, p]
+            lc[t // b, t % b] = left[p, t]
+        lam = values[p]
+        res = np.inf
+        for _ in range(iterations):
+            if not _factor(diag, lower, upper, lam, *factors, *scratch):
+                res = np.inf
+                break
+            _solve(lower, upper, r, False, x, *factors, *columns)
+            r[:] = x
+            _solve(lower, upper, lc, True, x, *factors, *columns)
+            lc[:] = x
+            norm = np.sqrt(np.sum(np.abs(r) ** 2))
+            overlap = np.sum(lc * r) / norm
+            if not (np.isfinite(norm) and norm > 0.0 and np.isfinite(abs(overlap)) and overlap != 0.0):
+                res = np.inf
+                break
+            r /= norm
+            lc /= overlap
+            _matvec(diag, lower, upper, r, ax)
+            lam = np.sum(lc * ax)
+            res = np.sqrt(np.sum(np.abs(ax - lam * r) ** 2))
+            if res <= tol:
+                break
+        if not np.isfinite(res):
+            continue
+        residual[p] = res
+        values[p] = lam
+        for t in range(n):
+            right[t, p] = r[t // b, t % b]
+            left[p, t] = lc[t // b, t % b]
     return residual
 
 
@@ -467,8 +539,25 @@ def refine_eigenpairs(blocks: PeriodicBlocks, values: Array, right: Array, left:
     right = np.array(right, np.complex128)
     left = np.array(left, np.complex128)
     starts, members = clusters(values, reach)
-    residual = _refine(blocks.diag, blocks.lower, blocks.upper, values, right, left, starts, members,
-                       iterations, tol, LARGEST_CLUSTER)
+    sizes = np.diff(starts)
+    alone = members[starts[:-1][sizes == 1]]
+    real = alone[(values[alone].imag == 0.0) & ~np.any(right[:, alone].imag, axis=0)
+                 & ~np.any(left[alone].imag, axis=1)]
+    residual = np.full(values.size, np.inf)
+    A = (blocks.diag, blocks.lower, blocks.upper)
+    for picked, dtype in ((real, float), (np.setdiff1d(alone, real), complex)):
+        part = (values[picked], right[:, picked], left[picked])
+        v, r, lft = (a.real.copy() if dtype is float else a for a in part)
+        residual[picked] = _rqi_many(*A, v, r, lft, iterations, tol)
+        values[picked], right[:, picked], left[picked] = v, r, lft
+    grouped = np.flatnonzero(sizes > 1)
+    if grouped.size:
+        spans = [members[starts[c]:starts[c + 1]] for c in grouped]
+        group_starts = np.concatenate([[0], np.cumsum([span.size for span in spans])])
+        residual_grouped = _refine(*A, values, right, left, group_starts, np.concatenate(spans),
+                                   iterations, tol, LARGEST_CLUSTER)
+        together = np.concatenate(spans)
+        residual[together] = residual_grouped[together]
     return values, right, left, residual
 
 
