@@ -31,10 +31,14 @@ order by kappa |A r - lambda r| (Wilkinson).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Optional
 
 import numba
 import numpy as np
 import scipy.sparse as sp
+from scipy.linalg.lapack import zgbtrf, zgbtrs
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 
 Array = np.ndarray
 
@@ -48,10 +52,20 @@ class PeriodicBlocks:
     diag: Array
     lower: Array
     upper: Array
+    order: Optional[Array] = None
+    """order[i]: the index in the original matrix of block row and column i's unknown (None:
+    the same order); from_matrix."""
 
     @property
     def n(self) -> int:
         return self.diag.shape[0] * self.diag.shape[1]
+
+    def traces(self) -> tuple[float, float]:
+        """(tr A, tr A^2): sum_k tr D_k and sum_k tr D_k^2 + 2 tr(L_k U_{k-1}) (L_k couples
+        block row k to column k - 1, U_{k-1} row k - 1 to column k; N >= 3), O(N b^2)."""
+        below = np.roll(self.upper, 1, axis=0)  # U_{k-1}
+        return (float(np.einsum("kii->", self.diag)),
+                float(np.einsum("kij,kji->", self.diag, self.diag) + 2.0 * np.einsum("kij,kji->", self.lower, below)))
 
     @classmethod
     def from_matrix(cls, A, b: int, order=None) -> "PeriodicBlocks":
@@ -76,19 +90,21 @@ class PeriodicBlocks:
             raise ValueError("the matrix has entries outside the periodic block-tridiagonal pattern")
         keep = offset <= 2
         np.add.at(blocks, (offset[keep], rows[keep] // b, rows[keep] % b, cols[keep] % b), values[keep])
-        return cls(blocks[1], blocks[0], blocks[2])
+        return cls(blocks[1], blocks[0], blocks[2], None if order is None else np.asarray(order))
+
+    def sparse(self) -> sp.csr_array:
+        """The n x n matrix in block order, sparse."""
+        N, b = self.diag.shape[:2]
+        k = np.repeat(np.arange(N), b * b)
+        i, j = np.tile(np.repeat(np.arange(b), b), N), np.tile(np.arange(b), N * b)
+        rows = np.concatenate([k * b + i] * 3)
+        cols = np.concatenate([((k + shift) % N) * b + j for shift in (0, -1, 1)])
+        values = np.concatenate([self.diag.ravel(), self.lower.ravel(), self.upper.ravel()])
+        return sp.csr_array((values, (rows, cols)), shape=(self.n, self.n))
 
     def dense(self) -> Array:
         """The n x n matrix (tests)."""
-        N, b = self.diag.shape[:2]
-        A = np.zeros((self.n, self.n))
-        for k in range(N):
-            rows = slice(k * b, (k + 1) * b)
-            A[rows, k * b:(k + 1) * b] += self.diag[k]
-            prev, nxt = (k - 1) % N, (k + 1) % N
-            A[rows, prev * b:(prev + 1) * b] += self.lower[k]
-            A[rows, nxt * b:(nxt + 1) * b] += self.upper[k]
-        return A
+        return self.sparse().toarray()
 
     def solve(self, sigma: complex, rhs: Array, transpose: bool = False) -> Array:
         """x with (A - sigma I) x = rhs (or its transpose), rhs (n,): one factorization."""
@@ -322,113 +338,6 @@ def _matvec(diag, lower, upper, x, y):
 
 
 @numba.njit(cache=True)
-def _orthonormal(V):
-    """The rows of V (k, n) replaced by an orthonormal basis of their span (QR)."""
-    q, _ = np.linalg.qr(np.ascontiguousarray(V.T))
-    return np.ascontiguousarray(q.T)
-
-
-@numba.njit(cache=True)
-def _refine(diag, lower, upper, values, right, left, starts, members, iterations, tol, largest):
-    """Block two-sided Rayleigh quotient iteration of every cluster of eigenpairs (module
-    docstring), in place: values (n,), right (n, n) columns, left (n, n) rows (l^H as
-    spectra.Eigensystem stores them); cluster c holds members[starts[c]:starts[c + 1]]; at most
-    `iterations` steps, fewer once every member's residual is <= tol. Returns each pair's
-    residual |A r - lambda r| with |r| = 1 (inf where a factorization failed, or for the
-    members of a cluster larger than `largest`, which is left as it was)."""
-    N, b = diag.shape[0], diag.shape[1]
-    n = N * b
-    residual = np.full(n, np.inf)
-    for c in range(starts.size - 1):
-        idx = members[starts[c]:starts[c + 1]]
-        k = idx.size
-        if k > largest:
-            continue
-        factors, scratch, columns = _work(N, b, np.zeros(1, np.complex128))
-        X = np.empty((k, n), np.complex128)  # right vectors, one per row
-        Y = np.empty((k, n), np.complex128)  # conj(left vectors): l^H x = sum(Y[j] * x)
-        for j in range(k):
-            X[j] = right[:, idx[j]]
-            Y[j] = left[idx[j]]
-        theta = values[idx].copy()
-        x = np.empty((N, b), np.complex128)
-        ax = np.empty((N, b), np.complex128)
-        res = np.full(k, np.inf)
-        failed = False
-        for _ in range(iterations):
-            sigma = np.mean(theta)
-            if not _factor(diag, lower, upper, sigma, *factors, *scratch):
-                failed = True
-                break
-            for j in range(k):
-                _solve(lower, upper, X[j].reshape(N, b), False, x, *factors, *columns)
-                X[j] = x.ravel()
-                _solve(lower, upper, Y[j].reshape(N, b), True, x, *factors, *columns)
-                Y[j] = x.ravel()
-            if not (np.all(np.isfinite(X)) and np.all(np.isfinite(Y))):
-                failed = True
-                break
-            X, Y = _orthonormal(X), _orthonormal(Y)
-            G = np.empty((k, k), np.complex128)  # Y^H X in l^H r terms: G[a, b] = l_a^H x_b
-            H = np.empty((k, k), np.complex128)  # l_a^H A x_b
-            for j in range(k):
-                _matvec(diag, lower, upper, X[j].reshape(N, b), ax)
-                axr = ax.ravel()
-                for a in range(k):
-                    G[a, j] = np.sum(Y[a] * X[j])
-                    H[a, j] = np.sum(Y[a] * axr)
-            Ginv = np.linalg.inv(G)
-            theta, W = np.linalg.eig(Ginv @ H)
-            Winv_Ginv = np.linalg.inv(W) @ Ginv
-            Xn = np.zeros((k, n), np.complex128)
-            Yn = np.zeros((k, n), np.complex128)
-            for j in range(k):
-                for a in range(k):
-                    Xn[j] += W[a, j] * X[a]
-                    Yn[j] += Winv_Ginv[j, a] * Y[a]
-            for j in range(k):  # |r| = 1, l^H r = 1
-                scale = np.sqrt(np.sum(np.abs(Xn[j]) ** 2))
-                Xn[j] /= scale
-                Yn[j] *= scale
-            X, Y = Xn, Yn
-            if not np.all(np.isfinite(theta)):
-                failed = True
-                break
-            for j in range(k):
-                _matvec(diag, lower, upper, X[j].reshape(N, b), ax)
-                res[j] = np.sqrt(np.sum(np.abs(ax.ravel() - theta[j] * X[j]) ** 2))
-            if res.max() <= tol:
-                break
-        if failed:
-            continue
-        if k > 1 and res.max() > tol:
-            # the cluster's one shift converges linearly; each member's own shift cubically
-            for j in range(k):
-                for _ in range(2):
-                    if res[j] <= tol or not _factor(diag, lower, upper, theta[j], *factors, *scratch):
-                        break
-                    _solve(lower, upper, X[j].reshape(N, b), False, x, *factors, *columns)
-                    xr = x.ravel().copy()
-                    _solve(lower, upper, Y[j].reshape(N, b), True, x, *factors, *columns)
-                    yr = x.ravel().copy()
-                    norm = np.sqrt(np.sum(np.abs(xr) ** 2))
-                    overlap = np.sum(yr * xr) / norm
-                    if not (np.isfinite(norm) and norm > 0.0 and np.isfinite(abs(overlap)) and overlap != 0.0):
-                        break
-                    X[j] = xr / norm
-                    Y[j] = yr / overlap
-                    _matvec(diag, lower, upper, X[j].reshape(N, b), ax)
-                    theta[j] = np.sum(Y[j] * ax.ravel())
-                    res[j] = np.sqrt(np.sum(np.abs(ax.ravel() - theta[j] * X[j]) ** 2))
-        for j in range(k):
-            residual[idx[j]] = res[j]
-            values[idx[j]] = theta[j]
-            right[:, idx[j]] = X[j]
-            left[idx[j]] = Y[j]
-    return residual
-
-
-@numba.njit(cache=True)
 def _rqi_many(diag, lower, upper, values, right, left, iterations, tol):
     """Two-sided Rayleigh quotient iteration of each pair alone, in place, in the dtype of
     `right` (real pairs in real arithmetic, four times cheaper): values (k,), right (n, k)
@@ -478,51 +387,31 @@ def _rqi_many(diag, lower, upper, values, right, left, iterations, tol):
     return residual
 
 
-def clusters(guess: Array, reach: Array) -> tuple[Array, Array]:
+def clusters(guess: Array, reach: Array) -> list[Array]:
     """The eigenpairs to refine together: i and j are linked when their predicted eigenvalues
     are closer than reach_i + reach_j (reach: how far each may be from its prediction), and a
-    cluster is a connected set of links. Returns (starts, members) as _refine takes them."""
-    return _clusters(np.asarray(guess, np.complex128), np.asarray(reach, float))
+    cluster is a connected set of links. Returns the clusters' members, ascending."""
+    guess = np.asarray(guess, np.complex128)
+    n = guess.size
+    i, j = close_pairs(guess, 2.0 * float(np.max(reach, initial=0.0)))
+    linked = np.abs(guess[i] - guess[j]) <= reach[i] + reach[j]
+    graph = sp.coo_array((np.ones(int(linked.sum())), (i[linked], j[linked])), shape=(n, n))
+    root = connected_components(graph, directed=False)[1]
+    members = np.argsort(root, kind="stable")
+    return np.split(members, np.flatnonzero(np.diff(root[members])) + 1)
 
 
-@numba.njit(cache=True)
-def _clusters(values, reach):
-    n = values.size
-    parent = np.arange(n)
-    order = np.argsort(values.real)
-    widest = 2.0 * reach.max()
-    for a in range(n):
-        i = order[a]
-        for c in range(a + 1, n):
-            j = order[c]
-            if values[j].real - values[i].real > widest:
-                break
-            if abs(values[i] - values[j]) <= reach[i] + reach[j]:
-                ri, rj = i, j
-                while parent[ri] != ri:
-                    ri = parent[ri]
-                while parent[rj] != rj:
-                    rj = parent[rj]
-                if ri != rj:
-                    parent[max(ri, rj)] = min(ri, rj)
-    root = np.empty(n, np.int64)
-    for i in range(n):
-        r = i
-        while parent[r] != r:
-            r = parent[r]
-        root[i] = r
-    members = np.argsort(root, kind="mergesort")
-    starts = [0]
-    for a in range(1, n):
-        if root[members[a]] != root[members[a - 1]]:
-            starts.append(a)
-    starts.append(n)
-    return np.array(starts, np.int64), members.astype(np.int64)
+def close_pairs(points: Array, radius: float) -> tuple[Array, Array]:
+    """Index pairs (i < j) of the complex points within `radius` of each other (a k-d tree)."""
+    if points.size < 2:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    pairs = cKDTree(np.column_stack([points.real, points.imag])).query_pairs(radius, output_type="ndarray")
+    return pairs[:, 0], pairs[:, 1]
 
 
 LARGEST_CLUSTER = 16
-"""Clusters of more eigenpairs are not refined (refine_eigenpairs: residual inf): one shift
-serves a cluster, and the farther its members lie from it, the slower they converge."""
+"""Clusters of more eigenpairs are refined pair by pair (refine_eigenpairs): one shift serves a
+cluster, and the farther its members lie from it, the slower they converge."""
 
 
 def refine_eigenpairs(blocks: PeriodicBlocks, values: Array, right: Array, left: Array,
@@ -530,53 +419,213 @@ def refine_eigenpairs(blocks: PeriodicBlocks, values: Array, right: Array, left:
                       ) -> tuple[Array, Array, Array, Array]:
     """Every eigenpair of `blocks`' matrix refined from the guesses (values (n,), right vectors
     as columns, left vectors as rows l_i^H with l_i^H r_i = 1: spectra.Eigensystem's layout) by
-    at most `iterations` block two-sided Rayleigh quotient steps (fewer once each residual is
-    <= tol) on the clusters of pairs whose guesses are within reach of each other (clusters;
-    module docstring). Returns new (values, right, left, residual): |r_i| = 1, l_i^H r_i = 1,
-    residual_i = |A r_i - lambda_i r_i| (inf where a factorization failed or a cluster has
-    more than LARGEST_CLUSTER pairs)."""
+    at most `iterations` two-sided Rayleigh quotient steps (fewer once each residual is <= tol)
+    on the clusters of pairs whose guesses are within reach of each other (clusters; module
+    docstring): alone (also the members of a cluster larger than LARGEST_CLUSTER), in real
+    arithmetic where guess and vectors are real; in a cluster, with the cluster's mean as the
+    shift, then each member polished with its own. Any pair still above tol gets `iterations`
+    more steps alone with a pivoted banded LU (_pivoted_rqi). Where two pairs converged to one
+    eigenpair (_found_twice), one of them starts again from its guess with the converged pairs
+    near it deflated, for twice the iterations (up to ROUNDS times). Returns new (values, right, left,
+    residual): |r_i| = 1, l_i^H r_i = 1, residual_i = |A r_i - lambda_i r_i| (inf where a
+    factorization failed)."""
+    guess = (np.asarray(values, np.complex128), right, left)
     values = np.array(values, np.complex128)
     right = np.array(right, np.complex128)
     left = np.array(left, np.complex128)
-    starts, members = clusters(values, reach)
-    sizes = np.diff(starts)
-    alone = members[starts[:-1][sizes == 1]]
+    spans = clusters(values, np.asarray(reach, float))
+    grouped = [span for span in spans if 1 < span.size <= LARGEST_CLUSTER]
+    alone = np.setdiff1d(np.arange(values.size), np.concatenate(grouped + [np.zeros(0, np.int64)]))
     real = alone[(values[alone].imag == 0.0) & ~np.any(right[:, alone].imag, axis=0)
                  & ~np.any(left[alone].imag, axis=1)]
     residual = np.full(values.size, np.inf)
-    A = (blocks.diag, blocks.lower, blocks.upper)
     for picked, dtype in ((real, float), (np.setdiff1d(alone, real), complex)):
-        part = (values[picked], right[:, picked], left[picked])
-        v, r, lft = (a.real.copy() if dtype is float else a for a in part)
-        residual[picked] = _rqi_many(*A, v, r, lft, iterations, tol)
-        values[picked], right[:, picked], left[picked] = v, r, lft
-    grouped = np.flatnonzero(sizes > 1)
-    if grouped.size:
-        spans = [members[starts[c]:starts[c + 1]] for c in grouped]
-        group_starts = np.concatenate([[0], np.cumsum([span.size for span in spans])])
-        residual_grouped = _refine(*A, values, right, left, group_starts, np.concatenate(spans),
-                                   iterations, tol, LARGEST_CLUSTER)
-        together = np.concatenate(spans)
-        residual[together] = residual_grouped[together]
+        residual[picked] = _rqi(blocks, values, right, left, picked, iterations, tol, dtype)
+    for span in grouped:
+        residual[span] = _refine_cluster(blocks, values, right, left, span, iterations, tol)
+    rough = np.flatnonzero(residual > tol)  # a far guess, or pivot growth in the blocks' LU
+    if rough.size:
+        v, r, lft = values[rough], right[:, rough], left[rough]
+        again = _pivoted_rqi(blocks, v, r, lft, iterations, tol)
+        better = again < residual[rough]
+        values[rough[better]], right[:, rough[better]], left[rough[better]] = v[better], r[:, better], lft[better]
+        residual[rough[better]] = again[better]
+    for _ in range(ROUNDS):
+        twice = _found_twice(guess[0], values, right, left, residual)
+        for p in twice:
+            # from its guess again, the pairs found near it deflated: it finds the eigenvalue lost
+            near = np.argsort(np.abs(values - guess[0][p]))
+            near = near[(near != p) & np.isfinite(residual[near])][:DEFLATED]
+            v, r, lft = guess[0][[p]].copy(), guess[1][:, [p]].copy(), guess[2][[p]].copy()
+            again = _pivoted_rqi(blocks, v, r, lft, 2 * iterations, tol, (right[:, near], left[near]))
+            values[p], right[:, p], left[p], residual[p] = v[0], r[:, 0], lft[0], again[0]
+        if not twice.size:
+            break
     return values, right, left, residual
+
+
+DEFLATED = 16
+"""Pairs deflated when a pair found twice is refined again (refine_eigenpairs): the converged
+pairs nearest its guess."""
+
+ROUNDS = 3
+"""Rounds of refining again the pairs found twice (one may land on a third pair's eigenvalue)."""
+
+
+def _found_twice(guess: Array, values: Array, right: Array, left: Array, residual: Array) -> Array:
+    """Of every two pairs converged to one eigenpair (meeting discs kappa rho, |l_i^H r_j| >
+    1/2: one eigenvalue found twice, another lost), the one whose guess is farther from it."""
+    done = np.isfinite(residual)
+    bound = np.where(done, np.linalg.norm(left, axis=1) * np.where(done, residual, 0.0), 0.0)
+    i, j = touching(values, bound)
+    twice = np.abs(np.sum(left[i] * right[:, j].T, axis=1)) > 0.5
+    i, j = i[twice], j[twice]
+    farther = np.where(np.abs(guess[i] - values[i]) >= np.abs(guess[j] - values[j]), i, j)
+    return np.unique(farther)
+
+
+def _rqi(blocks: PeriodicBlocks, values: Array, right: Array, left: Array, picked: Array,
+         iterations: int, tol: float, dtype) -> Array:
+    """_rqi_many on the pairs `picked` in `dtype`, written back into values, right and left;
+    their residuals."""
+    part = (values[picked], right[:, picked], left[picked])
+    v, r, lft = (a.real.copy() if dtype is float else a for a in part)
+    residual = _rqi_many(blocks.diag, blocks.lower, blocks.upper, v, r, lft, iterations, tol)
+    values[picked], right[:, picked], left[picked] = v, r, lft
+    return residual
+
+
+def _refine_cluster(blocks: PeriodicBlocks, values: Array, right: Array, left: Array,
+                    idx: Array, iterations: int, tol: float) -> Array:
+    """Block two-sided Rayleigh quotient iteration of the cluster `idx` in place (module
+    docstring): the k right and k left vectors solved with one shift, the cluster's mean, and
+    the k x k projected problem's eigenpairs taken; then each member not yet within tol
+    polished by two steps with its own shift (the cluster's shift converges linearly, a
+    member's own cubically). Returns the members' residuals (inf, the cluster left as it was,
+    where a factorization failed)."""
+    N, b = blocks.diag.shape[:2]
+    factors, scratch, columns = _work(N, b, np.zeros(1, np.complex128))
+    x = np.empty((N, b), np.complex128)
+    A = (blocks.diag, blocks.lower, blocks.upper)
+
+    def solved(V: Array, transpose: bool) -> Array:
+        out = np.empty_like(V)
+        for j, v in enumerate(V):
+            _solve(blocks.lower, blocks.upper, v.reshape(N, b), transpose, x, *factors, *columns)
+            out[j] = x.ravel()
+        return out
+
+    X, Y, theta = right[:, idx].T.copy(), left[idx].copy(), values[idx].copy()  # rows: r_j, conj(l_j)
+    res = np.full(idx.size, np.inf)
+    for _ in range(iterations):
+        sigma = complex(theta.mean())
+        if not (_factor(*A, sigma, *factors, *scratch) or _factor(*A, nudged(sigma), *factors, *scratch)):
+            return res
+        X, Y = solved(X, False), solved(Y, True)
+        if not (np.isfinite(X).all() and np.isfinite(Y).all()):
+            return np.full(idx.size, np.inf)
+        X, Y = np.linalg.qr(X.T)[0].T, np.linalg.qr(Y.T)[0].T
+        G, H = Y @ X.T, Y @ np.array([blocks.matvec(v) for v in X]).T  # l_a^H x_j, l_a^H A x_j
+        theta, W = np.linalg.eig(np.linalg.solve(G, H))
+        X, Y = W.T @ X, np.linalg.solve(W, np.linalg.solve(G, Y))
+        norm = np.linalg.norm(X, axis=1)
+        X, Y = X / norm[:, None], Y * norm[:, None]  # |r| = 1, l^H r = 1
+        if not np.isfinite(theta).all():
+            return np.full(idx.size, np.inf)
+        res = np.linalg.norm(np.array([blocks.matvec(v) for v in X]) - theta[:, None] * X, axis=1)
+        if res.max() <= tol:
+            break
+    values[idx], right[:, idx], left[idx] = theta, X.T, Y
+    rough = idx[res > tol]
+    if rough.size:
+        v, r, lft = values[rough], right[:, rough], left[rough]
+        polished = _rqi_many(*A, v, r, lft, 2, tol)
+        better = polished < res[res > tol]
+        values[rough[better]], right[:, rough[better]], left[rough[better]] = v[better], r[:, better], lft[better]
+        res[np.flatnonzero(res > tol)[better]] = polished[better]
+    return res
+
+
+def nudged(sigma: complex) -> complex:
+    """A shift next to sigma (relative 1e-10, off the real axis), for a shifted matrix exactly
+    singular at sigma: sigma is then an eigenvalue to working precision (an exactly degenerate
+    pair, a mode decoupled from its neighbours), and inverse iteration with the nudged shift
+    still converges to it in one step."""
+    return sigma + 1e-10 * max(abs(sigma), 1.0) * (1.0 + 1.0j)
+
+
+def folded(N: int) -> Array:
+    """The block order 0, N - 1, 1, N - 2, 2, ...: in it each block's periodic neighbours are at
+    most two places away, so a periodic block-tridiagonal matrix becomes banded (3 b - 1
+    diagonals on each side)."""
+    order = np.empty(N, np.int64)
+    order[0::2], order[1::2] = np.arange((N + 1) // 2), N - 1 - np.arange(N // 2)
+    return order
+
+
+def _pivoted_rqi(blocks: PeriodicBlocks, values: Array, right: Array, left: Array,
+                 iterations: int, tol: float, deflated: Optional[tuple[Array, Array]] = None) -> Array:
+    """Two-sided Rayleigh quotient iteration of each pair alone, in place (complex; layout of
+    _rqi_many), the shifted solves by LAPACK's banded LU with partial pivoting (zgbtrf) of the
+    matrix in the folded order: stable where the blocks' LU without pivoting between blocks
+    grows (a shift near an eigenvalue of a leading sub-chain), at about three times its cost.
+    deflated: (right vectors as columns, left vectors as rows) of known eigenpairs projected
+    out of each iterate (x - R L^H x, l - L (R^T l) in the rows' conjugate layout), so that the
+    iteration finds another eigenvalue. Returns the residuals (inf where a factorization
+    failed)."""
+    N, b = blocks.diag.shape[:2]
+    n, kl = N * b, 3 * b - 1
+    perm = (b * folded(N)[:, None] + np.arange(b)).ravel()  # folded position -> unknown
+    A = sp.coo_array(blocks.sparse()[perm][:, perm])
+    band = np.zeros((3 * kl + 1, n), np.complex128)  # zgbtrf's layout: ab[2 kl + i - j, j] = M[i, j]
+    band[2 * kl + A.row - A.col, A.col] = A.data
+    residual = np.full(values.size, np.inf)
+    if deflated is not None:
+        known_r, known_l = deflated[0][perm], deflated[1][:, perm]
+    for p in range(values.size):
+        lam, r, lc = complex(values[p]), right[perm, p].astype(np.complex128), left[p, perm].astype(np.complex128)
+        res = np.inf
+        for _ in range(iterations):
+            for shift in (lam, nudged(lam)):
+                shifted = band.copy()
+                shifted[2 * kl] -= shift
+                lu, piv, info = zgbtrf(shifted, kl, kl)
+                if info == 0:
+                    break
+            if info != 0:
+                res = np.inf
+                break
+            r, info_r = zgbtrs(lu, kl, kl, r, piv)
+            lc, info_l = zgbtrs(lu, kl, kl, lc, piv, trans=1)
+            if deflated is not None:
+                r = r - known_r @ (known_l @ r)
+                lc = lc - (lc @ known_r) @ known_l
+            norm = np.linalg.norm(r)
+            overlap = np.sum(lc * r) / norm
+            if info_r or info_l or not (np.isfinite(norm) and norm > 0.0 and np.isfinite(overlap) and overlap != 0.0):
+                res = np.inf
+                break
+            r, lc = r / norm, lc / overlap
+            ar = A @ r
+            lam = complex(np.sum(lc * ar))
+            res = float(np.linalg.norm(ar - lam * r))
+            if res <= tol:
+                break
+        if np.isfinite(res):
+            residual[p], values[p] = res, lam
+            right[perm, p], left[p, perm] = r, lc
+    return residual
+
+
+def touching(values: Array, bounds: Array) -> tuple[Array, Array]:
+    """Index pairs (i < j) whose discs |z - values_i| <= bounds_i meet."""
+    values, bounds = np.asarray(values, np.complex128), np.asarray(bounds, float)
+    i, j = close_pairs(values, 2.0 * float(np.max(bounds, initial=0.0)))
+    meet = np.abs(values[i] - values[j]) <= bounds[i] + bounds[j]
+    return i[meet], j[meet]
 
 
 def separated(values: Array, bounds: Array) -> bool:
     """Whether the discs |z - values_i| <= bounds_i are pairwise disjoint: then each holds a
     different eigenvalue, and n of them hold the whole spectrum of an n x n matrix."""
-    return bool(_separated(np.asarray(values, np.complex128), np.asarray(bounds, float)))
-
-
-@numba.njit(cache=True)
-def _separated(values, bounds):
-    order = np.argsort(values.real)
-    n = values.size
-    for a in range(n):
-        i = order[a]
-        for c in range(a + 1, n):
-            j = order[c]
-            if values[j].real - values[i].real > bounds[i] + bounds[j]:
-                break  # sorted by real part: no later disc can reach disc i
-            if abs(values[i] - values[j]) <= bounds[i] + bounds[j]:
-                return False
-    return True
+    return touching(values, bounds)[0].size == 0
