@@ -134,26 +134,26 @@ def disk_major(N: int, b: int) -> Array:
 def _work(N, b, proto):
     """A factorization's arrays, of proto's dtype (real for a real shift): the pivot blocks'
     inverses P^-1, the multipliers G, T^-1 E and T^-T F^T (m, b, b), S^-1 (b, b), m = N - 1;
-    then _factor's scratch (e, ft, w, block) and _solve's (head, y, w1, tail)."""
+    then _factor's scratch (e, ft, w, block: (b, 2 b), _invert's) and _solve's (head, y, w1,
+    tail); nothing is allocated per block."""
     m = N - 1
     dtype = proto.dtype
     factors = (np.empty((m, b, b), dtype), np.empty((m, b, b), dtype), np.empty((m, b, b), dtype),
                np.empty((m, b, b), dtype), np.empty((b, b), dtype))
     scratch = (np.empty((m, b, b), dtype), np.empty((m, b, b), dtype), np.empty((m, b, b), dtype),
-               np.empty((b, b), dtype))
+               np.empty((b, 2 * b), dtype))
     columns = (np.empty((m, b, 1), dtype), np.empty((m, b, 1), dtype), np.empty((m, b, 1), dtype),
                np.empty(b, dtype))
     return factors, scratch, columns
 
 
 @numba.njit(cache=True)
-def _invert(a, out):
-    """out = a^-1 (b x b complex) by Gauss-Jordan with partial pivoting; False if singular."""
-    b = a.shape[0]
-    aug = np.empty((b, 2 * b), out.dtype)
+def _invert(aug, out):
+    """out = the inverse of the b x b matrix in aug[:, :b] by Gauss-Jordan with partial
+    pivoting, aug (b, 2 b) overwritten; False if singular."""
+    b = aug.shape[0]
     for i in range(b):
         for j in range(b):
-            aug[i, j] = a[i, j]
             aug[i, b + j] = 1.0 if i == j else 0.0
     for c in range(b):
         p, best = c, abs(aug[c, c])
@@ -247,8 +247,8 @@ def _tsolve(pinv, mult, upper, rhs, transpose, out, w):
 @numba.njit(cache=True)
 def _factor(diag, lower, upper, sigma, pinv, mult, z, zt, sinv, e, ft, w, block):
     """Factorize M = A - sigma I (module docstring) into the work arrays (e, ft, w: (m, b, b)
-    scratch; block: (b, b) scratch); False if a pivot block or the Schur complement is
-    singular."""
+    scratch; block: (b, 2 b) scratch, the pivot block in its left half); False if a pivot
+    block or the Schur complement is singular."""
     N, b = diag.shape[0], diag.shape[1]
     m = N - 1
     for k in range(m):
@@ -337,53 +337,318 @@ def _matvec(diag, lower, upper, x, y):
             y[k, i] = s
 
 
+BATCH = 16
+"""Pairs refined side by side by _rqi_many: every per-block loop runs over them innermost."""
+
+
+@numba.njit(cache=True)
+def _invert_batch(aug, out, ok, f):
+    """For each slot s: out[:, :, s] = the inverse of aug[:, :b, s] (Gauss-Jordan with partial
+    pivoting; aug (b, 2 b, K) overwritten); ok[s] = False where singular. f: (K,) scratch."""
+    b, K = aug.shape[0], aug.shape[2]
+    for i in range(b):
+        for j in range(b):
+            for s in range(K):
+                aug[i, b + j, s] = 1.0 if i == j else 0.0
+    for c in range(b):
+        for s in range(K):
+            p, best = c, abs(aug[c, c, s])
+            for r in range(c + 1, b):
+                if abs(aug[r, c, s]) > best:
+                    p, best = r, abs(aug[r, c, s])
+            if best == 0.0:
+                ok[s] = False
+                aug[c, c, s] = 1.0
+            elif p != c:
+                for j in range(2 * b):
+                    aug[c, j, s], aug[p, j, s] = aug[p, j, s], aug[c, j, s]
+            f[s] = 1.0 / aug[c, c, s]
+        for j in range(2 * b):
+            for s in range(K):
+                aug[c, j, s] *= f[s]
+        for r in range(b):
+            if r != c:
+                for s in range(K):
+                    f[s] = aug[r, c, s]
+                for j in range(2 * b):
+                    for s in range(K):
+                        aug[r, j, s] -= f[s] * aug[c, j, s]
+    for i in range(b):
+        for j in range(b):
+            for s in range(K):
+                out[i, j, s] = aug[i, b + j, s]
+
+
+@numba.njit(cache=True)
+def _tsolve_batch(P, G, upper, rhs, transpose, out, w):
+    """_tsolve for every slot: rhs, out, w (m, b, c, K)."""
+    m, b, ncol, K = rhs.shape
+    if not transpose:
+        for k in range(m):
+            for i in range(b):
+                for c in range(ncol):
+                    for s in range(K):
+                        w[k, i, c, s] = rhs[k, i, c, s]
+                    if k > 0:
+                        for j in range(b):
+                            for s in range(K):
+                                w[k, i, c, s] -= G[k, i, j, s] * w[k - 1, j, c, s]
+        for k in range(m - 1, -1, -1):
+            if k < m - 1:
+                for i in range(b):
+                    for j in range(b):
+                        u = upper[k, i, j]
+                        for c in range(ncol):
+                            for s in range(K):
+                                w[k, i, c, s] -= u * out[k + 1, j, c, s]
+            for i in range(b):
+                for c in range(ncol):
+                    for s in range(K):
+                        out[k, i, c, s] = 0.0
+                    for j in range(b):
+                        for s in range(K):
+                            out[k, i, c, s] += P[k, i, j, s] * w[k, j, c, s]
+    else:
+        for k in range(m):
+            for i in range(b):
+                for c in range(ncol):
+                    for s in range(K):
+                        out[k, i, c, s] = rhs[k, i, c, s]
+                    if k > 0:
+                        for j in range(b):
+                            u = upper[k - 1, j, i]
+                            for s in range(K):
+                                out[k, i, c, s] -= u * w[k - 1, j, c, s]
+            for i in range(b):
+                for c in range(ncol):
+                    for s in range(K):
+                        w[k, i, c, s] = 0.0
+                    for j in range(b):
+                        for s in range(K):
+                            w[k, i, c, s] += P[k, j, i, s] * out[k, j, c, s]
+        for k in range(m - 1, -1, -1):
+            for i in range(b):
+                for c in range(ncol):
+                    for s in range(K):
+                        out[k, i, c, s] = w[k, i, c, s]
+                    if k < m - 1:
+                        for j in range(b):
+                            for s in range(K):
+                                out[k, i, c, s] -= G[k + 1, j, i, s] * out[k + 1, j, c, s]
+
+
+@numba.njit(cache=True)
+def _factor_batch(diag, lower, upper, sigma, P, G, Z, ZT, S, E, FT, W, aug, ok, f):
+    """_factor for the shifts sigma (K,) side by side: P, G, Z, ZT (m, b, b, K), S (b, b, K);
+    E, FT, W (m, b, b, K) and aug (b, 2 b, K), f (K,) scratch; ok[s] False where slot s met a
+    singular pivot block or Schur complement."""
+    N, b, K = diag.shape[0], diag.shape[1], sigma.size
+    m = N - 1
+    ok[:] = True
+    for k in range(m):
+        for i in range(b):
+            for j in range(b):
+                d = diag[k, i, j]
+                for s in range(K):
+                    aug[i, j, s] = d
+            for s in range(K):
+                aug[i, i, s] -= sigma[s]
+        if k > 0:
+            for i in range(b):
+                for j in range(b):
+                    for s in range(K):
+                        G[k, i, j, s] = 0.0
+                    for t in range(b):
+                        low = lower[k, i, t]
+                        for s in range(K):
+                            G[k, i, j, s] += low * P[k - 1, t, j, s]
+            for i in range(b):
+                for j in range(b):
+                    for t in range(b):
+                        u = upper[k - 1, t, j]
+                        for s in range(K):
+                            aug[i, j, s] -= G[k, i, t, s] * u
+        _invert_batch(aug, P[k], ok, f)
+    E[:] = 0.0
+    FT[:] = 0.0
+    for i in range(b):
+        for j in range(b):
+            for s in range(K):
+                E[0, i, j, s] += lower[0, i, j]
+                E[m - 1, i, j, s] += upper[m - 1, i, j]
+                FT[0, i, j, s] += upper[N - 1, j, i]
+                FT[m - 1, i, j, s] += lower[N - 1, j, i]
+    _tsolve_batch(P, G, upper, E, False, Z, W)
+    _tsolve_batch(P, G, upper, FT, True, ZT, W)
+    for i in range(b):
+        for j in range(b):
+            for s in range(K):
+                aug[i, j, s] = diag[N - 1, i, j] - (sigma[s] if i == j else 0.0)
+            for t in range(b):
+                u, low = upper[N - 1, i, t], lower[N - 1, i, t]
+                for s in range(K):
+                    aug[i, j, s] -= u * Z[0, t, j, s] + low * Z[m - 1, t, j, s]
+    _invert_batch(aug, S, ok, f)
+
+
+@numba.njit(cache=True)
+def _solve_batch(lower, upper, rhs, transpose, out, P, G, Z, ZT, S, head, y, w1, tail):
+    """_solve for every slot: rhs, out (N, b, K); head, y, w1 (m, b, 1, K), tail (b, K)."""
+    N, b, K = rhs.shape
+    m = N - 1
+    for k in range(m):
+        for i in range(b):
+            for s in range(K):
+                head[k, i, 0, s] = rhs[k, i, s]
+    _tsolve_batch(P, G, upper, head, transpose, y, w1)
+    for i in range(b):
+        for s in range(K):
+            tail[i, s] = rhs[N - 1, i, s]
+        for t in range(b):
+            if transpose:
+                a, c = lower[0, t, i], upper[m - 1, t, i]
+            else:
+                a, c = upper[N - 1, i, t], lower[N - 1, i, t]
+            for s in range(K):
+                tail[i, s] -= a * y[0, t, 0, s] + c * y[m - 1, t, 0, s]
+    for i in range(b):
+        for s in range(K):
+            out[N - 1, i, s] = 0.0
+        for t in range(b):
+            for s in range(K):
+                out[N - 1, i, s] += (S[t, i, s] if transpose else S[i, t, s]) * tail[t, s]
+    for k in range(m):
+        for i in range(b):
+            for s in range(K):
+                out[k, i, s] = y[k, i, 0, s]
+            for t in range(b):
+                for s in range(K):
+                    out[k, i, s] -= (ZT[k, i, t, s] if transpose else Z[k, i, t, s]) * out[N - 1, t, s]
+
+
+@numba.njit(cache=True)
+def _matvec_batch(diag, lower, upper, x, y):
+    """y = A x for every slot, x and y (N, b, K)."""
+    N, b, K = x.shape
+    for k in range(N):
+        prev, nxt = (k - 1) % N, (k + 1) % N
+        for i in range(b):
+            for s in range(K):
+                y[k, i, s] = 0.0
+            for j in range(b):
+                d, low, u = diag[k, i, j], lower[k, i, j], upper[k, i, j]
+                for s in range(K):
+                    y[k, i, s] += d * x[k, j, s] + low * x[prev, j, s] + u * x[nxt, j, s]
+
+
 @numba.njit(cache=True)
 def _rqi_many(diag, lower, upper, values, right, left, iterations, tol):
     """Two-sided Rayleigh quotient iteration of each pair alone, in place, in the dtype of
     `right` (real pairs in real arithmetic, four times cheaper): values (k,), right (n, k)
-    columns, left (k, n) rows (conj(l) entries: l^H x = sum(left[j] * x)). Returns the
-    residuals (inf where a factorization failed)."""
+    columns, left (k, n) rows (conj(l) entries: l^H x = sum(left[j] * x)). BATCH pairs at a
+    time, each with its own shift, side by side in every loop (a slot whose pair is done takes
+    the next one). Returns the residuals (inf where a factorization failed)."""
     N, b = diag.shape[0], diag.shape[1]
     n, k = right.shape
-    factors, scratch, columns = _work(N, b, right[:1, 0])
-    r = np.empty((N, b), right.dtype)
-    lc = np.empty((N, b), right.dtype)
-    x = np.empty((N, b), right.dtype)
-    ax = np.empty((N, b), right.dtype)
+    m = N - 1
     residual = np.full(k, np.inf)
-    for p in range(k):
+    K = min(BATCH, k)
+    if K == 0:
+        return residual
+    dt = right.dtype
+    P, G = np.empty((m, b, b, K), dt), np.empty((m, b, b, K), dt)
+    Z, ZT = np.empty((m, b, b, K), dt), np.empty((m, b, b, K), dt)
+    E, FT, W = np.empty((m, b, b, K), dt), np.empty((m, b, b, K), dt), np.empty((m, b, b, K), dt)
+    S, aug, f = np.empty((b, b, K), dt), np.empty((b, 2 * b, K), dt), np.empty(K, dt)
+    head, y, w1, tail = (np.empty((m, b, 1, K), dt), np.empty((m, b, 1, K), dt),
+                         np.empty((m, b, 1, K), dt), np.empty((b, K), dt))
+    r, lc = np.zeros((N, b, K), dt), np.zeros((N, b, K), dt)
+    x, ax = np.empty((N, b, K), dt), np.empty((N, b, K), dt)
+    lam = np.zeros(K, dt)
+    ok = np.ones(K, np.bool_)
+    pair = np.full(K, -1)
+    steps = np.zeros(K, np.int64)
+    upcoming = 0
+    for s in range(K):
+        pair[s] = upcoming
+        upcoming += 1
+    for s in range(K):
+        p = pair[s]
         for t in range(n):
-            r[t // b, t % b] = right[t, p]
-            lc[t // b, t % b] = left[p, t]
-        lam = values[p]
-        res = np.inf
-        for _ in range(iterations):
-            if not _factor(diag, lower, upper, lam, *factors, *scratch):
-                res = np.inf
-                break
-            _solve(lower, upper, r, False, x, *factors, *columns)
-            r[:] = x
-            _solve(lower, upper, lc, True, x, *factors, *columns)
-            lc[:] = x
-            norm = np.sqrt(np.sum(np.abs(r) ** 2))
-            overlap = np.sum(lc * r) / norm
-            if not (np.isfinite(norm) and norm > 0.0 and np.isfinite(abs(overlap)) and overlap != 0.0):
-                res = np.inf
-                break
-            r /= norm
-            lc /= overlap
-            _matvec(diag, lower, upper, r, ax)
-            lam = np.sum(lc * ax)
-            res = np.sqrt(np.sum(np.abs(ax - lam * r) ** 2))
-            if res <= tol:
-                break
-        if not np.isfinite(res):
-            continue
-        residual[p] = res
-        values[p] = lam
-        for t in range(n):
-            right[t, p] = r[t // b, t % b]
-            left[p, t] = lc[t // b, t % b]
+            r[t // b, t % b, s] = right[t, p]
+            lc[t // b, t % b, s] = left[p, t]
+        lam[s] = values[p]
+    while True:
+        active = 0
+        for s in range(K):
+            if pair[s] >= 0:
+                active += 1
+        if active == 0:
+            break
+        _factor_batch(diag, lower, upper, lam, P, G, Z, ZT, S, E, FT, W, aug, ok, f)
+        _solve_batch(lower, upper, r, False, x, P, G, Z, ZT, S, head, y, w1, tail)
+        r[:] = x
+        _solve_batch(lower, upper, lc, True, x, P, G, Z, ZT, S, head, y, w1, tail)
+        lc[:] = x
+        for s in range(K):
+            if pair[s] < 0:
+                continue
+            norm, overlap = 0.0, 0.0 * lam[s]
+            for kk in range(N):
+                for i in range(b):
+                    norm += abs(r[kk, i, s]) ** 2
+                    overlap += lc[kk, i, s] * r[kk, i, s]
+            norm = np.sqrt(norm)
+            good = ok[s] and np.isfinite(norm) and norm > 0.0
+            if good:
+                overlap /= norm
+                good = np.isfinite(abs(overlap)) and overlap != 0.0
+            if good:
+                for kk in range(N):
+                    for i in range(b):
+                        r[kk, i, s] /= norm
+                        lc[kk, i, s] /= overlap
+            steps[s] += 1
+            if not good:
+                pair[s] = -2  # failed: its residual stays inf, its guess as it was
+        _matvec_batch(diag, lower, upper, r, ax)
+        for s in range(K):
+            p = pair[s]
+            if p == -1:
+                continue
+            done = p == -2
+            if not done:
+                q = 0.0 * lam[s]
+                for kk in range(N):
+                    for i in range(b):
+                        q += lc[kk, i, s] * ax[kk, i, s]
+                lam[s] = q
+                res = 0.0
+                for kk in range(N):
+                    for i in range(b):
+                        res += abs(ax[kk, i, s] - q * r[kk, i, s]) ** 2
+                res = np.sqrt(res)
+                if res <= tol or steps[s] >= iterations:
+                    residual[p] = res
+                    values[p] = q
+                    for t in range(n):
+                        right[t, p] = r[t // b, t % b, s]
+                        left[p, t] = lc[t // b, t % b, s]
+                    done = True
+            if done:  # the next pair into this slot
+                steps[s] = 0
+                if upcoming < k:
+                    p = upcoming
+                    upcoming += 1
+                    pair[s] = p
+                    for t in range(n):
+                        r[t // b, t % b, s] = right[t, p]
+                        lc[t // b, t % b, s] = left[p, t]
+                    lam[s] = values[p]
+                else:
+                    pair[s] = -1
+                    r[:, :, s] = 0.0
+                    lc[:, :, s] = 0.0
     return residual
 
 
@@ -422,7 +687,8 @@ def refine_eigenpairs(blocks: PeriodicBlocks, values: Array, right: Array, left:
     at most `iterations` two-sided Rayleigh quotient steps (fewer once each residual is <= tol)
     on the clusters of pairs whose guesses are within reach of each other (clusters; module
     docstring): alone (also the members of a cluster larger than LARGEST_CLUSTER), in real
-    arithmetic where guess and vectors are real; in a cluster, with the cluster's mean as the
+    arithmetic where guess and vectors are real, the lower member of a complex-conjugate pair
+    as the conjugate of the upper one; in a cluster, with the cluster's mean as the
     shift, then each member polished with its own. Any pair still above tol gets `iterations`
     more steps alone with a pivoted banded LU (_pivoted_rqi). Where two pairs converged to one
     eigenpair (_found_twice), one of them starts again from its guess with the converged pairs
@@ -439,8 +705,13 @@ def refine_eigenpairs(blocks: PeriodicBlocks, values: Array, right: Array, left:
     real = alone[(values[alone].imag == 0.0) & ~np.any(right[:, alone].imag, axis=0)
                  & ~np.any(left[alone].imag, axis=1)]
     residual = np.full(values.size, np.inf)
-    for picked, dtype in ((real, float), (np.setdiff1d(alone, real), complex)):
+    upper, lower = conjugate_pairs(values, np.setdiff1d(alone, real))
+    single = np.setdiff1d(np.setdiff1d(alone, real), np.concatenate([upper, lower]))
+    for picked, dtype in ((real, float), (np.concatenate([upper, single]), complex)):
         residual[picked] = _rqi(blocks, values, right, left, picked, iterations, tol, dtype)
+    # a real matrix: the lower member of a complex pair is the upper one's conjugate
+    values[lower], right[:, lower], left[lower] = values[upper].conj(), right[:, upper].conj(), left[upper].conj()
+    residual[lower] = residual[upper]
     for span in grouped:
         residual[span] = _refine_cluster(blocks, values, right, left, span, iterations, tol)
     rough = np.flatnonzero(residual > tol)  # a far guess, or pivot growth in the blocks' LU
@@ -482,6 +753,19 @@ def _found_twice(guess: Array, values: Array, right: Array, left: Array, residua
     i, j = i[twice], j[twice]
     farther = np.where(np.abs(guess[i] - values[i]) >= np.abs(guess[j] - values[j]), i, j)
     return np.unique(farther)
+
+
+def conjugate_pairs(values: Array, candidates: Array) -> tuple[Array, Array]:
+    """(upper, lower): the candidates with Im > 0 and, for each, the candidate whose value is
+    nearest its conjugate, where that match is mutual (each is the other's nearest) and
+    nearer than any other candidate; the others are in neither."""
+    if candidates.size < 2:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    z = values[candidates]
+    distance = np.abs(z[:, None] - z.conj()[None, :])  # |z_a - conj(z_b)|
+    nearest = np.argmin(distance, axis=1)
+    mutual = (nearest[nearest] == np.arange(z.size)) & (z.imag > 0) & (z[nearest].imag < 0)
+    return candidates[mutual], candidates[nearest[mutual]]
 
 
 def _rqi(blocks: PeriodicBlocks, values: Array, right: Array, left: Array, picked: Array,
