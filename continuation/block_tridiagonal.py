@@ -107,21 +107,19 @@ class PeriodicBlocks:
         return self.sparse().toarray()
 
     def solve(self, sigma: complex, rhs: Array, transpose: bool = False) -> Array:
-        """x with (A - sigma I) x = rhs (or its transpose), rhs (n,): one factorization."""
-        N, b = self.diag.shape[:2]
-        factors, scratch, columns = _work(N, b, np.zeros(1, np.complex128))
-        ok = _factor(self.diag, self.lower, self.upper, complex(sigma), *factors, *scratch)
-        x = np.empty((N, b), np.complex128)
-        _solve(self.lower, self.upper, np.asarray(rhs, np.complex128).reshape(N, b), transpose, x,
-               *factors, *columns)
-        return x.ravel() if ok else np.full(self.n, np.nan + 0j)
+        """x with (A - sigma I) x = rhs (or its transpose), rhs (n,): one factorization (nan
+        where a pivot block is singular)."""
+        shifted = Shifted(self, sigma)
+        return shifted.solve(rhs, transpose) if shifted.ok else np.full(self.n, np.nan + 0j)
 
-    def matvec(self, x: Array) -> Array:
-        """A x for x (n,), complex."""
+    def matvec(self, X: Array) -> Array:
+        """A X for X (n,) or (n, K), complex."""
         N, b = self.diag.shape[:2]
-        y = np.empty((N, b), np.complex128)
-        _matvec(self.diag, self.lower, self.upper, np.asarray(x, np.complex128).reshape(N, b), y)
-        return y.ravel()
+        X = np.asarray(X, np.complex128)
+        x = np.ascontiguousarray(X.reshape(self.n, -1)).reshape(N, b, -1)
+        y = np.empty_like(x)
+        _matvec(self.diag, self.lower, self.upper, x, y)
+        return y.reshape(X.shape)
 
 
 def disk_major(N: int, b: int) -> Array:
@@ -131,219 +129,50 @@ def disk_major(N: int, b: int) -> Array:
 
 
 @numba.njit(cache=True)
-def _work(N, b, proto):
-    """A factorization's arrays, of proto's dtype (real for a real shift): the pivot blocks'
-    inverses P^-1, the multipliers G, T^-1 E and T^-T F^T (m, b, b), S^-1 (b, b), m = N - 1;
-    then _factor's scratch (e, ft, w, block: (b, 2 b), _invert's) and _solve's (head, y, w1,
-    tail); nothing is allocated per block."""
+def _work(N, b, K, proto):
+    """The arrays of K shifted factorizations side by side, of proto's dtype (real for real
+    shifts): the pivot blocks' inverses P^-1, the multipliers G, T^-1 E and T^-T F^T (m, b, b,
+    K), S^-1 (b, b, K), m = N - 1; _factor's scratch E, F^T, W (m, b, b, K), aug (b, 2 b, K),
+    ok (K,), f (K,); _solve's head, y, w1 (m, b, 1, K) and tail (b, K)."""
     m = N - 1
-    dtype = proto.dtype
-    factors = (np.empty((m, b, b), dtype), np.empty((m, b, b), dtype), np.empty((m, b, b), dtype),
-               np.empty((m, b, b), dtype), np.empty((b, b), dtype))
-    scratch = (np.empty((m, b, b), dtype), np.empty((m, b, b), dtype), np.empty((m, b, b), dtype),
-               np.empty((b, 2 * b), dtype))
-    columns = (np.empty((m, b, 1), dtype), np.empty((m, b, 1), dtype), np.empty((m, b, 1), dtype),
-               np.empty(b, dtype))
+    dt = proto.dtype
+    factors = (np.empty((m, b, b, K), dt), np.empty((m, b, b, K), dt), np.empty((m, b, b, K), dt),
+               np.empty((m, b, b, K), dt), np.empty((b, b, K), dt))
+    scratch = (np.empty((m, b, b, K), dt), np.empty((m, b, b, K), dt), np.empty((m, b, b, K), dt),
+               np.empty((b, 2 * b, K), dt), np.ones(K, np.bool_), np.empty(K, dt))
+    columns = (np.empty((m, b, 1, K), dt), np.empty((m, b, 1, K), dt), np.empty((m, b, 1, K), dt),
+               np.empty((b, K), dt))
     return factors, scratch, columns
 
 
-@numba.njit(cache=True)
-def _invert(aug, out):
-    """out = the inverse of the b x b matrix in aug[:, :b] by Gauss-Jordan with partial
-    pivoting, aug (b, 2 b) overwritten; False if singular."""
-    b = aug.shape[0]
-    for i in range(b):
-        for j in range(b):
-            aug[i, b + j] = 1.0 if i == j else 0.0
-    for c in range(b):
-        p, best = c, abs(aug[c, c])
-        for r in range(c + 1, b):
-            if abs(aug[r, c]) > best:
-                p, best = r, abs(aug[r, c])
-        if best == 0.0:
-            return False
-        if p != c:
-            for j in range(2 * b):
-                aug[c, j], aug[p, j] = aug[p, j], aug[c, j]
-        piv = 1.0 / aug[c, c]
-        for j in range(2 * b):
-            aug[c, j] *= piv
-        for r in range(b):
-            if r != c and aug[r, c] != 0.0:
-                f = aug[r, c]
-                for j in range(2 * b):
-                    aug[r, j] -= f * aug[c, j]
-    for i in range(b):
-        for j in range(b):
-            out[i, j] = aug[i, b + j]
-    return True
+class Shifted:
+    """A - sigma I factorized (_factor with one shift), solved for any number of right-hand
+    sides (_solve, one at a time). ok: False where a pivot block or the Schur complement is
+    singular (the solutions are then not finite)."""
+
+    def __init__(self, blocks: "PeriodicBlocks", sigma: complex):
+        N, b = blocks.diag.shape[:2]
+        shift = np.array([sigma], np.complex128)
+        self.blocks, self.shape = blocks, (N, b, 1)
+        self.factors, self.scratch, self.columns = _work(N, b, 1, shift)
+        _factor(blocks.diag, blocks.lower, blocks.upper, shift, *self.factors, *self.scratch)
+        self.ok = bool(self.scratch[4][0])
+
+    def solve(self, rhs: Array, transpose: bool = False) -> Array:
+        """(A - sigma I)^-1 rhs (or with the transpose): rhs and the result (n,) or (n, k)."""
+        rhs = np.asarray(rhs, np.complex128)
+        out = np.empty(rhs.shape, np.complex128)
+        x = np.empty(self.shape, np.complex128)
+        for j, column in enumerate(rhs.reshape(rhs.shape[0], -1).T):
+            _solve(self.blocks.lower, self.blocks.upper, np.ascontiguousarray(column).reshape(self.shape),
+                   transpose, x, *self.factors, *self.columns)
+            out.reshape(rhs.shape[0], -1)[:, j] = x.ravel()
+        return out
 
 
 @numba.njit(cache=True)
-def _mul_sub(c, a, bmat, transpose_b):
-    """c -= a @ bmat (or a @ bmat^T), b x b."""
-    b = c.shape[0]
-    for i in range(b):
-        for j in range(b):
-            s = 0.0
-            for k in range(b):
-                s += a[i, k] * (bmat[j, k] if transpose_b else bmat[k, j])
-            c[i, j] -= s
-
-
-@numba.njit(cache=True)
-def _tsolve(pinv, mult, upper, rhs, transpose, out, w):
-    """out = T^-1 rhs (or T^-T rhs), rhs, out and the scratch w (m, b, c): c right-hand sides
-    at once."""
-    m, b, ncol = rhs.shape
-    if not transpose:
-        for k in range(m):  # L w = rhs, L unit lower block bidiagonal (mult)
-            for i in range(b):
-                for c in range(ncol):
-                    s = rhs[k, i, c]
-                    if k > 0:
-                        for j in range(b):
-                            s -= mult[k, i, j] * w[k - 1, j, c]
-                    w[k, i, c] = s
-        for k in range(m - 1, -1, -1):  # U x = w: U has pivots P_k and upper[k]
-            for i in range(b):
-                for c in range(ncol):
-                    s = w[k, i, c]
-                    if k < m - 1:
-                        for j in range(b):
-                            s -= upper[k, i, j] * out[k + 1, j, c]
-                    w[k, i, c] = s
-            for i in range(b):
-                for c in range(ncol):
-                    s = 0.0
-                    for j in range(b):
-                        s += pinv[k, i, j] * w[k, j, c]
-                    out[k, i, c] = s
-    else:
-        for k in range(m):  # U^T w = rhs
-            for i in range(b):
-                for c in range(ncol):
-                    s = rhs[k, i, c]
-                    if k > 0:
-                        for j in range(b):
-                            s -= upper[k - 1, j, i] * w[k - 1, j, c]
-                    out[k, i, c] = s
-            for i in range(b):
-                for c in range(ncol):
-                    s = 0.0
-                    for j in range(b):
-                        s += pinv[k, j, i] * out[k, j, c]
-                    w[k, i, c] = s
-        for k in range(m - 1, -1, -1):  # L^T x = w
-            for i in range(b):
-                for c in range(ncol):
-                    s = w[k, i, c]
-                    if k < m - 1:
-                        for j in range(b):
-                            s -= mult[k + 1, j, i] * out[k + 1, j, c]
-                    out[k, i, c] = s
-
-
-@numba.njit(cache=True)
-def _factor(diag, lower, upper, sigma, pinv, mult, z, zt, sinv, e, ft, w, block):
-    """Factorize M = A - sigma I (module docstring) into the work arrays (e, ft, w: (m, b, b)
-    scratch; block: (b, 2 b) scratch, the pivot block in its left half); False if a pivot
-    block or the Schur complement is singular."""
-    N, b = diag.shape[0], diag.shape[1]
-    m = N - 1
-    for k in range(m):
-        for i in range(b):
-            for j in range(b):
-                block[i, j] = diag[k, i, j]
-            block[i, i] -= sigma
-        if k > 0:
-            for i in range(b):  # G_k = lower[k] P_{k-1}^-1
-                for j in range(b):
-                    s = 0.0
-                    for t in range(b):
-                        s += lower[k, i, t] * pinv[k - 1, t, j]
-                    mult[k, i, j] = s
-            _mul_sub(block, mult[k], upper[k - 1], False)
-        if not _invert(block, pinv[k]):
-            return False
-    # E: block rows 0 (lower[0], the corner) and m - 1 (upper[m - 1]) of the last block column;
-    # F^T: the transposed last block row, block columns 0 (upper[N - 1], the corner), m - 1 (lower[N - 1])
-    e[0] = 0.0
-    e[m - 1] = 0.0
-    ft[0] = 0.0
-    ft[m - 1] = 0.0
-    for k in range(1, m - 1):
-        e[k] = 0.0
-        ft[k] = 0.0
-    for i in range(b):
-        for j in range(b):
-            e[0, i, j] += lower[0, i, j]
-            e[m - 1, i, j] += upper[m - 1, i, j]
-            ft[0, i, j] += upper[N - 1, j, i]
-            ft[m - 1, i, j] += lower[N - 1, j, i]
-    _tsolve(pinv, mult, upper, e, False, z, w)
-    _tsolve(pinv, mult, upper, ft, True, zt, w)
-    for i in range(b):  # S = M_ll - F T^-1 E
-        for j in range(b):
-            s = diag[N - 1, i, j] - (sigma if i == j else 0.0)
-            for t in range(b):
-                s -= upper[N - 1, i, t] * z[0, t, j] + lower[N - 1, i, t] * z[m - 1, t, j]
-            block[i, j] = s
-    return _invert(block, sinv)
-
-
-@numba.njit(cache=True)
-def _solve(lower, upper, rhs, transpose, out, pinv, mult, z, zt, sinv, head, y, w1, tail):
-    """out = M^-1 rhs (or M^-T rhs), rhs and out (N, b), with _factor's arrays (head, y, w1:
-    (m, b, 1) scratch; tail: (b,) scratch)."""
-    N, b = rhs.shape
-    m = N - 1
-    for k in range(m):
-        for i in range(b):
-            head[k, i, 0] = rhs[k, i]
-    _tsolve(pinv, mult, upper, head, transpose, y, w1)
-    for i in range(b):  # rhs_l - F y, or rhs_l - E^T y
-        s = rhs[N - 1, i]
-        for t in range(b):
-            if transpose:
-                s -= lower[0, t, i] * y[0, t, 0] + upper[m - 1, t, i] * y[m - 1, t, 0]
-            else:
-                s -= upper[N - 1, i, t] * y[0, t, 0] + lower[N - 1, i, t] * y[m - 1, t, 0]
-        tail[i] = s
-    for i in range(b):
-        s = 0.0
-        for t in range(b):
-            s += (sinv[t, i] if transpose else sinv[i, t]) * tail[t]
-        out[N - 1, i] = s
-    zz = zt if transpose else z
-    for k in range(m):
-        for i in range(b):
-            s = y[k, i, 0]
-            for t in range(b):
-                s -= zz[k, i, t] * out[N - 1, t]
-            out[k, i] = s
-
-
-@numba.njit(cache=True)
-def _matvec(diag, lower, upper, x, y):
-    """y = A x, x and y (N, b)."""
-    N, b = x.shape
-    for k in range(N):
-        prev, nxt = (k - 1) % N, (k + 1) % N
-        for i in range(b):
-            s = 0.0
-            for j in range(b):
-                s += diag[k, i, j] * x[k, j] + lower[k, i, j] * x[prev, j] + upper[k, i, j] * x[nxt, j]
-            y[k, i] = s
-
-
-BATCH = 16
-"""Pairs refined side by side by _rqi_many: every per-block loop runs over them innermost."""
-
-
-@numba.njit(cache=True)
-def _invert_batch(aug, out, ok, f):
-    """For each slot s: out[:, :, s] = the inverse of aug[:, :b, s] (Gauss-Jordan with partial
+def _invert(aug, out, ok, f):
+    """For each shift s: out[:, :, s] = the inverse of aug[:, :b, s] (Gauss-Jordan with partial
     pivoting; aug (b, 2 b, K) overwritten); ok[s] = False where singular. f: (K,) scratch."""
     b, K = aug.shape[0], aug.shape[2]
     for i in range(b):
@@ -380,8 +209,9 @@ def _invert_batch(aug, out, ok, f):
 
 
 @numba.njit(cache=True)
-def _tsolve_batch(P, G, upper, rhs, transpose, out, w):
-    """_tsolve for every slot: rhs, out, w (m, b, c, K)."""
+def _tsolve(P, G, upper, rhs, transpose, out, w):
+    """out = T^-1 rhs (or T^-T rhs) for each of the K factorizations (slot s, last index), c
+    right-hand sides each: rhs, out and the scratch w (m, b, c, K)."""
     m, b, ncol, K = rhs.shape
     if not transpose:
         for k in range(m):
@@ -438,10 +268,11 @@ def _tsolve_batch(P, G, upper, rhs, transpose, out, w):
 
 
 @numba.njit(cache=True)
-def _factor_batch(diag, lower, upper, sigma, P, G, Z, ZT, S, E, FT, W, aug, ok, f):
-    """_factor for the shifts sigma (K,) side by side: P, G, Z, ZT (m, b, b, K), S (b, b, K);
-    E, FT, W (m, b, b, K) and aug (b, 2 b, K), f (K,) scratch; ok[s] False where slot s met a
-    singular pivot block or Schur complement."""
+def _factor(diag, lower, upper, sigma, P, G, Z, ZT, S, E, FT, W, aug, ok, f):
+    """Factorize M_s = A - sigma_s I (module docstring) for the shifts sigma (K,) side by side,
+    every loop over them innermost: P, G, Z, ZT (m, b, b, K), S (b, b, K); E, FT, W (m, b, b,
+    K), aug (b, 2 b, K) and f (K,) scratch (_work); ok[s] False where shift s met a singular
+    pivot block or Schur complement."""
     N, b, K = diag.shape[0], diag.shape[1], sigma.size
     m = N - 1
     ok[:] = True
@@ -468,7 +299,7 @@ def _factor_batch(diag, lower, upper, sigma, P, G, Z, ZT, S, E, FT, W, aug, ok, 
                         u = upper[k - 1, t, j]
                         for s in range(K):
                             aug[i, j, s] -= G[k, i, t, s] * u
-        _invert_batch(aug, P[k], ok, f)
+        _invert(aug, P[k], ok, f)
     E[:] = 0.0
     FT[:] = 0.0
     for i in range(b):
@@ -478,8 +309,8 @@ def _factor_batch(diag, lower, upper, sigma, P, G, Z, ZT, S, E, FT, W, aug, ok, 
                 E[m - 1, i, j, s] += upper[m - 1, i, j]
                 FT[0, i, j, s] += upper[N - 1, j, i]
                 FT[m - 1, i, j, s] += lower[N - 1, j, i]
-    _tsolve_batch(P, G, upper, E, False, Z, W)
-    _tsolve_batch(P, G, upper, FT, True, ZT, W)
+    _tsolve(P, G, upper, E, False, Z, W)
+    _tsolve(P, G, upper, FT, True, ZT, W)
     for i in range(b):
         for j in range(b):
             for s in range(K):
@@ -488,19 +319,20 @@ def _factor_batch(diag, lower, upper, sigma, P, G, Z, ZT, S, E, FT, W, aug, ok, 
                 u, low = upper[N - 1, i, t], lower[N - 1, i, t]
                 for s in range(K):
                     aug[i, j, s] -= u * Z[0, t, j, s] + low * Z[m - 1, t, j, s]
-    _invert_batch(aug, S, ok, f)
+    _invert(aug, S, ok, f)
 
 
 @numba.njit(cache=True)
-def _solve_batch(lower, upper, rhs, transpose, out, P, G, Z, ZT, S, head, y, w1, tail):
-    """_solve for every slot: rhs, out (N, b, K); head, y, w1 (m, b, 1, K), tail (b, K)."""
+def _solve(lower, upper, rhs, transpose, out, P, G, Z, ZT, S, head, y, w1, tail):
+    """out[..., s] = M_s^-1 rhs[..., s] (or M_s^-T) for each factorization s: rhs, out (N, b, K);
+    head, y, w1 (m, b, 1, K), tail (b, K) scratch (_work)."""
     N, b, K = rhs.shape
     m = N - 1
     for k in range(m):
         for i in range(b):
             for s in range(K):
                 head[k, i, 0, s] = rhs[k, i, s]
-    _tsolve_batch(P, G, upper, head, transpose, y, w1)
+    _tsolve(P, G, upper, head, transpose, y, w1)
     for i in range(b):
         for s in range(K):
             tail[i, s] = rhs[N - 1, i, s]
@@ -527,8 +359,8 @@ def _solve_batch(lower, upper, rhs, transpose, out, P, G, Z, ZT, S, head, y, w1,
 
 
 @numba.njit(cache=True)
-def _matvec_batch(diag, lower, upper, x, y):
-    """y = A x for every slot, x and y (N, b, K)."""
+def _matvec(diag, lower, upper, x, y):
+    """y = A x for K vectors at once, x and y (N, b, K)."""
     N, b, K = x.shape
     for k in range(N):
         prev, nxt = (k - 1) % N, (k + 1) % N
@@ -541,6 +373,11 @@ def _matvec_batch(diag, lower, upper, x, y):
                     y[k, i, s] += d * x[k, j, s] + low * x[prev, j, s] + u * x[nxt, j, s]
 
 
+BATCH = 16
+"""Pairs refined side by side by _rqi_many (each with its own shift, every per-block loop over
+them innermost; 16 was the fastest of 8, 16, 32, 64 at N = 1000)."""
+
+
 @numba.njit(cache=True)
 def _rqi_many(diag, lower, upper, values, right, left, iterations, tol):
     """Two-sided Rayleigh quotient iteration of each pair alone, in place, in the dtype of
@@ -550,22 +387,15 @@ def _rqi_many(diag, lower, upper, values, right, left, iterations, tol):
     the next one). Returns the residuals (inf where a factorization failed)."""
     N, b = diag.shape[0], diag.shape[1]
     n, k = right.shape
-    m = N - 1
     residual = np.full(k, np.inf)
     K = min(BATCH, k)
     if K == 0:
         return residual
     dt = right.dtype
-    P, G = np.empty((m, b, b, K), dt), np.empty((m, b, b, K), dt)
-    Z, ZT = np.empty((m, b, b, K), dt), np.empty((m, b, b, K), dt)
-    E, FT, W = np.empty((m, b, b, K), dt), np.empty((m, b, b, K), dt), np.empty((m, b, b, K), dt)
-    S, aug, f = np.empty((b, b, K), dt), np.empty((b, 2 * b, K), dt), np.empty(K, dt)
-    head, y, w1, tail = (np.empty((m, b, 1, K), dt), np.empty((m, b, 1, K), dt),
-                         np.empty((m, b, 1, K), dt), np.empty((b, K), dt))
+    (P, G, Z, ZT, S), (E, FT, W, aug, ok, f), (head, y, w1, tail) = _work(N, b, K, right[:1, 0])
     r, lc = np.zeros((N, b, K), dt), np.zeros((N, b, K), dt)
     x, ax = np.empty((N, b, K), dt), np.empty((N, b, K), dt)
     lam = np.zeros(K, dt)
-    ok = np.ones(K, np.bool_)
     pair = np.full(K, -1)
     steps = np.zeros(K, np.int64)
     upcoming = 0
@@ -585,10 +415,10 @@ def _rqi_many(diag, lower, upper, values, right, left, iterations, tol):
                 active += 1
         if active == 0:
             break
-        _factor_batch(diag, lower, upper, lam, P, G, Z, ZT, S, E, FT, W, aug, ok, f)
-        _solve_batch(lower, upper, r, False, x, P, G, Z, ZT, S, head, y, w1, tail)
+        _factor(diag, lower, upper, lam, P, G, Z, ZT, S, E, FT, W, aug, ok, f)
+        _solve(lower, upper, r, False, x, P, G, Z, ZT, S, head, y, w1, tail)
         r[:] = x
-        _solve_batch(lower, upper, lc, True, x, P, G, Z, ZT, S, head, y, w1, tail)
+        _solve(lower, upper, lc, True, x, P, G, Z, ZT, S, head, y, w1, tail)
         lc[:] = x
         for s in range(K):
             if pair[s] < 0:
@@ -611,7 +441,7 @@ def _rqi_many(diag, lower, upper, values, right, left, iterations, tol):
             steps[s] += 1
             if not good:
                 pair[s] = -2  # failed: its residual stays inf, its guess as it was
-        _matvec_batch(diag, lower, upper, r, ax)
+        _matvec(diag, lower, upper, r, ax)
         for s in range(K):
             p = pair[s]
             if p == -1:
@@ -787,43 +617,34 @@ def _refine_cluster(blocks: PeriodicBlocks, values: Array, right: Array, left: A
     polished by two steps with its own shift (the cluster's shift converges linearly, a
     member's own cubically). Returns the members' residuals (inf, the cluster left as it was,
     where a factorization failed)."""
-    N, b = blocks.diag.shape[:2]
-    factors, scratch, columns = _work(N, b, np.zeros(1, np.complex128))
-    x = np.empty((N, b), np.complex128)
-    A = (blocks.diag, blocks.lower, blocks.upper)
-
-    def solved(V: Array, transpose: bool) -> Array:
-        out = np.empty_like(V)
-        for j, v in enumerate(V):
-            _solve(blocks.lower, blocks.upper, v.reshape(N, b), transpose, x, *factors, *columns)
-            out[j] = x.ravel()
-        return out
-
     X, Y, theta = right[:, idx].T.copy(), left[idx].copy(), values[idx].copy()  # rows: r_j, conj(l_j)
     res = np.full(idx.size, np.inf)
     for _ in range(iterations):
         sigma = complex(theta.mean())
-        if not (_factor(*A, sigma, *factors, *scratch) or _factor(*A, nudged(sigma), *factors, *scratch)):
-            return res
-        X, Y = solved(X, False), solved(Y, True)
+        shifted = Shifted(blocks, sigma)
+        if not shifted.ok:
+            shifted = Shifted(blocks, nudged(sigma))
+            if not shifted.ok:
+                return res
+        X, Y = shifted.solve(X.T).T, shifted.solve(Y.T, transpose=True).T
         if not (np.isfinite(X).all() and np.isfinite(Y).all()):
             return np.full(idx.size, np.inf)
         X, Y = np.linalg.qr(X.T)[0].T, np.linalg.qr(Y.T)[0].T
-        G, H = Y @ X.T, Y @ np.array([blocks.matvec(v) for v in X]).T  # l_a^H x_j, l_a^H A x_j
+        G, H = Y @ X.T, Y @ blocks.matvec(X.T)  # l_a^H x_j, l_a^H A x_j
         theta, W = np.linalg.eig(np.linalg.solve(G, H))
         X, Y = W.T @ X, np.linalg.solve(W, np.linalg.solve(G, Y))
         norm = np.linalg.norm(X, axis=1)
         X, Y = X / norm[:, None], Y * norm[:, None]  # |r| = 1, l^H r = 1
         if not np.isfinite(theta).all():
             return np.full(idx.size, np.inf)
-        res = np.linalg.norm(np.array([blocks.matvec(v) for v in X]) - theta[:, None] * X, axis=1)
+        res = np.linalg.norm(blocks.matvec(X.T).T - theta[:, None] * X, axis=1)
         if res.max() <= tol:
             break
     values[idx], right[:, idx], left[idx] = theta, X.T, Y
     rough = idx[res > tol]
     if rough.size:
         v, r, lft = values[rough], right[:, rough], left[rough]
-        polished = _rqi_many(*A, v, r, lft, 2, tol)
+        polished = _rqi_many(blocks.diag, blocks.lower, blocks.upper, v, r, lft, 2, tol)
         better = polished < res[res > tol]
         values[rough[better]], right[:, rough[better]], left[rough[better]] = v[better], r[:, better], lft[better]
         res[np.flatnonzero(res > tol)[better]] = polished[better]
