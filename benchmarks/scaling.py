@@ -13,10 +13,13 @@ even inside a step), prints how far it got (the last accepted F_x) and is left o
 Run: python benchmarks/scaling.py [--N 10,20,40,100,200,400,1000] [--budget 600]
                                   [--exhaustive-up-to 100] [--eps 1e-4,0]
                                   [--window-N 1000 --window 0.0715:0.08] [--workers K]
-                                  [--spectra cpu|gpu|auto[,...]]
+                                  [--spectra cpu|gpu|auto[,...]] [--refine-from n|inf[,...]]
 With --window-N, also a run tracking only that spectral window (bifurcate --window; lambda / k_n)
 at each of those N. --spectra: where the dense spectra run (bifurcate --spectra; default auto);
-with several, each fast run is repeated for each and compared with the first.
+with several, each fast run is repeated for each and compared with the first. --refine-from:
+the n from which full spectra are refined from the previous sample's (continuation/refinement.py;
+inf: never), several compared the same way; "refined + declined" counts the full spectra so
+refined and the refinements whose certificate failed (a dense spectrum was taken instead).
 """
 from __future__ import annotations
 
@@ -32,6 +35,7 @@ CHILD = r"""
 import json, resource, signal, sys, time
 from diskfriction.continuation.collisions import DetectionParams
 from diskfriction.disks.equilibria import DiskEquilibria
+from diskfriction.continuation import refinement
 from diskfriction.continuation.linalg import measured
 from diskfriction.continuation.scans import default_workers
 from diskfriction.continuation.spectra import spectra_on
@@ -47,6 +51,7 @@ window = None if sys.argv[5] == "-" else tuple(float(w) * unit for w in sys.argv
 workers = None if sys.argv[6] == "auto" else int(sys.argv[6])
 DEVICE = spectra_on(sys.argv[7])  # held for the whole child process (a dropped one restores "auto")
 DEVICE.__enter__()
+refinement.REFINE_FROM = float(sys.argv[8])
 system = System.from_scene(scene)
 reached = {"F_x": 0.0}
 
@@ -85,7 +90,7 @@ with measured() as work:
         out.update(done=False, points=None, collisions=None)
 signal.alarm(0)
 out.update(seconds=time.perf_counter() - t0, reached=reached["F_x"], spectra=work.spectra,
-           partial=work.spectra_partial, factorizations=work.factorizations, solves=work.solves,
+           partial=work.spectra_partial, refined=work.spectra_refined, declined=work.refinements_declined, factorizations=work.factorizations, solves=work.solves,
            peak_mb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
            worker_mb=resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024)
 print(json.dumps(out))
@@ -93,26 +98,32 @@ print(json.dumps(out))
 
 
 def run(N: int, eps: float, mode: str, budget: float, window: str = "-", workers: str = "auto",
-        spectra: str = "auto") -> dict:
+        spectra: str = "auto", refine_from: str = "default") -> dict:
+    from diskfriction.continuation.refinement import REFINE_FROM
+
+    refine = str(REFINE_FROM) if refine_from == "default" else refine_from
     proc = subprocess.run([sys.executable, "-c", CHILD, str(N), str(eps), mode, str(budget), window, workers,
-                           spectra], capture_output=True, text=True)
+                           spectra, refine], capture_output=True, text=True)
     if proc.returncode != 0:
         return {"N": N, "eps": eps, "mode": mode, "done": False,
                 "error": proc.stderr.strip().splitlines()[-1] if proc.stderr else "failed"}
     return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
-def row(r: dict, spectra: str = "auto") -> str:
-    """A table row; the detection column names the spectra's device unless it is "auto"."""
+def row(r: dict, spectra: str = "auto", refine_from: str = "default") -> str:
+    """A table row; the detection column names the spectra's device unless it is "auto", and
+    the refinement's threshold unless it is the default."""
     if spectra != "auto":
         r = dict(r, mode=f"{r['mode']}, spectra {spectra}")
+    if refine_from != "default":
+        r = dict(r, mode=f"{r['mode']}, refine from n = {refine_from}")
     if "error" in r:
         return f"| {r['N']} | {r['eps']:g} | {r['mode']} | failed: {r['error']} |"
     coll = "-" if r["collisions"] is None else len(r["collisions"])
     status = "0.12" if r["done"] else f"stopped at F_x = {r['reached']:.4g}"
     memory = f"{r['peak_mb']:.0f}" + (f" + {r['workers']} x {r['worker_mb']:.0f}" if r["workers"] else "")
     return (f"| {r['N']} | {r['eps']:g} | {r['mode']} | {r['workers']} | {r['seconds']:.1f} | {status} | "
-            f"{r['spectra']} + {r['partial']} | {r['factorizations']} | {r['solves']} | {coll} | {memory} |")
+            f"{r['spectra']} + {r['partial']} | {r['refined']} + {r['declined']} | {r['factorizations']} | {r['solves']} | {coll} | {memory} |")
 
 
 def agreement(fast: dict, exhaustive: dict) -> str:
@@ -137,25 +148,29 @@ def main() -> None:
     ap.add_argument("--window", default="0.0715:0.08", help="LO:HI in lambda / k_n")
     ap.add_argument("--workers", default="auto", help="scan workers of the fast detection (auto: the sweep's choice)")
     ap.add_argument("--spectra", default="auto", help="cpu, gpu or auto; several (gpu,cpu): each fast run for each")
+    ap.add_argument("--refine-from", default="default",
+                    help="n from which full spectra are refined (refinement.REFINE_FROM; inf: never); several: "
+                         "each fast run for each")
     args = ap.parse_args()
-    devices = args.spectra.split(",")
+    devices, refines = args.spectra.split(","), args.refine_from.split(",")
     sizes = [int(n) for n in args.N.split(",") if n]
     eps_values = [float(e) for e in args.eps.split(",")]
     print(f"{time.strftime('%Y-%m-%d %H:%M')}, load average {open('/proc/loadavg').read().split()[0]}")
-    print("| N | eps | detection | workers | s | reached | spectra full + partial | LU | solves | collisions | "
-          "peak MB (sweep + workers x largest) |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    print("| N | eps | detection | workers | s | reached | spectra full + partial | refined + declined | LU | "
+          "solves | collisions | peak MB (sweep + workers x largest) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     results = {}
     for N in [int(n) for n in args.window_N.split(",") if n]:
         print(row(run(N, eps_values[0], "fast", args.budget, args.window, args.workers)), flush=True)
     for eps in eps_values:
         for N in sizes:
+            variants = [(device, refine) for device in devices for refine in refines]
             r = results[(N, eps, "fast")] = run(N, eps, "fast", args.budget, workers=args.workers,
-                                                 spectra=devices[0])
-            print(row(r, devices[0]), flush=True)
-            for device in devices[1:]:
-                other = run(N, eps, "fast", args.budget, workers=args.workers, spectra=device)
-                print(row(other, device) + f" {agreement(other, r)}", flush=True)
+                                                 spectra=devices[0], refine_from=refines[0])
+            print(row(r, *variants[0]), flush=True)
+            for device, refine in variants[1:]:
+                other = run(N, eps, "fast", args.budget, workers=args.workers, spectra=device, refine_from=refine)
+                print(row(other, device, refine) + f" {agreement(other, r)}", flush=True)
             if eps and N <= args.exhaustive_up_to:
                 e = results[(N, eps, "exhaustive")] = run(N, eps, "exhaustive", args.budget)
                 print(row(e) + f" {agreement(r, e)}", flush=True)

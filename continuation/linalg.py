@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
-from dataclasses import dataclass
+from dataclasses import astuple, dataclass, fields
 from typing import Optional, Union
 
 import numpy as np
@@ -38,20 +38,24 @@ Matrix = Union[Array, sp.spmatrix, sp.sparray]
 @dataclass
 class Work:
     """What the core spent: full eigendecompositions (dense, O(n^3)), partial ones (a few
-    eigenvalues near a shift: nearest.py), LU factorizations and triangular solves. Printed
-    by benchmarks/scaling.py."""
+    eigenvalues near a shift: nearest.py), LU factorizations and triangular solves; full
+    spectra refined from a nearby sample's instead of decomposed, and refinements declined by
+    their certificate (refinement.py; a dense spectrum was taken instead). Printed by
+    benchmarks/scaling.py."""
 
     spectra: int = 0
     spectra_partial: int = 0
     factorizations: int = 0
     solves: int = 0
+    spectra_refined: int = 0
+    refinements_declined: int = 0
 
-    def counts(self) -> tuple[int, int, int, int]:
-        return self.spectra, self.spectra_partial, self.factorizations, self.solves
+    def counts(self) -> tuple[int, ...]:
+        return astuple(self)
 
-    def add(self, counts: tuple[int, int, int, int]) -> None:
-        self.spectra, self.spectra_partial, self.factorizations, self.solves = (
-            a + b for a, b in zip(self.counts(), counts))
+    def add(self, counts: tuple[int, ...]) -> None:
+        for f, n in zip(fields(self), counts):
+            setattr(self, f.name, getattr(self, f.name) + n)
 
 
 _LEDGER = Work()
@@ -64,7 +68,7 @@ def book(kind: str, n: int = 1) -> None:
     setattr(_LEDGER, kind, getattr(_LEDGER, kind) + n)
 
 
-def book_counts(counts: tuple[int, int, int, int]) -> None:
+def book_counts(counts: tuple[int, ...]) -> None:
     """Add the counts of work done elsewhere (a scan worker's, ScanOutcome.spent)."""
     _LEDGER.add(counts)
 

@@ -30,6 +30,11 @@ Optional hooks (defaults below):
     eigensystem(u, p, vectors) -> spectra.Eigensystem of A(u, p); default LAPACK dgeev of the
         dense A. Override to exclude exactly decoupled modes from detection or to use a faster
         solver for the same matrix.
+    stability_blocks(u, p) -> block_tridiagonal.PeriodicBlocks of A(u, p) or None (default):
+        where A is periodic block-tridiagonal (the disk chain), full spectra from n =
+        refinement.REFINE_FROM are refined from the previous sample's instead of decomposed
+        (refinement.py). Only for a problem whose eigensystem() is A's whole spectrum, none
+        excluded.
     dense_spectra() -> bool: whether eigensystem() takes dense spectra (spectra.eigensystem,
         which may run on a GPU); default True. A problem that tracks a spectral window returns
         False: its scans may then run on workers whatever device the dense spectra use.
@@ -102,6 +107,11 @@ class Problem(ABC):
     def dense_spectra(self) -> bool:
         """Whether eigensystem() takes dense spectra (spectra.eigensystem); True by default."""
         return True
+
+    def stability_blocks(self, u: Array, p: float):
+        """A(u, p) as periodic blocks (block_tridiagonal.PeriodicBlocks), or None: no such
+        structure (the default)."""
+        return None
 
     def spectrum(self, u: Array, p: float) -> Array:
         """All eigenvalues of A(u, p) (complex array, any order)."""

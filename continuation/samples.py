@@ -27,6 +27,7 @@ from .certify import inconsistent_labels, nearest_gaps
 from .linalg import book
 from .nearest import ShiftInvertFailed, nearest_eigensystem
 from .problem import Problem
+from .refinement import refinable, refined_eigensystem
 from .spectra import (Eigensystem, eigen_status, eigenvalue_slopes, imag_threshold, match_eigenvalues,
                       status_at)
 
@@ -341,11 +342,14 @@ def make_sample(s: float, x: Array, system: Eigensystem, rel_tol: float,
 def sample_at(problem: Problem, s: float, x: Array, rel_tol: float, reference: Optional[Sample],
               tangent: Optional[Array] = None, side: int = 0) -> Sample:
     """The sample of the branch point x: eigenvalues only (tangent None), or the eigensystem
-    with vectors and the slopes along `tangent` (matrix_derivative on `side`)."""
+    with vectors and the slopes along `tangent` (matrix_derivative on `side`); that eigensystem
+    refined from `reference`'s where refinement.py can and certifies it, else decomposed."""
     u, p = x[:-1], float(x[-1])
     if tangent is None:
         return make_sample(s, x, problem.eigensystem(u, p), rel_tol, reference)
-    system = problem.eigensystem(u, p, vectors=True)
+    system = refined_eigensystem(problem, x, reference) if refinable(problem, reference) else None
+    if system is None:
+        system = problem.eigensystem(u, p, vectors=True)
     dA = matrix_derivative(problem, x, tangent, side)
     return make_sample(s, x, system, rel_tol, reference, tangent, eigenvalue_slopes(system, dA), dA)
 

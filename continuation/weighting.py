@@ -64,6 +64,9 @@ class Weighted(Problem):
     def dense_spectra(self) -> bool:
         return self.inner.dense_spectra()
 
+    def stability_blocks(self, y, p):
+        return self.inner.stability_blocks(self.u(y), p)
+
     def derivative_step(self, x: Array) -> float:
         """The inner step, times s: a unit direction in y moves u by up to 1 / s."""
         return self.inner.derivative_step(np.append(self.u(x[:-1]), x[-1])) * self.s

@@ -52,6 +52,7 @@ import scipy.sparse as sp
 from diskfriction.continuation.linalg import SingularMatrix, dense, solve
 from diskfriction.continuation.problem import Problem
 from diskfriction.continuation.spectra import Eigensystem, eigensystem
+from diskfriction.continuation.block_tridiagonal import PeriodicBlocks, disk_major
 from diskfriction.continuation.spectral_window import Window, sized, widened, window_eigensystem
 from diskfriction.matrices import Matrix
 from diskfriction.symbolic import System
@@ -243,6 +244,17 @@ class DiskEquilibria(Problem):
     def dense_spectra(self) -> bool:
         """Dense spectra unless a spectral window is tracked (eigensystem)."""
         return self.window is None
+
+    def stability_blocks(self, q, F_x) -> PeriodicBlocks | None:
+        """The stability matrix as periodic blocks, one D x D block per disk (each disk couples
+        to its neighbours, disk N to disk 1: symbolic/system.py), for refined full spectra
+        (continuation/refinement.py); None with a spectral window, a free disk (its modes are
+        excluded from the spectrum) or N < 3."""
+        N = self.system.scene.N
+        if self.window is not None or self.free or N < 3:
+            return None
+        D = self.system.ndof // N
+        return PeriodicBlocks.from_matrix(self.stability_matrix(q, F_x), D, disk_major(N, D))
 
     def _window_eigensystem(self, q, F_x, vectors: bool) -> Eigensystem:
         """The spectral window's eigenvalues (spectral_window.py; its k fixed at the start state,

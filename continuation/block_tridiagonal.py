@@ -1,0 +1,736 @@
+"""Periodic block-tridiagonal matrices: shifted solves in O(N b^3) and eigenpair refinement
+(issue 26 item 1, the eigenpair continuation's kernel).
+
+A matrix of N x N blocks of size b with blocks only on the diagonal, the first off-diagonals
+and the two periodic corners (the disk chain's stability matrix: each disk couples to its two
+neighbours, disk N to disk 1):
+
+    row k:   lower[k] x[k-1] + diag[k] x[k] + upper[k] x[k+1] = rhs[k],   indices mod N.
+
+Shifted solves. M = A - sigma I (sigma complex) is factorized with the last block row and
+column as a border: T (the first N - 1 block rows and columns) is block tridiagonal without
+corners, factorized by block LU without pivoting between blocks (partial pivoting inside each
+b x b block), and the border by its Schur complement S = M_ll - F T^-1 E (E: the last block
+column, nonzero in block rows 0 and N - 2; F: the last block row). Solves with M and with M^T
+each cost O(N b^2) after the factorization. No pivoting between blocks: where a leading
+block of T is singular for the shift (a pivot block exactly singular) the factorization gives
+non-finite values and the caller falls back to a dense solve (refine_eigenpairs marks the
+pair unconverged).
+
+Eigenpair refinement. Two-sided Rayleigh quotient iteration (Ostrowski; Parlett 1974) from a
+guess (lambda, r, l) with l^H r = 1:
+
+    M = A - lambda I,   r <- M^-1 r,   l <- M^-H l,   scale so |r| = 1 and l^H r = 1,
+    lambda <- l^H A r,
+
+cubically convergent for a simple eigenvalue. Each iteration is one factorization and two
+solves, O(N b^3) per eigenpair; all eigenpairs are refined in one compiled loop. The residual
+|A r - lambda r| (|r| = 1) and kappa = |l| |r| / |l^H r| bound the eigenvalue's error to first
+order by kappa |A r - lambda r| (Wilkinson).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Optional
+
+import numba
+import numpy as np
+import scipy.sparse as sp
+from scipy.linalg.lapack import zgbtrf, zgbtrs
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+Array = np.ndarray
+
+
+@dataclass(frozen=True)
+class PeriodicBlocks:
+    """A periodic block-tridiagonal matrix: diag, lower, upper (N, b, b) real arrays (module
+    docstring); lower[0] is the corner coupling block row 0 to block column N - 1, upper[N - 1]
+    the corner coupling block row N - 1 to block column 0."""
+
+    diag: Array
+    lower: Array
+    upper: Array
+    order: Optional[Array] = None
+    """order[i]: the index in the original matrix of block row and column i's unknown (None:
+    the same order); from_matrix."""
+
+    @property
+    def n(self) -> int:
+        return self.diag.shape[0] * self.diag.shape[1]
+
+    def traces(self) -> tuple[float, float]:
+        """(tr A, tr A^2): sum_k tr D_k and sum_k tr D_k^2 + 2 tr(L_k U_{k-1}) (L_k couples
+        block row k to column k - 1, U_{k-1} row k - 1 to column k; N >= 3), O(N b^2)."""
+        below = np.roll(self.upper, 1, axis=0)  # U_{k-1}
+        return (float(np.einsum("kii->", self.diag)),
+                float(np.einsum("kij,kji->", self.diag, self.diag) + 2.0 * np.einsum("kij,kji->", self.lower, below)))
+
+    @classmethod
+    def from_matrix(cls, A, b: int, order=None) -> "PeriodicBlocks":
+        """The blocks of the n x n matrix A (dense or sparse), n = N b, N >= 3, with its rows and
+        columns taken in `order` (order[i]: A's index of row and column i; None: as they are;
+        the disk chain's unknowns are field-major, x_1..x_N, y_1..y_N, ..., so its block order
+        is disk_major(N, b)). ValueError if the result has an entry outside the periodic
+        block-tridiagonal pattern."""
+        A = sp.csr_array(A)
+        if order is not None:
+            A = A[order][:, order]
+        A = sp.coo_array(A)
+        n = A.shape[0]
+        if A.shape != (n, n) or n % b or n // b < 3:
+            raise ValueError(f"a periodic block-tridiagonal matrix has N >= 3 blocks of size {b} "
+                             f"(got shape {A.shape})")
+        N = n // b
+        rows, cols, values = A.row, A.col, A.data
+        blocks = np.zeros((3, N, b, b))  # lower, diag, upper
+        offset = (cols // b - rows // b + 1) % N  # 0: lower, 1: diag, 2: upper
+        if np.any(offset > 2) and np.any(values[offset > 2] != 0.0):
+            raise ValueError("the matrix has entries outside the periodic block-tridiagonal pattern")
+        keep = offset <= 2
+        np.add.at(blocks, (offset[keep], rows[keep] // b, rows[keep] % b, cols[keep] % b), values[keep])
+        return cls(blocks[1], blocks[0], blocks[2], None if order is None else np.asarray(order))
+
+    def sparse(self) -> sp.csr_array:
+        """The n x n matrix in block order, sparse."""
+        N, b = self.diag.shape[:2]
+        k = np.repeat(np.arange(N), b * b)
+        i, j = np.tile(np.repeat(np.arange(b), b), N), np.tile(np.arange(b), N * b)
+        rows = np.concatenate([k * b + i] * 3)
+        cols = np.concatenate([((k + shift) % N) * b + j for shift in (0, -1, 1)])
+        values = np.concatenate([self.diag.ravel(), self.lower.ravel(), self.upper.ravel()])
+        return sp.csr_array((values, (rows, cols)), shape=(self.n, self.n))
+
+    def dense(self) -> Array:
+        """The n x n matrix (tests)."""
+        return self.sparse().toarray()
+
+    def solve(self, sigma: complex, rhs: Array, transpose: bool = False) -> Array:
+        """x with (A - sigma I) x = rhs (or its transpose), rhs (n,): one factorization (nan
+        where a pivot block is singular)."""
+        shifted = Shifted(self, sigma)
+        return shifted.solve(rhs, transpose) if shifted.ok else np.full(self.n, np.nan + 0j)
+
+    def matvec(self, X: Array) -> Array:
+        """A X for X (n,) or (n, K), complex."""
+        N, b = self.diag.shape[:2]
+        X = np.asarray(X, np.complex128)
+        x = np.ascontiguousarray(X.reshape(self.n, -1)).reshape(N, b, -1)
+        y = np.empty_like(x)
+        _matvec(self.diag, self.lower, self.upper, x, y)
+        return y.reshape(X.shape)
+
+
+def disk_major(N: int, b: int) -> Array:
+    """The order that takes field-major unknowns (index f N + k for field f of disk k) to
+    disk-major ones (k b + f): PeriodicBlocks.from_matrix's `order` for the disk chain."""
+    return np.arange(N * b).reshape(b, N).T.ravel()
+
+
+@numba.njit(cache=True)
+def _work(N, b, K, proto):
+    """The arrays of K shifted factorizations side by side, of proto's dtype (real for real
+    shifts): the pivot blocks' inverses P^-1, the multipliers G, T^-1 E and T^-T F^T (m, b, b,
+    K), S^-1 (b, b, K), m = N - 1; _factor's scratch E, F^T, W (m, b, b, K), aug (b, 2 b, K),
+    ok (K,), f (K,); _solve's head, y, w1 (m, b, 1, K) and tail (b, K)."""
+    m = N - 1
+    dt = proto.dtype
+    factors = (np.empty((m, b, b, K), dt), np.empty((m, b, b, K), dt), np.empty((m, b, b, K), dt),
+               np.empty((m, b, b, K), dt), np.empty((b, b, K), dt))
+    scratch = (np.empty((m, b, b, K), dt), np.empty((m, b, b, K), dt), np.empty((m, b, b, K), dt),
+               np.empty((b, 2 * b, K), dt), np.ones(K, np.bool_), np.empty(K, dt))
+    columns = (np.empty((m, b, 1, K), dt), np.empty((m, b, 1, K), dt), np.empty((m, b, 1, K), dt),
+               np.empty((b, K), dt))
+    return factors, scratch, columns
+
+
+class Shifted:
+    """A - sigma I factorized (_factor with one shift), solved for any number of right-hand
+    sides (_solve, one at a time). ok: False where a pivot block or the Schur complement is
+    singular (the solutions are then not finite)."""
+
+    def __init__(self, blocks: "PeriodicBlocks", sigma: complex):
+        N, b = blocks.diag.shape[:2]
+        shift = np.array([sigma], np.complex128)
+        self.blocks, self.shape = blocks, (N, b, 1)
+        self.factors, self.scratch, self.columns = _work(N, b, 1, shift)
+        _factor(blocks.diag, blocks.lower, blocks.upper, shift, *self.factors, *self.scratch)
+        self.ok = bool(self.scratch[4][0])
+
+    def solve(self, rhs: Array, transpose: bool = False) -> Array:
+        """(A - sigma I)^-1 rhs (or with the transpose): rhs and the result (n,) or (n, k)."""
+        rhs = np.asarray(rhs, np.complex128)
+        out = np.empty(rhs.shape, np.complex128)
+        x = np.empty(self.shape, np.complex128)
+        for j, column in enumerate(rhs.reshape(rhs.shape[0], -1).T):
+            _solve(self.blocks.lower, self.blocks.upper, np.ascontiguousarray(column).reshape(self.shape),
+                   transpose, x, *self.factors, *self.columns)
+            out.reshape(rhs.shape[0], -1)[:, j] = x.ravel()
+        return out
+
+
+@numba.njit(cache=True)
+def _invert(aug, out, ok, f):
+    """For each shift s: out[:, :, s] = the inverse of aug[:, :b, s] (Gauss-Jordan with partial
+    pivoting; aug (b, 2 b, K) overwritten); ok[s] = False where singular. f: (K,) scratch."""
+    b, K = aug.shape[0], aug.shape[2]
+    for i in range(b):
+        for j in range(b):
+            for s in range(K):
+                aug[i, b + j, s] = 1.0 if i == j else 0.0
+    for c in range(b):
+        for s in range(K):
+            p, best = c, abs(aug[c, c, s])
+            for r in range(c + 1, b):
+                if abs(aug[r, c, s]) > best:
+                    p, best = r, abs(aug[r, c, s])
+            if best == 0.0:
+                ok[s] = False
+                aug[c, c, s] = 1.0
+            elif p != c:
+                for j in range(2 * b):
+                    aug[c, j, s], aug[p, j, s] = aug[p, j, s], aug[c, j, s]
+            f[s] = 1.0 / aug[c, c, s]
+        for j in range(2 * b):
+            for s in range(K):
+                aug[c, j, s] *= f[s]
+        for r in range(b):
+            if r != c:
+                for s in range(K):
+                    f[s] = aug[r, c, s]
+                for j in range(2 * b):
+                    for s in range(K):
+                        aug[r, j, s] -= f[s] * aug[c, j, s]
+    for i in range(b):
+        for j in range(b):
+            for s in range(K):
+                out[i, j, s] = aug[i, b + j, s]
+
+
+@numba.njit(cache=True)
+def _tsolve(P, G, upper, rhs, transpose, out, w):
+    """out = T^-1 rhs (or T^-T rhs) for each of the K factorizations (slot s, last index), c
+    right-hand sides each: rhs, out and the scratch w (m, b, c, K)."""
+    m, b, ncol, K = rhs.shape
+    if not transpose:
+        for k in range(m):
+            for i in range(b):
+                for c in range(ncol):
+                    for s in range(K):
+                        w[k, i, c, s] = rhs[k, i, c, s]
+                    if k > 0:
+                        for j in range(b):
+                            for s in range(K):
+                                w[k, i, c, s] -= G[k, i, j, s] * w[k - 1, j, c, s]
+        for k in range(m - 1, -1, -1):
+            if k < m - 1:
+                for i in range(b):
+                    for j in range(b):
+                        u = upper[k, i, j]
+                        for c in range(ncol):
+                            for s in range(K):
+                                w[k, i, c, s] -= u * out[k + 1, j, c, s]
+            for i in range(b):
+                for c in range(ncol):
+                    for s in range(K):
+                        out[k, i, c, s] = 0.0
+                    for j in range(b):
+                        for s in range(K):
+                            out[k, i, c, s] += P[k, i, j, s] * w[k, j, c, s]
+    else:
+        for k in range(m):
+            for i in range(b):
+                for c in range(ncol):
+                    for s in range(K):
+                        out[k, i, c, s] = rhs[k, i, c, s]
+                    if k > 0:
+                        for j in range(b):
+                            u = upper[k - 1, j, i]
+                            for s in range(K):
+                                out[k, i, c, s] -= u * w[k - 1, j, c, s]
+            for i in range(b):
+                for c in range(ncol):
+                    for s in range(K):
+                        w[k, i, c, s] = 0.0
+                    for j in range(b):
+                        for s in range(K):
+                            w[k, i, c, s] += P[k, j, i, s] * out[k, j, c, s]
+        for k in range(m - 1, -1, -1):
+            for i in range(b):
+                for c in range(ncol):
+                    for s in range(K):
+                        out[k, i, c, s] = w[k, i, c, s]
+                    if k < m - 1:
+                        for j in range(b):
+                            for s in range(K):
+                                out[k, i, c, s] -= G[k + 1, j, i, s] * out[k + 1, j, c, s]
+
+
+@numba.njit(cache=True)
+def _factor(diag, lower, upper, sigma, P, G, Z, ZT, S, E, FT, W, aug, ok, f):
+    """Factorize M_s = A - sigma_s I (module docstring) for the shifts sigma (K,) side by side,
+    every loop over them innermost: P, G, Z, ZT (m, b, b, K), S (b, b, K); E, FT, W (m, b, b,
+    K), aug (b, 2 b, K) and f (K,) scratch (_work); ok[s] False where shift s met a singular
+    pivot block or Schur complement."""
+    N, b, K = diag.shape[0], diag.shape[1], sigma.size
+    m = N - 1
+    ok[:] = True
+    for k in range(m):
+        for i in range(b):
+            for j in range(b):
+                d = diag[k, i, j]
+                for s in range(K):
+                    aug[i, j, s] = d
+            for s in range(K):
+                aug[i, i, s] -= sigma[s]
+        if k > 0:
+            for i in range(b):
+                for j in range(b):
+                    for s in range(K):
+                        G[k, i, j, s] = 0.0
+                    for t in range(b):
+                        low = lower[k, i, t]
+                        for s in range(K):
+                            G[k, i, j, s] += low * P[k - 1, t, j, s]
+            for i in range(b):
+                for j in range(b):
+                    for t in range(b):
+                        u = upper[k - 1, t, j]
+                        for s in range(K):
+                            aug[i, j, s] -= G[k, i, t, s] * u
+        _invert(aug, P[k], ok, f)
+    E[:] = 0.0
+    FT[:] = 0.0
+    for i in range(b):
+        for j in range(b):
+            for s in range(K):
+                E[0, i, j, s] += lower[0, i, j]
+                E[m - 1, i, j, s] += upper[m - 1, i, j]
+                FT[0, i, j, s] += upper[N - 1, j, i]
+                FT[m - 1, i, j, s] += lower[N - 1, j, i]
+    _tsolve(P, G, upper, E, False, Z, W)
+    _tsolve(P, G, upper, FT, True, ZT, W)
+    for i in range(b):
+        for j in range(b):
+            for s in range(K):
+                aug[i, j, s] = diag[N - 1, i, j] - (sigma[s] if i == j else 0.0)
+            for t in range(b):
+                u, low = upper[N - 1, i, t], lower[N - 1, i, t]
+                for s in range(K):
+                    aug[i, j, s] -= u * Z[0, t, j, s] + low * Z[m - 1, t, j, s]
+    _invert(aug, S, ok, f)
+
+
+@numba.njit(cache=True)
+def _solve(lower, upper, rhs, transpose, out, P, G, Z, ZT, S, head, y, w1, tail):
+    """out[..., s] = M_s^-1 rhs[..., s] (or M_s^-T) for each factorization s: rhs, out (N, b, K);
+    head, y, w1 (m, b, 1, K), tail (b, K) scratch (_work)."""
+    N, b, K = rhs.shape
+    m = N - 1
+    for k in range(m):
+        for i in range(b):
+            for s in range(K):
+                head[k, i, 0, s] = rhs[k, i, s]
+    _tsolve(P, G, upper, head, transpose, y, w1)
+    for i in range(b):
+        for s in range(K):
+            tail[i, s] = rhs[N - 1, i, s]
+        for t in range(b):
+            if transpose:
+                a, c = lower[0, t, i], upper[m - 1, t, i]
+            else:
+                a, c = upper[N - 1, i, t], lower[N - 1, i, t]
+            for s in range(K):
+                tail[i, s] -= a * y[0, t, 0, s] + c * y[m - 1, t, 0, s]
+    for i in range(b):
+        for s in range(K):
+            out[N - 1, i, s] = 0.0
+        for t in range(b):
+            for s in range(K):
+                out[N - 1, i, s] += (S[t, i, s] if transpose else S[i, t, s]) * tail[t, s]
+    for k in range(m):
+        for i in range(b):
+            for s in range(K):
+                out[k, i, s] = y[k, i, 0, s]
+            for t in range(b):
+                for s in range(K):
+                    out[k, i, s] -= (ZT[k, i, t, s] if transpose else Z[k, i, t, s]) * out[N - 1, t, s]
+
+
+@numba.njit(cache=True)
+def _matvec(diag, lower, upper, x, y):
+    """y = A x for K vectors at once, x and y (N, b, K)."""
+    N, b, K = x.shape
+    for k in range(N):
+        prev, nxt = (k - 1) % N, (k + 1) % N
+        for i in range(b):
+            for s in range(K):
+                y[k, i, s] = 0.0
+            for j in range(b):
+                d, low, u = diag[k, i, j], lower[k, i, j], upper[k, i, j]
+                for s in range(K):
+                    y[k, i, s] += d * x[k, j, s] + low * x[prev, j, s] + u * x[nxt, j, s]
+
+
+BATCH = 16
+"""Pairs refined side by side by _rqi_many (each with its own shift, every per-block loop over
+them innermost; 16 was the fastest of 8, 16, 32, 64 at N = 1000)."""
+
+
+@numba.njit(cache=True)
+def _rqi_many(diag, lower, upper, values, right, left, iterations, tol):
+    """Two-sided Rayleigh quotient iteration of each pair alone, in place, in the dtype of
+    `right` (real pairs in real arithmetic, four times cheaper): values (k,), right (n, k)
+    columns, left (k, n) rows (conj(l) entries: l^H x = sum(left[j] * x)). BATCH pairs at a
+    time, each with its own shift, side by side in every loop (a slot whose pair is done takes
+    the next one). Returns the residuals (inf where a factorization failed)."""
+    N, b = diag.shape[0], diag.shape[1]
+    n, k = right.shape
+    residual = np.full(k, np.inf)
+    K = min(BATCH, k)
+    if K == 0:
+        return residual
+    dt = right.dtype
+    (P, G, Z, ZT, S), (E, FT, W, aug, ok, f), (head, y, w1, tail) = _work(N, b, K, right[:1, 0])
+    r, lc = np.zeros((N, b, K), dt), np.zeros((N, b, K), dt)
+    x, ax = np.empty((N, b, K), dt), np.empty((N, b, K), dt)
+    lam = np.zeros(K, dt)
+    pair = np.full(K, -1)
+    steps = np.zeros(K, np.int64)
+    upcoming = 0
+    for s in range(K):
+        pair[s] = upcoming
+        upcoming += 1
+    for s in range(K):
+        p = pair[s]
+        for t in range(n):
+            r[t // b, t % b, s] = right[t, p]
+            lc[t // b, t % b, s] = left[p, t]
+        lam[s] = values[p]
+    while True:
+        active = 0
+        for s in range(K):
+            if pair[s] >= 0:
+                active += 1
+        if active == 0:
+            break
+        _factor(diag, lower, upper, lam, P, G, Z, ZT, S, E, FT, W, aug, ok, f)
+        _solve(lower, upper, r, False, x, P, G, Z, ZT, S, head, y, w1, tail)
+        r[:] = x
+        _solve(lower, upper, lc, True, x, P, G, Z, ZT, S, head, y, w1, tail)
+        lc[:] = x
+        for s in range(K):
+            if pair[s] < 0:
+                continue
+            norm, overlap = 0.0, 0.0 * lam[s]
+            for kk in range(N):
+                for i in range(b):
+                    norm += abs(r[kk, i, s]) ** 2
+                    overlap += lc[kk, i, s] * r[kk, i, s]
+            norm = np.sqrt(norm)
+            good = ok[s] and np.isfinite(norm) and norm > 0.0
+            if good:
+                overlap /= norm
+                good = np.isfinite(abs(overlap)) and overlap != 0.0
+            if good:
+                for kk in range(N):
+                    for i in range(b):
+                        r[kk, i, s] /= norm
+                        lc[kk, i, s] /= overlap
+            steps[s] += 1
+            if not good:
+                pair[s] = -2  # failed: its residual stays inf, its guess as it was
+        _matvec(diag, lower, upper, r, ax)
+        for s in range(K):
+            p = pair[s]
+            if p == -1:
+                continue
+            done = p == -2
+            if not done:
+                q = 0.0 * lam[s]
+                for kk in range(N):
+                    for i in range(b):
+                        q += lc[kk, i, s] * ax[kk, i, s]
+                lam[s] = q
+                res = 0.0
+                for kk in range(N):
+                    for i in range(b):
+                        res += abs(ax[kk, i, s] - q * r[kk, i, s]) ** 2
+                res = np.sqrt(res)
+                if res <= tol or steps[s] >= iterations:
+                    residual[p] = res
+                    values[p] = q
+                    for t in range(n):
+                        right[t, p] = r[t // b, t % b, s]
+                        left[p, t] = lc[t // b, t % b, s]
+                    done = True
+            if done:  # the next pair into this slot
+                steps[s] = 0
+                if upcoming < k:
+                    p = upcoming
+                    upcoming += 1
+                    pair[s] = p
+                    for t in range(n):
+                        r[t // b, t % b, s] = right[t, p]
+                        lc[t // b, t % b, s] = left[p, t]
+                    lam[s] = values[p]
+                else:
+                    pair[s] = -1
+                    r[:, :, s] = 0.0
+                    lc[:, :, s] = 0.0
+    return residual
+
+
+def clusters(guess: Array, reach: Array) -> list[Array]:
+    """The eigenpairs to refine together: i and j are linked when their predicted eigenvalues
+    are closer than reach_i + reach_j (reach: how far each may be from its prediction), and a
+    cluster is a connected set of links. Returns the clusters' members, ascending."""
+    guess = np.asarray(guess, np.complex128)
+    n = guess.size
+    i, j = close_pairs(guess, 2.0 * float(np.max(reach, initial=0.0)))
+    linked = np.abs(guess[i] - guess[j]) <= reach[i] + reach[j]
+    graph = sp.coo_array((np.ones(int(linked.sum())), (i[linked], j[linked])), shape=(n, n))
+    root = connected_components(graph, directed=False)[1]
+    members = np.argsort(root, kind="stable")
+    return np.split(members, np.flatnonzero(np.diff(root[members])) + 1)
+
+
+def close_pairs(points: Array, radius: float) -> tuple[Array, Array]:
+    """Index pairs (i < j) of the complex points within `radius` of each other (a k-d tree)."""
+    if points.size < 2:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    pairs = cKDTree(np.column_stack([points.real, points.imag])).query_pairs(radius, output_type="ndarray")
+    return pairs[:, 0], pairs[:, 1]
+
+
+LARGEST_CLUSTER = 16
+"""Clusters of more eigenpairs are refined pair by pair (refine_eigenpairs): one shift serves a
+cluster, and the farther its members lie from it, the slower they converge."""
+
+
+def refine_eigenpairs(blocks: PeriodicBlocks, values: Array, right: Array, left: Array,
+                      reach: Array, iterations: int = 6, tol: float = 0.0
+                      ) -> tuple[Array, Array, Array, Array]:
+    """Every eigenpair of `blocks`' matrix refined from the guesses (values (n,), right vectors
+    as columns, left vectors as rows l_i^H with l_i^H r_i = 1: spectra.Eigensystem's layout) by
+    at most `iterations` two-sided Rayleigh quotient steps (fewer once each residual is <= tol)
+    on the clusters of pairs whose guesses are within reach of each other (clusters; module
+    docstring): alone (also the members of a cluster larger than LARGEST_CLUSTER), in real
+    arithmetic where guess and vectors are real, the lower member of a complex-conjugate pair
+    as the conjugate of the upper one; in a cluster, with the cluster's mean as the
+    shift, then each member polished with its own. Any pair still above tol gets `iterations`
+    more steps alone with a pivoted banded LU (_pivoted_rqi). Where two pairs converged to one
+    eigenpair (_found_twice), one of them starts again from its guess with the converged pairs
+    near it deflated, for twice the iterations (up to ROUNDS times). Returns new (values, right, left,
+    residual): |r_i| = 1, l_i^H r_i = 1, residual_i = |A r_i - lambda_i r_i| (inf where a
+    factorization failed)."""
+    guess = (np.asarray(values, np.complex128), right, left)
+    values = np.array(values, np.complex128)
+    right = np.array(right, np.complex128)
+    left = np.array(left, np.complex128)
+    spans = clusters(values, np.asarray(reach, float))
+    grouped = [span for span in spans if 1 < span.size <= LARGEST_CLUSTER]
+    alone = np.setdiff1d(np.arange(values.size), np.concatenate(grouped + [np.zeros(0, np.int64)]))
+    real = alone[(values[alone].imag == 0.0) & ~np.any(right[:, alone].imag, axis=0)
+                 & ~np.any(left[alone].imag, axis=1)]
+    residual = np.full(values.size, np.inf)
+    upper, lower = conjugate_pairs(values, np.setdiff1d(alone, real))
+    single = np.setdiff1d(np.setdiff1d(alone, real), np.concatenate([upper, lower]))
+    for picked, dtype in ((real, float), (np.concatenate([upper, single]), complex)):
+        residual[picked] = _rqi(blocks, values, right, left, picked, iterations, tol, dtype)
+    # a real matrix: the lower member of a complex pair is the upper one's conjugate
+    values[lower], right[:, lower], left[lower] = values[upper].conj(), right[:, upper].conj(), left[upper].conj()
+    residual[lower] = residual[upper]
+    for span in grouped:
+        residual[span] = _refine_cluster(blocks, values, right, left, span, iterations, tol)
+    rough = np.flatnonzero(residual > tol)  # a far guess, or pivot growth in the blocks' LU
+    if rough.size:
+        v, r, lft = values[rough], right[:, rough], left[rough]
+        again = _pivoted_rqi(blocks, v, r, lft, iterations, tol)
+        better = again < residual[rough]
+        values[rough[better]], right[:, rough[better]], left[rough[better]] = v[better], r[:, better], lft[better]
+        residual[rough[better]] = again[better]
+    for _ in range(ROUNDS):
+        twice = _found_twice(guess[0], values, right, left, residual)
+        for p in twice:
+            # from its guess again, the pairs found near it deflated: it finds the eigenvalue lost
+            near = np.argsort(np.abs(values - guess[0][p]))
+            near = near[(near != p) & np.isfinite(residual[near])][:DEFLATED]
+            v, r, lft = guess[0][[p]].copy(), guess[1][:, [p]].copy(), guess[2][[p]].copy()
+            again = _pivoted_rqi(blocks, v, r, lft, 2 * iterations, tol, (right[:, near], left[near]))
+            values[p], right[:, p], left[p], residual[p] = v[0], r[:, 0], lft[0], again[0]
+        if not twice.size:
+            break
+    return values, right, left, residual
+
+
+DEFLATED = 16
+"""Pairs deflated when a pair found twice is refined again (refine_eigenpairs): the converged
+pairs nearest its guess."""
+
+ROUNDS = 3
+"""Rounds of refining again the pairs found twice (one may land on a third pair's eigenvalue)."""
+
+
+def _found_twice(guess: Array, values: Array, right: Array, left: Array, residual: Array) -> Array:
+    """Of every two pairs converged to one eigenpair (meeting discs kappa rho, |l_i^H r_j| >
+    1/2: one eigenvalue found twice, another lost), the one whose guess is farther from it."""
+    done = np.isfinite(residual)
+    bound = np.where(done, np.linalg.norm(left, axis=1) * np.where(done, residual, 0.0), 0.0)
+    i, j = touching(values, bound)
+    twice = np.abs(np.sum(left[i] * right[:, j].T, axis=1)) > 0.5
+    i, j = i[twice], j[twice]
+    farther = np.where(np.abs(guess[i] - values[i]) >= np.abs(guess[j] - values[j]), i, j)
+    return np.unique(farther)
+
+
+def conjugate_pairs(values: Array, candidates: Array) -> tuple[Array, Array]:
+    """(upper, lower): the candidates with Im > 0 and, for each, the candidate whose value is
+    nearest its conjugate, where that match is mutual (each is the other's nearest) and
+    nearer than any other candidate; the others are in neither."""
+    if candidates.size < 2:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    z = values[candidates]
+    distance = np.abs(z[:, None] - z.conj()[None, :])  # |z_a - conj(z_b)|
+    nearest = np.argmin(distance, axis=1)
+    mutual = (nearest[nearest] == np.arange(z.size)) & (z.imag > 0) & (z[nearest].imag < 0)
+    return candidates[mutual], candidates[nearest[mutual]]
+
+
+def _rqi(blocks: PeriodicBlocks, values: Array, right: Array, left: Array, picked: Array,
+         iterations: int, tol: float, dtype) -> Array:
+    """_rqi_many on the pairs `picked` in `dtype`, written back into values, right and left;
+    their residuals."""
+    part = (values[picked], right[:, picked], left[picked])
+    v, r, lft = (a.real.copy() if dtype is float else a for a in part)
+    residual = _rqi_many(blocks.diag, blocks.lower, blocks.upper, v, r, lft, iterations, tol)
+    values[picked], right[:, picked], left[picked] = v, r, lft
+    return residual
+
+
+def _refine_cluster(blocks: PeriodicBlocks, values: Array, right: Array, left: Array,
+                    idx: Array, iterations: int, tol: float) -> Array:
+    """Block two-sided Rayleigh quotient iteration of the cluster `idx` in place (module
+    docstring): the k right and k left vectors solved with one shift, the cluster's mean, and
+    the k x k projected problem's eigenpairs taken; then each member not yet within tol
+    polished by two steps with its own shift (the cluster's shift converges linearly, a
+    member's own cubically). Returns the members' residuals (inf, the cluster left as it was,
+    where a factorization failed)."""
+    X, Y, theta = right[:, idx].T.copy(), left[idx].copy(), values[idx].copy()  # rows: r_j, conj(l_j)
+    res = np.full(idx.size, np.inf)
+    for _ in range(iterations):
+        sigma = complex(theta.mean())
+        shifted = Shifted(blocks, sigma)
+        if not shifted.ok:
+            shifted = Shifted(blocks, nudged(sigma))
+            if not shifted.ok:
+                return res
+        X, Y = shifted.solve(X.T).T, shifted.solve(Y.T, transpose=True).T
+        if not (np.isfinite(X).all() and np.isfinite(Y).all()):
+            return np.full(idx.size, np.inf)
+        X, Y = np.linalg.qr(X.T)[0].T, np.linalg.qr(Y.T)[0].T
+        G, H = Y @ X.T, Y @ blocks.matvec(X.T)  # l_a^H x_j, l_a^H A x_j
+        theta, W = np.linalg.eig(np.linalg.solve(G, H))
+        X, Y = W.T @ X, np.linalg.solve(W, np.linalg.solve(G, Y))
+        norm = np.linalg.norm(X, axis=1)
+        X, Y = X / norm[:, None], Y * norm[:, None]  # |r| = 1, l^H r = 1
+        if not np.isfinite(theta).all():
+            return np.full(idx.size, np.inf)
+        res = np.linalg.norm(blocks.matvec(X.T).T - theta[:, None] * X, axis=1)
+        if res.max() <= tol:
+            break
+    values[idx], right[:, idx], left[idx] = theta, X.T, Y
+    rough = idx[res > tol]
+    if rough.size:
+        v, r, lft = values[rough], right[:, rough], left[rough]
+        polished = _rqi_many(blocks.diag, blocks.lower, blocks.upper, v, r, lft, 2, tol)
+        better = polished < res[res > tol]
+        values[rough[better]], right[:, rough[better]], left[rough[better]] = v[better], r[:, better], lft[better]
+        res[np.flatnonzero(res > tol)[better]] = polished[better]
+    return res
+
+
+def nudged(sigma: complex) -> complex:
+    """A shift next to sigma (relative 1e-10, off the real axis), for a shifted matrix exactly
+    singular at sigma: sigma is then an eigenvalue to working precision (an exactly degenerate
+    pair, a mode decoupled from its neighbours), and inverse iteration with the nudged shift
+    still converges to it in one step."""
+    return sigma + 1e-10 * max(abs(sigma), 1.0) * (1.0 + 1.0j)
+
+
+def folded(N: int) -> Array:
+    """The block order 0, N - 1, 1, N - 2, 2, ...: in it each block's periodic neighbours are at
+    most two places away, so a periodic block-tridiagonal matrix becomes banded (3 b - 1
+    diagonals on each side)."""
+    order = np.empty(N, np.int64)
+    order[0::2], order[1::2] = np.arange((N + 1) // 2), N - 1 - np.arange(N // 2)
+    return order
+
+
+def _pivoted_rqi(blocks: PeriodicBlocks, values: Array, right: Array, left: Array,
+                 iterations: int, tol: float, deflated: Optional[tuple[Array, Array]] = None) -> Array:
+    """Two-sided Rayleigh quotient iteration of each pair alone, in place (complex; layout of
+    _rqi_many), the shifted solves by LAPACK's banded LU with partial pivoting (zgbtrf) of the
+    matrix in the folded order: stable where the blocks' LU without pivoting between blocks
+    grows (a shift near an eigenvalue of a leading sub-chain), at about three times its cost.
+    deflated: (right vectors as columns, left vectors as rows) of known eigenpairs projected
+    out of each iterate (x - R L^H x, l - L (R^T l) in the rows' conjugate layout), so that the
+    iteration finds another eigenvalue. Returns the residuals (inf where a factorization
+    failed)."""
+    N, b = blocks.diag.shape[:2]
+    n, kl = N * b, 3 * b - 1
+    perm = (b * folded(N)[:, None] + np.arange(b)).ravel()  # folded position -> unknown
+    A = sp.coo_array(blocks.sparse()[perm][:, perm])
+    band = np.zeros((3 * kl + 1, n), np.complex128)  # zgbtrf's layout: ab[2 kl + i - j, j] = M[i, j]
+    band[2 * kl + A.row - A.col, A.col] = A.data
+    residual = np.full(values.size, np.inf)
+    if deflated is not None:
+        known_r, known_l = deflated[0][perm], deflated[1][:, perm]
+    for p in range(values.size):
+        lam, r, lc = complex(values[p]), right[perm, p].astype(np.complex128), left[p, perm].astype(np.complex128)
+        res = np.inf
+        for _ in range(iterations):
+            for shift in (lam, nudged(lam)):
+                shifted = band.copy()
+                shifted[2 * kl] -= shift
+                lu, piv, info = zgbtrf(shifted, kl, kl)
+                if info == 0:
+                    break
+            if info != 0:
+                res = np.inf
+                break
+            r, info_r = zgbtrs(lu, kl, kl, r, piv)
+            lc, info_l = zgbtrs(lu, kl, kl, lc, piv, trans=1)
+            if deflated is not None:
+                r = r - known_r @ (known_l @ r)
+                lc = lc - (lc @ known_r) @ known_l
+            norm = np.linalg.norm(r)
+            overlap = np.sum(lc * r) / norm
+            if info_r or info_l or not (np.isfinite(norm) and norm > 0.0 and np.isfinite(overlap) and overlap != 0.0):
+                res = np.inf
+                break
+            r, lc = r / norm, lc / overlap
+            ar = A @ r
+            lam = complex(np.sum(lc * ar))
+            res = float(np.linalg.norm(ar - lam * r))
+            if res <= tol:
+                break
+        if np.isfinite(res):
+            residual[p], values[p] = res, lam
+            right[perm, p], left[p, perm] = r, lc
+    return residual
+
+
+def touching(values: Array, bounds: Array) -> tuple[Array, Array]:
+    """Index pairs (i < j) whose discs |z - values_i| <= bounds_i meet."""
+    values, bounds = np.asarray(values, np.complex128), np.asarray(bounds, float)
+    i, j = close_pairs(values, 2.0 * float(np.max(bounds, initial=0.0)))
+    meet = np.abs(values[i] - values[j]) <= bounds[i] + bounds[j]
+    return i[meet], j[meet]
+
+
+def separated(values: Array, bounds: Array) -> bool:
+    """Whether the discs |z - values_i| <= bounds_i are pairwise disjoint: then each holds a
+    different eigenvalue, and n of them hold the whole spectrum of an n x n matrix."""
+    return touching(values, bounds)[0].size == 0

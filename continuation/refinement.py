@@ -1,0 +1,151 @@
+"""Full spectra by eigenpair continuation (issue 26 item 1): the eigensystem at a branch point
+refined from a nearby sample's instead of a dense O(n^3) decomposition.
+
+Where the stability matrix is periodic block-tridiagonal (Problem.stability_blocks: the disk
+chain, each disk coupled to its two neighbours), every eigenpair (lambda_i, r_i, l_i) of the
+reference sample is carried to the new point x:
+
+    predicted   lambda_i + dlambda_i/ds ds,   ds = (x - x_ref) . t_ref  (the slopes along the
+                reference's tangent; the reference's own value where it has no slopes),
+    refined     by two-sided Rayleigh quotient iteration on the O(N b^3) shifted solves of
+                block_tridiagonal.py (pairs predicted within REACH times their moves of each
+                other refined together as a cluster),
+
+O(n^2 b^2) for the n = N b pairs against LAPACK's O(n^3): 4 to 5 times faster at n = 3000
+on one core (docs/continuation.md, Eigenpair continuation).
+
+The result is used only when it is certified; otherwise (None) the caller takes the dense
+spectrum, and the work ledger counts both outcomes (linalg.Work: spectra_refined,
+refinements_declined). Certificate, with rho_i = |A r_i - lambda_i r_i| (|r_i| = 1), kappa_i =
+|l_i| |r_i| / |l_i^H r_i| and R = max|lambda| of the reference:
+  - every rho_i <= RESIDUAL R (a backward error, relative to the spectral radius);
+  - the discs |z - lambda_i| <= kappa_i rho_i (the first-order bound of each eigenvalue's error,
+    Wilkinson) are pairwise disjoint: n disjoint discs each hold a different eigenvalue, so the
+    n refined values are the whole spectrum, none found twice and none lost. Discs may meet
+    only where they belong to a semisimple degenerate eigenvalue: members well conditioned
+    (kappa <= KAPPA) with biorthogonal vectors (|l_i^H r_j| <= BIORTHOGONAL), which span as
+    many dimensions as there are members (degenerate_only);
+  - the trace identities sum lambda_i = tr A and sum lambda_i^2 = tr A^2 (O(N b^2) from the
+    blocks) hold within TRACE times their bounds sum kappa_i rho_i + n eps R and sum 2 |lambda_i|
+    kappa_i rho_i + n eps R^2.
+"""
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Optional
+
+import numpy as np
+
+from .block_tridiagonal import refine_eigenpairs, touching
+from .linalg import book
+from .spectra import Eigensystem, on_gpu
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .problem import Problem
+    from .samples import Sample
+
+Array = np.ndarray
+
+REFINE_FROM = 1500
+"""Smallest n at which a full spectrum with vectors is refined from the previous sample rather
+than decomposed (not where the spectra run on a GPU, spectra.on_gpu, which is faster still).
+Measured (benchmarks/eigenpair_refinement.py, one core): LAPACK / refined 2.0 at n = 1200,
+4 to 5 at n = 3000; below n = 900 no gain."""
+
+ITERATIONS = 6
+"""Rayleigh quotient steps at most per pair (cubic convergence: 2 or 3 suffice for a step of
+a continuation)."""
+
+RESIDUAL = 1e-12
+"""Largest residual rho_i accepted, relative to the spectral radius."""
+
+REACH = 4.0
+"""Pairs whose predictions are within REACH times their predicted moves (plus 1e-9 R) of each
+other are refined together (block_tridiagonal.clusters)."""
+
+TRACE = 10.0
+"""Slack of the trace identities over their error bounds."""
+
+KAPPA = 100.0
+"""Largest condition number of a member of meeting discs (degenerate_only): a generic
+eigenvalue of the chain has kappa 1 to 10, a pair near a collision a diverging one."""
+
+BIORTHOGONAL = 1e-8
+"""Largest |l_i^H r_j| (l_i^H r_i = 1) of two members of meeting discs (degenerate_only)."""
+
+EPS = np.finfo(float).eps
+
+
+def refinable(problem: Problem, reference: Optional[Sample]) -> bool:
+    """Whether a full sample of `problem` may be refined from `reference`: n >= REFINE_FROM,
+    dense spectra on the CPU, and a full reference with every eigenvalue's vectors and none
+    excluded (no free disk, no spectral window)."""
+    if reference is None or reference.partial or reference.system is None:
+        return False
+    n = reference.eigvals.size
+    system = reference.system
+    return (n >= REFINE_FROM and not on_gpu(n) and system.disc is None and system.guard is None
+            and (system.columns is None or bool(np.all(system.columns >= 0)))
+            and not np.any(reference.excluded))
+
+
+def refined_eigensystem(problem: Problem, x: Array, reference: Sample) -> Optional[Eigensystem]:
+    """The eigensystem of the stability matrix at x (= (u, p)) refined from `reference`'s
+    (refinable), in the reference's label order, vectors normalised to |r_i| = 1, l_i^H r_i = 1;
+    None where the problem has no periodic blocks or the result is not certified (module
+    docstring). Booked as spectra_refined or refinements_declined."""
+    blocks = problem.stability_blocks(x[:-1], float(x[-1]))
+    if blocks is None:
+        return None
+    old = reference.system
+    values = np.asarray(reference.eigvals, complex)
+    scale = float(np.abs(values).max()) or 1.0
+    move = np.zeros(values.size, complex)
+    if reference.dlam is not None and reference.tangent is not None:
+        move = reference.dlam * float((x - reference.x) @ reference.tangent)
+    order = np.arange(values.size) if blocks.order is None else blocks.order
+    columns = np.arange(values.size) if old.columns is None else old.columns  # label i's vectors
+    refined = refine_eigenpairs(blocks, values + move, old.right[np.ix_(order, columns)],
+                                old.left[np.ix_(columns, order)],
+                                REACH * np.abs(move) + 1e-9 * scale, ITERATIONS, 1e-13 * scale)
+    system = certified(blocks, *refined, scale)
+    if system is None:
+        book("refinements_declined")
+        return None
+    book("spectra_refined")
+    right, left = np.empty_like(system.right), np.empty_like(system.left)
+    right[order], left[:, order] = system.right, system.left
+    return Eigensystem(system.values, right, left, np.zeros(values.size, bool))
+
+
+def certified(blocks, values: Array, right: Array, left: Array, residual: Array,
+              scale: float) -> Optional[Eigensystem]:
+    """Eigensystem(values, right, left) if it passes the certificate (module docstring) for the
+    matrix of `blocks`, with spectral radius `scale`; else None."""
+    if not np.all(residual <= RESIDUAL * scale):  # inf: a factorization failed
+        return None
+    kappa = np.linalg.norm(left, axis=1)  # |l_i| |r_i| / |l_i^H r_i| with |r_i| = 1, l_i^H r_i = 1
+    bound = kappa * residual
+    if not degenerate_only(*touching(values, bound), kappa, right, left):
+        return None
+    trace, trace2 = blocks.traces()
+    n = values.size
+    if abs(values.sum() - trace) > TRACE * (bound.sum() + n * EPS * scale):
+        return None
+    if abs((values ** 2).sum() - trace2) > TRACE * (2.0 * (np.abs(values) * bound).sum() + n * EPS * scale ** 2):
+        return None
+    return Eigensystem(values, right, left)
+
+
+def degenerate_only(i: Array, j: Array, kappa: Array, right: Array, left: Array) -> bool:
+    """Whether the pairs (i, j) whose discs meet are all members of a semisimple degenerate
+    eigenvalue (a ring's standing waves, a mode repeated by symmetry): well conditioned
+    (kappa <= KAPPA) with biorthogonal vectors, |l_i^H r_j| and |l_j^H r_i| <= BIORTHOGONAL;
+    their discs then hold as many eigenvalues as they are. A pair found twice (r_i = r_j) fails
+    the second, a pair near a collision (kappa diverging) the first."""
+    if i.size == 0:
+        return True
+    if np.any(kappa[i] > KAPPA) or np.any(kappa[j] > KAPPA):
+        return False
+    cross = np.maximum(np.abs(np.sum(left[i] * right[:, j].T, axis=1)),
+                       np.abs(np.sum(left[j] * right[:, i].T, axis=1)))
+    return bool(np.all(cross <= BIORTHOGONAL))

@@ -1,0 +1,176 @@
+"""Eigenpair continuation (issue 26 item 1): the periodic block-tridiagonal kernel, the
+refinement's certificate, and sweeps whose full spectra are refined finding the collisions of
+sweeps whose spectra are all decomposed."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from diskfriction.continuation import block_tridiagonal as bt
+from diskfriction.continuation import refinement
+from diskfriction.continuation.linalg import dense, measured
+from diskfriction.continuation.spectra import Eigensystem, eigensystem, track
+from diskfriction.disks.equilibria import DiskEquilibria, relax
+from diskfriction.scenes import Scene
+from diskfriction.symbolic import System
+
+
+def random_blocks(N: int, b: int, seed: int = 0) -> bt.PeriodicBlocks:
+    rng = np.random.default_rng(seed)
+    return bt.PeriodicBlocks(*(rng.standard_normal((N, b, b)) for _ in range(3)))
+
+
+def chain_matrix(N: int, F_x: float):
+    """J of the paper's scene with N disks, eps = 1e-4, relaxed from rest to F_x (sparse)."""
+    system = System.from_scene(Scene(N=N, eps=1e-4))
+    q, xi = relax(system, *system.rest_state(), F_x)
+    return DiskEquilibria(system, q, xi, F_x, "J").stability_matrix(q, F_x), system
+
+
+def test_periodic_blocks_are_the_matrix_and_solve_with_it():
+    """from_matrix in an order, traces, sparse, and (A - sigma I)^-1 and its transpose against
+    numpy; an entry outside the pattern is refused."""
+    N, b = 7, 3
+    blocks = random_blocks(N, b)
+    A = blocks.dense()
+    assert np.array_equal(blocks.sparse().toarray(), A)
+    trace, trace2 = blocks.traces()
+    assert trace == pytest.approx(np.trace(A), rel=1e-13) and trace2 == pytest.approx(np.trace(A @ A), rel=1e-13)
+    order = np.random.default_rng(1).permutation(N * b)
+    shuffled = np.empty_like(A)
+    shuffled[np.ix_(order, order)] = A  # shuffled[order[i], order[j]] = A[i, j]
+    again = bt.PeriodicBlocks.from_matrix(sp.csr_array(shuffled), b, order)
+    assert np.array_equal(again.dense(), A) and np.array_equal(again.order, order)
+    sigma, rhs = 0.3 + 0.2j, np.random.default_rng(2).standard_normal(N * b)
+    M = A - sigma * np.eye(N * b)
+    assert np.allclose(blocks.solve(sigma, rhs), np.linalg.solve(M, rhs), rtol=1e-12, atol=1e-12)
+    assert np.allclose(blocks.solve(sigma, rhs, transpose=True), np.linalg.solve(M.T, rhs), rtol=1e-12, atol=1e-12)
+    far = A.copy()
+    far[0, 3 * b] = 1.0  # block row 0 to block column 3: not a neighbour
+    with pytest.raises(ValueError, match="pattern"):
+        bt.PeriodicBlocks.from_matrix(far, b)
+
+
+@pytest.mark.parametrize("N", [3, 4, 5, 8, 9])
+def test_the_folded_order_makes_the_periodic_matrix_banded(N):
+    b = 2
+    order = bt.folded(N)
+    assert sorted(order) == list(range(N))
+    perm = (b * order[:, None] + np.arange(b)).ravel()
+    rows, cols = np.nonzero(random_blocks(N, b).dense()[np.ix_(perm, perm)])
+    assert np.abs(rows - cols).max() <= 3 * b - 1
+
+
+def test_refined_eigenpairs_are_lapacks_at_the_next_point():
+    """N = 30: the eigensystem at F_x = 0.05 refined from the one at 0.0499 (first-order
+    prediction, the old vectors) equals LAPACK's within 1e-12 of the spectral radius, every
+    residual within 1e-13 of it, and the certificate passes."""
+    A0, system = chain_matrix(30, 0.0499)
+    A1 = chain_matrix(30, 0.05)[0]
+    old = eigensystem(dense(A0), vectors=True)
+    N, b = 30, system.ndof // 30
+    blocks = bt.PeriodicBlocks.from_matrix(A1, b, bt.disk_major(N, b))
+    slopes = np.sum(old.left * (dense(A1 - A0) @ old.right).T, axis=1)  # l^H dA r
+    order, scale = blocks.order, np.abs(old.values).max()
+    values, right, left, residual = bt.refine_eigenpairs(
+        blocks, old.values + slopes, old.right[order], old.left[:, order], 4 * np.abs(slopes) + 1e-9 * scale,
+        6, 1e-13 * scale)
+    exact = np.linalg.eigvals(dense(A1))
+    assert np.abs(track(exact, values) - exact).max() <= 1e-12 * scale
+    assert residual.max() <= 1e-13 * scale
+    assert np.allclose(np.sum(left * right.T, axis=1), 1.0, atol=1e-12)  # l^H r = 1
+    assert refinement.certified(blocks, values, right, left, residual, scale) is not None
+
+
+def test_a_shift_that_breaks_the_blocks_lu_is_refined_with_pivoting():
+    """A pair whose eigenvalue is also one of the first diagonal block's (e_0 an exact
+    eigenvector): the blocks' LU without pivoting between blocks meets a singular pivot block,
+    the pivoted banded LU does not."""
+    N, b, mu = 6, 3, 0.7
+    blocks = random_blocks(N, b, seed=3)
+    blocks.diag[0][:, 0] = [mu, 0.0, 0.0]
+    blocks.lower[1][:, 0] = 0.0  # nothing else couples into unknown 0: A e_0 = mu e_0
+    blocks.upper[N - 1][:, 0] = 0.0
+    A = blocks.dense()
+    exact = eigensystem(A, vectors=True)
+    i = int(np.argmin(np.abs(exact.values - mu)))
+    assert abs(exact.values[i] - mu) <= 1e-12
+    guess = exact.values.copy()
+    guess[i] = mu  # the exact eigenvalue: the pivot block diag[0] - mu I is singular
+    values, right, left = guess[[i]].copy(), exact.right[:, [i]].copy(), exact.left[[i]].copy()
+    assert np.isinf(bt._rqi_many(blocks.diag, blocks.lower, blocks.upper, values, right, left, 3, 0.0))[0]
+    values, right, left, residual = bt.refine_eigenpairs(blocks, guess, exact.right, exact.left,
+                                                        np.full(guess.size, 1e-9), 4, 1e-14)
+    assert residual[i] <= 1e-13 and abs(values[i] - mu) <= 1e-13
+
+
+def test_the_certificate_refuses_a_duplicate_and_a_wrong_eigenvalue():
+    """Two pairs converged to one eigenvalue (overlapping discs), and a value moved away from
+    its eigenvalue with small claimed residuals (disjoint discs, but the traces disagree)."""
+    blocks = random_blocks(5, 3, seed=4)
+    exact = eigensystem(blocks.dense(), vectors=True)
+    right = exact.right / np.linalg.norm(exact.right, axis=0)
+    left = exact.left * np.linalg.norm(exact.right, axis=0)[:, None]
+    scale = np.abs(exact.values).max()
+    residual = np.linalg.norm(blocks.dense() @ right - right * exact.values, axis=0)
+    assert refinement.certified(blocks, exact.values, right, left, residual, scale) is not None
+    real = np.flatnonzero(exact.values.imag == 0.0)
+    i, j = real[0], real[1]
+    values, r2, l2 = exact.values.copy(), right.copy(), left.copy()
+    values[j], r2[:, j], l2[j] = values[i], right[:, i], left[i]
+    assert refinement.certified(blocks, values, r2, l2, residual, scale) is None
+    moved = exact.values.copy()
+    moved[i] += 0.5 * np.min(np.abs(np.delete(exact.values, i) - exact.values[i]))
+    assert refinement.certified(blocks, moved, right, left, residual, scale) is None
+
+
+@pytest.mark.parametrize("N", [10, 20, 40])
+def test_sweeps_with_refined_spectra_find_the_same_collisions(N, chain_sweep, monkeypatch):
+    """The paper's scene with N disks from rest to 0.12, every full spectrum refined where
+    certified (REFINE_FROM = 0): the same collisions as with every spectrum decomposed, within
+    1e-9 in F_x, with most full spectra refined and the declined ones counted."""
+    scene = Scene(N=N, eps=1e-4)
+    decomposed = chain_sweep(scene)[0]
+    monkeypatch.setattr(refinement, "REFINE_FROM", 0)
+    from diskfriction.disks.sweep import sweep
+
+    with measured() as work:
+        refined = sweep(System.from_scene(scene), 0.0, 0.12)
+    assert len(refined.collisions) == len(decomposed.collisions) > 0
+    assert [c.kind for c in refined.collisions] == [c.kind for c in decomposed.collisions]
+    assert np.abs(np.array([c.p for c in refined.collisions]) - [c.p for c in decomposed.collisions]).max() <= 1e-9
+    assert work.spectra_refined >= 0.8 * (work.spectra_refined + work.spectra)
+    assert work.spectra >= work.refinements_declined  # a declined refinement takes a dense spectrum
+
+
+def test_refinement_applies_only_where_the_whole_spectrum_is_refined(monkeypatch):
+    """No periodic blocks with a spectral window or a free disk; not below REFINE_FROM, nor
+    where the dense spectra run on a GPU."""
+    from diskfriction.continuation.samples import sample_at
+    from diskfriction.continuation.spectral_window import Window
+
+    system = System.from_scene(Scene(N=6, eps=1e-4))
+    q, xi = relax(system, *system.rest_state(), 0.01)
+    problem = DiskEquilibria(system, q, xi, 0.01)
+    assert problem.stability_blocks(q, 0.01) is not None
+    assert DiskEquilibria(system, q, xi, 0.01, window=Window(-1.0, 0.0)).stability_blocks(q, 0.01) is None
+    free = System.from_scene(Scene(N=6, eps=0.0))
+    assert DiskEquilibria(free, *free.rest_state(), 0.0).stability_blocks(free.rest_state()[0], 0.0) is None
+    x = np.append(q, 0.01)
+    tangent = np.zeros(x.size)
+    tangent[-1] = 1.0
+    reference = sample_at(problem, 0.0, x, 1e-9, None, tangent)
+    n = reference.eigvals.size
+    monkeypatch.setattr(refinement, "REFINE_FROM", n + 1)
+    assert not refinement.refinable(problem, reference)
+    monkeypatch.setattr(refinement, "REFINE_FROM", n)
+    assert refinement.refinable(problem, reference)
+    monkeypatch.setattr(refinement, "on_gpu", lambda n: True)
+    assert not refinement.refinable(problem, reference)
+    monkeypatch.setattr(refinement, "on_gpu", lambda n: False)
+    with measured() as work:
+        again = sample_at(problem, 0.0, x, 1e-9, reference, tangent)
+    assert work.spectra_refined == 1 and work.spectra == 0
+    assert np.abs(again.eigvals - reference.eigvals).max() <= 1e-12 * np.abs(reference.eigvals).max()
+    assert isinstance(again.system, Eigensystem)
