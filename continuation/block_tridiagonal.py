@@ -12,10 +12,11 @@ column as a border: T (the first N - 1 block rows and columns) is block tridiago
 corners, factorized by block LU without pivoting between blocks (partial pivoting inside each
 b x b block), and the border by its Schur complement S = M_ll - F T^-1 E (E: the last block
 column, nonzero in block rows 0 and N - 2; F: the last block row). Solves with M and with M^T
-each cost O(N b^2) after the factorization. No pivoting between blocks: where a leading
-block of T is singular for the shift (a pivot block exactly singular) the factorization gives
-non-finite values and the caller falls back to a dense solve (refine_eigenpairs marks the
-pair unconverged).
+each cost O(N b^2) after the factorization. The compiled kernels factorize K shifts side by
+side (arrays with the shift last, every loop over the shifts innermost: _work, _factor,
+_solve). No pivoting between blocks: where a pivot block is singular for the shift the
+factorization reports it (ok False), and where one nearly is the solves lose accuracy;
+refine_eigenpairs then turns to LAPACK's pivoted banded LU in the folded order (_pivoted_rqi).
 
 Eigenpair refinement. Two-sided Rayleigh quotient iteration (Ostrowski; Parlett 1974) from a
 guess (lambda, r, l) with l^H r = 1:
@@ -24,7 +25,7 @@ guess (lambda, r, l) with l^H r = 1:
     lambda <- l^H A r,
 
 cubically convergent for a simple eigenvalue. Each iteration is one factorization and two
-solves, O(N b^3) per eigenpair; all eigenpairs are refined in one compiled loop. The residual
+solves, O(N b^3) per eigenpair; BATCH eigenpairs at a time in one compiled loop. The residual
 |A r - lambda r| (|r| = 1) and kappa = |l| |r| / |l^H r| bound the eigenvalue's error to first
 order by kappa |A r - lambda r| (Wilkinson).
 """

@@ -11,7 +11,7 @@ reference sample is carried to the new point x:
                 block_tridiagonal.py (pairs predicted within REACH times their moves of each
                 other refined together as a cluster),
 
-O(n^2 b^2) for the n = N b pairs against LAPACK's O(n^3): 4 to 5 times faster at n = 3000
+O(n^2 b^2) for the n = N b pairs against LAPACK's O(n^3): about 4 times faster at n = 3000
 on one core (docs/continuation.md, Eigenpair continuation).
 
 The result is used only when it is certified; otherwise (None) the caller takes the dense
@@ -48,8 +48,10 @@ Array = np.ndarray
 REFINE_FROM = 1500
 """Smallest n at which a full spectrum with vectors is refined from the previous sample rather
 than decomposed (not where the spectra run on a GPU, spectra.on_gpu, which is faster still).
-Measured (benchmarks/eigenpair_refinement.py, one core): LAPACK / refined 2.0 at n = 1200,
-4 to 5 at n = 3000; below n = 900 no gain."""
+Measured: one spectrum (benchmarks/eigenpair_refinement.py, one core) LAPACK / refined 2.3 at
+n = 900, 1.8 to 3.2 at n = 1500, 4.1 at n = 3000; whole sweeps with every spectrum refined are
+still slower at n = 600 (benchmarks/scaling.py --refine-from: 80 s against 69 s at N = 200),
+where the refinement's Python overhead and declined samples weigh more."""
 
 ITERATIONS = 6
 """Rayleigh quotient steps at most per pair (cubic convergence: 2 or 3 suffice for a step of
