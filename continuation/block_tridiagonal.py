@@ -626,7 +626,7 @@ def _refine_cluster(blocks: PeriodicBlocks, values: Array, right: Array, left: A
         if not shifted.ok:
             shifted = Shifted(blocks, nudged(sigma))
             if not shifted.ok:
-                return res
+                return np.full(idx.size, np.inf)  # not res: the cluster is left as it was
         X, Y = shifted.solve(X.T).T, shifted.solve(Y.T, transpose=True).T
         if not (np.isfinite(X).all() and np.isfinite(Y).all()):
             return np.full(idx.size, np.inf)
