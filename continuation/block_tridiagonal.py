@@ -579,9 +579,8 @@ def _found_twice(guess: Array, values: Array, right: Array, left: Array, residua
     1/2: one eigenvalue found twice, another lost), the one whose guess is farther from it."""
     done = np.isfinite(residual)
     bound = np.where(done, np.linalg.norm(left, axis=1) * np.where(done, residual, 0.0), 0.0)
-    i, j = touching(values, bound)
-    twice = np.abs(np.sum(left[i] * right[:, j].T, axis=1)) > 0.5
-    i, j = i[twice], j[twice]
+    i, j, cross = meeting_discs(values, bound, right, left)
+    i, j = i[cross > 0.5], j[cross > 0.5]
     farther = np.where(np.abs(guess[i] - values[i]) >= np.abs(guess[j] - values[j]), i, j)
     return np.unique(farther)
 
@@ -731,7 +730,11 @@ def touching(values: Array, bounds: Array) -> tuple[Array, Array]:
     return i[meet], j[meet]
 
 
-def separated(values: Array, bounds: Array) -> bool:
-    """Whether the discs |z - values_i| <= bounds_i are pairwise disjoint: then each holds a
-    different eigenvalue, and n of them hold the whole spectrum of an n x n matrix."""
-    return touching(values, bounds)[0].size == 0
+def meeting_discs(values: Array, bounds: Array, right: Array, left: Array) -> tuple[Array, Array, Array]:
+    """(i, j, cross): the pairs whose error discs |z - values_i| <= bounds_i meet (touching),
+    and for each the larger of |l_i^H r_j| and |l_j^H r_i| (l_i^H r_i = 1): near 1 where both
+    converged to one eigenpair, near 0 for two eigenpairs of a semisimple eigenvalue."""
+    i, j = touching(values, bounds)
+    cross = np.maximum(np.abs(np.sum(left[i] * right[:, j].T, axis=1)),
+                       np.abs(np.sum(left[j] * right[:, i].T, axis=1)))
+    return i, j, cross

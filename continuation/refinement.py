@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING, Optional
 
 import numpy as np
 
-from .block_tridiagonal import refine_eigenpairs, touching
+from .block_tridiagonal import meeting_discs, refine_eigenpairs
 from .linalg import book
 from .spectra import Eigensystem, on_gpu
 
@@ -77,8 +77,8 @@ BIORTHOGONAL = 1e-8
 EPS = np.finfo(float).eps
 
 
-def refinable(problem: Problem, reference: Optional[Sample]) -> bool:
-    """Whether a full sample of `problem` may be refined from `reference`: n >= REFINE_FROM,
+def refinable(reference: Optional[Sample]) -> bool:
+    """Whether a full sample may be refined from `reference`: n >= REFINE_FROM,
     dense spectra on the CPU, and a full reference with every eigenvalue's vectors and none
     excluded (no free disk, no spectral window)."""
     if reference is None or reference.partial or reference.system is None:
@@ -127,7 +127,7 @@ def certified(blocks, values: Array, right: Array, left: Array, residual: Array,
         return None
     kappa = np.linalg.norm(left, axis=1)  # |l_i| |r_i| / |l_i^H r_i| with |r_i| = 1, l_i^H r_i = 1
     bound = kappa * residual
-    if not degenerate_only(*touching(values, bound), kappa, right, left):
+    if not degenerate_only(*meeting_discs(values, bound, right, left), kappa):
         return None
     trace, trace2 = blocks.traces()
     n = values.size
@@ -138,16 +138,15 @@ def certified(blocks, values: Array, right: Array, left: Array, residual: Array,
     return Eigensystem(values, right, left)
 
 
-def degenerate_only(i: Array, j: Array, kappa: Array, right: Array, left: Array) -> bool:
-    """Whether the pairs (i, j) whose discs meet are all members of a semisimple degenerate
-    eigenvalue (a ring's standing waves, a mode repeated by symmetry): well conditioned
-    (kappa <= KAPPA) with biorthogonal vectors, |l_i^H r_j| and |l_j^H r_i| <= BIORTHOGONAL;
-    their discs then hold as many eigenvalues as they are. A pair found twice (r_i = r_j) fails
-    the second, a pair near a collision (kappa diverging) the first."""
+def degenerate_only(i: Array, j: Array, cross: Array, kappa: Array) -> bool:
+    """Whether the pairs (i, j) whose discs meet (block_tridiagonal.meeting_discs) are all
+    members of a semisimple degenerate eigenvalue (a ring's standing waves, a mode repeated by
+    symmetry): well conditioned (kappa <= KAPPA) with biorthogonal vectors, cross = max(|l_i^H
+    r_j|, |l_j^H r_i|) <= BIORTHOGONAL; their discs then hold as many eigenvalues as they are.
+    A pair found twice (r_i = r_j) fails the second, a pair near a collision (kappa diverging)
+    the first."""
     if i.size == 0:
         return True
     if np.any(kappa[i] > KAPPA) or np.any(kappa[j] > KAPPA):
         return False
-    cross = np.maximum(np.abs(np.sum(left[i] * right[:, j].T, axis=1)),
-                       np.abs(np.sum(left[j] * right[:, i].T, axis=1)))
     return bool(np.all(cross <= BIORTHOGONAL))

@@ -347,7 +347,7 @@ def sample_at(problem: Problem, s: float, x: Array, rel_tol: float, reference: O
     u, p = x[:-1], float(x[-1])
     if tangent is None:
         return make_sample(s, x, problem.eigensystem(u, p), rel_tol, reference)
-    system = refined_eigensystem(problem, x, reference) if refinable(problem, reference) else None
+    system = refined_eigensystem(problem, x, reference) if refinable(reference) else None
     if system is None:
         system = problem.eigensystem(u, p, vectors=True)
     dA = matrix_derivative(problem, x, tangent, side)

@@ -163,11 +163,11 @@ def test_refinement_applies_only_where_the_whole_spectrum_is_refined(monkeypatch
     reference = sample_at(problem, 0.0, x, 1e-9, None, tangent)
     n = reference.eigvals.size
     monkeypatch.setattr(refinement, "REFINE_FROM", n + 1)
-    assert not refinement.refinable(problem, reference)
+    assert not refinement.refinable(reference)
     monkeypatch.setattr(refinement, "REFINE_FROM", n)
-    assert refinement.refinable(problem, reference)
+    assert refinement.refinable(reference)
     monkeypatch.setattr(refinement, "on_gpu", lambda n: True)
-    assert not refinement.refinable(problem, reference)
+    assert not refinement.refinable(reference)
     monkeypatch.setattr(refinement, "on_gpu", lambda n: False)
     with measured() as work:
         again = sample_at(problem, 0.0, x, 1e-9, reference, tangent)
