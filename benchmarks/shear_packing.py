@@ -4,7 +4,9 @@ points, the contact events, the collisions located, how often an accepted state 
 pairs and how many, the largest force residual, how the branch ended (p_end; fold: the
 saddle-node in gamma, the plastic event of quasistatic shear; ds_min; commit) and the smallest
 real part of the tracked spectrum at the end over its value at the start (a fold drives it to
-0). One line per run, measured in this run, scans inline (workers = 0).
+0). One line per run, measured in this run; the collision scans run on scan workers as in
+`diskfriction bifurcate` (two on a machine with two cores or more, from n = PARALLEL_FROM), or
+on --workers K (0: inline, every step's scan in this process, bit-for-bit reproducible).
 
 Plastic events (folds) are passed up to PLASTIC_EVENTS times (packings/plastic.py); the column
 "plastic" counts them and "ended" says how the last segment ended.
@@ -13,13 +15,13 @@ With a window LO:HI (raw units of M^-1 J) only Re lambda in [LO, HI] is tracked,
 shift-invert (bifurcate --window): "collisions" and "complex" then count the window's, and
 "widened" how often the window crowded and was sized anew (packings/shear.py).
 
-Run: python benchmarks/shear_packing.py [N:SEEDS:GAMMA_END[:LO:HI] ...]
+Run: python benchmarks/shear_packing.py [--workers K] [N:SEEDS:GAMMA_END[:LO:HI] ...]
      (default: 32:3:0.01 64:3:0.01)
 """
 from __future__ import annotations
 
+import argparse
 import collections
-import sys
 import time
 
 import numpy as np
@@ -42,12 +44,12 @@ def kinds(branch) -> str:
     return ", ".join(f"{kind} {n}" for kind, n in counts.most_common()) or "-"
 
 
-def run(N: int, seed: int, gamma_end: float, window=None) -> str:
+def run(N: int, seed: int, gamma_end: float, window=None, workers=None) -> str:
     scene = PackingScene(N=N, seed=seed, gamma_range=(0.0, gamma_end))
     start = time.perf_counter()
     packing = prepare_scene(scene)
     prepared = time.perf_counter() - start
-    branch = shear(scene, packing, ShearParams(workers=0), plastic_events=PLASTIC_EVENTS,
+    branch = shear(scene, packing, ShearParams(workers=workers), plastic_events=PLASTIC_EVENTS,
                    window=window)
     sheared = time.perf_counter() - start - prepared
     fell = smallest(branch.eigenvalues[-1]) / smallest(branch.eigenvalues[0])
@@ -60,17 +62,23 @@ def run(N: int, seed: int, gamma_end: float, window=None) -> str:
             f"{kinds(branch)}")
 
 
-def main(runs: list[str]) -> None:
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("runs", nargs="*", default=["32:3:0.01", "64:3:0.01"])
+    ap.add_argument("--workers", type=int, default=None, help="scan workers (default: as bifurcate)")
+    args = ap.parse_args()
+    print(f"{time.strftime('%Y-%m-%d %H:%M')}, load average {open('/proc/loadavg').read().split()[0]}, "
+          f"workers {'automatic' if args.workers is None else args.workers}")
     print(f"{'N':>5} {'seed':>4} {'prep s':>7} {'shear s':>7} {'gamma end':>10} {'ended':>12} "
           f"{'points':>6} {'events':>6} {'collisions':>10} {'complex':>8} {'pairs':>7} "
           f"{'max |F|':>9} {'loose':>5} {'min/start':>9} {'plastic':>7} {'sigma_xy':>9} "
           f"{'widened':>7}  kinds")
-    for spec in runs:
+    for spec in args.runs:
         N, seeds, gamma_end, *band = spec.split(":")
         window = tuple(float(w) for w in band) if band else None
         for seed in range(1, int(seeds) + 1):
-            print(run(int(N), seed, float(gamma_end), window), flush=True)
+            print(run(int(N), seed, float(gamma_end), window, args.workers), flush=True)
 
 
 if __name__ == "__main__":
-    main(sys.argv[1:] or ["32:3:0.01", "64:3:0.01"])
+    main()

@@ -111,13 +111,14 @@ def crossed(g0: Array, g1: Array) -> Array:
     return ((g0 > 0) & (g1 <= 0)) | ((g0 < 0) & (g1 > 0))
 
 
-def _cut_at_event(problem: Problem, x: Array, step: _Step, g0: Array, par: ContinuationParams):
-    """The step ended on the far side of its first event (located on the branch), or the step
-    itself if no event function changes sign over it. Raises SegmentSolveError."""
+def _cut_at_event(problem: Problem, x: Array, t: Array, step: _Step, g0: Array, par: ContinuationParams):
+    """The step from x (unit tangent t) ended on the far side of its first event (located on the
+    branch), or the step itself if no event function changes sign over it. Raises
+    SegmentSolveError."""
     g1 = problem.event_functions(step.x[:-1], step.x[-1])
     if not crossed(g0, g1).any():
         return step
-    seg = Segment(problem, x, step.x, par.newton_tol, par.max_newton)
+    seg = Segment(problem, x, step.x, par.newton_tol, par.max_newton, t, step.tangent)
     hi, x_hi = 1.0, step.x
     while True:  # locate the first crossing in [0, hi]; one found crossed on the near side wins
         mask = crossed(g0, g1)
@@ -314,7 +315,7 @@ def _advance(problem, scans, here: _Start, index: int, pending: deque, previous,
         if params.stop_at_fold and forward.min() < 0:
             return _towards_fold(here, "the next step passed a fold in p", params)
         if here.g is not None:
-            step = _cut_at_event(problem, here.x, step, here.g, params)
+            step = _cut_at_event(problem, here.x, here.t, step, here.g, params)
         end = _sample(problem, 1.0, step.x, step.tangent, detection, here.sample, side=-1)
         if params.stop_at_fold and negative_parity(end) != negative_parity(here.sample):
             return _towards_fold(here, "the next step crossed a fold: a real eigenvalue of the "

@@ -166,6 +166,7 @@ class StepScan:
             x = self.segment.point(s)
             self.solves += 1
             self._points[s] = (x, tangent(self.problem, x, self.segment.sigma) if self.detector.slopes else None)
+            self.segment.remember(s, x.copy(), self._points[s][1])
         return self._points[s]
 
     def insert(self, s: float):

@@ -180,10 +180,14 @@ def factorize(M: Matrix) -> Factorization:
 def _empty_line(M: sp.csc_array) -> Optional[str]:
     """"row" or "column" if the sparse M has one without a nonzero value (exactly singular),
     else None."""
-    magnitude = abs(M)
-    if magnitude.max(axis=0).toarray().min() == 0.0:
+    stored = M.data != 0.0  # O(nnz): no sparse copies (1.5 ms at n = 770 took a quarter of an LU)
+    column = np.zeros(M.shape[1], bool)
+    column[np.repeat(np.arange(M.shape[1]), np.diff(M.indptr))[stored]] = True
+    if not column.all():
         return "column"
-    if magnitude.max(axis=1).toarray().min() == 0.0:
+    row = np.zeros(M.shape[0], bool)
+    row[M.indices[stored]] = True
+    if not row.all():
         return "row"
     return None
 

@@ -13,6 +13,7 @@ b . t > 0, so the orientation is kept and folds are passed.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Optional
 
 import numpy as np
 
@@ -55,8 +56,11 @@ def residual_norm(problem: Problem, x: Array) -> float:
 
 
 def bordered_newton(problem: Problem, x_target: Array, border: Array,
-                    tol: float, max_iter: int) -> NewtonResult:
-    """Solve G(u, p) = 0, b . (x - x_target) = 0 by Newton from x_target.
+                    tol: float, max_iter: int, start: Optional[Array] = None) -> NewtonResult:
+    """Solve G(u, p) = 0, b . (x - x_target) = 0 by Newton from x_target, or from `start` (a
+    prediction on the hyperplane b . (x - x_target) = 0, then updated at least once: a start
+    that already meets tol is polished to the accuracy a corrector from afar ends with, so that
+    a function of the point, evaluated along a bracket, does not carry tol's noise).
 
     Converged when max|G| <= tol (the border row is linear, so it holds to rounding after
     the first update and exactly at the start), or, for a problem with `rounding` > 0, when
@@ -64,16 +68,17 @@ def bordered_newton(problem: Problem, x_target: Array, border: Array,
     Fails on max_iter updates without convergence (saying what G rounds to there,
     NewtonResult.failure), a non-finite residual or a singular bordered matrix.
     """
-    x = np.array(x_target, dtype=float)
+    x = np.array(x_target if start is None else start, dtype=float)
+    first = 0 if start is None else 1
     for it in range(max_iter + 1):
         G = problem.residual(x[:-1], x[-1])
         r = float(np.max(np.abs(G), initial=0.0))
         if not np.isfinite(r):
             return NewtonResult(x, it, r, False)
-        if r <= tol:
+        if r <= tol and it >= first:
             return NewtonResult(x, it, r, True)
         M = bordered_matrix(problem, x, border)
-        if problem.rounding and r <= problem.rounding * term_size(M, x):
+        if problem.rounding and it >= first and r <= problem.rounding * term_size(M, x):
             return NewtonResult(x, it, r, True)  # G is not computed closer to 0 than this
         if it == max_iter:
             return NewtonResult(x, max_iter, r, False, ROUNDING * term_size(M, x))

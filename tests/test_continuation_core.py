@@ -441,3 +441,21 @@ def test_a_crowded_spectral_window_ends_the_run_at_its_last_certified_point():
     assert 0.4 < result.p[-1] <= 0.5 and status.p == result.p[-1]
     assert [c.kind for c in result.collisions] == ["birth"]
     assert result.collisions[0].p == pytest.approx(p1, abs=1e-10)
+
+
+def test_sparse_factorization_names_an_empty_row_or_column():
+    """A sparse matrix with a row or column of no nonzero value (an explicitly stored zero
+    included) is refused before SuperLU sees it, saying which; a full one factorizes."""
+    import scipy.sparse as sp
+    from diskfriction.continuation.linalg import SingularMatrix, factorize
+
+    full = np.array([[2.0, 1.0, 0.0], [0.0, 3.0, 1.0], [1.0, 0.0, 4.0]])
+    assert np.allclose(factorize(sp.csc_array(full)).solve(np.ones(3)), np.linalg.solve(full, np.ones(3)))
+    no_column = full.copy()
+    no_column[:, 1] = 0.0
+    with pytest.raises(SingularMatrix, match="empty column"):
+        factorize(sp.csc_array(no_column))
+    stored_zero = sp.csc_array(full)
+    stored_zero.data[stored_zero.indices == 2] = 0.0  # row 2 stored, all zero
+    with pytest.raises(SingularMatrix, match="empty row"):
+        factorize(stored_zero)
