@@ -459,3 +459,43 @@ def test_sparse_factorization_names_an_empty_row_or_column():
     stored_zero.data[stored_zero.indices == 2] = 0.0  # row 2 stored, all zero
     with pytest.raises(SingularMatrix, match="empty row"):
         factorize(stored_zero)
+
+
+def test_segment_points_start_from_the_hermite_prediction():
+    """On the circle u^2 + p^2 = 1 the point inside a step is predicted from the ends and their
+    tangents to O(h^4) (the straight line: O(h^2)), lies on the hyperplane at s, and the
+    corrected point is the branch point there (to rounding); a point solved later is predicted
+    from the nearest solved points, so it starts closer still."""
+    from diskfriction.continuation.newton import tangent
+    from diskfriction.continuation.segment import Segment
+
+    problem = FunctionProblem(G=lambda u, p: np.array([u[0] ** 2 + p ** 2 - 1.0]),
+                              G_u=lambda u, p: np.array([[2.0 * u[0]]]), G_p=lambda u, p: np.array([2.0 * p]))
+
+    def on_circle(angle):
+        return np.array([np.cos(angle), np.sin(angle)])
+
+    def segment(h, tangents=True):
+        x_a, x_b = on_circle(0.3), on_circle(0.3 + h)
+        t_a = tangent(problem, x_a, on_circle(0.3 + np.pi / 2))
+        t_b = tangent(problem, x_b, t_a)
+        return Segment(problem, x_a, x_b, 1e-14, 8, *((t_a, t_b) if tangents else (None, None)))
+
+    def error(seg, s):  # distance of the prediction from the branch point on its hyperplane
+        return np.linalg.norm(seg.predicted(s) - seg.point(s))
+
+    for h in (0.2, 0.1):
+        seg = segment(h)
+        x = seg.point(0.37)
+        assert abs(np.linalg.norm(x) - 1.0) < 1e-14
+        assert abs(seg.sigma @ (seg.predicted(0.37) - seg.secant_point(0.37))) < 1e-15
+    hermite = [error(segment(h), 0.37) for h in (0.2, 0.1)]
+    line = [error(segment(h, tangents=False), 0.37) for h in (0.2, 0.1)]
+    assert 12.0 < hermite[0] / hermite[1] < 20.0  # O(h^4): 16
+    assert 3.0 < line[0] / line[1] < 5.0  # O(h^2): 4
+    assert hermite[1] < 1e-2 * line[1]
+    exact = segment(0.2).point(0.5)
+    far = np.linalg.norm(segment(0.2).predicted(0.5) - exact)
+    seg = segment(0.2)
+    seg.point(0.499), seg.point(0.501)  # a bracket's points: no tangents, the line between them
+    assert np.linalg.norm(seg.predicted(0.5) - exact) < 1e-2 * far
