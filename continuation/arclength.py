@@ -316,6 +316,11 @@ def _advance(problem, scans, here: _Start, index: int, pending: deque, previous,
             return _towards_fold(here, "the next step passed a fold in p", params)
         if here.g is not None:
             step = _cut_at_event(problem, here.x, here.t, step, here.g, params)
+            back = params.direction * np.array([step.x[-1] - here.x[-1], step.tangent[-1]])
+            if params.stop_at_fold and step.event and back.min() < 0:
+                # the step went round two folds (an S in p, parity unchanged at its ends) and
+                # its first event lies on the branch between them
+                return _towards_fold(here, "the step's first contact event lies past a fold in p", params)
         end = _sample(problem, 1.0, step.x, step.tangent, detection, here.sample, side=-1)
         if params.stop_at_fold and negative_parity(end) != negative_parity(here.sample):
             return _towards_fold(here, "the next step crossed a fold: a real eigenvalue of the "

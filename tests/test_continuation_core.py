@@ -499,3 +499,31 @@ def test_segment_points_start_from_the_hermite_prediction():
     seg = segment(0.2)
     seg.point(0.499), seg.point(0.501)  # a bracket's points: no tangents, the line between them
     assert np.linalg.norm(seg.predicted(0.5) - exact) < 1e-2 * far
+
+
+def test_stop_at_fold_sees_a_step_round_an_s_through_its_event():
+    """p = u^3 - eps u is an S with folds at u = -+sqrt(eps / 3). The tracked matrix here is not
+    dG/du (A = 1, as a packing's M^-1 J in a window may show no eigenvalue crossing 0), so only
+    p and the tangent tell a fold. A long step from u = -0.01 lands on the upper branch (p and
+    the tangent forward at both ends) and its first event (u = 0) lies on the middle branch,
+    where p runs back: the step is halved like any step past a fold, and the run ends at the
+    first fold (within ds_min), not at the event on the unstable branch."""
+    from dataclasses import dataclass
+
+    eps = 1e-6
+
+    @dataclass(frozen=True)
+    class WithEvent(FunctionProblem):
+        def event_functions(self, u, p):
+            return np.array([u[0]])
+
+    problem = WithEvent(G=lambda u, p: np.array([u[0] ** 3 - eps * u[0] - p]),
+                        G_u=lambda u, p: np.array([[3 * u[0] ** 2 - eps]]), G_p=lambda u, p: np.array([-1.0]),
+                        A=lambda u, p: np.array([[1.0]]))
+    par = ContinuationParams(ds=0.02, ds_min=1e-12, ds_max=0.02, newton_tol=1e-15, p_min=-1.0, p_max=1.0,
+                             stop_at_fold=True)
+    br = continuation(problem, np.array([-0.01]), -1e-6 + 1e-8, par)
+    fold_u = -np.sqrt(eps / 3)
+    assert br.status.code == StopCode.FOLD
+    assert np.all(np.diff(br.p) >= 0) and np.all(br.u[:, 0] < fold_u)  # p is flat to rounding there
+    assert abs(br.p[-1] - (fold_u ** 3 - eps * fold_u)) < 1e-12

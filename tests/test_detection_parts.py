@@ -311,3 +311,22 @@ def test_measured_work_is_what_the_block_spent_and_nests():
             book_counts((2, 1, 0, 5, 0, 0))
     assert inner.counts() == (3, 1, 0, 5, 0, 0)
     assert outer.counts() == (4, 1, 0, 5, 0, 0)
+
+
+def test_a_located_double_eigenvalue_must_be_the_pairs_own():
+    """belongs_to_pair: over an interval where labels 0, 1 meet near lambda = 1 and labels 2, 3
+    near lambda = 3, a double eigenvalue found at 3 is not the collision of (0, 1) (the locator
+    started from one pair's model and converged on the other's), one found at 1 is."""
+    from diskfriction.continuation.detectors.fast import belongs_to_pair
+    from diskfriction.continuation.samples import make_sample
+    from diskfriction.continuation.segment import Segment
+    from diskfriction.continuation.spectra import Eigensystem
+
+    x_a, x_b, t = np.array([0.0, 0.0]), np.array([0.0, 1.0]), np.array([0.0, 1.0])
+    segment = Segment(None, x_a, x_b, 1e-12, 8)
+    slopes = np.array([1.0, -1.0, 1.0, -1.0])
+    a = make_sample(0.0, x_a, Eigensystem(np.array([0.5, 1.5, 2.5, 3.5], complex)), 1e-9, None, t, slopes)
+    b = make_sample(1.0, x_b, Eigensystem(np.array([1.5, 0.5, 3.5, 2.5], complex)), 1e-9, None, t, slopes)
+    assert belongs_to_pair(a, b, 0, 1, 1.0, 1.0, 0.5, segment)
+    assert not belongs_to_pair(a, b, 0, 1, 3.0, 1.0, 0.5, segment)
+    assert belongs_to_pair(a, b, 2, 3, 3.0, 3.0, 0.5, segment)
