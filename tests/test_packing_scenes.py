@@ -241,8 +241,11 @@ def test_verify_on_a_packing_measures_each_states_growth_against_its_spectrum(tm
     """`verify PACKING` on 24 disks to gamma = 0.002 (t_end 400): runs from states with complex
     pairs grow at the spectrum's rate (most within 2 %; two pairs of near rates may blur one)
     and some slide; runs from states with every eigenvalue real never slide, and relaxed at
-    rest they come back to the state, while complex pairs' runs rearrange the contact network,
-    slip (the stress drops by 1 % with the same contacts) or come back."""
+    rest they come back to the state, while complex pairs' runs come back or change the state
+    (rearrange the contact network, or slip: the stress drops by 1 % with the same contacts).
+    Which of the two changes a grown run ends in is not asked: it hangs on the start at
+    rounding level (a state 1.6e-16 away in strain, the same rates to 1e-5, relaxed once with
+    two contacts opened and once with none, docs/packings.md)."""
     import json
 
     scene = write(tmp_path, "[packing]\nN = 24\nseed = 3\n[shear]\ngamma = [0.0, 0.002]\n")
@@ -260,7 +263,7 @@ def test_verify_on_a_packing_measures_each_states_growth_against_its_spectrum(tm
     assert all(r["outcome"] == "came back" for r in still)
     assert min(r["stress_change_at_rest"] for r in grown) <= -1e-2
     outcomes = {r["outcome"] for r in grown}
-    assert {"rearranged", "slipped", "came back"} <= outcomes
+    assert "came back" in outcomes and outcomes & {"rearranged", "slipped"}
     for r in grown:
         changed = r["contacts_opened_at_rest"] + r["contacts_formed_at_rest"] > 0
         assert (r["outcome"] == "rearranged") == changed
