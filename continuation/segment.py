@@ -12,11 +12,11 @@ state committed at x_a (events are located before the step is committed).
 The corrector at s starts from the point predicted by the solved points nearest s on either
 side (the ends and every point solved or remembered since): the cubic Hermite interpolant
 where both carry tangents, else the straight line between them. Both lie on the hyperplane at
-s (sigma . x is linear in s along the branch). (Choosing the Hermite interpolant of farther
-points with tangents where a curvature estimate favoured it took 2.1 Newton updates per point
-against 1.7 on 256 disks sheared to 1e-3: a bracket's nearest points are the better guide.) A bracket refined to 1e-13 then costs its late
-points a residual evaluation each instead of the three or four Newton updates a start from the
-secant point needs (docs/continuation.md).
+s (sigma . x is linear in s along the branch). A bracket refined to 1e-13 then costs its late
+points one Newton update each instead of the three or four a start from the secant point
+needs (docs/continuation.md). (Choosing the Hermite interpolant of farther points with
+tangents where a curvature estimate favoured it took 2.1 Newton updates per point against 1.7
+on 256 disks sheared to 1e-3: a bracket's nearest points are the better guide.)
 """
 from __future__ import annotations
 
