@@ -50,7 +50,7 @@ def _locate(problem: Problem, branch: Branch, k: int, psi: Callable[[Segment, Ar
             span: tuple[float, float] = (0.0, 1.0)):
     """Refine the sign change of psi over step k, between segment coordinates span (default the
     whole step); returns (x at the interpolated root, p bracket)."""
-    seg = Segment(problem, branch.x[k], branch.x[k + 1], newton_tol, max_newton)
+    seg = Segment(problem, branch.x[k], branch.x[k + 1], newton_tol, max_newton, polish=False)
     pts, vals = {}, {}
 
     def f(s: float) -> float:
@@ -90,7 +90,7 @@ def branch_point_brackets(problem: Problem, branch: Branch, newton_tol: float = 
     x, lam = branch.x, branch.eigenvalues
     found = []
     for k in range(len(branch) - 1):
-        seg = Segment(problem, x[k], x[k + 1], newton_tol, max_newton)
+        seg = Segment(problem, x[k], x[k + 1], newton_tol, max_newton, polish=False)
         ends = lam[k:k + 2]
         real = (eigen_status(ends[0], rel_tol) == 0) & (eigen_status(ends[1], rel_tol) == 0)
         re0, re1 = ends[0].real[real], ends[1].real[real]

@@ -45,7 +45,11 @@ class SegmentSolveError(RuntimeError):
 @dataclass(frozen=True)
 class Segment:
     """The branch between x_a (s = 0) and x_b (s = 1), with the unit tangents there if known
-    (t_a, t_b, oriented along the branch); see the module docstring."""
+    (t_a, t_b, oriented along the branch); see the module docstring. polish: a predicted point
+    gets at least one Newton update (bordered_newton's start), for brackets of an event
+    function; not for the brackets of a branch point, where the bordered matrix is nearly
+    singular and an update from a point already within tol kicks it off the branch (the
+    Brusselator chain's 17 branch points were lost so)."""
 
     problem: Problem
     x_a: Array
@@ -54,6 +58,7 @@ class Segment:
     max_iter: int
     t_a: Optional[Array] = None
     t_b: Optional[Array] = None
+    polish: bool = True
     _known: dict = field(default_factory=dict, compare=False, repr=False)
 
     @cached_property
@@ -108,8 +113,9 @@ class Segment:
             return self.x_b.copy()
         if s in self._known:
             return self._known[s][0].copy()
-        res = bordered_newton(self.problem, self.secant_point(s), self.sigma, self.tol, self.max_iter,
-                              self.predicted(s))
+        predicted = self.predicted(s)
+        res = bordered_newton(self.problem, self.secant_point(s) if not self.polish else predicted,
+                              self.sigma, self.tol, self.max_iter, predicted if self.polish else None)
         if not res.converged:
             raise SegmentSolveError(f"corrector failed at s={s:.6g} ({res.failure()})")
         self.remember(s, res.x.copy())
