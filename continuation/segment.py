@@ -114,8 +114,11 @@ class Segment:
         if s in self._known:
             return self._known[s][0].copy()
         predicted = self.predicted(s)
-        res = bordered_newton(self.problem, self.secant_point(s) if not self.polish else predicted,
-                              self.sigma, self.tol, self.max_iter, predicted if self.polish else None)
+        if self.polish:
+            res = bordered_newton(self.problem, self.secant_point(s), self.sigma, self.tol, self.max_iter,
+                                  predicted)
+        else:  # from the prediction (on the same hyperplane), updated only while above tol
+            res = bordered_newton(self.problem, predicted, self.sigma, self.tol, self.max_iter)
         if not res.converged:
             raise SegmentSolveError(f"corrector failed at s={s:.6g} ({res.failure()})")
         self.remember(s, res.x.copy())
