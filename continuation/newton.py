@@ -55,12 +55,12 @@ def residual_norm(problem: Problem, x: Array) -> float:
     return float(np.max(np.abs(problem.residual(x[:-1], x[-1])), initial=0.0))
 
 
-def bordered_newton(problem: Problem, x_target: Array, border: Array,
-                    tol: float, max_iter: int, start: Optional[Array] = None) -> NewtonResult:
+def bordered_newton(problem: Problem, x_target: Array, border: Array, tol: float, max_iter: int,
+                    start: Optional[Array] = None, polish: bool = False) -> NewtonResult:
     """Solve G(u, p) = 0, b . (x - x_target) = 0 by Newton from x_target, or from `start` (a
-    prediction on the hyperplane b . (x - x_target) = 0, then updated at least once: a start
-    that already meets tol is polished to the accuracy a corrector from afar ends with, so that
-    a function of the point, evaluated along a bracket, does not carry tol's noise).
+    prediction on the hyperplane b . (x - x_target) = 0). polish: update at least once, so that
+    a start already within tol ends as accurate as a corrector from afar (a function of the
+    point, evaluated along a bracket, then does not carry tol's noise).
 
     Converged when max|G| <= tol (the border row is linear, so it holds to rounding after
     the first update and exactly at the start), or, for a problem with `rounding` > 0, when
@@ -69,7 +69,7 @@ def bordered_newton(problem: Problem, x_target: Array, border: Array,
     NewtonResult.failure), a non-finite residual or a singular bordered matrix.
     """
     x = np.array(x_target if start is None else start, dtype=float)
-    first = 0 if start is None else 1
+    first = 1 if polish else 0
     for it in range(max_iter + 1):
         G = problem.residual(x[:-1], x[-1])
         r = float(np.max(np.abs(G), initial=0.0))

@@ -46,7 +46,7 @@ class SegmentSolveError(RuntimeError):
 class Segment:
     """The branch between x_a (s = 0) and x_b (s = 1), with the unit tangents there if known
     (t_a, t_b, oriented along the branch); see the module docstring. polish: a predicted point
-    gets at least one Newton update (bordered_newton's start), for brackets of an event
+    gets at least one Newton update (bordered_newton's polish), for brackets of an event
     function; not for the brackets of a branch point, where the bordered matrix is nearly
     singular and an update from a point already within tol kicks it off the branch (the
     Brusselator chain's 17 branch points were lost so)."""
@@ -113,12 +113,8 @@ class Segment:
             return self.x_b.copy()
         if s in self._known:
             return self._known[s][0].copy()
-        predicted = self.predicted(s)
-        if self.polish:
-            res = bordered_newton(self.problem, self.secant_point(s), self.sigma, self.tol, self.max_iter,
-                                  predicted)
-        else:  # from the prediction (on the same hyperplane), updated only while above tol
-            res = bordered_newton(self.problem, predicted, self.sigma, self.tol, self.max_iter)
+        res = bordered_newton(self.problem, self.secant_point(s), self.sigma, self.tol, self.max_iter,
+                              self.predicted(s), self.polish)
         if not res.converged:
             raise SegmentSolveError(f"corrector failed at s={s:.6g} ({res.failure()})")
         self.remember(s, res.x.copy())

@@ -48,7 +48,8 @@ import scipy.sparse as sp
 from diskfriction.continuation.problem import Problem
 from diskfriction.errors import OneLineError
 from diskfriction.continuation.spectra import Eigensystem, eigensystem
-from diskfriction.continuation.spectral_window import Window, sized, widened, window_eigensystem
+from diskfriction.continuation.spectral_window import (EXTRA, MARGIN, Window, sized, widened,
+                                                       window_eigensystem)
 from diskfriction.matrices import Matrix
 from diskfriction.packings.network import D, Network
 
@@ -82,9 +83,9 @@ row sum at the committed state: below every eigenvalue of A_red (Gershgorin), so
 shift-invert near the tracked spectrum (a partial sample near a fold's zero eigenvalue) never
 meets the gauge rows, and constant along a step, so that dA/dgamma is zero there."""
 
-WINDOW_MARGIN, WINDOW_EXTRA = 1.5, 8
+WINDOW_MARGIN, WINDOW_EXTRA = MARGIN, EXTRA
 """A spectral window's k at the start of a segment: WINDOW_MARGIN times the eigenvalues within
-its reach there, plus WINDOW_EXTRA, as the chain's. Where shear softens the low spectrum and
+its reach there, plus WINDOW_EXTRA: the chain's (spectral_window.MARGIN, EXTRA: 1.5 and 8). Where shear softens the low spectrum and
 the window crowds, it is sized anew and the run goes on (packings/shear.py). The cost of a
 window sample grows about as k: with 2 and 16 (k = 68 against 47 at the start) 256 disks took
 188.5 s to gamma = 2e-3 against 135.0 s, on the same 207 points with the same 150
