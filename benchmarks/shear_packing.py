@@ -67,17 +67,34 @@ def main() -> None:
     ap.add_argument("runs", nargs="*", default=["32:3:0.01", "64:3:0.01"])
     ap.add_argument("--workers", type=int, default=None, help="scan workers (default: as bifurcate)")
     args = ap.parse_args()
+    if args.workers is not None and args.workers < 0:
+        ap.error(f"--workers: must be >= 0 (got {args.workers})")
+    runs = [parsed(spec, ap) for spec in args.runs]
     print(f"{time.strftime('%Y-%m-%d %H:%M')}, load average {open('/proc/loadavg').read().split()[0]}, "
           f"workers {'automatic' if args.workers is None else args.workers}")
     print(f"{'N':>5} {'seed':>4} {'prep s':>7} {'shear s':>7} {'gamma end':>10} {'ended':>12} "
           f"{'points':>6} {'events':>6} {'collisions':>10} {'complex':>8} {'pairs':>7} "
           f"{'max |F|':>9} {'loose':>5} {'min/start':>9} {'plastic':>7} {'sigma_xy':>9} "
           f"{'widened':>7}  kinds")
-    for spec in args.runs:
-        N, seeds, gamma_end, *band = spec.split(":")
-        window = tuple(float(w) for w in band) if band else None
-        for seed in range(1, int(seeds) + 1):
-            print(run(int(N), seed, float(gamma_end), window, args.workers), flush=True)
+    for N, seeds, gamma_end, window in runs:
+        for seed in range(1, seeds + 1):
+            print(run(N, seed, gamma_end, window, args.workers), flush=True)
+
+
+def parsed(spec: str, ap: argparse.ArgumentParser) -> tuple:
+    """(N, seeds, gamma_end, window or None) of N:SEEDS:GAMMA_END[:LO:HI]; a one-line usage
+    error (exit 2) for anything else."""
+    parts = spec.split(":")
+    try:
+        if len(parts) not in (3, 5):
+            raise ValueError
+        N, seeds, gamma_end = int(parts[0]), int(parts[1]), float(parts[2])
+        window = (float(parts[3]), float(parts[4])) if len(parts) == 5 else None
+    except ValueError:
+        ap.error(f"run {spec!r}: expected N:SEEDS:GAMMA_END[:LO:HI], e.g. 256:1:0.002:-3:8")
+    if N < 2 or seeds < 1 or not gamma_end > 0 or (window is not None and not window[0] < window[1]):
+        ap.error(f"run {spec!r}: needs N >= 2, SEEDS >= 1, GAMMA_END > 0 and LO < HI")
+    return N, seeds, gamma_end, window
 
 
 if __name__ == "__main__":

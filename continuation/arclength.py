@@ -311,13 +311,11 @@ def _advance(problem, scans, here: _Start, index: int, pending: deque, previous,
     it stops there, else None)."""
     try:
         step = _attempt(problem, here.x, here.t, here.ds, params)
-        forward = params.direction * np.array([step.x[-1] - here.x[-1], step.tangent[-1]])
-        if params.stop_at_fold and forward.min() < 0:
+        if params.stop_at_fold and _runs_back(here, step, params):
             return _towards_fold(here, "the next step passed a fold in p", params)
         if here.g is not None:
             step = _cut_at_event(problem, here.x, here.t, step, here.g, params)
-            back = params.direction * np.array([step.x[-1] - here.x[-1], step.tangent[-1]])
-            if params.stop_at_fold and step.event and back.min() < 0:
+            if params.stop_at_fold and step.event and _runs_back(here, step, params):
                 # the step went round two folds (an S in p, parity unchanged at its ends) and
                 # its first event lies on the branch between them
                 return _towards_fold(here, "the step's first contact event lies past a fold in p", params)
@@ -352,6 +350,12 @@ def _advance(problem, scans, here: _Start, index: int, pending: deque, previous,
     g = problem.event_functions(committed.x[:-1], committed.x[-1]) if here.g is not None else None
     return _Start(committed.x, committed.tangent, end, ds, g), (_end_status(committed.x[-1], params)
                                                                 if committed.last else None)
+
+
+def _runs_back(here: _Start, step: _Step, params: ContinuationParams) -> bool:
+    """Whether p at the step's end, or its tangent there, points back against the run's
+    direction: the step passed a fold in p."""
+    return min(params.direction * (step.x[-1] - here.x[-1]), params.direction * step.tangent[-1]) < 0
 
 
 def _towards_fold(here: _Start, reason: str, params: ContinuationParams):

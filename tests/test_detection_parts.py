@@ -321,12 +321,14 @@ def test_a_located_double_eigenvalue_must_be_the_pairs_own():
     from diskfriction.continuation.samples import make_sample
     from diskfriction.continuation.segment import Segment
     from diskfriction.continuation.spectra import Eigensystem
+    from diskfriction.continuation.verdicts import scaled_slopes
 
     x_a, x_b, t = np.array([0.0, 0.0]), np.array([0.0, 1.0]), np.array([0.0, 1.0])
     segment = Segment(None, x_a, x_b, 1e-12, 8)
     slopes = np.array([1.0, -1.0, 1.0, -1.0])
     a = make_sample(0.0, x_a, Eigensystem(np.array([0.5, 1.5, 2.5, 3.5], complex)), 1e-9, None, t, slopes)
     b = make_sample(1.0, x_b, Eigensystem(np.array([1.5, 0.5, 3.5, 2.5], complex)), 1e-9, None, t, slopes)
-    assert belongs_to_pair(a, b, 0, 1, 1.0, 1.0, 0.5, segment)
-    assert not belongs_to_pair(a, b, 0, 1, 3.0, 1.0, 0.5, segment)
-    assert belongs_to_pair(a, b, 2, 3, 3.0, 3.0, 0.5, segment)
+    d = scaled_slopes(a, b, segment)
+    assert belongs_to_pair(a, b, 0, 1, 1.0, 1.0, 0.5, *d)
+    assert not belongs_to_pair(a, b, 0, 1, 3.0, 1.0, 0.5, *d)
+    assert belongs_to_pair(a, b, 2, 3, 3.0, 3.0, 0.5, *d)

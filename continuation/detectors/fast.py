@@ -59,7 +59,8 @@ def locate(scan, idx: int, i: int, j: int, kind: Kind) -> Optional[Collision]:
     scan.samples[idx], scan.samples[idx + 1]; None if it fails or lands outside the interval."""
     a, b = scan.samples[idx], scan.samples[idx + 1]
     segment, params = scan.segment, scan.params
-    mean, D = event_model(a, b, i, j, *scaled_slopes(a, b, segment))
+    slopes = scaled_slopes(a, b, segment)
+    mean, D = event_model(a, b, i, j, *slopes)
     roots = certify.cubic_roots_in_unit(D)
     t0 = roots[0] if roots else 0.5
     right, left = kind.real_side(a, b).system.vectors(i)
@@ -77,7 +78,7 @@ def locate(scan, idx: int, i: int, j: int, kind: Kind) -> Optional[Collision]:
     if not (a.s - 1e-9 <= s <= b.s + 1e-9 and lo - params.tol_p <= p <= hi + params.tol_p):
         return None
     t = (s - a.s) / (b.s - a.s)
-    if not belongs_to_pair(a, b, i, j, found.lam, float(certify.cubic_at(mean, t)), t, segment):
+    if not belongs_to_pair(a, b, i, j, found.lam, float(certify.cubic_at(mean, t)), t, *slopes):
         scan.warnings.append(f"step {scan.step}: locator: the double eigenvalue {found.lam:.6g} found at "
                              f"p = {p:.12g} is another pair's; splitting")
         return None
@@ -88,18 +89,17 @@ def locate(scan, idx: int, i: int, j: int, kind: Kind) -> Optional[Collision]:
 
 
 def belongs_to_pair(a: Sample, b: Sample, i: int, j: int, lam: float, mean: float, t: float,
-                    segment: Segment) -> bool:
+                    d_a: np.ndarray, d_b: np.ndarray) -> bool:
     """Whether the double eigenvalue lam, located at t in [0, 1] of the interval, is the
     collision of labels i and j: nearer their mean's cubic model there (mean) than the cubic
     model of any other label tracked at both ends (Hermite in t, from the samples' values and
-    slopes). A locator started from one pair's model may converge on a neighbouring pair's
+    their slopes per unit t, d_a and d_b: verdicts.scaled_slopes). A locator started from one pair's model may converge on a neighbouring pair's
     collision in the same interval (256 disks: a birth at lambda = 4.70 located on a death at
     4.50, 2.4e-9 away in strain); that pair's own event is located separately."""
     others = known(a) & known(b) & ~a.excluded & ~b.excluded
     others[[i, j]] = False
     if not others.any():
         return True
-    d_a, d_b = scaled_slopes(a, b, segment)
     k = np.flatnonzero(others)
     model = certify.cubic_at(certify.hermite_coefficients(a.eigvals[k], b.eigvals[k], d_a[k], d_b[k]), t)
     return abs(lam - mean) < float(np.min(np.abs(lam - model)))
