@@ -51,10 +51,10 @@ from .locate import jordan_chain_near
 from .newton import residual_norm, tangent
 from .partial_splits import certificates_survive, clusters, partial_allowed
 from .problem import Problem
-from .samples import Sample, continuation_perm, partial_sample_at, sample_at
+from .samples import Sample, continuation_perm, known, partial_sample_at, sample_at
 from .segment import Segment
 from .spectra import DEFAULT_REL_TOL
-from .verdicts import Verdict, VerdictKind
+from .verdicts import Verdict, VerdictKind, band_side
 
 Array = np.ndarray
 
@@ -386,7 +386,18 @@ def scan_step(problem: Problem, segment: Segment, start: Sample, end: Sample,
             samples.insert(0, previous.at(s_prev))
     scan = StepScan(problem, segment, samples, params, step, ends_at_event)
     found = scan.run()
-    tracked = None
-    if b.disc is not None:
-        tracked = ~np.any([smp.excluded for smp in scan.samples[scan._start:]], axis=0)
+    tracked = None if b.disc is None else certified_tracked(scan.samples[scan._start:])
     return ScanResult(found, scan.end_perm, scan.solves, scan.warnings, tracked)
+
+
+def certified_tracked(samples: list) -> Array:
+    """The labels of a window's step whose continuity the detection certified: never excluded,
+    and on no interval between the samples where they are known beyond the certified band on
+    one side at both ends (verdicts.beyond_band: not certified there)."""
+    tracked = ~np.any([smp.excluded for smp in samples], axis=0)
+    last = band_side(samples[0])
+    for smp in samples[1:]:
+        side, seen = band_side(smp), known(smp)
+        tracked &= ~(seen & (side != 0) & (side == last))
+        last = np.where(seen, side, last)
+    return tracked

@@ -50,7 +50,8 @@ class Sample:
     (without_vectors). A token of its own, not a number from a shared counter: no state is
     shared between samples, and none collides between a scan worker and this process.
     dA: the stability matrix's derivative d A / d tau along the tangent that gave the slopes
-    (dense or sparse), kept with the vectors for pair_coupling."""
+    (dense or sparse), kept with the vectors for pair_coupling. band: a spectral window's
+    certified band (lo, hi) of Re lambda, Eigensystem.band (None: every eigenvalue certified)."""
 
     s: float
     x: Array
@@ -66,6 +67,7 @@ class Sample:
     known: Optional[Array] = None
     disc: Optional[tuple[float, float]] = None
     dA: object = None
+    band: Optional[tuple[float, float]] = None
     uid: object = field(default_factory=object, repr=False, compare=False)
 
     @property
@@ -335,7 +337,7 @@ def make_sample(s: float, x: Array, system: Eigensystem, rel_tol: float,
     sample = Sample(s, x, values, eigen_status(values, rel_tol), imag_threshold(values, rel_tol),
                     excluded, tangent, dlam, system if system.right is not None else None,
                     system.guard, gaps, disc=system.disc,
-                    dA=dA if system.right is not None else None)
+                    dA=dA if system.right is not None else None, band=system.band)
     return sample if reference is None else sample.relabel(continuation_perm(reference, sample))
 
 
@@ -361,7 +363,7 @@ def partial_sample_at(problem: Problem, s: float, x: Array, left: Sample, cluste
     eigenvalues of the stability matrix nearest the real shift sigma (nearest.py), with vectors
     and slopes along `tangent`; labels continue `left` by the trapezoid prediction
     (predicted_match, rectangular: the k computed eigenvalues are the candidates). The other
-    labels hold nan (status, thr, excluded and guard flags: left's; they keep their status
+    labels hold nan (status, thr, excluded and guard flags and band: left's; they keep their status
     inside the interval being split, collisions.py). gaps: to the nearest of the k eigenvalues,
     at most the distance to the edge of the disc they cover. Vectors only for the labels
     computed (Eigensystem.columns).
@@ -406,5 +408,6 @@ def partial_sample_at(problem: Problem, s: float, x: Array, left: Sample, cluste
     excluded = left.excluded.copy()
     guard = None if left.guard is None else left.guard.copy()
     return Sample(s, x, eigvals, status, left.thr, excluded, tangent, dlam_all,
-                  Eigensystem(eigvals, np.hstack(rights), np.vstack(lefts), excluded, guard, columns),
-                  guard, gaps, known, dA=dA)
+                  Eigensystem(eigvals, np.hstack(rights), np.vstack(lefts), excluded, guard, columns,
+                              band=left.band),
+                  guard, gaps, known, dA=dA, band=left.band)

@@ -168,7 +168,9 @@ class Eigensystem:
     the column of `right` and row of `left` of each eigenvalue (-1: none), else None
     (eigenvalue i has column i); `disc`, when only the eigenvalues nearest a shift were computed
     (a spectral window), (sigma, radius): every eigenvalue with |lambda - sigma| < radius is
-    among `values`, and radius is the largest |lambda_i - sigma| of them; None: all computed."""
+    among `values`, and radius is the largest |lambda_i - sigma| of them; None: all computed;
+    `band`, with a window, the certified band (lo, hi) of Re lambda (Window.certified: no
+    collision beyond it is located), None: every eigenvalue is certified."""
 
     values: Array
     right: Optional[Array] = None
@@ -177,6 +179,7 @@ class Eigensystem:
     guard: Optional[Array] = None
     columns: Optional[Array] = None
     disc: Optional[tuple[float, float]] = None
+    band: Optional[tuple[float, float]] = None
 
     def vectors(self, i: int) -> tuple[Array, Array]:
         """(right vector, left vector) of eigenvalue i."""
@@ -192,7 +195,7 @@ class Eigensystem:
         pick = lambda a: None if a is None else a[perm]  # noqa: E731
         columns = None if self.right is None else (perm if self.columns is None else self.columns[perm])
         return Eigensystem(self.values[perm], self.right, self.left, pick(self.excluded), pick(self.guard),
-                           columns, self.disc)
+                           columns, self.disc, self.band)
 
 
 class SpectraDevice(StrEnum):

@@ -16,6 +16,9 @@ locator can start from its model. Exhaustive detection (version 0.1): the quadra
 third sample with the status of the adjacent end (certify.curvature_too_large) and the motion
 of every real eigenvalue against its gap (certify.outruns_gaps).
 
+With a spectral window, the labels beyond its certified band at both ends (beyond_band) are
+left out of the events and the certificates: their collisions lie outside the window.
+
 Pure functions of samples (samples.Sample) and the tolerances they are given: rho is the
 certification margin, doubt the weight of a model's cubic term (certify.py); the resolution
 floor of a pair's discriminant is 4 thr^2 and of a label's defect 2 thr, thr the larger status
@@ -90,12 +93,37 @@ def status_events(a: Sample, b: Sample, active: Optional[Array] = None):
     return events, consistent
 
 
+def band_side(sample: Sample) -> Array:
+    """+1 / -1 where a label's Re lambda lies above / below the sample's certified band
+    (Sample.band, a spectral window's), 0 inside it, where unknown (nan) or without a band."""
+    side = np.zeros(sample.eigvals.size, int)
+    if sample.band is not None:
+        with np.errstate(invalid="ignore"):
+            side[sample.eigvals.real > sample.band[1]] = 1
+            side[sample.eigvals.real < sample.band[0]] = -1
+    return side
+
+
+def beyond_band(a: Sample, b: Sample) -> Array:
+    """Labels beyond the certified band on the same side at both ends of [a, b]: no collision of
+    theirs inside the interval lies in the window (spectral_window.py), so none is certified or
+    located."""
+    side = band_side(a)
+    return (side != 0) & (side == band_side(b))
+
+
 def judge_fast(a: Sample, b: Sample, segment: Segment, rho: float, doubt: float) -> Verdict:
-    """The fast detection's verdict on [a, b] (module docstring; the samples carry slopes)."""
+    """The fast detection's verdict on [a, b] (module docstring; the samples carry slopes). The
+    status change must be explained by births and deaths of all active labels; the events and
+    certificates leave out the labels beyond a window's certified band (beyond_band)."""
     active = active_labels(a, b)
     events, consistent = status_events(a, b, active)
     if not consistent:
         return Verdict(VerdictKind.SPLIT, events, False, 0.5 * (a.s + b.s))
+    beyond = beyond_band(a, b)
+    if beyond.any():
+        events = [(i, j, kind) for i, j, kind in events if not (beyond[i] or beyond[j])]
+        active = active & ~beyond
     split = hermite_split(a, b, events, active, segment, rho, doubt)
     if split is not None:
         t_split, labels = split

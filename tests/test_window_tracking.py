@@ -1,11 +1,17 @@
 """A spectral window's stored columns: each one eigenvalue, continued across entries and exits
 (docs/continuation.md, A spectral window), checked against the full spectrum of the same
 sweep and on the rule's parts."""
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
+from diskfriction.continuation import spectral_window
+from diskfriction.continuation.collisions import certified_tracked
+from diskfriction.continuation.detectors import fast
 from diskfriction.continuation.samples import Sample, continuation_perm
 from diskfriction.continuation.spectral_window import Window, window_columns
+from diskfriction.continuation.verdicts import beyond_band
 from diskfriction.disks.sweep import SweepParams, sweep
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
@@ -155,3 +161,56 @@ def test_an_eigenvalue_leaving_the_disc_frees_its_label_and_shifts_no_other():
     a = _window_sample([-1.0, -0.3, 0.0, 0.3, 0.9], [True, False, False, False, True], 0.0)
     b = _window_sample([-0.3, 0.0, 0.3, 0.9, 1.02], [False, False, False, True, True], 0.01)
     assert continuation_perm(a, b).tolist() == [4, 0, 1, 2, 3]
+
+
+def _located_collisions(monkeypatch, certified: float) -> tuple[list, list]:
+    """The paper's scene, window 0.06:0.07 of Re lambda / k_n, scans inline, with CERTIFIED =
+    `certified`: (every double eigenvalue the locator found, the sweep's collisions)."""
+    found = []
+    locate = fast.locate
+
+    def counted(scan, idx, i, j, kind):
+        collision = locate(scan, idx, i, j, kind)
+        if collision is not None:
+            found.append(collision.eigenvalue)
+        return collision
+
+    monkeypatch.setattr(fast, "locate", counted)
+    monkeypatch.setattr(spectral_window, "CERTIFIED", certified)
+    k_n = SCENES["paper"].k_n
+    window = sweep(System.from_scene(SCENES["paper"]), 0.0, 0.12, "J",
+                   SweepParams(window=(0.06 * k_n, 0.07 * k_n), workers=0))
+    return found, window.collisions
+
+
+def test_collisions_beyond_the_certified_band_are_not_located(monkeypatch):
+    """With the whole guard band certified (CERTIFIED = 1, before) the paper's window
+    0.06:0.07 locates a collision beyond the band's inner half, outside W, which is then not
+    reported; with the outer half only watched it is not located, and the sweep reports the
+    same collisions at the same F_x."""
+    k_n = SCENES["paper"].k_n
+    band = Window(0.06 * k_n, 0.07 * k_n)
+    everywhere, before = _located_collisions(monkeypatch, 1.0)
+    certified, after = _located_collisions(monkeypatch, 0.5)
+    lo, hi = band.lo - 0.5 * band.guard, band.hi + 0.5 * band.guard
+    assert any(not lo <= lam <= hi for lam in everywhere)
+    assert all(lo <= lam <= hi for lam in certified) and len(certified) < len(everywhere)
+    assert len(after) == len(before) >= 2
+    assert [(c.kind, c.p) for c in after] == [(c.kind, c.p) for c in before]
+
+
+def test_labels_beyond_the_certified_band_on_one_side_are_not_certified():
+    """beyond_band: labels beyond the band on the same side at both ends only (not one that
+    crosses it, comes inside, or is unknown); certified_tracked: a label beyond it on both
+    sides of an interval between samples where it is known is not certified over the step,
+    even with a partial sample between that does not know it."""
+    band = (0.0, 1.0)
+    a = replace(_window_sample([-2.0, 0.5, 2.0, 3.0, 1.5], [False] * 5, 0.0), band=band)
+    b = replace(_window_sample([-2.5, 0.6, 2.5, -3.0, 0.9], [False] * 5, 0.1), band=band)
+    assert beyond_band(a, b).tolist() == [True, False, True, False, False]
+    assert not beyond_band(replace(a, band=None), replace(b, band=None)).any()
+    assert certified_tracked([a, b]).tolist() == [False, True, False, True, True]
+    partial = replace(b, eigvals=np.array([np.nan, 0.6, np.nan, np.nan, 0.9]),
+                      known=np.array([False, True, False, False, True]))
+    c = replace(a, s=1.0)  # back where a was
+    assert certified_tracked([b, partial, c]).tolist() == [False, True, False, True, True]
