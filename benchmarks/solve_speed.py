@@ -1,12 +1,15 @@
 """Sparse solves of the chain: SuperLU's own solve against compiled substitution over its
 factors (continuation/triangular.py), what copying the factors costs, and the factorization
 with the collision locator's borders as unit vectors and as it scales them
-(locate.BORDER_SCALE: fill and time).
+(locate.BORDER_SCALE: fill and time); then SuperLU's ordering as the shift-invert takes it
+(nearest.SHIFT_INVERT_ORDERING) against its default (COLAMD, partial pivoting), on the chain's
+matrix and on a sheared packing's A - sigma I (the spectral window's shift-invert, --packing N
+disks, window [-3, 8]; 0: none).
 
-The matrix is the bordered A - sigma I of the locator and of a shift-invert (A the stability
-matrix J of the chain at F_x = 0.002, sigma in the middle of its spectrum). Run:
-python benchmarks/solve_speed.py [--N 100,1000] [--repeat 7]. Medians over repeats of many
-calls, one BLAS thread.
+The chain's matrix is the bordered A - sigma I of the locator and of a shift-invert (A the
+stability matrix J of the chain at F_x = 0.002, sigma in the middle of its spectrum). Run:
+python benchmarks/solve_speed.py [--N 100,1000] [--packing 256] [--repeat 7]. Medians over
+repeats of many calls, one BLAS thread.
 """
 from __future__ import annotations
 
@@ -18,6 +21,7 @@ import scipy.sparse.linalg as spla
 
 from diskfriction.disks.equilibria import DiskEquilibria, relax
 from diskfriction.continuation.linalg import bordered, blas_threads
+from diskfriction.continuation.nearest import SHIFT_INVERT_ORDERING
 from diskfriction.continuation.locate import BORDER_SCALE
 from diskfriction.continuation.triangular import TriangularFactors
 from diskfriction.scenes import Scene
@@ -33,6 +37,7 @@ def median_us(fn, calls: int, repeat: int) -> float:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--N", default="100,1000")
+    ap.add_argument("--packing", type=int, default=256)
     ap.add_argument("--repeat", type=int, default=7)
     args = ap.parse_args()
     print(f"load average {open('/proc/loadavg').read().split()[0]} at the start")
@@ -68,6 +73,45 @@ def main() -> None:
                 fill = spla.splu(B)
                 us = median_us(lambda: spla.splu(B), calls // 10, args.repeat)
             print(f"    factorization, {label:<17}{us:9.1f} us   nnz(L + U) = {fill.L.nnz + fill.U.nnz}")
+        orderings(f"N = {N}, A - sigma I", sp.csc_array(K), r[:n], calls, args.repeat)
+    if args.packing:
+        A = packing_matrix(args.packing)
+        orderings(f"{args.packing} sheared disks, A - sigma I", A, rng.standard_normal(A.shape[0]),
+                  max(20, 60000 // A.shape[0]), args.repeat)
+
+
+def orderings(label: str, M, r, calls: int, repeat: int) -> None:
+    """Factorization, nnz(L + U), substitution and backward error with the shift-invert's
+    ordering and SuperLU's default."""
+    print(f"{label} (n = {M.shape[0]}):")
+    for name, options in (("shift-invert's (MMD, A + A^T)", SHIFT_INVERT_ORDERING),
+                          ("SuperLU's default (COLAMD)", {})):
+        with blas_threads():
+            lu = spla.splu(M, **options)
+            tri = TriangularFactors.of(lu)
+            factor = median_us(lambda: spla.splu(M, **options), calls // 10, repeat)
+            solve = median_us(lambda: tri.solve(r), calls, repeat)
+            x = tri.solve(r)
+            residual = np.abs(M @ x - r).max() / (abs(M).max() * np.abs(x).max())
+        print(f"    {name:<30} factorization {factor:8.1f} us, substitution {solve:7.1f} us, "
+              f"nnz(L + U) = {lu.L.nnz + lu.U.nnz}, backward error {residual:.1e}")
+
+
+def packing_matrix(N: int):
+    """A_red - sigma I (CSC) of N disks (seed 1) at the start of their shear, sigma the centre
+    of the window [-3, 8]."""
+    from diskfriction.packings.equilibria import PackingEquilibria
+    from diskfriction.packings.prepared import prepare_scene
+    from diskfriction.packings.shear import mass_diagonal, network_of, start
+    from diskfriction.scenes.packing import PackingScene
+    scene = PackingScene(N=N, seed=1)
+    packing = prepare_scene(scene)
+    network = network_of(scene, packing)
+    q, xi, rows = start(network, packing.positions)
+    problem = PackingEquilibria(network, q, xi, rows, 0.0, mass_diagonal(network, scene.m, scene.inertia),
+                                scene.matrix)
+    A = problem.reduced(q, 0.0)
+    return sp.csc_array(A - 2.5 * sp.identity(A.shape[0], format="csr"))
 
 
 if __name__ == "__main__":

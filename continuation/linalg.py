@@ -156,8 +156,9 @@ class Factorization:
         return x
 
 
-def factorize(M: Matrix) -> Factorization:
-    """LU of M (dense getrf or sparse SuperLU); raises SingularMatrix if M is singular."""
+def factorize(M: Matrix, ordering: Optional[dict] = None) -> Factorization:
+    """LU of M (dense getrf or sparse SuperLU, with `ordering` its keyword arguments, None:
+    SuperLU's defaults, COLAMD and partial pivoting); raises SingularMatrix if M is singular."""
     book("factorizations")
     if sp.issparse(M):
         M = M if M.format == "csc" else sp.csc_array(M)
@@ -165,7 +166,7 @@ def factorize(M: Matrix) -> Factorization:
         if empty is not None:  # SuperLU would print BLAS errors (DGEMV) before failing
             raise SingularMatrix(f"matrix has an empty {empty}")
         try:
-            return Factorization(spla.splu(M), True)
+            return Factorization(spla.splu(M, **(ordering or {})), True)
         except RuntimeError as err:  # SuperLU: "Factor is exactly singular"
             raise SingularMatrix(str(err)) from None
     M = np.asarray(M, dtype=float)
