@@ -51,6 +51,7 @@ from diskfriction.continuation.spectra import Eigensystem, eigensystem
 from diskfriction.continuation.spectral_window import (EXTRA, MARGIN, Window, sized, widened,
                                                        window_eigensystem)
 from diskfriction.matrices import Matrix
+from diskfriction.packings.assembly import Assembly
 from diskfriction.packings.network import D, Network
 
 REACH = 0.1
@@ -198,12 +199,27 @@ class PackingEquilibria(Problem):
         scale = np.median(delta[delta > 0]) if (delta > 0).any() else self.network.constants[0]
         self.kappa = float(self.network.kernels.normal_stiffness(scale, self.network.constants[1]))
         self._last = (None, None)
-        A, kept, n = self.reduced(q, gamma), self.gauge.kept, q.size
+        self._assemble()
+
+    def _assemble(self) -> None:
+        """The committed state's matrices as fixed linear maps of J's values
+        (packings/assembly.py): dG/dq, A_red and A_g (module docstring)."""
+        g, n = self.gauge, self.network.ndof
+        self._pattern = rows, cols = self.network.jacobian_pattern(self.rows_c[self.active])
+        keep, gauge = np.ones(n), np.zeros(n)
+        keep[g.rows], gauge[g.rows] = 0.0, self.kappa
+        self._dG_dq = Assembly.of(rows, cols, sp.diags_array(-keep), sp.eye_array(n),
+                                  sp.diags_array(gauge))
+        inverse_mass = sp.diags_array(1.0 if self.matrix is Matrix.J else 1.0 / self.mass, shape=(n, n))
+        E = sp.eye_array(n, format="csr")[:, g.kept]
+        self._reduced = Assembly.of(rows, cols, g.P @ inverse_mass, E)
+        A = self._reduced(self._evaluate(self.q_c, self.gamma_c)[1])
         parked = np.zeros(n)
-        parked[self.gauge.rows] = -PARKED * max(float(np.abs(A).sum(axis=1).max(initial=0.0)), 1.0)
-        self._embed = sp.csr_array((np.ones(kept.size), (kept, np.arange(kept.size))),
-                                   shape=(n, kept.size))
-        self._parked = sp.diags_array(parked)
+        parked[g.rows] = -PARKED * max(float(np.abs(A).sum(axis=1).max(initial=0.0)), 1.0)
+        embed = sp.csr_array((np.ones(g.kept.size), (g.kept, np.arange(g.kept.size))),
+                             shape=(n, g.kept.size))
+        self._stability = Assembly.of(rows, cols, embed @ g.P @ inverse_mass, E @ embed.T,
+                                      sp.diags_array(parked))
 
     def coulomb_limit(self, delta: np.ndarray) -> np.ndarray:
         """t* of every row at overlaps delta (0 where open) [length]."""
@@ -217,12 +233,13 @@ class PackingEquilibria(Problem):
                                          self.rows_c, cap=cap)
 
     def _evaluate(self, q, gamma):
-        """(F, J, dF/dgamma) of the active rows at the trial (q, gamma), kept for the last one."""
+        """(F, J's values on its pattern, dF/dgamma) of the active rows at the trial (q, gamma),
+        kept for the last one."""
         key = (q.tobytes(), gamma)
         if self._last[0] != key:
             xi = self.trial(q, gamma)[0]
-            self._last = (key, self.network.evaluate(q, xi[self.active], self.rows_c[self.active],
-                                                     gamma))
+            self._last = (key, self.network.evaluate_values(q, xi[self.active],
+                                                            self.rows_c[self.active], gamma))
         return self._last[1]
 
     # -- Problem protocol
@@ -234,12 +251,7 @@ class PackingEquilibria(Problem):
 
     def jacobian(self, q, gamma):
         """dG/dq = -J with the gauge rows (sparse)."""
-        keep = np.ones(q.size)
-        keep[self.gauge.rows] = 0.0
-        gauge = np.zeros(q.size)
-        gauge[self.gauge.rows] = self.kappa
-        J = self._evaluate(q, gamma)[1]
-        return (sp.diags_array(keep) @ (-J) + sp.diags_array(gauge)).tocsr()
+        return self._dG_dq(self._evaluate(q, gamma)[1])
 
     def dG_dp(self, q, gamma):
         F_gamma = self._evaluate(q, gamma)[2].copy()
@@ -248,18 +260,18 @@ class PackingEquilibria(Problem):
 
     def physical(self, q, gamma):
         """The network's J or M^-1 J at (q, gamma), sparse (loose disks' rows and columns 0)."""
-        J = self._evaluate(q, gamma)[1]
+        n = self.network.ndof
+        J = sp.csr_array((self._evaluate(q, gamma)[1], self._pattern), shape=(n, n))
         return J if self.matrix is Matrix.J else sp.diags_array(1.0 / self.mass) @ J
 
     def reduced(self, q, gamma) -> sp.csr_array:
         """A_red = P A E: the tracked spectrum without the translations and the loose disks."""
-        g = self.gauge
-        return (g.P @ self.physical(q, gamma) @ sp.eye_array(q.size, format="csc")[:, g.kept]).tocsr()
+        return self._reduced(self._evaluate(q, gamma)[1])
 
     def stability_matrix(self, q, gamma) -> sp.csr_array:
         """A_g (sparse): A_red at the kept dofs, the committed state's PARKED constant on the
         gauge rows' diagonal, zeros elsewhere (module docstring)."""
-        return (self._embed @ self.reduced(q, gamma) @ self._embed.T + self._parked).tocsr()
+        return self._stability(self._evaluate(q, gamma)[1])
 
     def dense_spectra(self) -> bool:
         """Dense spectra unless a spectral window is tracked (eigensystem)."""

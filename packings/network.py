@@ -81,11 +81,22 @@ class Network:
                  ) -> tuple[np.ndarray, sp.csr_matrix, np.ndarray]:
         """F, the sparse total stiffness J = -dF/dq (history following q) [force / length] and
         dF/dgamma (history following gamma) [force]."""
-        n = self.ndof
-        rows, cols = self.kernels.jacobian_pattern(self.N, contacts)
-        F, F_gamma, values = np.empty(n), np.empty(n), np.empty(rows.size)
+        rows, cols = self.jacobian_pattern(contacts)
+        F, values, F_gamma = self.evaluate_values(q, xi, contacts, gamma)
+        return F, sp.csr_matrix((values, (rows, cols)), shape=(self.ndof, self.ndof)), F_gamma
+
+    def jacobian_pattern(self, contacts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(rows, cols) of J's entries over the contact rows, one per value of evaluate_values
+        (duplicates summed)."""
+        return self.kernels.jacobian_pattern(self.N, contacts)
+
+    def evaluate_values(self, q: np.ndarray, xi: np.ndarray, contacts: np.ndarray, gamma: float
+                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """evaluate with J as its values on jacobian_pattern(contacts)."""
+        F, F_gamma = np.empty(self.ndof), np.empty(self.ndof)
+        values = np.empty(contacts.shape[0] * (2 * D) ** 2)  # a (2D)^2 block per contact row
         self.kernels.evaluate(q, xi, self.radii, contacts, self.params(gamma), F, values, F_gamma)
-        return F, sp.csr_matrix((values, (rows, cols)), shape=(n, n)), F_gamma
+        return F, values, F_gamma
 
     def history_step(self, q0: np.ndarray, q1: np.ndarray, gamma0: float, gamma1: float,
                      xi0: np.ndarray, contacts: np.ndarray, cap: bool = True

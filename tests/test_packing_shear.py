@@ -7,8 +7,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 from invariants import unaccounted_pair_changes
 
+from diskfriction.packings.assembly import Assembly
 from diskfriction.packings.equilibria import Gauge, PackingEquilibria, mass_diagonal, start
 from diskfriction.packings.prepared import prepare_scene
 from diskfriction.packings.shear import ShearParams, network_of, shear
@@ -264,3 +266,46 @@ def test_the_condition_numbers_follow_the_eigenvalues_columns(branch, windowed):
     assert branch.condition.shape == branch.eigenvalues.shape
     assert np.isnan(branch.condition[zero]).all() and (branch.condition[~zero] >= 1 - 1e-12).all()
     assert np.array_equal(np.isnan(windowed.condition), np.isnan(windowed.eigenvalues))
+
+
+def test_assembly_is_the_product_it_replaces_on_one_pattern():
+    """Assembly (packings/assembly.py): L J(v) R + C for a pattern with repeated entries, the
+    same CSR pattern (sorted) at every v, an entry that is zero at some v kept."""
+    rng = np.random.default_rng(2)
+    n, m, k = 12, 9, 7
+    rows, cols = rng.integers(0, n, 60), rng.integers(0, n, 60)
+    L = sp.random_array((m, n), density=0.3, random_state=3)
+    R = sp.random_array((n, k), density=0.3, random_state=4)
+    C = sp.random_array((m, k), density=0.2, random_state=5)
+    assembly = Assembly.of(rows, cols, L, R, C)
+    patterns = set()
+    for v in (rng.standard_normal(60), np.zeros(60)):
+        A = assembly(v)
+        J = sp.coo_array((v, (rows, cols)), shape=(n, n))
+        assert np.abs((A - (L @ J @ R + C)).toarray()).max() <= 1e-14
+        assert all(np.all(np.diff(A.indices[A.indptr[i]:A.indptr[i + 1]]) > 0) for i in range(m))
+        patterns.add((A.indptr.tobytes(), A.indices.tobytes()))
+    assert len(patterns) == 1 and assembly(np.zeros(60)).nnz > C.nnz
+
+
+def test_the_assembled_matrices_are_the_products_of_the_gauge(packing):
+    """dG/dq = -diag(keep) J + kappa diag(gauge), A_red = P M^-1 J E and A_g (A_red at the kept
+    dofs, the parked constant on the gauge rows' diagonal) at a point off the committed one,
+    against the sparse products they replace, to 1e-14 of the largest entry."""
+    problem = problem_at_start(packing)
+    rng = np.random.default_rng(1)
+    q, gamma, g = problem.q_c + 1e-6 * rng.standard_normal(problem.q_c.size), 1e-5, problem.gauge
+    n = q.size
+    J = problem.network.evaluate(q, problem.trial(q, gamma)[0][problem.active],
+                                 problem.rows_c[problem.active], gamma)[1]
+    keep, gauge = np.ones(n), np.zeros(n)
+    keep[g.rows], gauge[g.rows] = 0.0, problem.kappa
+    A_red = g.P @ sp.diags_array(1.0 / problem.mass) @ J @ sp.eye_array(n, format="csr")[:, g.kept]
+    parked = problem.stability_matrix(problem.q_c, problem.gamma_c).diagonal()[g.rows]
+    A_g = sp.lil_array((n, n))
+    A_g[np.ix_(g.kept, g.kept)] = A_red
+    A_g[g.rows, g.rows] = parked
+    for got, expected in ((problem.jacobian(q, gamma), sp.diags_array(-keep) @ J + sp.diags_array(gauge)),
+                          (problem.reduced(q, gamma), A_red), (problem.stability_matrix(q, gamma), A_g)):
+        assert np.abs((got - expected).toarray()).max() <= 1e-14 * np.abs(expected.toarray()).max()
+    assert np.all(parked < 0) and np.ptp(parked) == 0.0
