@@ -1,5 +1,5 @@
 """Sparse matrices of one committed state, assembled from the kernels' Jacobian values by a
-fixed linear map (docs/packings.md#cost).
+fixed linear map (docs/packings.md, Shear: the stop-37 benchmark).
 
 Within a committed state the contact rows, the gauge and the masses are fixed, so every matrix
 the continuation asks of the network (dG/dq, A_red, A_g: packings/equilibria.py) is
