@@ -77,7 +77,8 @@ def compare(old: dict, new: dict) -> tuple[str, bool]:
     dpts = float(np.abs(np.subtract(old["p"], new["p"])).max())
     same = old == new
     ok = kinds and dp <= TOLERANCE and dset <= TOLERANCE and dpts <= TOLERANCE
-    labels = "" if dlam <= TOLERANCE or not ok else f" (labels differ at {relabelled(lam_old, lam_new, scale)} points)"
+    moved = relabelled(lam_old, lam_new, scale)
+    labels = "" if dlam <= TOLERANCE or not ok else f" (labels differ at {moved} points)"
     verdict = "bit for bit" if same else ("within 1e-12" + labels if ok else "CHANGED")
     return (f"{len(new['collisions'])} collisions, {verdict}: max |d location| {dp:.2g}, "
             f"max |d lambda| / max|lambda| {dlam:.2g} by label, {dset:.2g} as sets, "

@@ -18,7 +18,7 @@ at the end the run heads for (p_max for direction +1, p_min for -1), TURNED_BACK
 other (the branch passed a fold and came back, short of its goal); otherwise after max_steps
 accepted steps (MAX_STEPS). The status is a branch.Stop (code, reason, p).
 Events (problem.event_functions): if a component changes sign over the step, the step is cut at
-the first such change, located on the branch (the step's segment) by the Illinois method to
+the first such change, located on the branch (the step's segment) by segment.refine_sign_change to
 |dp| <= event_tol max(1, |p|) (a relative tolerance: it terminates at any p), and ends on the
 far side of it; the next step starts there. No step and no collision scan straddles an event.
 Each accepted step is scanned for eigenvalue collisions (collisions.scan_step) in the state
@@ -135,7 +135,7 @@ def _cut_at_event(problem: Problem, x: Array, t: Array, step: _Step, g0: Array, 
             p = abs(pts[up][-1])
             return abs(pts[up][-1] - pts[lo][-1]) <= par.event_tol * max(1.0, p) or up - lo <= 1e-14
 
-        lo, up = refine_sign_change(f, 0.0, g0[c], hi, g1[c], done)
+        lo, up = refine_sign_change(f, 0.0, g0[c], hi, g1[c], done, tol=_width_in_s(x, x_hi, hi, par))
         g_lo = problem.event_functions(pts[lo][:-1], pts[lo][-1]) if lo > 0.0 else g0
         if not crossed(g0, g_lo).any():  # nothing before lo: events within [lo, up] coincide
             x_e = pts[up]
@@ -144,6 +144,14 @@ def _cut_at_event(problem: Problem, x: Array, t: Array, step: _Step, g0: Array, 
     t_e = tangent(problem, x_e, step.tangent)
     return _Step(x_e, t_e, replace(step.newton, x=x_e, residual=residual_norm(problem, x_e)),
                  False, True)
+
+
+def _width_in_s(x: Array, x_hi: Array, hi: float, par: ContinuationParams) -> float:
+    """Half the bracket width in s that the event's done() accepts, |dp| <= event_tol max(1,
+    |p|), where p is linear in s between x (s = 0) and x_hi (s = hi); 0 (no estimate) where p
+    does not change."""
+    dp = abs(float(x_hi[-1] - x[-1]))
+    return 0.5 * par.event_tol * max(1.0, abs(float(x[-1]))) * hi / dp if dp > 0.0 else 0.0
 
 
 def _angle(t0: Array, t1: Array) -> float:

@@ -1,7 +1,7 @@
 """Folds, branch points and Hopf points of a finished branch, located post hoc.
 
 Both are sign changes of a smooth test function between accepted points k, k+1, refined by
-the Illinois method along the step's secant segment (segment.py):
+segment.refine_sign_change along the step's secant segment (segment.py):
   fold  (limit point):  psi(s) = t_p(s), the p component of the unit tangent at x(s)
                         (bordered with the secant), zero where the branch turns back in p;
   branch point:         psi(s) = det [[G_u, G_p], [sigma^T]] at x(s), sigma the step's
@@ -34,7 +34,7 @@ Array = np.ndarray
 @dataclass(frozen=True)
 class SpecialPoint:
     """kind "fold" | "hopf" | "branch" (a simple branch point); p, u at the located point;
-    bracket (p_lo, p_hi) of the final Illinois bracket; step k of the branch step containing
+    bracket (p_lo, p_hi) of the final bracket; step k of the branch step containing
     it; value: 0 for a fold or a branch point, the eigenvalue (~ i omega) for a Hopf point."""
 
     kind: str

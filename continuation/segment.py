@@ -122,24 +122,30 @@ class Segment:
 
 
 def refine_sign_change(f: Callable[[float], Optional[float]], a: float, fa: float, b: float, fb: float,
-                       done: Callable[[float, float], bool], max_eval: int = 200):
-    """Shrink a bracket [a, b] of a sign change of f (fa * fb < 0) by the Illinois method.
+                       done: Callable[[float, float], bool], max_eval: int = 200, tol: float = 0.0):
+    """Shrink a bracket [a, b] of a sign change of f (fa * fb < 0).
 
-    Illinois = regula falsi s = (a fb - b fa) / (fb - fa), where the end value kept twice in
-    a row is halved, so both ends converge (order ~1.44); a bisection step is forced when two
-    updates did not halve the bracket. Stops when done(a, b), when f(s) == 0 (returns
-    [s, s]), when f returns None (the caller could not evaluate, e.g. the structure changed),
-    or after max_eval evaluations. Returns the final bracket (a, b).
+    Each new point is the inverse quadratic interpolant through the bracket's ends and the end
+    it last replaced, where it lies inside the bracket and the three values differ, else the
+    regula falsi point; a bisection is forced when two updates did not halve the bracket
+    (Brent's safeguard). With tol > 0 (the bracket width in s that done() accepts, as the caller
+    estimates it) a new point keeps at least tol from either end: a converged estimate then
+    closes the bracket with one evaluation beyond it instead of creeping on the root from one
+    side. Stops when done(a, b), when f(s) == 0 (returns [s, s]), when f returns None (the
+    caller could not evaluate, e.g. the structure changed), or after max_eval evaluations.
+    Returns the final bracket (a, b).
     """
-    side = 0
     widths = [np.inf, np.inf]
+    c = fc = None  # the end replaced last
     for _ in range(max_eval):
         if done(a, b):
             break
         w = b - a
-        s = (a * fb - b * fa) / (fb - fa)
+        s = _interpolated(a, fa, b, fb, c, fc)
         if w > 0.5 * widths[-2] or not (a < s < b):
             s = 0.5 * (a + b)
+        if 0.0 < tol < 0.25 * w:
+            s = min(max(s, a + tol), b - tol)
         widths.append(w)
         fs = f(s)
         if fs is None:
@@ -147,13 +153,17 @@ def refine_sign_change(f: Callable[[float], Optional[float]], a: float, fa: floa
         if fs == 0.0:
             return s, s
         if np.sign(fs) == np.sign(fb):
-            b, fb = s, fs
-            if side == -1:
-                fa *= 0.5
-            side = -1
+            c, fc, b, fb = b, fb, s, fs
         else:
-            a, fa = s, fs
-            if side == +1:
-                fb *= 0.5
-            side = +1
+            c, fc, a, fa = a, fa, s, fs
     return a, b
+
+
+def _interpolated(a: float, fa: float, b: float, fb: float, c: Optional[float],
+                  fc: Optional[float]) -> float:
+    """The root of the inverse quadratic through (a, fa), (b, fb), (c, fc) where the three
+    values differ, else of the line through the bracket's ends (regula falsi)."""
+    if c is not None and fc != fa and fc != fb:
+        return (a * fb * fc / ((fa - fb) * (fa - fc)) + b * fa * fc / ((fb - fa) * (fb - fc))
+                + c * fa * fb / ((fc - fa) * (fc - fb)))
+    return (a * fb - b * fa) / (fb - fa)

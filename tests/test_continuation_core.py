@@ -14,6 +14,7 @@ from diskfriction.continuation import (ContinuationParams, DetectionParams, Func
                           count_complex_pairs)
 from diskfriction.continuation.bifurcations import locate_folds, locate_hopf
 from diskfriction.continuation.branch import Stop, StopCode
+from diskfriction.continuation.segment import refine_sign_change
 from diskfriction.continuation.detectors import DETECTORS, Kind
 from diskfriction.continuation.detectors.fast import Fast
 from diskfriction.continuation.spectra import sort_spectrum
@@ -86,8 +87,9 @@ def assert_count_changes_only_at_collisions(problem, branch, p_lo, p_hi, n_grid=
 def test_fold_of_scalar_equation_is_passed_and_located():
     """G = u^2 + p from (u, p) = (1, -1): the branch turns at the fold (0, 0) and lands on
     p = -1 again at u = -1, the side it started from, short of p_max = 1: its status says it
-    turned back (issue 23: it said "p_end"). Fold located to |x - x_fold| <= 1e-9, hence
-    |p| <= 1e-15."""
+    turned back (issue 23: it said "p_end"). Fold located to |x - x_fold| <= 1e-9, on the
+    branch within the corrector's residual (|u^2 + p| <= 1e-12: with the bracket's points
+    corrected to that residual, p carries it even where u = 0 exactly)."""
     problem = FunctionProblem(G=lambda u, p: np.array([u[0] ** 2 + p]), G_u=lambda u, p: np.array([[2 * u[0]]]),
                               G_p=lambda u, p: np.array([1.0]))
     br = run(problem, 1, p_min=-1.0, p_max=1.0, ds=0.1, ds_max=0.2, u0=np.array([1.0]))
@@ -96,7 +98,7 @@ def test_fold_of_scalar_equation_is_passed_and_located():
     assert np.all(np.abs(br.u[:, 0] ** 2 + br.p) <= 1e-12)
     folds = locate_folds(problem, br)
     assert len(folds) == 1
-    assert abs(folds[0].p) <= 1e-15 and abs(folds[0].u[0]) <= 1e-8
+    assert np.hypot(folds[0].u[0], folds[0].p) <= 1e-9 and abs(folds[0].u[0] ** 2 + folds[0].p) <= 1e-12
     assert folds[0].bracket[0] <= folds[0].p <= folds[0].bracket[1]
 
 
@@ -527,3 +529,18 @@ def test_stop_at_fold_sees_a_step_round_an_s_through_its_event():
     assert br.status.code == StopCode.FOLD
     assert np.all(np.diff(br.p) >= 0) and np.all(br.u[:, 0] < fold_u)  # p is flat to rounding there
     assert abs(br.p[-1] - (fold_u ** 3 - eps * fold_u)) < 1e-12
+
+
+@pytest.mark.parametrize("f, root, most", [(lambda s: np.exp(4.0 * s) - 2.0, np.log(2.0) / 4.0, 10),
+                                           (lambda s: (s - 0.3) ** 3 + 0.05 * (s - 0.3), 0.3, 15)],
+                         ids=["exp", "cubic"])
+def test_a_sign_change_is_bracketed_to_1e_12_in_few_evaluations(f, root, most):
+    """refine_sign_change on [0, 1]: the root stays inside a bracket shrunk to 1e-12, in at most
+    10 (exp(4s) - 2) and 15 ((s - 0.3)^3 + 0.05 (s - 0.3)) evaluations, inverse quadratic
+    interpolation against Illinois regula falsi's 23 and 20; with tol = 2.5e-13 (points kept
+    that far from the ends) in no more."""
+    for tol in (0.0, 2.5e-13):
+        calls = []
+        a, b = refine_sign_change(lambda s: calls.append(s) or f(s), 0.0, f(0.0), 1.0, f(1.0),
+                                  lambda a, b: b - a <= 1e-12, tol=tol)
+        assert a - 1e-16 <= root <= b + 1e-16 and b - a <= 1e-12 and len(calls) <= most

@@ -3,7 +3,7 @@ samples without slopes; intervals certified by the three-sample quadratic of eve
 discriminant and the motion of every real eigenvalue against its gap (certify.curvature_too_large,
 certify.outruns_gaps), the third sample the nearest beyond the interval with the status of the
 adjacent end (at a step's start, possibly a sample of the previous step); splits at midpoints;
-events located by the Illinois method on D, every evaluation a new sample with its full
+events located by segment.refine_sign_change on D, every evaluation a new sample with its full
 spectrum. Eigenvalues are not smooth at a collision, so the stencil never reaches across one."""
 from __future__ import annotations
 
@@ -55,7 +55,7 @@ class Exhaustive(Detector):
 
 
 def refine(scan, idx: int, i: int, j: int) -> None:
-    """Illinois on s -> D_ij(x(s)) over scan.samples[idx], scan.samples[idx + 1]; every
+    """refine_sign_change on s -> D_ij(x(s)) over scan.samples[idx], scan.samples[idx + 1]; every
     evaluation stays as a sample. Aborts when the pair loses its labels or eligibility."""
     a, b = scan.samples[idx], scan.samples[idx + 1]
     at = {a.s: a, b.s: b}
