@@ -55,8 +55,11 @@ class Fast(Detector):
 
 
 def locate(scan, idx: int, i: int, j: int, kind: Kind) -> Optional[Collision]:
-    """Newton on the minimally augmented system from the cubic model's root over
-    scan.samples[idx], scan.samples[idx + 1]; None if it fails or lands outside the interval."""
+    """Newton on the minimally augmented system over scan.samples[idx], scan.samples[idx + 1],
+    from the branch point the segment predicts (Segment.predicted, from the solved points
+    nearest it) at the cubic model's root; None if it fails or lands outside the interval. (From
+    the secant point of the whole step, off the branch, 256 sheared disks saw a spectrum that
+    was not the interval's, and Newton converged 13 times on a neighbouring birth 4.1e-7 away.)"""
     a, b = scan.samples[idx], scan.samples[idx + 1]
     segment, params = scan.segment, scan.params
     slopes = scaled_slopes(a, b, segment)
@@ -64,7 +67,7 @@ def locate(scan, idx: int, i: int, j: int, kind: Kind) -> Optional[Collision]:
     roots = certify.cubic_roots_in_unit(D)
     t0 = roots[0] if roots else 0.5
     right, left = kind.real_side(a, b).system.vectors(i)
-    x0 = segment.secant_point(a.s + t0 * (b.s - a.s))
+    x0 = segment.predicted(a.s + t0 * (b.s - a.s))
     try:
         found = locate_double_eigenvalue(
             scan.problem, x0, float(certify.cubic_at(mean, t0)), right, left.conj(),
