@@ -40,8 +40,15 @@ def main() -> None:
     ap.add_argument("--packing", type=int, default=256)
     ap.add_argument("--repeat", type=int, default=7)
     args = ap.parse_args()
+    try:
+        chains = [int(v) for v in args.N.split(",")]
+    except ValueError:
+        ap.error(f"--N: expected disk counts separated by commas, e.g. 100,1000 (got {args.N!r})")
+    if min(chains) < 2 or args.packing == 1 or args.packing < 0 or args.repeat < 1:
+        ap.error(f"need every --N >= 2, --packing 0 (none) or >= 2 and --repeat >= 1 "
+                 f"(got {args.N}, {args.packing}, {args.repeat})")
     print(f"load average {open('/proc/loadavg').read().split()[0]} at the start")
-    for N in [int(v) for v in args.N.split(",")]:
+    for N in chains:
         system = System.from_scene(Scene(N=N, eps=1e-4))
         q, xi = relax(system, *system.rest_state(), 0.002)
         A = DiskEquilibria(system, q, xi, 0.002, "J", sparse=True).stability_matrix(q, 0.002)
@@ -76,8 +83,9 @@ def main() -> None:
         orderings(f"N = {N}, A - sigma I", sp.csc_array(K), r[:n], calls, args.repeat)
     if args.packing:
         A = packing_matrix(args.packing)
-        orderings(f"{args.packing} sheared disks, A - sigma I", A, rng.standard_normal(A.shape[0]),
-                  max(20, 60000 // A.shape[0]), args.repeat)
+        r = np.random.default_rng(0).standard_normal(A.shape[0])
+        orderings(f"{args.packing} sheared disks, A - sigma I", A, r, max(20, 60000 // A.shape[0]),
+                  args.repeat)
 
 
 def orderings(label: str, M, r, calls: int, repeat: int) -> None:
