@@ -2,8 +2,9 @@
 factors (continuation/triangular.py), what copying the factors costs, and the factorization
 with the collision locator's borders as unit vectors and as it scales them
 (locate.BORDER_SCALE: fill and time); then SuperLU's ordering as the shift-invert takes it
-(nearest.SHIFT_INVERT_ORDERING) against its default (COLAMD, partial pivoting), on the chain's
-matrix and on a sheared packing's A - sigma I (the spectral window's shift-invert, --packing N
+(nearest.SHIFT_INVERT_ORDERING) against its default (COLAMD, partial pivoting), each also with
+its ordering kept for a repeated pattern (continuation/orderings.py), on the chain's matrix and
+on a sheared packing's A - sigma I (the spectral window's shift-invert, --packing N
 disks, window [-3, 8]; 0: none).
 
 The chain's matrix is the bordered A - sigma I of the locator and of a shift-invert (A the
@@ -20,6 +21,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from diskfriction.disks.equilibria import DiskEquilibria, relax
+from diskfriction.continuation import orderings as reuse
 from diskfriction.continuation.linalg import bordered, blas_threads
 from diskfriction.continuation.nearest import SHIFT_INVERT_ORDERING
 from diskfriction.continuation.locate import BORDER_SCALE
@@ -80,17 +82,19 @@ def main() -> None:
                 fill = spla.splu(B)
                 us = median_us(lambda: spla.splu(B), calls // 10, args.repeat)
             print(f"    factorization, {label:<17}{us:9.1f} us   nnz(L + U) = {fill.L.nnz + fill.U.nnz}")
-        orderings(f"N = {N}, A - sigma I", sp.csc_array(K), r[:n], calls, args.repeat)
+        compare_orderings(f"N = {N}, A - sigma I", sp.csc_array(K), r[:n], calls, args.repeat)
     if args.packing:
         A = packing_matrix(args.packing)
         r = np.random.default_rng(0).standard_normal(A.shape[0])
-        orderings(f"{args.packing} sheared disks, A - sigma I", A, r, max(20, 60000 // A.shape[0]),
+        compare_orderings(f"{args.packing} sheared disks, A - sigma I", A, r, max(20, 60000 // A.shape[0]),
                   args.repeat)
 
 
-def orderings(label: str, M, r, calls: int, repeat: int) -> None:
+def compare_orderings(label: str, M, r, calls: int, repeat: int) -> None:
     """Factorization, nnz(L + U), substitution and backward error with the shift-invert's
-    ordering and SuperLU's default."""
+    ordering and SuperLU's default; the factorization again with the ordering kept for the
+    pattern (continuation/orderings.py: what the core does from the second matrix of a
+    pattern on)."""
     print(f"{label} (n = {M.shape[0]}):")
     for name, options in (("shift-invert's (MMD, A + A^T)", SHIFT_INVERT_ORDERING),
                           ("SuperLU's default (COLAMD)", {})):
@@ -98,11 +102,13 @@ def orderings(label: str, M, r, calls: int, repeat: int) -> None:
             lu = spla.splu(M, **options)
             tri = TriangularFactors.of(lu)
             factor = median_us(lambda: spla.splu(M, **options), calls // 10, repeat)
+            kept = median_us(lambda: reuse.splu(M, options), calls // 10, repeat)
             solve = median_us(lambda: tri.solve(r), calls, repeat)
             x = tri.solve(r)
             residual = np.abs(M @ x - r).max() / (abs(M).max() * np.abs(x).max())
-        print(f"    {name:<30} factorization {factor:8.1f} us, substitution {solve:7.1f} us, "
-              f"nnz(L + U) = {lu.L.nnz + lu.U.nnz}, backward error {residual:.1e}")
+        print(f"    {name:<30} factorization {factor:8.1f} us ({kept:.1f} us with the ordering kept), "
+              f"substitution {solve:7.1f} us, nnz(L + U) = {lu.L.nnz + lu.U.nnz}, "
+              f"backward error {residual:.1e}")
 
 
 def packing_matrix(N: int):

@@ -30,6 +30,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from . import orderings
 from .triangular import TriangularFactors
 
 Array = np.ndarray
@@ -158,7 +159,8 @@ class Factorization:
 
 def factorize(M: Matrix, ordering: Optional[dict] = None) -> Factorization:
     """LU of M (dense getrf or sparse SuperLU, with `ordering` its keyword arguments, None:
-    SuperLU's defaults, COLAMD and partial pivoting); raises SingularMatrix if M is singular."""
+    SuperLU's defaults, COLAMD and partial pivoting; a pattern factorized before keeps its
+    column order: orderings.py); raises SingularMatrix if M is singular."""
     book("factorizations")
     if sp.issparse(M):
         M = M if M.format == "csc" else sp.csc_array(M)
@@ -166,7 +168,7 @@ def factorize(M: Matrix, ordering: Optional[dict] = None) -> Factorization:
         if empty is not None:  # SuperLU would print BLAS errors (DGEMV) before failing
             raise SingularMatrix(f"matrix has an empty {empty}")
         try:
-            return Factorization(spla.splu(M, **(ordering or {})), True)
+            return Factorization(orderings.splu(M, ordering), True)
         except RuntimeError as err:  # SuperLU: "Factor is exactly singular"
             raise SingularMatrix(str(err)) from None
     M = np.asarray(M, dtype=float)

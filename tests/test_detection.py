@@ -249,6 +249,61 @@ def test_compiled_substitution_solves_like_superlu():
     assert np.max(np.abs(M.T @ lu.solve(rhs, transpose=True) - rhs)) <= 1e-9 * np.max(np.abs(X))
 
 
+@pytest.mark.parametrize("symmetric", [False, True], ids=["partial-pivoting", "symmetric-mode"])
+def test_a_repeated_pattern_reuses_its_ordering_and_solves_alike(symmetric):
+    """A second matrix of the same pattern (the bordered A - sigma I of the N = 40 chain at
+    another sigma, near an eigenvalue) is factorized in the column order of the first
+    (orderings.py) and solves like SuperLU's own factorization of it, with SuperLU's solve and
+    after the factors are copied (triangular.py), with and without transpose: bit for bit with
+    partial pivoting, to rounding with SymmetricMode; the log-determinant from its factors
+    (sign and value) is that of the matrix; another pattern is factorized afresh."""
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+    from diskfriction.continuation import orderings
+    from diskfriction.continuation.linalg import COPY_FACTORS_AT, bordered, factorize
+    from diskfriction.continuation.nearest import SHIFT_INVERT_ORDERING
+
+    options = SHIFT_INVERT_ORDERING if symmetric else None
+    system = System.from_scene(Scene(N=40, eps=1e-4))
+    q, xi = relax(system, *system.rest_state(), 0.01)
+    A = DiskEquilibria(system, q, xi, 0.01, "J", sparse=True).stability_matrix(q, 0.01)
+    n = A.shape[0]
+    eigenvalues = np.sort(np.linalg.eigvals(A.toarray()).real)
+    rng = np.random.default_rng(5)
+    c, b = rng.standard_normal(n), rng.standard_normal(n)
+    matrix = lambda sigma: sp.csc_array(bordered(A - sigma * sp.identity(n, format="csr"), c, b))  # noqa: E731
+    first, second = matrix(eigenvalues[n // 3]), matrix(eigenvalues[n // 2] * (1 + 1e-6))
+    factorize(first, options)
+    lu = factorize(second, options)
+    assert isinstance(lu.lu, orderings.Reordered)
+    reference = spla.splu(second, **(options or {}))
+    rhs = rng.standard_normal((n + 1, 2))
+    for k in range(COPY_FACTORS_AT + 4):
+        transpose = k % 2 == 1
+        x = lu.solve(rhs[:, (k // 2) % 2], transpose)
+        expected = reference.solve(rhs[:, (k // 2) % 2], trans="T" if transpose else "N")
+        if symmetric:
+            assert np.max(np.abs(x - expected)) <= 1e-10 * np.max(np.abs(expected))
+        elif lu.triangular is None:
+            assert np.array_equal(x, expected)
+        residual = (second.T if transpose else second) @ x - rhs[:, (k // 2) % 2]
+        assert np.max(np.abs(residual)) <= 1e-9 * np.max(np.abs(x))
+    assert lu.triangular is not None
+    diagonal = lu.lu.U.diagonal()
+    sign = np.prod(np.sign(diagonal)) * linalg_parity(lu.lu.perm_r) * linalg_parity(lu.lu.perm_c)
+    assert (sign, np.sum(np.log(np.abs(diagonal)))) == pytest.approx(np.linalg.slogdet(second.toarray()), rel=1e-9)
+    coupled = sp.lil_array(A)
+    coupled[0, n - 5] = 1e-3  # one more nonzero
+    other = sp.csc_array(bordered(sp.csr_array(coupled) - 0.5 * sp.identity(n, format="csr"), c, b))
+    assert not isinstance(factorize(other, options).lu, orderings.Reordered)
+
+
+def linalg_parity(permutation):
+    from diskfriction.continuation.linalg import _parity
+
+    return _parity(permutation)
+
+
 @pytest.mark.parametrize("partial_from", [None, 0], ids=["default", "partial-splits"])
 def test_a_spectral_window_lists_the_full_detection_s_collisions_in_it(partial_from, chain_sweep):
     """N = 40, eps = 1e-4: tracking only 0.0553 <= Re lambda / k_n <= 0.0562 by shift-invert
