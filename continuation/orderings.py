@@ -35,8 +35,8 @@ KEPT = 8
 @dataclass(frozen=True)
 class _Pattern:
     """A sparsity pattern (CSC indptr, indices; shape), the options it was ordered for, the
-    column order q (rows too where symmetric) and the permuted matrix's pattern, whose data is
-    M.data[take]."""
+    column order q (rows too where symmetric), its inverse, and the permuted matrix's pattern,
+    whose data is M.data[take]."""
 
     options: str
     shape: tuple
