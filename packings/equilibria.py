@@ -42,7 +42,9 @@ values (packings/assembly.py), set up at every commit.
 """
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass, replace
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -169,6 +171,7 @@ class PackingEquilibria(Problem):
         self.reach = REACH * network.constants[0]
         delta = network.overlaps(q, rows, gamma)
         self.delta_hold = LOOSE_OVERLAP * float(np.median(delta[delta > 0]))
+        self._kept: dict = {}
         self._set_committed(q, xi, rows, gamma)
         self.window = window
         if window is not None and window.k == 0:  # sized once, here, at the start state
@@ -201,6 +204,16 @@ class PackingEquilibria(Problem):
         self.kappa = float(self.network.kernels.normal_stiffness(scale, self.network.constants[1]))
         self._last = (None, None)
         self._assemble()
+        self._keep(_digest(self.state()))
+
+    def _keep(self, key: bytes) -> None:
+        """Remember the committed state's derived part under its snapshot's digest (the most
+        recent KEPT_STATES): the continuation restores the states of pending steps (to record a
+        point, or after a failed scan), and assembling one anew took 10 ms, 5.4 s of the
+        continuation's 49 s for 256 sheared disks to gamma = 2e-3 (502 states set, 180 commits)."""
+        self._kept[key] = tuple(getattr(self, name) for name in _DERIVED)
+        while len(self._kept) > KEPT_STATES:
+            del self._kept[next(iter(self._kept))]
 
     def _assemble(self) -> None:
         """The committed state's matrices as fixed linear maps of J's values
@@ -331,7 +344,19 @@ class PackingEquilibria(Problem):
         return self.q_c.copy(), self.xi_c.copy(), self.rows_c.copy(), self.gamma_c, self.sliding
 
     def restore(self, snapshot: tuple) -> None:
-        self._set_committed(*snapshot)
+        """Back to a state() snapshot: its derived part (gauge, matrices' assemblies) from the
+        last few states set (KEPT_STATES), else computed again."""
+        key = _digest(snapshot)
+        kept = self._kept.pop(key, None)
+        if kept is None:
+            self._set_committed(*snapshot)
+            return
+        q, xi, rows, gamma, _ = snapshot
+        self.q_c, self.xi_c, self.rows_c, self.gamma_c = q.copy(), xi.copy(), rows, float(gamma)
+        for name, value in zip(_DERIVED, kept):
+            setattr(self, name, value)
+        self._last = (None, None)
+        self._keep(key)
 
     def commit(self, q_old, gamma_old, q_new, gamma_new) -> bool:
         """Commit at (q_new, gamma_new): the rows found again (histories carried by row), the
@@ -404,6 +429,21 @@ class PackingEquilibria(Problem):
             if (self.network.overlaps(trial, mine, gamma) < 0).all():
                 q = trial
         return q
+
+
+KEPT_STATES = 6
+"""Committed states whose derived part PackingEquilibria keeps for restore."""
+_DERIVED = ("gauge", "active", "sliding", "_band", "kappa", "_pattern", "_dG_dq", "_reduced", "_stability")
+"""What _set_committed derives from a state (q, xi, rows, gamma, sliding)."""
+
+
+def _digest(snapshot: tuple) -> bytes:
+    """A key of a state() snapshot (q, xi, rows, gamma, sliding): the hash of its bytes."""
+    q, xi, rows, gamma, sliding = snapshot
+    h = hashlib.blake2b(digest_size=16)
+    for part in (q, xi, rows, np.float64(gamma), sliding):
+        h.update(np.ascontiguousarray(part).tobytes())
+    return h.digest()
 
 
 def row_keys(rows: np.ndarray) -> np.ndarray:

@@ -312,6 +312,41 @@ def test_the_assembled_matrices_are_the_products_of_the_gauge(packing):
     assert np.all(parked < 0) and np.ptp(parked) == 0.0
 
 
+def test_a_restored_state_is_the_state_set_afresh(packing):
+    """restore of a state() snapshot kept from an earlier commit (PackingEquilibria._kept) gives
+    the residual, dG/dq and A_g of a problem set to that state afresh, bit for bit, without
+    assembling again; an unknown snapshot is set afresh; only the last KEPT_STATES are kept."""
+    from diskfriction.packings import equilibria
+
+    problem = problem_at_start(packing)
+    first = problem.state()
+    rng = np.random.default_rng(2)
+    states = [first]
+    for k in range(equilibria.KEPT_STATES + 1):  # other committed states: the disks moved by ~1e-9
+        problem._set_committed(first[0] + 1e-9 * (k + 1) * rng.standard_normal(first[0].size), first[1],
+                               first[2], first[3], first[4])
+        states.append(problem.state())
+    assert len(problem._kept) == equilibria.KEPT_STATES
+    fresh = problem_at_start(packing)
+    target = states[-3]
+    fresh.restore(target)  # not kept by `fresh`: set afresh
+    assembled = []
+    original = equilibria.Assembly.of
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(equilibria.Assembly, "of", lambda *a, **k: assembled.append(1) or original(*a, **k))
+        problem.restore(target)
+    assert not assembled
+    x = target[0] + 1e-7 * rng.standard_normal(target[0].size)
+    for got, expected in ((problem.residual(x, 1e-6), fresh.residual(x, 1e-6)),
+                          (problem.jacobian(x, 1e-6).toarray(), fresh.jacobian(x, 1e-6).toarray()),
+                          (problem.stability_matrix(x, 1e-6).toarray(), fresh.stability_matrix(x, 1e-6).toarray())):
+        assert np.array_equal(got, expected)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(equilibria.Assembly, "of", lambda *a, **k: assembled.append(1) or original(*a, **k))
+        problem.restore(first)  # dropped from the kept states long ago
+    assert assembled
+
+
 def test_the_locator_starts_from_the_predicted_branch_point(monkeypatch):
     """256 disks (seed 1), window [-3, 8], to gamma = 1.27e-4: every located collision is found
     by the locator's first run. It starts from the point the segment predicts from the solved
