@@ -387,8 +387,9 @@ def _before_fold(problem: Problem, here: _Start, step: _Step, params: Continuati
     arclength; the step ends at the bracket's near end, on the branch, where p still runs
     forward. None where the tangents at the step's ends do not point forward and back (the step
     went round two folds), where the step lands on the end of the span, or where a point of the
-    segment cannot be solved: the caller then halves the step (_towards_fold). Closing in by halving took about 9 accepted steps and 22 rejected ones per
-    fold of 256 sheared disks; the bracket takes about 8 points, without spectra."""
+    segment cannot be solved: the caller then halves the step (_towards_fold). Closing in by
+    halving took about 9 accepted steps and 22 rejected ones per fold of 256 sheared disks; the
+    bracket takes about 8 points, without spectra."""
     direction = params.direction
     start, end = direction * float(here.t[-1]), direction * float(step.tangent[-1])
     if step.last or not start > 0.0 > end:  # step.tangent is oriented by here.t, as below

@@ -9,9 +9,9 @@ last few patterns (KEPT) and factorizes a repeated one as M[:, q] (M[q][:, q] wh
 permutes rows and columns alike, SymmetricMode) with the natural order. The factors are those
 of the same elimination: with partial pivoting they are bit for bit the factors SuperLU's own
 ordering gives; with SymmetricMode they agree to rounding (1e-13 relative in a solve, the same
-nonzeros). On 256 sheared disks (benchmarks/solve_speed.py --packing 256) the bordered
+nonzeros). On matrices of 256 sheared disks (taken from a run, timed once) the bordered
 corrector matrix takes 1.7 ms against 2.4 ms and the shift-invert's A - sigma I 1.3 ms against
-2.9 ms.
+2.9 ms; benchmarks/solve_speed.py --packing 256 prints the latter.
 
 `Reordered` shows the factors of the permuted matrix as factors of M (solve, transposed solve,
 L, U, perm_r, perm_c with the permutations composed), so callers and the compiled substitution
@@ -109,7 +109,8 @@ def splu(M: sp.csc_array, options: Optional[dict] = None):
             inner = spla.splu(pattern.permuted(M), **{**options, "permc_spec": "NATURAL"})
             return Reordered.of(inner, pattern)
     lu = spla.splu(M, **options)
-    _kept.insert(0, _order_of(M, key, np.argsort(lu.perm_c), bool(options.get("options", {}).get("SymmetricMode"))))
+    symmetric = bool(options.get("options", {}).get("SymmetricMode"))
+    _kept.insert(0, _order_of(M, key, np.argsort(lu.perm_c), symmetric))
     del _kept[KEPT:]
     return lu
 

@@ -204,7 +204,7 @@ class PackingEquilibria(Problem):
         self.kappa = float(self.network.kernels.normal_stiffness(scale, self.network.constants[1]))
         self._last = (None, None)
         self._assemble()
-        self._keep(_digest(self.state()))
+        self._keep(_digest((self.q_c, self.xi_c, self.rows_c, self.gamma_c, self.sliding)))
 
     def _keep(self, key: bytes) -> None:
         """Remember the committed state's derived part under its snapshot's digest (the most
