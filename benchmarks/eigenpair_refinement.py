@@ -49,7 +49,6 @@ def main() -> None:
     ap.add_argument("--dF", default="1e-4,5e-4")
     ap.add_argument("--iterations", type=int, default=6)
     ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--reach", type=float, default=4.0, help="clusters: pairs within REACH times their predicted moves")
     args = ap.parse_args()
     print(f"{time.strftime('%Y-%m-%d %H:%M')}, load average {open('/proc/loadavg').read().split()[0]}")
     print("| N | n | dF | LAPACK, both vectors | refined | LAPACK / refined | "
@@ -72,9 +71,9 @@ def main() -> None:
             step = eigenvalue_slopes(old, A - stability(system, q0, xi0, 0.002))
             guess = old.values + step
             scale = np.abs(old.values).max()
-            reach, tol = args.reach * np.abs(step) + 1e-9 * scale, 1e-13 * scale
+            tol = 1e-13 * scale
             refined_s, (values, right, left, residual) = seconds(
-                lambda: refine_eigenpairs(blocks, guess, guess_right, guess_left, reach, args.iterations, tol),
+                lambda: refine_eigenpairs(blocks, guess, guess_right, guess_left, args.iterations, tol),
                 args.repeat)
             with blas_threads(), spectra_on("cpu"):
                 exact = eigensystem(dense(A), False).values

@@ -483,20 +483,6 @@ def _rqi_many(diag, lower, upper, values, right, left, iterations, tol):
     return residual
 
 
-def clusters(guess: Array, reach: Array) -> list[Array]:
-    """The eigenpairs to refine together: i and j are linked when their predicted eigenvalues
-    are closer than reach_i + reach_j (reach: how far each may be from its prediction), and a
-    cluster is a connected set of links. Returns the clusters' members, ascending."""
-    guess = np.asarray(guess, np.complex128)
-    n = guess.size
-    i, j = close_pairs(guess, 2.0 * float(np.max(reach, initial=0.0)))
-    linked = np.abs(guess[i] - guess[j]) <= reach[i] + reach[j]
-    graph = sp.coo_array((np.ones(int(linked.sum())), (i[linked], j[linked])), shape=(n, n))
-    root = connected_components(graph, directed=False)[1]
-    members = np.argsort(root, kind="stable")
-    return np.split(members, np.flatnonzero(np.diff(root[members])) + 1)
-
-
 def close_pairs(points: Array, radius: float) -> tuple[Array, Array]:
     """Index pairs (i < j) of the complex points within `radius` of each other (a k-d tree)."""
     if points.size < 2:
@@ -506,45 +492,40 @@ def close_pairs(points: Array, radius: float) -> tuple[Array, Array]:
 
 
 LARGEST_CLUSTER = 16
-"""Clusters of more eigenpairs are refined pair by pair (refine_eigenpairs): one shift serves a
-cluster, and the farther its members lie from it, the slower they converge."""
+"""Largest group of pairs with meeting error discs refined again together (refine_eigenpairs);
+a larger one is left to the certificate."""
 
 
 def refine_eigenpairs(blocks: PeriodicBlocks, values: Array, right: Array, left: Array,
-                      reach: Array, iterations: int = 6, tol: float = 0.0
-                      ) -> tuple[Array, Array, Array, Array]:
+                      iterations: int = 6, tol: float = 0.0) -> tuple[Array, Array, Array, Array]:
     """Every eigenpair of `blocks`' matrix refined from the guesses (values (n,), right vectors
     as columns, left vectors as rows l_i^H with l_i^H r_i = 1: spectra.Eigensystem's layout) by
-    at most `iterations` two-sided Rayleigh quotient steps (fewer once each residual is <= tol)
-    on the clusters of pairs whose guesses are within reach of each other (clusters; module
-    docstring): alone (also the members of a cluster larger than LARGEST_CLUSTER), in real
-    arithmetic where guess and vectors are real, the lower member of a complex-conjugate pair
-    as the conjugate of the upper one; in a cluster, with the cluster's mean as the
-    shift, then each member polished with its own. Any pair still above tol gets `iterations`
-    more steps alone with a pivoted banded LU (_pivoted_rqi). Where two pairs converged to one
-    eigenpair (_found_twice), one of them starts again from its guess with the converged pairs
-    near it deflated, for twice the iterations (up to ROUNDS times). Returns new (values, right, left,
-    residual): |r_i| = 1, l_i^H r_i = 1, residual_i = |A r_i - lambda_i r_i| (inf where a
-    factorization failed)."""
+    at most `iterations` two-sided Rayleigh quotient steps (fewer once each residual is <= tol),
+    each pair alone: in real arithmetic where guess and vectors are real, the lower member of a
+    complex-conjugate pair as the conjugate of the upper one. Any pair still above tol gets
+    `iterations` more steps alone with a pivoted banded LU (_pivoted_rqi). Pairs whose error
+    discs kappa_i rho_i then meet (a degenerate or nearly degenerate eigenvalue: alone, two
+    pairs may land on one eigenpair, or on vectors of one eigenspace that are not
+    biorthogonal) are refined again together from their guesses, in groups of at most
+    LARGEST_CLUSTER (_refine_cluster: one shift, the projected problem). Where two pairs still
+    converged to one eigenpair (_found_twice), one of them starts again from its guess with the
+    converged pairs near it deflated, for twice the iterations (up to ROUNDS times). Returns
+    new (values, right, left, residual): |r_i| = 1, l_i^H r_i = 1, residual_i = |A r_i -
+    lambda_i r_i| (inf where a factorization failed)."""
     guess = (np.asarray(values, np.complex128), right, left)
     values = np.array(values, np.complex128)
     right = np.array(right, np.complex128)
     left = np.array(left, np.complex128)
-    spans = clusters(values, np.asarray(reach, float))
-    grouped = [span for span in spans if 1 < span.size <= LARGEST_CLUSTER]
-    alone = np.setdiff1d(np.arange(values.size), np.concatenate(grouped + [np.zeros(0, np.int64)]))
-    real = alone[(values[alone].imag == 0.0) & ~np.any(right[:, alone].imag, axis=0)
-                 & ~np.any(left[alone].imag, axis=1)]
+    every = np.arange(values.size)
+    real = every[(values.imag == 0.0) & ~np.any(right.imag, axis=0) & ~np.any(left.imag, axis=1)]
     residual = np.full(values.size, np.inf)
-    upper, lower = conjugate_pairs(values, np.setdiff1d(alone, real))
-    single = np.setdiff1d(np.setdiff1d(alone, real), np.concatenate([upper, lower]))
+    upper, lower = conjugate_pairs(values, np.setdiff1d(every, real))
+    single = np.setdiff1d(np.setdiff1d(every, real), np.concatenate([upper, lower]))
     for picked, dtype in ((real, float), (np.concatenate([upper, single]), complex)):
         residual[picked] = _rqi(blocks, values, right, left, picked, iterations, tol, dtype)
     # a real matrix: the lower member of a complex pair is the upper one's conjugate
     values[lower], right[:, lower], left[lower] = values[upper].conj(), right[:, upper].conj(), left[upper].conj()
     residual[lower] = residual[upper]
-    for span in grouped:
-        residual[span] = _refine_cluster(blocks, values, right, left, span, iterations, tol)
     rough = np.flatnonzero(residual > tol)  # a far guess, or pivot growth in the blocks' LU
     if rough.size:
         v, r, lft = values[rough], right[:, rough], left[rough]
@@ -552,6 +533,9 @@ def refine_eigenpairs(blocks: PeriodicBlocks, values: Array, right: Array, left:
         better = again < residual[rough]
         values[rough[better]], right[:, rough[better]], left[rough[better]] = v[better], r[:, better], lft[better]
         residual[rough[better]] = again[better]
+    for group in meeting_groups(values, residual, left):
+        if group.size <= LARGEST_CLUSTER:
+            _refine_group(blocks, guess, values, right, left, residual, group, iterations, tol)
     for _ in range(ROUNDS):
         twice = _found_twice(guess[0], values, right, left, residual)
         for p in twice:
@@ -566,6 +550,39 @@ def refine_eigenpairs(blocks: PeriodicBlocks, values: Array, right: Array, left:
     return values, right, left, residual
 
 
+def meeting_groups(values: Array, residual: Array, left: Array) -> list[Array]:
+    """The groups (two or more, ascending) of converged pairs linked by meeting error discs
+    |z - lambda_i| <= kappa_i rho_i (kappa_i = |l_i| with |r_i| = 1, l_i^H r_i = 1)."""
+    done = np.isfinite(residual)
+    i, j = touching(values, error_bounds(residual, left))
+    keep = done[i] & done[j]
+    if not keep.any():
+        return []
+    graph = sp.coo_array((np.ones(int(keep.sum())), (i[keep], j[keep])), shape=(values.size,) * 2)
+    root = connected_components(graph, directed=False)[1]
+    members = np.argsort(root, kind="stable")
+    groups = np.split(members, np.flatnonzero(np.diff(root[members])) + 1)
+    return [g for g in groups if g.size > 1]
+
+
+def error_bounds(residual: Array, left: Array) -> Array:
+    """kappa_i rho_i, each eigenvalue's first-order error bound (kappa_i = |l_i| with |r_i| = 1,
+    l_i^H r_i = 1; rho_i the residual); 0 where the pair did not converge (rho_i inf)."""
+    done = np.isfinite(residual)
+    return np.where(done, np.linalg.norm(left, axis=1) * np.where(done, residual, 0.0), 0.0)
+
+
+def _refine_group(blocks: PeriodicBlocks, guess: tuple[Array, Array, Array], values: Array, right: Array,
+                  left: Array, residual: Array, group: Array, iterations: int, tol: float) -> None:
+    """The pairs `group` refined again together from their guesses (_refine_cluster), in place;
+    kept as they were where a factorization failed."""
+    v, r, lft = guess[0][group].astype(np.complex128), guess[1][:, group].astype(np.complex128), \
+        guess[2][group].astype(np.complex128)
+    res = _refine_cluster(blocks, v, r, lft, np.arange(group.size), iterations, tol)
+    if np.all(np.isfinite(res)):
+        values[group], right[:, group], left[group], residual[group] = v, r, lft, res
+
+
 DEFLATED = 16
 """Pairs deflated when a pair found twice is refined again (refine_eigenpairs): the converged
 pairs nearest its guess."""
@@ -577,9 +594,7 @@ ROUNDS = 3
 def _found_twice(guess: Array, values: Array, right: Array, left: Array, residual: Array) -> Array:
     """Of every two pairs converged to one eigenpair (meeting discs kappa rho, |l_i^H r_j| >
     1/2: one eigenvalue found twice, another lost), the one whose guess is farther from it."""
-    done = np.isfinite(residual)
-    bound = np.where(done, np.linalg.norm(left, axis=1) * np.where(done, residual, 0.0), 0.0)
-    i, j, cross = meeting_discs(values, bound, right, left)
+    i, j, cross = meeting_discs(values, error_bounds(residual, left), right, left)
     i, j = i[cross > 0.5], j[cross > 0.5]
     farther = np.where(np.abs(guess[i] - values[i]) >= np.abs(guess[j] - values[j]), i, j)
     return np.unique(farther)

@@ -8,8 +8,8 @@ reference sample is carried to the new point x:
     predicted   lambda_i + dlambda_i/ds ds,   ds = (x - x_ref) . t_ref  (the slopes along the
                 reference's tangent; the reference's own value where it has no slopes),
     refined     by two-sided Rayleigh quotient iteration on the O(N b^3) shifted solves of
-                block_tridiagonal.py (pairs predicted within REACH times their moves of each
-                other refined together as a cluster),
+                block_tridiagonal.py (pairs whose error discs then meet refined again together
+                as a cluster),
 
 O(n^2 b^2) for the n = N b pairs against LAPACK's O(n^3): about 4 times faster at n = 3000
 on one core (docs/continuation.md, Eigenpair continuation).
@@ -60,10 +60,6 @@ a continuation)."""
 RESIDUAL = 1e-12
 """Largest residual rho_i accepted, relative to the spectral radius."""
 
-REACH = 4.0
-"""Pairs whose predictions are within REACH times their predicted moves (plus 1e-9 R) of each
-other are refined together (block_tridiagonal.clusters)."""
-
 TRACE = 10.0
 """Slack of the trace identities over their error bounds."""
 
@@ -107,8 +103,7 @@ def refined_eigensystem(problem: Problem, x: Array, reference: Sample) -> Option
     order = np.arange(values.size) if blocks.order is None else blocks.order
     columns = np.arange(values.size) if old.columns is None else old.columns  # label i's vectors
     refined = refine_eigenpairs(blocks, values + move, old.right[np.ix_(order, columns)],
-                                old.left[np.ix_(columns, order)],
-                                REACH * np.abs(move) + 1e-9 * scale, ITERATIONS, 1e-13 * scale)
+                                old.left[np.ix_(columns, order)], ITERATIONS, 1e-13 * scale)
     system = certified(blocks, *refined, scale)
     if system is None:
         book("refinements_declined")
