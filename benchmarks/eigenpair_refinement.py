@@ -66,14 +66,13 @@ def main() -> None:
             b = system.ndof // N
             order = disk_major(N, b)
             blocks = PeriodicBlocks.from_matrix(A, b, order)
-            guess_right, guess_left = old.right[order], old.left[:, order]
             # first order in the matrix's change: lambda + l^H (A1 - A0) r (what the slopes predict)
             step = eigenvalue_slopes(old, A - stability(system, q0, xi0, 0.002))
             guess = old.values + step
             scale = np.abs(old.values).max()
             tol = 1e-13 * scale
             refined_s, (values, right, left, residual) = seconds(
-                lambda: refine_eigenpairs(blocks, guess, guess_right, guess_left, args.iterations, tol),
+                lambda: refine_eigenpairs(blocks, guess, old.right, old.left, args.iterations, tol),
                 args.repeat)
             with blas_threads(), spectra_on("cpu"):
                 exact = eigensystem(dense(A), False).values

@@ -374,29 +374,45 @@ def _matvec(diag, lower, upper, x, y):
                     y[k, i, s] += d * x[k, j, s] + low * x[prev, j, s] + u * x[nxt, j, s]
 
 
+STALLED = 0.1
+"""_rqi_many stops a pair whose residual fell by less than this factor in a step (cubic
+convergence falls by orders of magnitude): the blocks' LU has reached its accuracy (pivot
+growth, module docstring), and the pivoted LU takes the pair over. The chain of 1000 disks:
+60 of 2118 real pairs stalled between 1e-12 and 1e-11 of the spectral radius, and steps 3 to
+6 cost a quarter of the refinement for none of them."""
+
 BATCH = 16
 """Pairs refined side by side by _rqi_many (each with its own shift, every per-block loop over
 them innermost; 16 was the fastest of 8, 16, 32, 64 at N = 1000)."""
 
 
 @numba.njit(cache=True)
-def _rqi_many(diag, lower, upper, values, right, left, iterations, tol):
-    """Two-sided Rayleigh quotient iteration of each pair alone, in place, in the dtype of
-    `right` (real pairs in real arithmetic, four times cheaper): values (k,), right (n, k)
-    columns, left (k, n) rows (conj(l) entries: l^H x = sum(left[j] * x)). BATCH pairs at a
-    time, each with its own shift, side by side in every loop (a slot whose pair is done takes
-    the next one). Returns the residuals (inf where a factorization failed)."""
+def _rqi_many(diag, lower, upper, guess, right, left, rows, source, target, mirror, values_out, right_out,
+              left_out, iterations, tol):
+    """Two-sided Rayleigh quotient iteration of each pair alone, in the dtype of `guess` (real
+    pairs in real arithmetic, four times cheaper; then `right` and `left` are the real parts of
+    the complex vectors). Pair p starts from guess[p] with the right vector right[rows, source[p]]
+    and the left row left[source[p], rows] (conj(l) entries, l^H x = sum(left[j] * x)): rows[t]
+    is the row of block unknown t (PeriodicBlocks.order). Its result goes to values_out[target[p]],
+    right_out[rows, target[p]] and left_out[target[p], rows], and, where mirror[p] >= 0, its
+    complex conjugate to column and row mirror[p] (the lower member of a conjugate pair). A pair
+    stops at tol, after `iterations` steps, or where its residual stalled (STALLED). BATCH
+    pairs at a time, each with its own shift, side by side in every loop (a slot whose pair is
+    done takes the next one). Returns the residuals |A r - lambda r| (|r| = 1) and the norms |l|
+    (l^H r = 1), inf and nan where a factorization failed (nothing written then)."""
     N, b = diag.shape[0], diag.shape[1]
-    n, k = right.shape
+    n, k = N * b, guess.size
     residual = np.full(k, np.inf)
+    kappa = np.full(k, np.nan)
     K = min(BATCH, k)
     if K == 0:
-        return residual
-    dt = right.dtype
-    (P, G, Z, ZT, S), (E, FT, W, aug, ok, f), (head, y, w1, tail) = _work(N, b, K, right[:1, 0])
+        return residual, kappa
+    dt = guess.dtype
+    (P, G, Z, ZT, S), (E, FT, W, aug, ok, f), (head, y, w1, tail) = _work(N, b, K, guess[:1])
     r, lc = np.zeros((N, b, K), dt), np.zeros((N, b, K), dt)
     x, ax = np.empty((N, b, K), dt), np.empty((N, b, K), dt)
     lam = np.zeros(K, dt)
+    last = np.full(K, np.inf)  # each slot's previous residual
     pair = np.full(K, -1)
     steps = np.zeros(K, np.int64)
     upcoming = 0
@@ -406,9 +422,9 @@ def _rqi_many(diag, lower, upper, values, right, left, iterations, tol):
     for s in range(K):
         p = pair[s]
         for t in range(n):
-            r[t // b, t % b, s] = right[t, p]
-            lc[t // b, t % b, s] = left[p, t]
-        lam[s] = values[p]
+            r[t // b, t % b, s] = right[rows[t], source[p]]
+            lc[t // b, t % b, s] = left[source[p], rows[t]]
+        lam[s] = guess[p]
     while True:
         active = 0
         for s in range(K):
@@ -441,7 +457,7 @@ def _rqi_many(diag, lower, upper, values, right, left, iterations, tol):
                         lc[kk, i, s] /= overlap
             steps[s] += 1
             if not good:
-                pair[s] = -2  # failed: its residual stays inf, its guess as it was
+                pair[s] = -2  # failed: its residual stays inf, nothing written
         _matvec(diag, lower, upper, r, ax)
         for s in range(K):
             p = pair[s]
@@ -454,33 +470,53 @@ def _rqi_many(diag, lower, upper, values, right, left, iterations, tol):
                     for i in range(b):
                         q += lc[kk, i, s] * ax[kk, i, s]
                 lam[s] = q
-                res = 0.0
+                res, size = 0.0, 0.0
                 for kk in range(N):
                     for i in range(b):
                         res += abs(ax[kk, i, s] - q * r[kk, i, s]) ** 2
+                        size += abs(lc[kk, i, s]) ** 2
                 res = np.sqrt(res)
-                if res <= tol or steps[s] >= iterations:
-                    residual[p] = res
-                    values[p] = q
+                stalled = res > STALLED * last[s]
+                last[s] = res
+                if res <= tol or steps[s] >= iterations or stalled:
+                    residual[p], kappa[p] = res, np.sqrt(size)
+                    c, m = target[p], mirror[p]
+                    values_out[c] = q
                     for t in range(n):
-                        right[t, p] = r[t // b, t % b, s]
-                        left[p, t] = lc[t // b, t % b, s]
+                        right_out[rows[t], c] = r[t // b, t % b, s]
+                        left_out[c, rows[t]] = lc[t // b, t % b, s]
+                    if m >= 0:
+                        values_out[m] = np.conj(q)
+                        for t in range(n):
+                            right_out[rows[t], m] = np.conj(r[t // b, t % b, s])
+                            left_out[m, rows[t]] = np.conj(lc[t // b, t % b, s])
                     done = True
             if done:  # the next pair into this slot
                 steps[s] = 0
+                last[s] = np.inf
                 if upcoming < k:
                     p = upcoming
                     upcoming += 1
                     pair[s] = p
                     for t in range(n):
-                        r[t // b, t % b, s] = right[t, p]
-                        lc[t // b, t % b, s] = left[p, t]
-                    lam[s] = values[p]
+                        r[t // b, t % b, s] = right[rows[t], source[p]]
+                        lc[t // b, t % b, s] = left[source[p], rows[t]]
+                    lam[s] = guess[p]
                 else:
                     pair[s] = -1
                     r[:, :, s] = 0.0
                     lc[:, :, s] = 0.0
-    return residual
+    return residual, kappa
+
+
+def rqi_in_place(blocks: "PeriodicBlocks", values: Array, right: Array, left: Array, iterations: int,
+                 tol: float) -> tuple[Array, Array]:
+    """_rqi_many on the pairs (values (k,), right (n, k) columns, left (k, n) rows, in block
+    order, one dtype) in place: (residuals, |l|); a pair whose factorization failed is left as
+    it was."""
+    every, n = np.arange(values.size), right.shape[0]
+    return _rqi_many(blocks.diag, blocks.lower, blocks.upper, values.copy(), right, left, np.arange(n), every,
+                     every, np.full(values.size, -1), values, right, left, iterations, tol)
 
 
 def close_pairs(points: Array, radius: float) -> tuple[Array, Array]:
@@ -497,64 +533,139 @@ a larger one is left to the certificate."""
 
 
 def refine_eigenpairs(blocks: PeriodicBlocks, values: Array, right: Array, left: Array,
-                      iterations: int = 6, tol: float = 0.0) -> tuple[Array, Array, Array, Array]:
-    """Every eigenpair of `blocks`' matrix refined from the guesses (values (n,), right vectors
-    as columns, left vectors as rows l_i^H with l_i^H r_i = 1: spectra.Eigensystem's layout) by
-    at most `iterations` two-sided Rayleigh quotient steps (fewer once each residual is <= tol),
-    each pair alone: in real arithmetic where guess and vectors are real, the lower member of a
-    complex-conjugate pair as the conjugate of the upper one. Any pair still above tol gets
-    `iterations` more steps alone with a pivoted banded LU (_pivoted_rqi). Pairs whose error
-    discs kappa_i rho_i then meet (a degenerate or nearly degenerate eigenvalue: alone, two
-    pairs may land on one eigenpair, or on vectors of one eigenspace that are not
-    biorthogonal) are refined again together from their guesses, in groups of at most
-    LARGEST_CLUSTER (_refine_cluster: one shift, the projected problem). Where two pairs still
-    converged to one eigenpair (_found_twice), one of them starts again from its guess with the
-    converged pairs near it deflated, for twice the iterations (up to ROUNDS times). Returns
-    new (values, right, left, residual): |r_i| = 1, l_i^H r_i = 1, residual_i = |A r_i -
-    lambda_i r_i| (inf where a factorization failed)."""
-    guess = (np.asarray(values, np.complex128), right, left)
-    values = np.array(values, np.complex128)
-    right = np.array(right, np.complex128)
-    left = np.array(left, np.complex128)
-    every = np.arange(values.size)
-    real = every[(values.imag == 0.0) & ~np.any(right.imag, axis=0) & ~np.any(left.imag, axis=1)]
-    residual = np.full(values.size, np.inf)
-    upper, lower = conjugate_pairs(values, np.setdiff1d(every, real))
+                      iterations: int = 6, tol: float = 0.0, columns: Optional[Array] = None
+                      ) -> tuple[Array, Array, Array, Array]:
+    """Every eigenpair of `blocks`' matrix refined from the guesses: values (n,), right vectors
+    as columns and left vectors as rows l_i^H (l_i^H r_i = 1: spectra.Eigensystem's layout) in
+    the matrix's own order (PeriodicBlocks.order takes block unknowns to it), pair i's in column
+    (and row) columns[i] (None: i). Each pair alone by at most `iterations` two-sided Rayleigh
+    quotient steps (fewer once its residual is <= tol): in real arithmetic where guess and
+    vectors are real, the lower member of a complex-conjugate pair as the conjugate of the upper
+    one. Any pair still above tol gets `iterations` more steps alone with a pivoted banded LU
+    (_pivoted_rqi). Pairs whose error discs kappa_i rho_i then meet (a degenerate or nearly
+    degenerate eigenvalue: alone, two pairs may land on one eigenpair, or on vectors of one
+    eigenspace that are not biorthogonal) are refined again together from their guesses, in
+    groups of at most LARGEST_CLUSTER (_refine_cluster: one shift, the projected problem).
+    Where two pairs still converged to one eigenpair (_found_twice), one of them starts again
+    from its guess with the converged pairs near it deflated, for twice the iterations (up to
+    ROUNDS times). The guesses are read, never copied whole. Returns new (values, right, left,
+    residual) in the matrix's order, pair i in column and row i: |r_i| = 1, l_i^H r_i = 1,
+    residual_i = |A r_i - lambda_i r_i| (inf where a factorization failed)."""
+    n = values.size
+    every = np.arange(n)
+    guess = Guesses(np.asarray(values, np.complex128), right, left,
+                    every if blocks.order is None else np.asarray(blocks.order),
+                    every if columns is None else np.asarray(columns))
+    out = Refined.empty(guess.rows)
+    vectors_real = ~np.any(right.imag, axis=0) & ~np.any(left.imag, axis=1)
+    real = every[(guess.values.imag == 0.0) & vectors_real[guess.source]]
+    upper, lower = conjugate_pairs(guess.values, np.setdiff1d(every, real))
     single = np.setdiff1d(np.setdiff1d(every, real), np.concatenate([upper, lower]))
-    for picked, dtype in ((real, float), (np.concatenate([upper, single]), complex)):
-        residual[picked] = _rqi(blocks, values, right, left, picked, iterations, tol, dtype)
+    out.rqi(blocks, guess, real, np.full(real.size, -1), iterations, tol, real=True)
     # a real matrix: the lower member of a complex pair is the upper one's conjugate
-    values[lower], right[:, lower], left[lower] = values[upper].conj(), right[:, upper].conj(), left[upper].conj()
-    residual[lower] = residual[upper]
-    rough = np.flatnonzero(residual > tol)  # a far guess, or pivot growth in the blocks' LU
+    out.rqi(blocks, guess, np.concatenate([upper, single]), np.concatenate([lower, np.full(single.size, -1)]),
+            iterations, tol)
+    out.residual[lower], out.kappa[lower] = out.residual[upper], out.kappa[upper]
+    rough = np.flatnonzero(out.residual > tol)  # a far guess, or pivot growth in the blocks' LU
     if rough.size:
-        v, r, lft = values[rough], right[:, rough], left[rough]
-        again = _pivoted_rqi(blocks, v, r, lft, iterations, tol)
-        better = again < residual[rough]
-        values[rough[better]], right[:, rough[better]], left[rough[better]] = v[better], r[:, better], lft[better]
-        residual[rough[better]] = again[better]
-    for group in meeting_groups(values, residual, left):
+        started = np.isfinite(out.residual[rough])  # from the guess where the blocks' LU failed
+        v, r, lft = out.take(rough)
+        v[~started], r[:, ~started], lft[~started] = guess.take(rough[~started])
+        out.put(rough, v, r, lft, _pivoted_rqi(blocks, v, r, lft, iterations, tol), better=True)
+    for group in meeting_groups(out.values, out.residual, out.kappa):
         if group.size <= LARGEST_CLUSTER:
-            _refine_group(blocks, guess, values, right, left, residual, group, iterations, tol)
+            v, r, lft = guess.take(group)
+            res = _refine_cluster(blocks, v, r, lft, iterations, tol)
+            if np.all(np.isfinite(res)):  # else left as it was
+                out.put(group, v, r, lft, res)
     for _ in range(ROUNDS):
-        twice = _found_twice(guess[0], values, right, left, residual)
+        twice = _found_twice(guess.values, out)
         for p in twice:
             # from its guess again, the pairs found near it deflated: it finds the eigenvalue lost
-            near = np.argsort(np.abs(values - guess[0][p]))
-            near = near[(near != p) & np.isfinite(residual[near])][:DEFLATED]
-            v, r, lft = guess[0][[p]].copy(), guess[1][:, [p]].copy(), guess[2][[p]].copy()
-            again = _pivoted_rqi(blocks, v, r, lft, 2 * iterations, tol, (right[:, near], left[near]))
-            values[p], right[:, p], left[p], residual[p] = v[0], r[:, 0], lft[0], again[0]
+            near = np.argsort(np.abs(out.values - guess.values[p]))
+            near = near[(near != p) & np.isfinite(out.residual[near])][:DEFLATED]
+            v, r, lft = guess.take(np.array([p]))
+            _, known_r, known_l = out.take(near)
+            out.put(np.array([p]), v, r, lft, _pivoted_rqi(blocks, v, r, lft, 2 * iterations, tol, (known_r, known_l)))
         if not twice.size:
             break
-    return values, right, left, residual
+    return out.values, out.right, out.left, out.residual
 
 
-def meeting_groups(values: Array, residual: Array, left: Array) -> list[Array]:
+@dataclass(frozen=True)
+class Guesses:
+    """The guesses refine_eigenpairs starts from: values (n,), right (n, m) columns and left (m,
+    n) rows in the matrix's order, rows[t] the row of block unknown t, source[i] pair i's
+    column of right and row of left."""
+
+    values: Array
+    right: Array
+    left: Array
+    rows: Array
+    source: Array
+
+    def take(self, pairs: Array) -> tuple[Array, Array, Array]:
+        """Copies of the pairs' (values, right columns, left rows) in block order, complex."""
+        cols = self.source[pairs]
+        return (self.values[pairs].copy(), self.right[np.ix_(self.rows, cols)].astype(np.complex128),
+                self.left[np.ix_(cols, self.rows)].astype(np.complex128))
+
+
+@dataclass(frozen=True)
+class Refined:
+    """refine_eigenpairs' result as it is built: values (n,), right (n, n), left (n, n) in the
+    matrix's order (pair i in column and row i), residual and kappa = |l_i| (nan where none)."""
+
+    values: Array
+    right: Array
+    left: Array
+    residual: Array
+    kappa: Array
+    rows: Array
+
+    @classmethod
+    def empty(cls, rows: Array) -> "Refined":
+        n = rows.size
+        # the right vectors column by column, the left ones row by row, as LAPACK leaves them:
+        # each pair's reads and writes are contiguous
+        return cls(np.zeros(n, np.complex128), np.zeros((n, n), np.complex128, order="F"),
+                   np.zeros((n, n), np.complex128), np.full(n, np.inf), np.full(n, np.nan), rows)
+
+    def rqi(self, blocks: PeriodicBlocks, guess: Guesses, pairs: Array, mirror: Array, iterations: int,
+            tol: float, real: bool = False) -> None:
+        """_rqi_many on `pairs` from their guesses, written here (with each conjugate into its
+        mirror's column and row, mirror -1: none); real: in real arithmetic."""
+        values, right, left = guess.values[pairs], guess.right, guess.left
+        if real:
+            values, right, left = values.real.copy(), right.real, left.real
+        else:
+            right, left = np.asarray(right, np.complex128), np.asarray(left, np.complex128)
+        self.residual[pairs], self.kappa[pairs] = _rqi_many(
+            blocks.diag, blocks.lower, blocks.upper, values, right, left, self.rows, guess.source[pairs], pairs,
+            mirror, self.values, self.right, self.left, iterations, tol)
+
+    def take(self, pairs: Array) -> tuple[Array, Array, Array]:
+        """Copies of the pairs' (values, right columns, left rows) in block order."""
+        return (self.values[pairs].copy(), self.right[np.ix_(self.rows, pairs)],
+                self.left[np.ix_(pairs, self.rows)])
+
+    def put(self, pairs: Array, values: Array, right: Array, left: Array, residual: Array,
+            better: bool = False) -> None:
+        """The pairs set to (values, right, left) in block order with their residuals; better:
+        only those whose residual is below the present one."""
+        keep = residual < self.residual[pairs] if better else np.ones(pairs.size, bool)
+        pairs = pairs[keep]
+        self.values[pairs], self.residual[pairs] = values[keep], residual[keep]
+        self.right[np.ix_(self.rows, pairs)] = right[:, keep]
+        self.left[np.ix_(pairs, self.rows)] = left[keep]
+        self.kappa[pairs] = np.linalg.norm(left[keep], axis=1)
+
+
+def meeting_groups(values: Array, residual: Array, kappa: Array) -> list[Array]:
     """The groups (two or more, ascending) of converged pairs linked by meeting error discs
-    |z - lambda_i| <= kappa_i rho_i (kappa_i = |l_i| with |r_i| = 1, l_i^H r_i = 1)."""
+    |z - lambda_i| <= kappa_i rho_i."""
     done = np.isfinite(residual)
-    i, j = touching(values, error_bounds(residual, left))
+    i, j = touching(values, error_bounds(residual, kappa))
     keep = done[i] & done[j]
     if not keep.any():
         return []
@@ -565,22 +676,11 @@ def meeting_groups(values: Array, residual: Array, left: Array) -> list[Array]:
     return [g for g in groups if g.size > 1]
 
 
-def error_bounds(residual: Array, left: Array) -> Array:
+def error_bounds(residual: Array, kappa: Array) -> Array:
     """kappa_i rho_i, each eigenvalue's first-order error bound (kappa_i = |l_i| with |r_i| = 1,
     l_i^H r_i = 1; rho_i the residual); 0 where the pair did not converge (rho_i inf)."""
     done = np.isfinite(residual)
-    return np.where(done, np.linalg.norm(left, axis=1) * np.where(done, residual, 0.0), 0.0)
-
-
-def _refine_group(blocks: PeriodicBlocks, guess: tuple[Array, Array, Array], values: Array, right: Array,
-                  left: Array, residual: Array, group: Array, iterations: int, tol: float) -> None:
-    """The pairs `group` refined again together from their guesses (_refine_cluster), in place;
-    kept as they were where a factorization failed."""
-    v, r, lft = guess[0][group].astype(np.complex128), guess[1][:, group].astype(np.complex128), \
-        guess[2][group].astype(np.complex128)
-    res = _refine_cluster(blocks, v, r, lft, np.arange(group.size), iterations, tol)
-    if np.all(np.isfinite(res)):
-        values[group], right[:, group], left[group], residual[group] = v, r, lft, res
+    return np.where(done, np.where(done, kappa, 0.0) * np.where(done, residual, 0.0), 0.0)
 
 
 DEFLATED = 16
@@ -591,10 +691,11 @@ ROUNDS = 3
 """Rounds of refining again the pairs found twice (one may land on a third pair's eigenvalue)."""
 
 
-def _found_twice(guess: Array, values: Array, right: Array, left: Array, residual: Array) -> Array:
+def _found_twice(guess: Array, out: Refined) -> Array:
     """Of every two pairs converged to one eigenpair (meeting discs kappa rho, |l_i^H r_j| >
     1/2: one eigenvalue found twice, another lost), the one whose guess is farther from it."""
-    i, j, cross = meeting_discs(values, error_bounds(residual, left), right, left)
+    values = out.values
+    i, j, cross = meeting_discs(values, error_bounds(out.residual, out.kappa), out.right, out.left)
     i, j = i[cross > 0.5], j[cross > 0.5]
     farther = np.where(np.abs(guess[i] - values[i]) >= np.abs(guess[j] - values[j]), i, j)
     return np.unique(farther)
@@ -613,37 +714,26 @@ def conjugate_pairs(values: Array, candidates: Array) -> tuple[Array, Array]:
     return candidates[mutual], candidates[nearest[mutual]]
 
 
-def _rqi(blocks: PeriodicBlocks, values: Array, right: Array, left: Array, picked: Array,
-         iterations: int, tol: float, dtype) -> Array:
-    """_rqi_many on the pairs `picked` in `dtype`, written back into values, right and left;
-    their residuals."""
-    part = (values[picked], right[:, picked], left[picked])
-    v, r, lft = (a.real.copy() if dtype is float else a for a in part)
-    residual = _rqi_many(blocks.diag, blocks.lower, blocks.upper, v, r, lft, iterations, tol)
-    values[picked], right[:, picked], left[picked] = v, r, lft
-    return residual
-
-
 def _refine_cluster(blocks: PeriodicBlocks, values: Array, right: Array, left: Array,
-                    idx: Array, iterations: int, tol: float) -> Array:
-    """Block two-sided Rayleigh quotient iteration of the cluster `idx` in place (module
-    docstring): the k right and k left vectors solved with one shift, the cluster's mean, and
-    the k x k projected problem's eigenpairs taken; then each member not yet within tol
-    polished by two steps with its own shift (the cluster's shift converges linearly, a
-    member's own cubically). Returns the members' residuals (inf, the cluster left as it was,
-    where a factorization failed)."""
-    X, Y, theta = right[:, idx].T.copy(), left[idx].copy(), values[idx].copy()  # rows: r_j, conj(l_j)
-    res = np.full(idx.size, np.inf)
+                    iterations: int, tol: float) -> Array:
+    """Block two-sided Rayleigh quotient iteration of the cluster (values (k,), right (n, k)
+    columns, left (k, n) rows, block order, complex) in place (module docstring): the k right
+    and k left vectors solved with one shift, the cluster's mean, and the k x k projected
+    problem's eigenpairs taken; then each member not yet within tol polished by two steps with
+    its own shift (the cluster's shift converges linearly, a member's own cubically). Returns
+    the members' residuals (inf, the cluster left as it was, where a factorization failed)."""
+    X, Y, theta = right.T.copy(), left.copy(), values.copy()  # rows: r_j, conj(l_j)
+    res = np.full(values.size, np.inf)
     for _ in range(iterations):
         sigma = complex(theta.mean())
         shifted = Shifted(blocks, sigma)
         if not shifted.ok:
             shifted = Shifted(blocks, nudged(sigma))
             if not shifted.ok:
-                return np.full(idx.size, np.inf)  # not res: the cluster is left as it was
+                return np.full(values.size, np.inf)  # not res: the cluster is left as it was
         X, Y = shifted.solve(X.T).T, shifted.solve(Y.T, transpose=True).T
         if not (np.isfinite(X).all() and np.isfinite(Y).all()):
-            return np.full(idx.size, np.inf)
+            return np.full(values.size, np.inf)
         X, Y = np.linalg.qr(X.T)[0].T, np.linalg.qr(Y.T)[0].T
         G, H = Y @ X.T, Y @ blocks.matvec(X.T)  # l_a^H x_j, l_a^H A x_j
         theta, W = np.linalg.eig(np.linalg.solve(G, H))
@@ -651,18 +741,18 @@ def _refine_cluster(blocks: PeriodicBlocks, values: Array, right: Array, left: A
         norm = np.linalg.norm(X, axis=1)
         X, Y = X / norm[:, None], Y * norm[:, None]  # |r| = 1, l^H r = 1
         if not np.isfinite(theta).all():
-            return np.full(idx.size, np.inf)
+            return np.full(values.size, np.inf)
         res = np.linalg.norm(blocks.matvec(X.T).T - theta[:, None] * X, axis=1)
         if res.max() <= tol:
             break
-    values[idx], right[:, idx], left[idx] = theta, X.T, Y
-    rough = idx[res > tol]
+    values[:], right[:], left[:] = theta, X.T, Y
+    rough = np.flatnonzero(res > tol)
     if rough.size:
         v, r, lft = values[rough], right[:, rough], left[rough]
-        polished = _rqi_many(blocks.diag, blocks.lower, blocks.upper, v, r, lft, 2, tol)
-        better = polished < res[res > tol]
+        polished = rqi_in_place(blocks, v, r, lft, 2, tol)[0]
+        better = polished < res[rough]
         values[rough[better]], right[:, rough[better]], left[rough[better]] = v[better], r[:, better], lft[better]
-        res[np.flatnonzero(res > tol)[better]] = polished[better]
+        res[rough[better]] = polished[better]
     return res
 
 

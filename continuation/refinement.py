@@ -100,18 +100,14 @@ def refined_eigensystem(problem: Problem, x: Array, reference: Sample) -> Option
     move = np.zeros(values.size, complex)
     if reference.dlam is not None and reference.tangent is not None:
         move = reference.dlam * float((x - reference.x) @ reference.tangent)
-    order = np.arange(values.size) if blocks.order is None else blocks.order
-    columns = np.arange(values.size) if old.columns is None else old.columns  # label i's vectors
-    refined = refine_eigenpairs(blocks, values + move, old.right[np.ix_(order, columns)],
-                                old.left[np.ix_(columns, order)], ITERATIONS, 1e-13 * scale)
+    refined = refine_eigenpairs(blocks, values + move, old.right, old.left, ITERATIONS, 1e-13 * scale,
+                                old.columns)  # columns: label i's vectors
     system = certified(blocks, *refined, scale)
     if system is None:
         book("refinements_declined")
         return None
     book("spectra_refined")
-    right, left = np.empty_like(system.right), np.empty_like(system.left)
-    right[order], left[:, order] = system.right, system.left
-    return Eigensystem(system.values, right, left, np.zeros(values.size, bool))
+    return Eigensystem(system.values, system.right, system.left, np.zeros(values.size, bool))
 
 
 def certified(blocks, values: Array, right: Array, left: Array, residual: Array,
