@@ -544,8 +544,10 @@ def refine_eigenpairs(blocks: PeriodicBlocks, values: Array, right: Array, left:
     one. Any pair still above tol gets `iterations` more steps alone with a pivoted banded LU
     (_pivoted_rqi). Pairs whose error discs kappa_i rho_i then meet (a degenerate or nearly
     degenerate eigenvalue: alone, two pairs may land on one eigenpair, or on vectors of one
-    eigenspace that are not biorthogonal) are refined again together from their guesses, in
-    groups of at most LARGEST_CLUSTER (_refine_cluster: one shift, the projected problem).
+    eigenspace that are not biorthogonal), and each pair still above tol with the pair whose
+    guess is nearest (refinement_groups), are refined again together from their guesses, in
+    groups of at most LARGEST_CLUSTER (_refine_cluster: one shift, the projected problem),
+    where that leaves no residual above both tol and the group's largest before.
     Where two pairs still converged to one eigenpair (_found_twice), one of them starts again
     from its guess with the converged pairs near it deflated, for twice the iterations (up to
     ROUNDS times). The guesses are read, never copied whole. Returns new (values, right, left,
@@ -572,11 +574,11 @@ def refine_eigenpairs(blocks: PeriodicBlocks, values: Array, right: Array, left:
         v, r, lft = out.take(rough)
         v[~started], r[:, ~started], lft[~started] = guess.take(rough[~started])
         out.put(rough, v, r, lft, _pivoted_rqi(blocks, v, r, lft, iterations, tol), better=True)
-    for group in meeting_groups(out.values, out.residual, out.kappa):
+    for group in refinement_groups(guess.values, out.values, out.residual, out.kappa, tol):
         if group.size <= LARGEST_CLUSTER:
             v, r, lft = guess.take(group)
             res = _refine_cluster(blocks, v, r, lft, iterations, tol)
-            if np.all(np.isfinite(res)):  # else left as it was
+            if res.max() <= max(tol, out.residual[group].max()):  # else left as it was
                 out.put(group, v, r, lft, res)
     for _ in range(ROUNDS):
         twice = _found_twice(guess.values, out)
@@ -661,15 +663,27 @@ class Refined:
         self.kappa[pairs] = np.linalg.norm(left[keep], axis=1)
 
 
-def meeting_groups(values: Array, residual: Array, kappa: Array) -> list[Array]:
-    """The groups (two or more, ascending) of converged pairs linked by meeting error discs
-    |z - lambda_i| <= kappa_i rho_i."""
+def refinement_groups(guess: Array, values: Array, residual: Array, kappa: Array, tol: float) -> list[Array]:
+    """The groups (two or more, ascending) of pairs to refine again together: converged pairs
+    linked by meeting error discs |z - lambda_i| <= kappa_i rho_i, and each pair still above
+    tol linked to the pair whose guess is nearest its own (near a collision two eigenvalues are
+    nearly defective, and alone their Rayleigh iterations converge slowly or land on one
+    eigenvalue; together they span an invariant subspace that is well conditioned)."""
+    n = values.size
     done = np.isfinite(residual)
     i, j = touching(values, error_bounds(residual, kappa))
     keep = done[i] & done[j]
-    if not keep.any():
+    rough = np.flatnonzero(residual > tol)
+    if rough.size and n > 1:
+        points = np.column_stack([guess.real, guess.imag])
+        nearest = cKDTree(points).query(points[rough], k=2)[1]
+        partner = np.where(nearest[:, 0] == rough, nearest[:, 1], nearest[:, 0])  # ties: not itself
+        i, j = np.concatenate([i[keep], rough]), np.concatenate([j[keep], partner])
+    else:
+        i, j = i[keep], j[keep]
+    if not i.size:
         return []
-    graph = sp.coo_array((np.ones(int(keep.sum())), (i[keep], j[keep])), shape=(values.size,) * 2)
+    graph = sp.coo_array((np.ones(i.size), (i, j)), shape=(n, n))
     root = connected_components(graph, directed=False)[1]
     members = np.argsort(root, kind="stable")
     groups = np.split(members, np.flatnonzero(np.diff(root[members])) + 1)
