@@ -509,16 +509,6 @@ def _rqi_many(diag, lower, upper, guess, right, left, rows, source, target, mirr
     return residual, kappa
 
 
-def rqi_in_place(blocks: "PeriodicBlocks", values: Array, right: Array, left: Array, iterations: int,
-                 tol: float) -> tuple[Array, Array]:
-    """_rqi_many on the pairs (values (k,), right (n, k) columns, left (k, n) rows, in block
-    order, one dtype) in place: (residuals, |l|); a pair whose factorization failed is left as
-    it was."""
-    every, n = np.arange(values.size), right.shape[0]
-    return _rqi_many(blocks.diag, blocks.lower, blocks.upper, values.copy(), right, left, np.arange(n), every,
-                     every, np.full(values.size, -1), values, right, left, iterations, tol)
-
-
 def close_pairs(points: Array, radius: float) -> tuple[Array, Array]:
     """Index pairs (i < j) of the complex points within `radius` of each other (a k-d tree)."""
     if points.size < 2:
@@ -546,8 +536,7 @@ def refine_eigenpairs(blocks: PeriodicBlocks, values: Array, right: Array, left:
     degenerate eigenvalue: alone, two pairs may land on one eigenpair, or on vectors of one
     eigenspace that are not biorthogonal), and each pair still above tol with the pair whose
     guess is nearest (refinement_groups), are refined again together from their guesses, in
-    groups of at most LARGEST_CLUSTER (_refine_cluster: one shift, the projected problem),
-    where that leaves no residual above both tol and the group's largest before.
+    groups of at most LARGEST_CLUSTER (_refine_cluster: one shift, the projected problem).
     Where two pairs still converged to one eigenpair (_found_twice), one of them starts again
     from its guess with the converged pairs near it deflated, for twice the iterations (up to
     ROUNDS times). The guesses are read, never copied whole. Returns new (values, right, left,
@@ -578,7 +567,7 @@ def refine_eigenpairs(blocks: PeriodicBlocks, values: Array, right: Array, left:
         if group.size <= LARGEST_CLUSTER:
             v, r, lft = guess.take(group)
             res = _refine_cluster(blocks, v, r, lft, iterations, tol)
-            if res.max() <= max(tol, out.residual[group].max()):  # else left as it was
+            if np.all(np.isfinite(res)):  # else left as it was
                 out.put(group, v, r, lft, res)
     for _ in range(ROUNDS):
         twice = _found_twice(guess.values, out)
@@ -665,15 +654,15 @@ class Refined:
 
 def refinement_groups(guess: Array, values: Array, residual: Array, kappa: Array, tol: float) -> list[Array]:
     """The groups (two or more, ascending) of pairs to refine again together: converged pairs
-    linked by meeting error discs |z - lambda_i| <= kappa_i rho_i, and each pair still above
+    (rho_i <= tol) linked by meeting error discs |z - lambda_i| <= kappa_i rho_i, and each pair still above
     tol linked to the pair whose guess is nearest its own (near a collision two eigenvalues are
     nearly defective, and alone their Rayleigh iterations converge slowly or land on one
     eigenvalue; together they span an invariant subspace that is well conditioned)."""
     n = values.size
-    done = np.isfinite(residual)
-    i, j = touching(values, error_bounds(residual, kappa))
-    keep = done[i] & done[j]
-    rough = np.flatnonzero(residual > tol)
+    converged = residual <= tol  # a rough pair's wide disc would link it to pairs it does not concern
+    i, j = touching(values, error_bounds(np.where(converged, residual, np.inf), kappa))
+    keep = converged[i] & converged[j]
+    rough = np.flatnonzero(~converged)
     if rough.size and n > 1:
         points = np.column_stack([guess.real, guess.imag])
         nearest = cKDTree(points).query(points[rough], k=2)[1]
@@ -734,7 +723,8 @@ def _refine_cluster(blocks: PeriodicBlocks, values: Array, right: Array, left: A
     columns, left (k, n) rows, block order, complex) in place (module docstring): the k right
     and k left vectors solved with one shift, the cluster's mean, and the k x k projected
     problem's eigenpairs taken; then each member not yet within tol polished by two steps with
-    its own shift (the cluster's shift converges linearly, a member's own cubically). Returns
+    its own shift (the cluster's shift converges linearly, a member's own cubically), with the
+    pivoted LU (the blocks' LU stalls near 1e-12 R for such shifts). Returns
     the members' residuals (inf, the cluster left as it was, where a factorization failed)."""
     X, Y, theta = right.T.copy(), left.copy(), values.copy()  # rows: r_j, conj(l_j)
     res = np.full(values.size, np.inf)
@@ -763,7 +753,7 @@ def _refine_cluster(blocks: PeriodicBlocks, values: Array, right: Array, left: A
     rough = np.flatnonzero(res > tol)
     if rough.size:
         v, r, lft = values[rough], right[:, rough], left[rough]
-        polished = rqi_in_place(blocks, v, r, lft, 2, tol)[0]
+        polished = _pivoted_rqi(blocks, v, r, lft, 2, tol)
         better = polished < res[rough]
         values[rough[better]], right[:, rough[better]], left[rough[better]] = v[better], r[:, better], lft[better]
         res[rough[better]] = polished[better]
