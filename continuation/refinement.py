@@ -45,13 +45,15 @@ if TYPE_CHECKING:  # pragma: no cover
 
 Array = np.ndarray
 
-REFINE_FROM = 1500
+REFINE_FROM = 600
 """Smallest n at which a full spectrum with vectors is refined from the previous sample rather
 than decomposed (not where the spectra run on a GPU, spectra.on_gpu, which is faster still).
-Measured: one spectrum (benchmarks/eigenpair_refinement.py, one core) LAPACK / refined 2.3 at
-n = 900, 1.8 to 3.2 at n = 1500, 4.1 at n = 3000; whole sweeps with every spectrum refined are
-still slower at n = 600 (benchmarks/scaling.py --refine-from: 80 s against 69 s at N = 200),
-where the refinement's Python overhead and declined samples weigh more."""
+Measured on whole sweeps from rest to 0.12 with every full spectrum refined where certified
+against every one decomposed (benchmarks/scaling.py --refine-from default,0, two workers,
+2026-11-27 15:55): N = 300 (n = 900) 98.8 against 177.3 s, N = 200 (n = 600) 36.3 against
+52.4 s, the same collisions within 5.6e-11 in F_x; N = 100 (n = 300) 8.1 against 8.2 s, and
+N = 40 1.5 against 1.0 s, where LAPACK's spectra are cheap and the refinement's Python
+overhead and its declined samples weigh more."""
 
 ITERATIONS = 6
 """Rayleigh quotient steps at most per pair (cubic convergence: 2 or 3 suffice for a step of
