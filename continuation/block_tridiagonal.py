@@ -41,6 +41,8 @@ from scipy.linalg.lapack import zgbtrf, zgbtrs
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
+from .linalg import row_norms
+
 Array = np.ndarray
 
 
@@ -649,7 +651,7 @@ class Refined:
         self.values[pairs], self.residual[pairs] = values[keep], residual[keep]
         self.right[np.ix_(self.rows, pairs)] = right[:, keep]
         self.left[np.ix_(pairs, self.rows)] = left[keep]
-        self.kappa[pairs] = np.linalg.norm(left[keep], axis=1)
+        self.kappa[pairs] = row_norms(left[keep])
 
 
 def refinement_groups(guess: Array, values: Array, residual: Array, kappa: Array, tol: float) -> list[Array]:

@@ -237,3 +237,10 @@ def _controller():
 def blas_threads():
     """Context running BLAS on one thread (module docstring)."""
     return _controller().limit(limits=1, user_api="blas")
+
+
+def row_norms(a: Array) -> Array:
+    """|a_i| of each row of the 2-d array a, real or complex, without the temporary copy of a
+    complex a that np.linalg.norm(a, axis=1) makes (its conjugate: 0.23 of 0.26 s for the left
+    vectors at n = 3000). Column norms: row_norms(a.T)."""
+    return np.sqrt(np.einsum("ij,ij->i", a.real, a.real) + np.einsum("ij,ij->i", a.imag, a.imag))

@@ -37,7 +37,7 @@ from typing import TYPE_CHECKING, Optional
 import numpy as np
 
 from .block_tridiagonal import meeting_discs, refine_eigenpairs
-from .linalg import book
+from .linalg import book, row_norms
 from .spectra import Eigensystem, on_gpu
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -119,7 +119,7 @@ def certified(blocks, values: Array, right: Array, left: Array, residual: Array,
     matrix of `blocks`, with spectral radius `scale`; else None."""
     if not np.all(residual <= RESIDUAL * scale):  # inf: a factorization failed
         return None
-    kappa = np.linalg.norm(left, axis=1)  # |l_i| |r_i| / |l_i^H r_i| with |r_i| = 1, l_i^H r_i = 1
+    kappa = row_norms(left)  # |l_i| |r_i| / |l_i^H r_i| with |r_i| = 1, l_i^H r_i = 1
     bound = kappa * residual
     if not degenerate_only(*meeting_discs(values, bound, right, left), kappa):
         return None

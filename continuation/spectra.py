@@ -38,7 +38,7 @@ from scipy.optimize import linear_sum_assignment
 from diskfriction.errors import OneLineError
 
 from . import gpu_spectra
-from .linalg import book
+from .linalg import book, row_norms
 
 Array = np.ndarray
 
@@ -272,7 +272,7 @@ def condition_numbers(system: Eigensystem) -> Array:
     columns = np.arange(system.values.size) if system.columns is None else system.columns
     have = columns >= 0
     c = columns[have]
-    kappa[have] = np.linalg.norm(system.right[:, c], axis=0) * np.linalg.norm(system.left[c], axis=1)
+    kappa[have] = (row_norms(system.right.T) * row_norms(system.left))[c]
     return kappa
 
 

@@ -182,6 +182,17 @@ def test_the_groups_refined_again_are_meeting_discs_and_pairs_left_above_tol():
     assert bt.refinement_groups(guess, values, np.full(guess.size, 1e-16), kappa, 1e-13) == []
 
 
+def test_row_norms_are_numpys():
+    """linalg.row_norms against np.linalg.norm(axis=1): complex in C and Fortran order (the
+    column norms of right vectors: row_norms(right.T)), and real."""
+    from diskfriction.continuation.linalg import row_norms
+
+    rng = np.random.default_rng(7)
+    a = rng.standard_normal((40, 30)) + 1j * rng.standard_normal((40, 30))
+    for x in (a, np.asfortranarray(a), a.T, a.real):
+        assert np.allclose(row_norms(x), np.linalg.norm(x, axis=1), rtol=1e-14, atol=0.0)
+
+
 def test_the_certificate_refuses_a_duplicate_and_a_wrong_eigenvalue():
     """Two pairs converged to one eigenvalue (overlapping discs), and a value moved away from
     its eigenvalue with small claimed residuals (disjoint discs, but the traces disagree)."""
