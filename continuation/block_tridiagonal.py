@@ -534,16 +534,17 @@ def refine_eigenpairs(blocks: PeriodicBlocks, values: Array, right: Array, left:
     quotient steps (fewer once its residual is <= tol): in real arithmetic where guess and
     vectors are real, the lower member of a complex-conjugate pair as the conjugate of the upper
     one. Any pair still above tol gets `iterations` more steps alone with a pivoted banded LU
-    (_pivoted_rqi). Pairs whose error discs kappa_i rho_i then meet (a degenerate or nearly
-    degenerate eigenvalue: alone, two pairs may land on one eigenpair, or on vectors of one
-    eigenspace that are not biorthogonal), and each pair still above tol with the pair whose
-    guess is nearest (refinement_groups), are refined again together from their guesses, in
-    groups of at most LARGEST_CLUSTER (_refine_cluster: one shift, the projected problem).
-    Where two pairs still converged to one eigenpair (_found_twice), one of them starts again
-    from its guess with the converged pairs near it deflated, for twice the iterations (up to
-    ROUNDS times). The guesses are read, never copied whole. Returns new (values, right, left,
-    residual) in the matrix's order, pair i in column and row i: |r_i| = 1, l_i^H r_i = 1,
-    residual_i = |A r_i - lambda_i r_i| (inf where a factorization failed)."""
+    (_pivoted_rqi; again a lower member as its upper one's conjugate). Pairs whose error discs
+    kappa_i rho_i then meet (a degenerate or nearly degenerate eigenvalue: alone, two pairs may
+    land on one eigenpair, or on vectors of one eigenspace that are not biorthogonal), and each
+    pair still above tol with the pair whose guess is nearest (refinement_groups), are refined
+    again together from their guesses, in groups of at most LARGEST_CLUSTER (_refine_cluster:
+    one shift, the projected problem). Where two pairs still converged to one eigenpair
+    (_found_twice), one of them starts again from its guess with the converged pairs near it
+    deflated, for twice the iterations (up to ROUNDS times). The guesses are read, never copied
+    whole. Returns new (values, right, left, residual) in the matrix's order, pair i in column
+    and row i: |r_i| = 1, l_i^H r_i = 1, residual_i = |A r_i - lambda_i r_i| (inf where a
+    factorization failed)."""
     n = values.size
     every = np.arange(n)
     guess = Guesses(np.asarray(values, np.complex128), right, left,
@@ -560,11 +561,15 @@ def refine_eigenpairs(blocks: PeriodicBlocks, values: Array, right: Array, left:
             iterations, tol)
     out.residual[lower], out.kappa[lower] = out.residual[upper], out.kappa[upper]
     rough = np.flatnonzero(out.residual > tol)  # a far guess, or pivot growth in the blocks' LU
+    rough = rough[~np.isin(rough, lower)]  # a lower member follows its upper one
     if rough.size:
         started = np.isfinite(out.residual[rough])  # from the guess where the blocks' LU failed
         v, r, lft = out.take(rough)
         v[~started], r[:, ~started], lft[~started] = guess.take(rough[~started])
         out.put(rough, v, r, lft, _pivoted_rqi(blocks, v, r, lft, iterations, tol), better=True)
+        mirrored = np.isin(upper, rough)
+        v, r, lft = out.take(upper[mirrored])
+        out.put(lower[mirrored], v.conj(), r.conj(), lft.conj(), out.residual[upper[mirrored]])
     for group in refinement_groups(guess.values, out.values, out.residual, out.kappa, tol):
         if group.size <= LARGEST_CLUSTER:
             v, r, lft = guess.take(group)
