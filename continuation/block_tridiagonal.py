@@ -380,8 +380,8 @@ STALLED = 0.1
 """_rqi_many stops a pair whose residual fell by less than this factor in a step (cubic
 convergence falls by orders of magnitude): the blocks' LU has reached its accuracy (pivot
 growth, module docstring), and the pivoted LU takes the pair over. The chain of 1000 disks:
-60 of 2118 real pairs stalled between 1e-12 and 1e-11 of the spectral radius, and steps 3 to
-6 cost a quarter of the refinement for none of them."""
+of 2118 real pairs 60 were above 1e-12 of the spectral radius after 2 steps and 52 after 6,
+and steps 3 to 6 made the refinement a quarter slower (2.58 against 2.07 s)."""
 
 BATCH = 16
 """Pairs refined side by side by _rqi_many (each with its own shift, every per-block loop over
@@ -520,8 +520,8 @@ def close_pairs(points: Array, radius: float) -> tuple[Array, Array]:
 
 
 LARGEST_CLUSTER = 16
-"""Largest group of pairs with meeting error discs refined again together (refine_eigenpairs);
-a larger one is left to the certificate."""
+"""Largest group of pairs refined again together (refine_eigenpairs, refinement_groups); a
+larger one is left as it is, to the certificate."""
 
 
 def refine_eigenpairs(blocks: PeriodicBlocks, values: Array, right: Array, left: Array,
@@ -661,10 +661,11 @@ class Refined:
 
 def refinement_groups(guess: Array, values: Array, residual: Array, kappa: Array, tol: float) -> list[Array]:
     """The groups (two or more, ascending) of pairs to refine again together: converged pairs
-    (rho_i <= tol) linked by meeting error discs |z - lambda_i| <= kappa_i rho_i, and each pair still above
-    tol linked to the pair whose guess is nearest its own (near a collision two eigenvalues are
-    nearly defective, and alone their Rayleigh iterations converge slowly or land on one
-    eigenvalue; together they span an invariant subspace that is well conditioned)."""
+    (rho_i <= tol) linked by meeting error discs |z - lambda_i| <= kappa_i rho_i, and each pair
+    still above tol linked to the pair whose guess is nearest its own (near a collision two
+    eigenvalues are nearly defective, and alone their Rayleigh iterations converge slowly or
+    land on one eigenvalue; together they span an invariant subspace that is well
+    conditioned)."""
     n = values.size
     converged = residual <= tol  # a rough pair's wide disc would link it to pairs it does not concern
     i, j = touching(values, error_bounds(np.where(converged, residual, np.inf), kappa))
@@ -690,7 +691,7 @@ def error_bounds(residual: Array, kappa: Array) -> Array:
     """kappa_i rho_i, each eigenvalue's first-order error bound (kappa_i = |l_i| with |r_i| = 1,
     l_i^H r_i = 1; rho_i the residual); 0 where the pair did not converge (rho_i inf)."""
     done = np.isfinite(residual)
-    return np.where(done, np.where(done, kappa, 0.0) * np.where(done, residual, 0.0), 0.0)
+    return np.where(done, kappa * np.where(done, residual, 0.0), 0.0)
 
 
 DEFLATED = 16
