@@ -295,10 +295,12 @@ class StepScan:
 
     def release_vectors(self) -> None:
         """Drop the eigenvectors of the inner full samples that no locator can need any more:
-        both neighbours full and both intervals clean or narrow. That is final: a clean or
-        narrow interval is never split, and a relabelling permutes both its ends alike. (Next
-        to a partial sample an interval is clean only on the labels known at both ends.) Keeps
-        a busy step's peak memory down; the scan's results are the same."""
+        both neighbours full and both intervals final (_settled). That is final: a clean or
+        narrow interval is never split, and a relabelling permutes both its ends alike; an
+        interval whose events are all located lies left of every interval _advance acts on
+        later, and splits and relabellings act right of that. (Next to a partial sample an
+        interval is clean only on the labels known at both ends.) Keeps a busy step's peak
+        memory down; the scan's results are the same."""
         S = self.samples
         for k in range(self._start + 1, len(S) - 1):
             if (S[k].system is not None and not (S[k - 1].partial or S[k].partial or S[k + 1].partial)
@@ -306,8 +308,11 @@ class StepScan:
                 S[k] = S[k].without_vectors()
 
     def _settled(self, idx: int) -> bool:
+        """Whether _advance passes the interval by: clean, narrow, or every event resolved
+        (Detector.done)."""
         verdict = self.verdict(idx)
-        return verdict.kind == VerdictKind.CLEAN or self.narrow(self.samples[idx], self.samples[idx + 1])
+        return (verdict.kind == VerdictKind.CLEAN or self.narrow(self.samples[idx], self.samples[idx + 1])
+                or (verdict.kind == VerdictKind.EVENTS and self.detector.done(self, idx, verdict)))
 
     def run(self) -> list:
         """Refine until every interval is final; return the collisions in branch order."""

@@ -526,25 +526,31 @@ def test_a_partial_sample_matches_the_full_one_on_its_labels_or_declines():
 
 
 def test_settled_samples_drop_their_vectors_and_the_scan_finds_the_same(monkeypatch):
-    """A scan drops the eigenvectors of inner samples whose two intervals are settled (clean or
-    narrow, full neighbours): some samples of the N = 20 sweep lose them, and without the
-    release (monkeypatched away) the branch and its collisions are exactly the same."""
+    """A scan drops the eigenvectors of inner samples whose two intervals are settled (clean,
+    narrow or with every event located; full neighbours): at the end of every scan of the
+    N = 20 sweep no inner sample between two full ones holds vectors (an interval with a
+    located collision kept them to the scan's end until stop 40), and without the release
+    (monkeypatched away) the branch and its collisions are exactly the same."""
     from diskfriction.continuation.collisions import StepScan
 
     system = System.from_scene(Scene(N=20, eps=1e-4))
-    released, inner = [], []
+    released, inner, held = [], [], []
     run = StepScan.run
 
     def counting_run(self):
         found = run(self)
-        middle = self.samples[1:-1]
-        inner.append(len(middle))
-        released.append(sum(s.system is None and s.tangent is not None for s in middle))
+        S = self.samples
+        inner.append(len(S) - 2)
+        released.append(sum(s.system is None and s.tangent is not None for s in S[1:-1]))
+        held.extend(k for k in range(1, len(S) - 1) if S[k].system is not None
+                    and not (S[k - 1].partial or S[k].partial or S[k + 1].partial))
         return found
 
     monkeypatch.setattr(StepScan, "run", counting_run)
     lean = sweep(system, 0.0, 0.12, "J", SweepParams(workers=0))
-    assert 0 < sum(released) < sum(inner)
+    assert 0 < sum(released) <= sum(inner)
+    assert held == []
+    assert len(lean.collisions) > 0
     monkeypatch.setattr(StepScan, "release_vectors", lambda self: None)
     released.clear()
     kept = sweep(system, 0.0, 0.12, "J", SweepParams(workers=0))

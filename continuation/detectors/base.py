@@ -88,6 +88,11 @@ class Detector:
         (locate one, or sample inside it); False if all of them are already final."""
         raise NotImplementedError
 
+    def done(self, scan, idx: int, verdict: Verdict) -> bool:
+        """Whether resolve has nothing left to do on the interval samples[idx], samples[idx + 1]
+        whose verdict holds events, without acting (default: not known, False)."""
+        return False
+
     def final(self, scan, a: Sample, b: Sample, i: int, j: int, kind: Kind) -> bool:
         """Whether the event (i, j, kind) of [a, b], not located by resolve, is bracketed
         finely enough to be reported as resolved (by interpolation: StepScan.interpolated)."""

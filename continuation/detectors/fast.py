@@ -47,6 +47,11 @@ class Fast(Detector):
             return True
         return False
 
+    def done(self, scan, idx: int, verdict: Verdict) -> bool:
+        """Every event of the interval is located."""
+        a, b = scan.samples[idx], scan.samples[idx + 1]
+        return all((a.uid, b.uid, i, j) in scan.located for i, j, _ in verdict.events)
+
     def final(self, scan, a: Sample, b: Sample, i: int, j: int, kind: Kind) -> bool:
         return scan.narrow(a, b)
 
