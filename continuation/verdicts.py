@@ -270,6 +270,12 @@ def _fast_candidates(a: Sample, b: Sample, active: Array) -> tuple[Array, Array,
     return real, upper, partner
 
 
+def events_in_trouble(a: Sample, b: Sample, events: list) -> Array:
+    """The labels a partial sample splitting [a, b] for its events must compute: the event
+    pairs' labels with their conjugate partners (the other pairs are certified on [a, b])."""
+    return _with_partners(a, b, event_labels(events, a.eigvals.size))
+
+
 def _with_partners(a: Sample, b: Sample, mask: Array) -> Array:
     """mask with the conjugate partner (at either end) of every complex member added: a
     partial sample's labels must include both members of a pair."""

@@ -15,7 +15,7 @@ from .. import certify
 from ..locate import LocatorFailed, locate_double_eigenvalue
 from ..samples import Sample, known
 from ..segment import Segment
-from ..verdicts import Verdict, event_model, judge_fast, scaled_slopes
+from ..verdicts import Verdict, event_model, events_in_trouble, judge_fast, scaled_slopes
 from .base import Collision, Detector, Kind
 
 
@@ -33,7 +33,7 @@ class Fast(Detector):
 
     def resolve(self, scan, idx: int, verdict: Verdict) -> bool:
         """Locate the first event of the interval not yet located; where the locator fails,
-        split the interval instead (fallback_split)."""
+        bracket it by the pair's discriminant instead (bracket)."""
         a, b = scan.samples[idx], scan.samples[idx + 1]
         for i, j, kind in verdict.events:
             key = (a.uid, b.uid, i, j)
@@ -41,7 +41,7 @@ class Fast(Detector):
                 continue
             found = locate(scan, idx, i, j, kind)
             if found is None:
-                scan.split(idx, fallback_split(scan, a, b))
+                scan.split(idx, fallback_split(scan, a, b), events_in_trouble(a, b, verdict.events))
             else:
                 scan.located[key] = found
             return True
