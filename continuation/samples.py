@@ -17,6 +17,7 @@ eigenvalue beyond the guard bands may leave it and another join it (window_match
 """
 from __future__ import annotations
 
+import tempfile
 from dataclasses import dataclass, field, replace
 from typing import Optional
 
@@ -88,6 +89,20 @@ class Sample:
         verdicts cached on it stay valid (collisions.StepScan.release_vectors)."""
         return replace(self, system=None, dA=None)
 
+    def spilled(self) -> "Sample":
+        """The same sample, under the same uid, with its eigenvectors on disk (on_disk):
+        the same values, read back on use (collisions.StepScan.release_vectors)."""
+        system = self.system
+        return replace(self, system=replace(system, right=on_disk(system.right), left=on_disk(system.left)))
+
+    @property
+    def vectors_in_memory(self) -> int:
+        """Bytes of the eigenvectors held in memory (0 without vectors or spilled)."""
+        system = self.system
+        if system is None or system.right is None or is_on_disk(system.right):
+            return 0
+        return system.right.nbytes + system.left.nbytes
+
     def relabel(self, perm: Array) -> "Sample":
         """Labels permuted: new[i] = old[perm[i]]."""
         take = lambda a: None if a is None else a[perm]  # noqa: E731
@@ -110,6 +125,28 @@ class Sample:
     def slopes(self, segment) -> Array:
         """d lambda / ds on `segment` (s in [0, 1] from x_a to x_b): dlam L / (sigma . t)."""
         return self.dlam * (segment.length / float(segment.sigma @ self.tangent))
+
+
+def on_disk(a: Array) -> Array:
+    """a written to an unlinked temporary file (tempfile's directory: TMPDIR) and mapped
+    read-only in its own memory order: the same values, which the operating system pages in on
+    use and may drop again under memory pressure (clean file pages, unlike the process's own
+    memory); the file's space is freed with the last view of it."""
+    fortran = a.flags.f_contiguous and not a.flags.c_contiguous
+    with tempfile.TemporaryFile() as f:
+        np.ascontiguousarray(a.T if fortran else a).tofile(f)
+        f.flush()
+        mapped = np.memmap(f, dtype=a.dtype, mode="r", shape=a.shape, order="F" if fortran else "C")
+    return np.asarray(mapped)  # a plain ndarray (compiled kernels take it) whose base keeps the map
+
+
+def is_on_disk(a: Array) -> bool:
+    """Whether a is (a view of) on_disk's mapped file."""
+    while isinstance(a, np.ndarray):
+        if isinstance(a, np.memmap):
+            return True
+        a = a.base
+    return False
 
 
 def matrix_derivative(problem: Problem, x: Array, t: Array, side: int = 0):

@@ -559,6 +559,39 @@ def test_settled_samples_drop_their_vectors_and_the_scan_finds_the_same(monkeypa
     assert [(c.p, c.kind, c.pair) for c in lean.collisions] == [(c.p, c.kind, c.pair) for c in kept.collisions]
 
 
+def test_samples_spilled_to_disk_leave_the_scan_unchanged(monkeypatch):
+    """With no memory for inner samples' vectors (SCAN_MEMORY = 0) a scan keeps in memory only
+    the ends of the interval it works on and maps the others from disk (Sample.spilled): the
+    N = 20 sweep (partial samples forced) spills samples, and its branch and collisions are
+    exactly those of the sweep that keeps them all in memory. on_disk keeps values and memory
+    order, read-only."""
+    from diskfriction.continuation import collisions
+    from diskfriction.continuation.samples import Sample, is_on_disk, on_disk
+
+    a = np.asfortranarray(np.arange(12.0).reshape(3, 4) * (1 + 2j))
+    for x in (a, np.ascontiguousarray(a)):
+        y = on_disk(x)
+        assert np.array_equal(x, y) and y.flags.f_contiguous == x.flags.f_contiguous
+        assert is_on_disk(y) and is_on_disk(y[:, 1]) and not is_on_disk(x) and not y.flags.writeable
+
+    system = System.from_scene(Scene(N=20, eps=1e-4))
+    params = SweepParams(detection=DetectionParams(partial_from=0), workers=0)  # partial samples too
+    kept = sweep(system, 0.0, 0.12, "J", params)
+    spilled = []
+    spill = Sample.spilled
+
+    def counting(self):
+        spilled.append(self.s)
+        return spill(self)
+
+    monkeypatch.setattr(collisions, "SCAN_MEMORY", 0)
+    monkeypatch.setattr(Sample, "spilled", counting)
+    lean = sweep(system, 0.0, 0.12, "J", params)
+    assert len(spilled) > 10
+    assert np.array_equal(lean.F_x, kept.F_x) and np.array_equal(lean.eigenvalues, kept.eigenvalues)
+    assert [(c.p, c.kind, c.pair) for c in lean.collisions] == [(c.p, c.kind, c.pair) for c in kept.collisions]
+
+
 def test_a_failing_locator_costs_partial_samples_and_finds_the_same_collisions(monkeypatch):
     """Where the locator fails, the event's interval is split by a partial sample of the event
     pairs' labels (with partial samples forced, partial_from = 0): with every locator call
