@@ -122,7 +122,7 @@ class DetectionParams:
 SCAN_MEMORY = 1 << 30
 """Bytes of inner samples' eigenvectors a scan keeps in memory; beyond, the samples farthest
 from its work go to disk (StepScan._spill): 3 full samples of the chain of 1000 disks, the
-whole step at N = 300 (22 MB a sample)."""
+whole step at N = 300 (26 MB a sample)."""
 
 
 class _Budget(Exception):

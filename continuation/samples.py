@@ -91,7 +91,7 @@ class Sample:
 
     def spilled(self) -> "Sample":
         """The same sample, under the same uid, with its eigenvectors on disk (on_disk):
-        the same values, read back on use (collisions.StepScan.release_vectors)."""
+        the same values, read back on use (collisions.StepScan._spill)."""
         system = self.system
         return replace(self, system=replace(system, right=on_disk(system.right), left=on_disk(system.left)))
 

@@ -33,7 +33,9 @@ class Fast(Detector):
 
     def resolve(self, scan, idx: int, verdict: Verdict) -> bool:
         """Locate the first event of the interval not yet located; where the locator fails,
-        bracket it by the pair's discriminant instead (bracket)."""
+        split the interval instead (fallback_split), with a partial sample of the events'
+        labels and their partners where partial samples are allowed (a full spectrum costs
+        2.4 s at the chain of 1000 disks, such a sample about 0.02 s)."""
         a, b = scan.samples[idx], scan.samples[idx + 1]
         for i, j, kind in verdict.events:
             key = (a.uid, b.uid, i, j)
