@@ -319,7 +319,8 @@ class StepScan:
         unsettled interval first, until those held in memory are at most SCAN_MEMORY. The
         intervals right of the one the scan works on wait with both ends' vectors: at the
         chain of 1000 disks a step of 45 collisions held 40 samples' vectors, 6.1 GB, and the
-        steps grow (docs/continuation.md, Eigenpair continuation)."""
+        steps grow (docs/continuation.md, Eigenpair continuation). Where the disk refuses (no
+        space, no temporary directory) the samples stay in memory, as before spilling."""
         S = self.samples
         inner = range(self._start + 1, len(S) - 1)
         held = sum(S[k].vectors_in_memory for k in inner)
@@ -330,8 +331,12 @@ class StepScan:
             if held <= SCAN_MEMORY:
                 break
             if S[k].vectors_in_memory and k not in (first, first + 1):
+                try:
+                    spilled = S[k].spilled()
+                except OSError:
+                    return
                 held -= S[k].vectors_in_memory
-                S[k] = S[k].spilled()
+                S[k] = spilled
 
     def _settled(self, idx: int) -> bool:
         """Whether _advance passes the interval by: clean, narrow, or every event resolved

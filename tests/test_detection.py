@@ -563,8 +563,9 @@ def test_samples_spilled_to_disk_leave_the_scan_unchanged(monkeypatch):
     """With no memory for inner samples' vectors (SCAN_MEMORY = 0) a scan keeps in memory only
     the ends of the interval it works on and maps the others from disk (Sample.spilled): the
     N = 20 sweep (partial samples forced) spills samples, and its branch and collisions are
-    exactly those of the sweep that keeps them all in memory. on_disk keeps values and memory
-    order, read-only."""
+    exactly those of the sweep that keeps them all in memory, and so are they where the disk
+    refuses (OSError: the samples stay in memory). on_disk keeps values and memory order,
+    read-only."""
     from diskfriction.continuation import collisions
     from diskfriction.continuation.samples import Sample, is_on_disk, on_disk
 
@@ -590,6 +591,13 @@ def test_samples_spilled_to_disk_leave_the_scan_unchanged(monkeypatch):
     assert len(spilled) > 10
     assert np.array_equal(lean.F_x, kept.F_x) and np.array_equal(lean.eigenvalues, kept.eigenvalues)
     assert [(c.p, c.kind, c.pair) for c in lean.collisions] == [(c.p, c.kind, c.pair) for c in kept.collisions]
+
+    def full_disk(*args, **kwargs):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr("tempfile.TemporaryFile", full_disk)  # the samples stay in memory
+    refused = sweep(system, 0.0, 0.12, "J", params)
+    assert np.array_equal(refused.eigenvalues, kept.eigenvalues) and len(refused.collisions) == len(kept.collisions)
 
 
 def test_a_failing_locator_costs_partial_samples_and_finds_the_same_collisions(monkeypatch):
