@@ -179,8 +179,7 @@ def pending_full(workers: int, ends: list) -> bool:
 
 def _vector_bytes(sample: Sample) -> int:
     """The bytes of the sample's eigenvectors and of the matrix derivative kept with them."""
-    system, dA = sample.system, sample.dA
-    vectors = 0 if system is None or system.right is None else system.right.nbytes + system.left.nbytes
+    vectors, dA = sample.vectors_in_memory, sample.dA
     if dA is None:
         return vectors
     if scipy.sparse.issparse(dA):
