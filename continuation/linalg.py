@@ -94,6 +94,16 @@ def dense(K: Matrix) -> Array:
     return K.toarray() if sp.issparse(K) else np.asarray(K)
 
 
+def same_matrix(A: Matrix, B: Matrix) -> bool:
+    """Whether A and B hold the same values (dense or sparse, whatever the sparse pattern
+    stores)."""
+    if A.shape != B.shape or sp.issparse(A) != sp.issparse(B):
+        return False
+    if sp.issparse(A):
+        return (A != B).nnz == 0
+    return bool(np.array_equal(A, B))
+
+
 def bordered(K: Matrix, c: Array, b: Array, d: float = 0.0) -> Matrix:
     """[[K, c], [b^T, d]], dense if K is dense, CSC if K is sparse."""
     n = K.shape[0]

@@ -82,8 +82,14 @@ class Problem(ABC):
         """dG/dp at (u, p), shape (n,)."""
 
     def commit(self, u_old: Array, p_old: float, u_new: Array, p_new: float) -> Optional[bool]:
-        """Accept the step (u_old, p_old) -> (u_new, p_new); stateless problems do nothing."""
+        """Accept the step (u_old, p_old) -> (u_new, p_new); stateless problems do nothing.
+        True asks the core to solve again at p_new, from resolve_start(u_new)."""
         return None
+
+    def resolve_start(self, u_new: Array) -> Array:
+        """Where the core solves again after a commit that asked for it: u_new, the accepted
+        point, unless the commit moved part of the state (a packing's loose disks giving way)."""
+        return u_new
 
     def state(self) -> object:
         """A picklable snapshot of the committed state; stateless problems have none."""
@@ -99,6 +105,11 @@ class Problem(ABC):
     def stability_matrix(self, u: Array, p: float):
         """The matrix A(u, p) whose eigenvalues are tracked; default dG/du."""
         return self.jacobian(u, p)
+
+    def spectrum_matrix(self, u: Array, p: float):
+        """What eigensystem(u, p) is computed from: two points where it is the same matrix
+        (linalg.same_matrix) have the same eigensystem. Default: stability_matrix(u, p)."""
+        return self.stability_matrix(u, p)
 
     def eigensystem(self, u: Array, p: float, vectors: bool = False) -> Eigensystem:
         """Eigenvalues (and, with `vectors`, normalised left and right vectors) of A(u, p)."""

@@ -46,7 +46,7 @@ class Sample:
     computed, the others holding nan (status: the left neighbour's). disc: a spectral window's
     (sigma, radius), Eigensystem.disc (None: every eigenvalue computed, or a partial sample).
     uid: the token the scan's caches key on (verdicts, located collisions): a new one whenever
-    the point, its labels or its slopes change (at, relabel, with_slopes; any replace() that
+    the point, its labels or its slopes change (at, relabel, moved; any replace() that
     changes the data must pass uid=object()), the same one when only the vectors are released
     (without_vectors). A token of its own, not a number from a shared counter: no state is
     shared between samples, and none collides between a scan worker and this process.
@@ -79,10 +79,11 @@ class Sample:
         """The same point at another segment coordinate (a new step starts at its old end)."""
         return replace(self, s=s, uid=object())
 
-    def with_slopes(self, dlam: Array, dA=None) -> "Sample":
-        """The same point with other eigenvalue slopes d lambda / d tau (after an event), from
-        the matrix derivative dA."""
-        return replace(self, dlam=dlam, dA=dA, uid=object())
+    def moved(self, x: Array, tangent: Optional[Array] = None, dlam: Optional[Array] = None,
+              dA=None) -> "Sample":
+        """The same spectrum at the point x (where the stability matrix is the same), with the
+        slopes dlam along `tangent` from the matrix derivative dA (None: without slopes)."""
+        return replace(self, x=x, tangent=tangent, dlam=dlam, dA=dA, uid=object())
 
     def without_vectors(self) -> "Sample":
         """The same sample without its eigenvectors (the slopes stay), under the same uid: the

@@ -56,10 +56,11 @@ class Assembly:
         np.cumsum(np.bincount(row_of, minlength=shape[0]), out=indptr[1:])
         return cls(shape, indptr, (slots % shape[1]).astype(np.int64), S, constant)
 
-    def __call__(self, values: Array) -> sp.csr_array:
-        """A(values) (CSR, sorted indices, the same pattern at every call)."""
-        A = sp.csr_array((self.S @ values + self.constant, self.indices, self.indptr),
-                         shape=self.shape, copy=False)
+    def __call__(self, values: Array, constant: bool = True) -> sp.csr_array:
+        """A(values) (CSR, sorted indices, the same pattern at every call); without C if not
+        `constant`."""
+        data = self.S @ values + self.constant if constant else self.S @ values
+        A = sp.csr_array((data, self.indices, self.indptr), shape=self.shape, copy=False)
         A.has_sorted_indices = True
         return A
 

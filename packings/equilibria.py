@@ -287,6 +287,11 @@ class PackingEquilibria(Problem):
         gauge rows' diagonal, zeros elsewhere (module docstring)."""
         return self._stability(self._evaluate(q, gamma)[1])
 
+    def spectrum_matrix(self, q, gamma) -> sp.csr_array:
+        """A_red at the kept dofs, zeros elsewhere (A_g without the gauge rows' PARKED diagonal,
+        a constant of the committed state): what eigensystem() is computed from."""
+        return self._stability(self._evaluate(q, gamma)[1], constant=False)
+
     def dense_spectra(self) -> bool:
         """Dense spectra unless a spectral window is tracked (eigensystem)."""
         return self.window is None
@@ -377,6 +382,13 @@ class PackingEquilibria(Problem):
         sliding = carried(self.rows_c, (slid | self.sliding) & self.active, rows) > 0
         self._set_committed(q_new if moved is None else moved, xi_rows, rows, gamma_new, sliding)
         return capped or moved is not None or not np.array_equal(loose, self.gauge.loose)
+
+    def resolve_start(self, u_new: np.ndarray) -> np.ndarray:
+        """The committed q: u_new with the loose disks that gave way at the commit moved
+        (_release_pushed). The network's equations hold there as they did at u_new, so the
+        core's re-solve takes no update and the stability matrix is the same (arclength._moved);
+        from u_new, Newton moved the whole packing by about 1e-12 to put the loose disks back."""
+        return self.q_c.copy()
 
     def _release_pushed(self, q: np.ndarray, rows: np.ndarray, gamma: float) -> np.ndarray | None:
         """A loose disk (of the committed gauge) that a neighbour pushes into (a contact with

@@ -464,6 +464,23 @@ def test_sparse_factorization_names_an_empty_row_or_column():
         factorize(stored_zero)
 
 
+def test_same_matrix_compares_values_whatever_the_pattern_stores():
+    """linalg.same_matrix: a sparse matrix with an explicitly stored zero is the same as one
+    without it; one value off by a rounding unit, another shape, or dense against sparse is
+    not the same matrix."""
+    import scipy.sparse as sp
+    from diskfriction.continuation.linalg import same_matrix
+
+    full = np.array([[2.0, 1.0, 0.0], [0.0, 3.0, 1.0], [1.0, 0.0, 4.0]])
+    stored = sp.csr_array((np.array([2.0, 1.0, 0.0, 3.0, 1.0, 1.0, 4.0]),
+                           np.array([0, 1, 2, 1, 2, 0, 2]), np.array([0, 3, 5, 7])), shape=(3, 3))
+    assert same_matrix(sp.csr_array(full), stored) and same_matrix(full, full.copy())
+    off = full.copy()
+    off[1, 1] = np.nextafter(3.0, 4.0)
+    assert not same_matrix(sp.csr_array(full), sp.csr_array(off)) and not same_matrix(full, off)
+    assert not same_matrix(full, full[:2]) and not same_matrix(full, sp.csr_array(full))
+
+
 def test_segment_points_start_from_the_hermite_prediction():
     """On the circle u^2 + p^2 = 1 the point inside a step is predicted from the ends and their
     tangents to O(h^4) (the straight line: O(h^2)), lies on the hyperplane at s, and the

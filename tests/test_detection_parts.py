@@ -288,7 +288,7 @@ def test_a_samples_cache_token_changes_with_its_data_and_survives_releasing_its_
     values = np.array([1.0 + 0j, 2.0 + 0j])
     a = Sample(0.0, np.zeros(3), values, np.zeros(2, int), 1e-12, np.zeros(2, bool),
                dlam=np.ones(2, complex), system=Eigensystem(values, np.eye(2), np.eye(2)))
-    changed = [a.at(0.5), a.relabel(np.array([1, 0])), a.with_slopes(np.zeros(2, complex))]
+    changed = [a.at(0.5), a.relabel(np.array([1, 0])), a.moved(a.x, a.tangent, np.zeros(2, complex))]
     assert all(b.uid is not a.uid for b in changed) and len({id(b.uid) for b in changed}) == 3
     lean = a.without_vectors()
     assert lean.system is None and lean.uid is a.uid

@@ -259,6 +259,41 @@ def test_a_window_that_crowds_is_widened_and_finds_the_same_collisions(packing, 
     assert unaccounted_pair_changes(tight.gamma, tight.n_complex, kinds) == []
 
 
+def test_a_commit_that_leaves_the_matrix_the_same_keeps_the_spectrum(packing, windowed, monkeypatch):
+    """Commits where loose disks gave way or histories were capped change the state but not
+    A_red: the re-solve from the committed q (PackingEquilibria.resolve_start) takes no update,
+    and the end sample's spectrum is kept at the new point (arclength._moved) instead of a
+    second decomposition of the same matrix. With that second decomposition forced, the branch
+    is the same point for point and the collisions within 1e-12 in strain."""
+    from diskfriction.continuation import arclength
+
+    kept, updates, same_matrix = [], {}, arclength.same_matrix
+    real_newton = arclength.fixed_p_newton
+
+    def counting_newton(*args, **kwargs):
+        result = real_newton(*args, **kwargs)
+        updates["last"] = result.iterations
+        return result
+
+    def counting_same(A, B):
+        same = same_matrix(A, B)
+        if same:
+            kept.append(updates["last"])
+        return same
+
+    monkeypatch.setattr(arclength, "fixed_p_newton", counting_newton)
+    monkeypatch.setattr(arclength, "same_matrix", counting_same)
+    counted = shear(SCENE, packing, ShearParams(workers=0), window=WINDOW)
+    assert len(kept) >= 5 and set(kept) == {0}
+    monkeypatch.setattr(arclength, "same_matrix", lambda A, B: False)
+    again = shear(SCENE, packing, ShearParams(workers=0), window=WINDOW)
+    for run in (counted, again):
+        assert np.array_equal(run.gamma, windowed.gamma) and np.array_equal(run.q, windowed.q)
+    assert len(again.collisions) == len(windowed.collisions) >= 4
+    assert np.abs(np.array([c.p for c in again.collisions])
+                  - [c.p for c in windowed.collisions]).max() <= 1e-12
+
+
 def test_the_condition_numbers_follow_the_eigenvalues_columns(branch, windowed):
     """branch.condition has the eigenvalues' shape: nan exactly at the translations' and loose
     disks' zeros (no vectors), at least 1 elsewhere (|l| |r| >= |l^H r|); with a window, nan
