@@ -152,6 +152,46 @@ def test_a_plastic_event_is_passed_by_relaxing_with_friction():
     assert np.all(np.diff(passed.gamma) > 0)
 
 
+def test_detection_at_64_disks_agrees_with_dense_spectra_inside_every_step(monkeypatch):
+    """Issue 25: 64 disks (seed 1) sheared to gamma = 5e-4, every eigenvalue tracked. At 97
+    points across every step (its segment, in the state committed at its start), the dense
+    spectrum of A_red has as many complex pairs as at the step's start plus the births less
+    the deaths the scan located before that point; points within 1e-9 in strain of a located
+    collision are left out (there the pair's Im is still near the status threshold). The
+    steps ending at a contact reaching its Coulomb limit hold up to a dozen collisions within
+    1e-5 of strain (docs/packings.md, Accuracy measured)."""
+    from diskfriction.continuation import scans
+    from diskfriction.continuation.spectra import count_complex_pairs
+
+    scene = PackingScene(N=64, seed=1, gamma_range=(0.0, 5e-4))
+    packing = prepare_scene(scene)
+    real_scan, checked, wrong = scans.scan_step, [], []
+
+    def pairs(problem, x):
+        found = problem.eigensystem(x[:-1], float(x[-1]))
+        return count_complex_pairs(found.values[~found.excluded])
+
+    def checking_scan(problem, segment, start, end, *args, **kwargs):
+        result = real_scan(problem, segment, start, end, *args, **kwargs)
+        at = [(float(segment.sigma @ (np.append(c.u, c.p) - segment.x_a)) / segment.length, c)
+              for c in result.collisions]
+        first = pairs(problem, segment.x_a)
+        for s in np.linspace(0.0, 1.0, 97)[1:]:
+            x = segment.point(s)
+            if any(abs(c.p - x[-1]) <= 1e-9 for _, c in at):
+                continue
+            located = sum(1 if c.kind.value == "birth" else -1 for s_c, c in at if s_c < s)
+            checked.append(s)
+            if pairs(problem, x) != first + located:
+                wrong.append((float(x[-1]), pairs(problem, x), first + located))
+        return result
+
+    monkeypatch.setattr(scans, "scan_step", checking_scan)
+    run = shear(scene, packing, ShearParams(workers=0), plastic_events=5)
+    assert run.status.reached and len(run.collisions) >= 30 and len(checked) >= 400
+    assert wrong == []
+
+
 def test_a_loose_disk_pushed_into_gives_way(packing):
     """A loose disk moved into its neighbour (overlap 100 delta_hold, a force the network's
     equations leave out): _release_pushed moves it back along its normal force until no contact
