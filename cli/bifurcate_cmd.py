@@ -9,8 +9,8 @@ import math
 from pathlib import Path
 
 from diskfriction.cli.common import (EXIT_FAILED, CommandError, add_matrix_argument,
-                                     add_scene_argument, check_memory, matrix_from_args, number,
-                                     output_dir, path, scene_from_args)
+                                     add_scene_argument, bracketed_only, check_memory,
+                                     matrix_from_args, number, output_dir, path, scene_from_args)
 from diskfriction.cli.progress import Progress
 from diskfriction.words import count
 from diskfriction.scenes.packing import PackingScene
@@ -211,10 +211,11 @@ def _run(args: argparse.Namespace) -> int:
             f"{branch.window[1]:.6g}] (raw; {branch.eigenvalues.shape[1]} eigenvalues tracked "
             "through it and its guard bands, a column each in branch.npz"
             + (f"; it crowded and was widened {count(branch.widenings, 'time')}"
-               if branch.widenings else "") + ")") + ":")
+               if branch.widenings else "") + ")") + bracketed_only(records) + ":")
         for r in records:
             print(f"  {r['kind']:5s}  F_x = {r['F_x']:.10f}  lambda = {r['lambda_re']:.6g}  "
-                  f"(lambda/k_n = {r['lambda_re'] / scene.k_n:.5g})")
+                  f"(lambda/k_n = {r['lambda_re'] / scene.k_n:.5g})"
+                  + ("" if r["resolved"] else "  bracketed only: F_x in [{:.10f}, {:.10f}]".format(*r["bracket"])))
         print(f"wrote {out}/branch.npz, collisions.json, diagram.png")
     if not branch.status[-1].reached:
         from diskfriction.disks.equilibrium import contact_states

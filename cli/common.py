@@ -113,6 +113,17 @@ def path(p, folds=()) -> str:
     return " -> ".join(f"{v:.6g}" for v in [p[0], *turns, p[-1]])
 
 
+def bracketed_only(records: list[dict]) -> str:
+    """", K only bracketed" (the collisions the detection found but did not locate to its
+    tolerance: its solve budget ran out, or their interval could not be certified; resolved
+    false in collisions.json, each with its bracket), or "" when every one is located."""
+    unlocated = sum(not r["resolved"] for r in records)
+    if not unlocated:
+        return ""
+    return (f", {unlocated} of them only bracketed, not located to the detection's tolerance "
+            "(resolved: false in collisions.json)")
+
+
 def code_targets(subparsers: argparse._SubParsersAction, command: str, help: str
                  ) -> argparse._SubParsersAction:
     """Add `command`, whose first argument names the other code it works with (CODE); the

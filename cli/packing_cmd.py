@@ -9,7 +9,8 @@ import dataclasses
 import json
 from pathlib import Path
 
-from diskfriction.cli.common import EXIT_FAILED, CommandError, matrix_from_args, output_dir
+from diskfriction.cli.common import (EXIT_FAILED, CommandError, bracketed_only, matrix_from_args,
+                                     output_dir)
 from diskfriction.cli.progress import Progress
 from diskfriction.scenes.packing import PackingScene
 from diskfriction.words import count
@@ -90,7 +91,8 @@ def run_packing(args: argparse.Namespace, scene: PackingScene,
                   f"{branch.window[1]:.6g}] (raw)")
         if branch.widenings:
             inside += f" (the window crowded and was widened {count(branch.widenings, 'time')})"
-        print(f"{count(len(records), 'collision')} ({matrix}) with gamma >= {g0:g}{inside}; "
+        print(f"{count(len(records), 'collision')} ({matrix}) with gamma >= {g0:g}{inside}"
+              f"{bracketed_only(records)}; "
               f"complex pairs at {100 * (branch.n_complex > 0).mean():.0f} % of the equilibria, "
               f"at most {branch.n_complex.max()}")
         print(f"wrote {out}/branch.npz, collisions.json, diagram.png, packing.npz")

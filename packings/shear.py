@@ -97,9 +97,13 @@ class PackingBranch:
 
 
 def collision_records(branch: PackingBranch) -> list[dict]:
-    """One record per located collision: strain, kind, the double eigenvalue, the matrix."""
+    """One record per collision: strain, kind, the double eigenvalue, the matrix, the bracket
+    of strain it lies in and whether it is located to the detection's tolerance (resolved;
+    docs/outputs.md)."""
     return [{"gamma": c.p, "kind": str(c.kind), "lambda_re": c.eigenvalue,
-             "lambda_im": 0.0, "matrix": str(branch.matrix)} for c in branch.collisions]
+             "lambda_im": 0.0, "matrix": str(branch.matrix),
+             "bracket": [float(b) for b in c.bracket], "resolved": bool(c.resolved)}
+            for c in branch.collisions]
 
 
 def network_of(scene: PackingScene, packing: Packing) -> Network:

@@ -153,6 +153,26 @@ def test_bifurcate_shears_a_packing_scene_and_writes_its_branch(tmp_path):
     assert f"{len(records)} collisions" in result.stdout
 
 
+def test_bifurcate_says_how_many_collisions_are_only_bracketed(tmp_path, monkeypatch, capsys):
+    """A detection whose solve budget runs out (1 solve a step here; 500 by default) leaves
+    collisions bracketed but not located: bifurcate says how many in its summary, as
+    collisions.json marks them (resolved: false), instead of listing them like the others."""
+    import json
+
+    from diskfriction.cli.main import main
+    from diskfriction.continuation import collisions
+
+    budget = collisions.DetectionParams  # what bifurcate imports when it runs
+    monkeypatch.setattr(collisions, "DetectionParams", lambda **kw: budget(max_solves=1, **kw))
+    scene = write(tmp_path, "[packing]\nN = 24\nseed = 3\n[shear]\ngamma = [0.0, 0.001]\n")
+    assert main(["bifurcate", str(scene), "--workers", "0", "--out", str(tmp_path / "out")]) == 0
+    records = json.loads((tmp_path / "out" / "collisions.json").read_text())["collisions"]
+    unlocated = sum(not r["resolved"] for r in records)
+    assert unlocated >= 1
+    out = capsys.readouterr().out
+    assert f"{len(records)} collisions (M^-1 J) with gamma >= 0, {unlocated} of them only bracketed" in out, out
+
+
 def test_bifurcate_with_a_window_lists_only_its_collisions(tmp_path):
     """`bifurcate PACKING --window 0:50` on 24 disks: exit 0, every collision's double
     eigenvalue in the window, the branch's spectrum stored as window columns (nan where a
