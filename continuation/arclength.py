@@ -480,9 +480,9 @@ def _commit(problem: Problem, x: Array, step: _Step, end: Sample, par: Continuat
     """Call problem.commit; if it reports a change, re-solve at fixed p (from
     problem.resolve_start) and refresh tangent and spectrum (the jump is not scanned for
     collisions; the stored residual is the re-solve's, the iterations add up). Where the
-    stability matrix came out the same, the end sample's spectrum is kept (_moved). After an
-    event the slopes are refreshed on the side of the next step. Returns (step, end sample) or
-    (None, end)."""
+    matrix the spectrum is computed from (problem.spectrum_matrix) came out the same, the end
+    sample's spectrum is kept (_moved). After an event the slopes are refreshed on the side of
+    the next step. Returns (step, end sample) or (None, end)."""
     u, p = step.x[:-1].copy(), float(step.x[-1])
     before = problem.spectrum_matrix(u, p) if detection.spectra else None
     changed = problem.commit(x[:-1], float(x[-1]), u, p)
@@ -506,11 +506,10 @@ def _commit(problem: Problem, x: Array, step: _Step, end: Sample, par: Continuat
 
 
 def _moved(problem: Problem, end: Sample, x: Array, t: Optional[Array]) -> Sample:
-    """The end sample at x, where the stability matrix is the same (a commit that changed the
-    state but not the matrix: a packing's loose disks giving way, a capped history): its
-    spectrum kept, with the slopes along t (None: a sample without slopes) on the side of the
-    next step. A packing of 256 disks re-solved after 156 of 180 commits to gamma = 2e-3, and
-    the matrix came out the same after all but a few (docs/continuation.md)."""
+    """The end sample at x, where the matrix its spectrum is computed from is the same (a
+    commit that changed the state but not that matrix: a packing's loose disks giving way, a
+    capped history): its spectrum kept, with the slopes along t (None: a sample without
+    slopes) on the side of the next step (docs/continuation.md, History along the branch)."""
     if t is None:
         return end.moved(x)
     dA = matrix_derivative(problem, x, t, +1)

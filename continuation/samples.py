@@ -81,8 +81,9 @@ class Sample:
 
     def moved(self, x: Array, tangent: Optional[Array] = None, dlam: Optional[Array] = None,
               dA=None) -> "Sample":
-        """The same spectrum at the point x (where the stability matrix is the same), with the
-        slopes dlam along `tangent` from the matrix derivative dA (None: without slopes)."""
+        """The same spectrum at the point x (where the matrix it is computed from is the same),
+        with the slopes dlam along `tangent` from the matrix derivative dA (None: without
+        slopes)."""
         return replace(self, x=x, tangent=tangent, dlam=dlam, dA=dA, uid=object())
 
     def without_vectors(self) -> "Sample":
