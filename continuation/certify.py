@@ -75,6 +75,16 @@ def _cubic_min(c0: float, c1: float, c2: float, c3: float) -> tuple[float, float
     return best_v, best_t
 
 
+def stays_above(y0: Array, y1: Array, d0: Array, d1: Array, level: float, doubt: float) -> Array:
+    """Whether each cubic Hermite model (ends y0, y1, slopes d0, d1 on [0, 1]) stays above
+    `level` all along: its minimum, less doubt |c3| (the weight the certificates give the cubic
+    term), is above it."""
+    out = np.zeros(np.size(y0), bool)
+    for k, (c0, c1, c2, c3) in enumerate(zip(*hermite_coefficients(y0, y1, d0, d1))):
+        out[k] = _cubic_min(c0, c1, c2, c3)[0] - doubt * abs(c3) > level
+    return out
+
+
 @numba.njit(cache=True, error_model="numpy")
 def _pair_margin(la: complex, lb: complex, da: complex, db: complex, rho: float, floor: float,
                  doubt: float) -> tuple[bool, float, float]:

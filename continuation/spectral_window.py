@@ -14,9 +14,10 @@ full spectrum's; those beyond the guard band are `excluded`, those in the guard 
 (verdicts._enters_past_guard). The detection certifies pairs, and locates collisions, only in
 the certified band, W widened by CERTIFIED of the guard band on each side (Window.certified):
 an eigenvalue beyond it at both ends of an interval on the same side (verdicts.beyond_band)
-takes part in no certificate and none of its collisions is located, for its value at any
-collision inside the interval lies outside W (the assumption the guard band rests on: an
-eigenvalue does not cross CERTIFIED of the guard band between two samples unseen). A collision
+takes part in no certificate and none of its collisions is located while the cubic model of
+its real part stays beyond the band between the samples, for its value at any collision
+inside the interval lies outside W (the assumption the guard band rests on: an eigenvalue
+does not stray CERTIFIED of the guard band off its model between two samples). A collision
 is reported when its double eigenvalue lies in W (disks/sweep.py, packings/shear.py); the
 certificate covers exactly the window.
 
@@ -45,8 +46,10 @@ from .spectra import Eigensystem
 
 Array = np.ndarray
 
-GUARD = 0.25
-"""Width of each guard band, as a fraction of the window's width."""
+GUARD = 0.15
+"""Width of each guard band, as a fraction of the window's width (0.25 until the labels beyond
+the certified band were checked against their cubic models, verdicts.beyond_band:
+docs/continuation.md)."""
 
 MARGIN = 1.5
 """k is set at the first sample to MARGIN times the eigenvalues within reach, plus EXTRA."""

@@ -16,8 +16,9 @@ locator can start from its model. Exhaustive detection (version 0.1): the quadra
 third sample with the status of the adjacent end (certify.curvature_too_large) and the motion
 of every real eigenvalue against its gap (certify.outruns_gaps).
 
-With a spectral window, the labels beyond its certified band at both ends (beyond_band) are
-left out of the events and the certificates: their collisions lie outside the window.
+With a spectral window, the labels beyond its certified band at both ends whose cubic model
+stays beyond it in between (beyond_band) are left out of the events and the certificates:
+their collisions lie outside the window.
 
 Pure functions of samples (samples.Sample) and the tolerances they are given: rho is the
 certification margin, doubt the weight of a model's cubic term (certify.py); the resolution
@@ -104,12 +105,21 @@ def band_side(sample: Sample) -> Array:
     return side
 
 
-def beyond_band(a: Sample, b: Sample) -> Array:
-    """Labels beyond the certified band on the same side at both ends of [a, b]: no collision of
-    theirs inside the interval lies in the window (spectral_window.py), so none is certified or
-    located."""
+def beyond_band(a: Sample, b: Sample, d_a: Array, d_b: Array, doubt: float) -> Array:
+    """Labels beyond the certified band on the same side at both ends of [a, b] whose cubic
+    Hermite model of Re lambda (slopes d_a, d_b per unit of the interval) stays beyond it in
+    between, by the doubt margin of the model's cubic term: no collision of theirs inside the
+    interval lies in the window (spectral_window.py), so none is certified or located. A label
+    whose model dips into the band takes part in the certificates."""
     side = band_side(a)
-    return (side != 0) & (side == band_side(b))
+    beyond = (side != 0) & (side == band_side(b))
+    for sign, edge in ((1, 1), (-1, 0)):  # above the band: Re lambda > hi; below: -Re lambda > -lo
+        on = np.flatnonzero(beyond & (side == sign))
+        if on.size:
+            beyond[on] = certify.stays_above(sign * a.eigvals[on].real, sign * b.eigvals[on].real,
+                                             sign * d_a[on].real, sign * d_b[on].real,
+                                             sign * a.band[edge], doubt)
+    return beyond
 
 
 def judge_fast(a: Sample, b: Sample, segment: Segment, rho: float, doubt: float) -> Verdict:
@@ -120,7 +130,7 @@ def judge_fast(a: Sample, b: Sample, segment: Segment, rho: float, doubt: float)
     events, consistent = status_events(a, b, active)
     if not consistent:
         return Verdict(VerdictKind.SPLIT, events, False, 0.5 * (a.s + b.s))
-    beyond = beyond_band(a, b)
+    beyond = beyond_band(a, b, *scaled_slopes(a, b, segment), doubt)
     if beyond.any():
         events = [(i, j, kind) for i, j, kind in events if not (beyond[i] or beyond[j])]
         active = active & ~beyond

@@ -174,7 +174,7 @@ def test_bifurcate_says_how_many_collisions_are_only_bracketed(tmp_path, monkeyp
 
 
 def test_bifurcate_with_a_window_lists_only_its_collisions(tmp_path):
-    """`bifurcate PACKING --window 0:50` on 24 disks: exit 0, every collision's double
+    """`bifurcate PACKING --window 5:50` on 24 disks: exit 0, every collision's double
     eigenvalue in the window, the branch's spectrum stored as window columns (nan where a
     column holds no tracked eigenvalue), the window named in the summary."""
     import json
@@ -182,14 +182,14 @@ def test_bifurcate_with_a_window_lists_only_its_collisions(tmp_path):
     import numpy as np
 
     scene = write(tmp_path, "[packing]\nN = 24\nseed = 3\n[shear]\ngamma = [0.0, 0.002]\n")
-    result = run_cli("bifurcate", str(scene), "--window", "0:50", "--out", str(tmp_path / "out"))
+    result = run_cli("bifurcate", str(scene), "--window", "5:50", "--out", str(tmp_path / "out"))
     assert result.returncode == 0, result.stderr
     records = json.loads((tmp_path / "out" / "collisions.json").read_text())["collisions"]
-    assert records and all(0 <= r["lambda_re"] <= 50 for r in records)
+    assert records and all(5 <= r["lambda_re"] <= 50 for r in records)
     with np.load(tmp_path / "out" / "branch.npz") as branch:
         lam = branch["eigenvalues"]
     assert np.isnan(lam).any() and np.isfinite(lam).any(axis=0).all()
-    assert "Re lambda in [0, 50]" in result.stdout
+    assert "Re lambda in [5, 50]" in result.stdout
 
 
 @pytest.mark.parametrize("option, value", [("--fx", "0:0.1"), ("--ds-max", "0.1"),
