@@ -213,9 +213,10 @@ def _run(args: argparse.Namespace) -> int:
             + (f"; it crowded and was widened {count(branch.widenings, 'time')}"
                if branch.widenings else "") + ")") + bracketed_only(records) + ":")
         for r in records:
+            unlocated = ("" if r["resolved"] else
+                         "  bracketed only: F_x in [{:.10f}, {:.10f}]".format(*r["bracket"]))
             print(f"  {r['kind']:5s}  F_x = {r['F_x']:.10f}  lambda = {r['lambda_re']:.6g}  "
-                  f"(lambda/k_n = {r['lambda_re'] / scene.k_n:.5g})"
-                  + ("" if r["resolved"] else "  bracketed only: F_x in [{:.10f}, {:.10f}]".format(*r["bracket"])))
+                  f"(lambda/k_n = {r['lambda_re'] / scene.k_n:.5g}){unlocated}")
         print(f"wrote {out}/branch.npz, collisions.json, diagram.png")
     if not branch.status[-1].reached:
         from diskfriction.disks.equilibrium import contact_states

@@ -79,9 +79,15 @@ def stays_above(y0: Array, y1: Array, d0: Array, d1: Array, level: float, doubt:
     """Whether each cubic Hermite model (ends y0, y1, slopes d0, d1 on [0, 1]) stays above
     `level` all along: its minimum, less doubt |c3| (the weight the certificates give the cubic
     term), is above it."""
-    out = np.zeros(np.size(y0), bool)
-    for k, (c0, c1, c2, c3) in enumerate(zip(*hermite_coefficients(y0, y1, d0, d1))):
-        out[k] = _cubic_min(c0, c1, c2, c3)[0] - doubt * abs(c3) > level
+    return _stays_above(*hermite_coefficients(*(np.asarray(v, dtype=float) for v in (y0, y1, d0, d1))),
+                        level, doubt)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _stays_above(c0: Array, c1: Array, c2: Array, c3: Array, level: float, doubt: float) -> Array:
+    out = np.empty(c0.size, np.bool_)
+    for k in range(c0.size):
+        out[k] = _cubic_min(c0[k], c1[k], c2[k], c3[k])[0] - doubt * abs(c3[k]) > level
     return out
 
 

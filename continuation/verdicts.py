@@ -130,11 +130,12 @@ def judge_fast(a: Sample, b: Sample, segment: Segment, rho: float, doubt: float)
     events, consistent = status_events(a, b, active)
     if not consistent:
         return Verdict(VerdictKind.SPLIT, events, False, 0.5 * (a.s + b.s))
-    beyond = beyond_band(a, b, *scaled_slopes(a, b, segment), doubt)
+    d_a, d_b = scaled_slopes(a, b, segment)
+    beyond = beyond_band(a, b, d_a, d_b, doubt)
     if beyond.any():
         events = [(i, j, kind) for i, j, kind in events if not (beyond[i] or beyond[j])]
         active = active & ~beyond
-    split = hermite_split(a, b, events, active, segment, rho, doubt)
+    split = hermite_split(a, b, d_a, d_b, events, active, rho, doubt)
     if split is not None:
         t_split, labels = split
         return Verdict(VerdictKind.SPLIT, events, True, a.s + t_split * (b.s - a.s), labels)
@@ -161,13 +162,13 @@ def scaled_slopes(a: Sample, b: Sample, segment: Segment) -> tuple[Array, Array]
     return a.slopes(segment) * h, b.slopes(segment) * h
 
 
-def hermite_split(a: Sample, b: Sample, events: list, active: Array, segment: Segment,
+def hermite_split(a: Sample, b: Sample, d_a: Array, d_b: Array, events: list, active: Array,
                   rho: float, doubt: float):
-    """Fast: None if every candidate pair and every label is certified by the cubic models,
-    else (where to split: t in [0, 1], the worst pair's model minimum kept SPLIT_OFF_ENDS off
-    the ends; the mask of labels in trouble, with the event pairs and conjugate partners, or
-    None if the next sample must be full)."""
-    d_a, d_b = scaled_slopes(a, b, segment)
+    """Fast: None if every candidate pair and every label is certified by the cubic models
+    (slopes d_a, d_b per unit of the interval: scaled_slopes), else (where to split: t in
+    [0, 1], the worst pair's model minimum kept SPLIT_OFF_ENDS off the ends; the mask of labels
+    in trouble, with the event pairs and conjugate partners, or None if the next sample must be
+    full)."""
     real, upper, partner = _fast_candidates(a, b, active)
     thr = max(a.thr, b.thr)
     t_worst, pairs, crossing = certify.worst_uncertified_pair(a.eigvals, b.eigvals, d_a, d_b, real,

@@ -178,5 +178,6 @@ def test_collisions_only_bracketed_are_counted_and_marked(tmp_path, monkeypatch,
     records = json.loads((tmp_path / "collisions.json").read_text())
     unlocated = [r for r in records if not r["resolved"]]
     out = capsys.readouterr().out
-    assert unlocated and f"{len(records)} collisions (J), {len(unlocated)} of them only bracketed" in out, out
+    summary = f"{len(records)} collisions (J), {len(unlocated)} of them only bracketed"
+    assert unlocated and summary in out, out
     assert out.count("bracketed only: F_x in [") == len(unlocated)

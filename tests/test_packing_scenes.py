@@ -170,7 +170,8 @@ def test_bifurcate_says_how_many_collisions_are_only_bracketed(tmp_path, monkeyp
     unlocated = sum(not r["resolved"] for r in records)
     assert unlocated >= 1
     out = capsys.readouterr().out
-    assert f"{len(records)} collisions (M^-1 J) with gamma >= 0, {unlocated} of them only bracketed" in out, out
+    summary = f"{len(records)} collisions (M^-1 J) with gamma >= 0, {unlocated} of them only bracketed"
+    assert summary in out, out
 
 
 def test_bifurcate_with_a_window_lists_only_its_collisions(tmp_path):
