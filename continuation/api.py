@@ -38,7 +38,7 @@ from .newton import bordered_newton
 from .problem import FunctionProblem, Problem
 from .weighting import Weighted, scale_of, unweighted
 from .segment import SegmentSolveError
-from .spectral_window import WIDENINGS
+from .spectral_window import WIDENINGS, WindowCrowded
 
 Array = np.ndarray
 Function = Callable[[Array, float], Array]
@@ -315,24 +315,34 @@ def solve_branch(problem: Problem, u0, p_span, options: Options = Options(), *,
 
 
 def solve_in_runs(problem: Problem, u0, p_span, options: Options,
-                  callback_of: Callable[[int], Optional[Callback]]) -> list[Branch]:
-    """solve_branch, where a crowded spectral window (StopCode.WINDOW) does not end the work:
-    the problem's window is sized anew, wider, at the last certified point
-    (Problem.widen_window) and a new run goes on from there, until a run ends otherwise or
-    WIDENINGS runs in a row reach no further point. callback_of(r) is run r's callback (None:
-    none); a run after the first starts at the last point of the one before, which its
-    callback does not get again. Returns the runs' branches in order (their eigenvalues
-    under each run's own labels: a widened window holds more of them)."""
-    runs, stuck, (p_start, p_stop) = [], 0, p_span
+                  callback_of: Callable[[int], Optional[Callback]]) -> tuple[list[Branch], int]:
+    """solve_branch, where a crowded spectral window does not end the work: the problem's
+    window is sized anew, wider, at the last certified point (Problem.widen_window) and a new
+    run goes on from there (a run that ended with StopCode.WINDOW), or the run starts again
+    (its first point crowded: WindowCrowded before any point, as at the start of a packing's
+    segment after a plastic event), until a run ends otherwise or WIDENINGS widenings in a row
+    reach no further point. callback_of(r) is run r's callback (None: none); a run after the
+    first starts at the last point of the one before, which its callback does not get again.
+    Returns (the runs' branches in order, their eigenvalues under each run's own labels: a
+    widened window holds more of them; how often the window was widened)."""
+    runs, stuck, widenings, (p_start, p_stop) = [], 0, 0, p_span
     while True:
         callback = callback_of(len(runs))
         if runs and callback is not None:
             callback = _after_start(callback)
-        branch = solve_branch(problem, u0, (p_start, p_stop), options, callback=callback).branch
+        try:
+            branch = solve_branch(problem, u0, (p_start, p_stop), options, callback=callback).branch
+        except WindowCrowded:
+            stuck += 1
+            if stuck > WIDENINGS or not problem.widen_window():
+                raise
+            widenings += 1
+            continue
         runs.append(branch)
         stuck = stuck + 1 if len(branch) == 1 else 0
         if branch.status.code is not StopCode.WINDOW or stuck > WIDENINGS or not problem.widen_window():
-            return runs
+            return runs, widenings
+        widenings += 1
         u0, p_start = branch.u[-1], float(branch.p[-1])
 
 

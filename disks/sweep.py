@@ -143,7 +143,7 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
                     progress(F_x)
             return record
 
-        runs = solve_in_runs(problem, problem.q_c, (F_start, b), options, record_of)
+        runs, widened = solve_in_runs(problem, problem.q_c, (F_start, b), options, record_of)
         for run, branch in enumerate(runs):  # a run after the first follows a widened window
             skipped = run > 0 or first > 0  # its first point was recorded before
             if run == 0 and first > 0:
@@ -155,7 +155,7 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
             events += branch.events
             if leg == 1:
                 collisions += branch.collisions
-        blocks_used, widenings = base + len(runs), widenings + len(runs) - 1
+        blocks_used, widenings = base + len(runs), widenings + widened
         status.append(runs[-1].status)
         F_start = float(runs[-1].p[-1])
         if not runs[-1].status.reached:

@@ -152,13 +152,13 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
                     progress(gamma)
             return record
 
-        runs = solve_in_runs(problem, q, (gamma_start, g1), options, record_of)
+        runs, widened = solve_in_runs(problem, q, (gamma_start, g1), options, record_of)
         for run, branch in enumerate(runs):  # a run after the first follows a widened window
             collisions += branch.collisions
             events += branch.events
             continued[base + run] = branch.continued if run == 0 else branch.continued[1:]
             kappas += list(branch.condition if run == 0 else branch.condition[1:])
-        widenings += len(runs) - 1
+        widenings += widened
         branch = runs[-1]
         if branch.status.code not in PLASTIC or len(passed) >= plastic_events:
             break

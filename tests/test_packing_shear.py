@@ -4,6 +4,7 @@ complex pairs accounted for by a located collision, and the collisions where the
 say they are."""
 from __future__ import annotations
 
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -297,6 +298,34 @@ def test_a_window_that_crowds_is_widened_and_finds_the_same_collisions(packing, 
                   - [c.p for c in generous.collisions]).max() <= 1e-12
     kinds = [(c.p, c.kind) for c in tight.collisions]
     assert unaccounted_pair_changes(tight.gamma, tight.n_complex, kinds) == []
+
+
+def test_a_window_that_crowds_at_its_first_point_is_widened_there(packing, windowed, monkeypatch):
+    """A window sized with k = the eigenvalues within its reach crowds at once, at the first
+    point of the run (as 256 disks' window did at the start of a segment after a plastic event
+    at gamma = 0.0102, a pair with |Im| = 12.7 in its band, where the exception lost 334 s of
+    shear): it is sized anew, wider, there and the shear goes on; the same collisions as a
+    generous window within 1e-12."""
+    from diskfriction.continuation import spectral_window
+    from diskfriction.packings import equilibria
+
+    sized, decompose = spectral_window.sized, equilibria.window_eigensystem
+    points, crowded_at = [], []
+
+    def watched(A, window, vectors):
+        try:
+            return decompose(A, window, vectors)
+        except spectral_window.WindowCrowded:
+            crowded_at.append(len(points))
+            raise
+
+    monkeypatch.setattr(equilibria, "sized", lambda w, A, *_: replace(w, k=sized(w, A, 1.0, 1).k - 1))
+    monkeypatch.setattr(equilibria, "window_eigensystem", watched)
+    tight = shear(SCENE, packing, ShearParams(workers=0), points.append, window=WINDOW)
+    assert crowded_at[0] == 0 and tight.widenings >= 1 and tight.status.reached
+    assert len(tight.collisions) == len(windowed.collisions) >= 4
+    assert np.abs(np.array([c.p for c in tight.collisions])
+                  - [c.p for c in windowed.collisions]).max() <= 1e-12
 
 
 def test_a_commit_that_leaves_the_matrix_the_same_keeps_the_spectrum(packing, windowed, monkeypatch):
