@@ -25,9 +25,13 @@ from typing import Callable, Hashable, Iterator, Optional
 from diskfriction.errors import OneLineError
 from diskfriction.files import source_digest
 
-RUN_SOURCES = ("diskfriction.scenes", "diskfriction.symbolic", "diskfriction.continuation",
-               "diskfriction.dynamics")
-"""The packages a task's result depends on: its code version digests their sources."""
+RUN_SOURCES = ("diskfriction", "diskfriction.scenes", "diskfriction.symbolic",
+               "diskfriction.continuation", "diskfriction.dynamics", "diskfriction.disks",
+               "diskfriction.packings", "diskfriction.studies")
+"""The packages a task's result depends on: its code version digests their sources. Every
+folder the studies reach (tests/test_layers.py); until stop 42 the chain's and the packings'
+own folders (disks/, packings/) and the studies' were missing, so an edit there left map
+cells on disk that a rerun took as current."""
 
 HTTP_ANY_PORT = {"dashboard_address": "127.0.0.1:0"}
 """The scheduler serves HTTP (health, metrics) even without a dashboard, by default on port

@@ -66,3 +66,28 @@ def test_the_rule_catches_an_upward_import(tmp_path, monkeypatch):
     (core / "x.py").write_text("def f():\n    from diskfriction.studies.maps import grid_values\n")
     monkeypatch.setattr(__import__(__name__), "ROOT", tmp_path)
     assert violations() == ["continuation/x.py -> diskfriction.studies"]
+
+
+def imported_closure(folder: str) -> set[str]:
+    """The folders `folder`'s modules import, directly or through the folders they import."""
+    seen, todo = set(), [folder]
+    while todo:
+        current = todo.pop()
+        if current in seen:
+            continue
+        seen.add(current)
+        for path in sorted((ROOT / current).rglob("*.py")):
+            if path.relative_to(ROOT).as_posix() not in ENTRY_POINTS:
+                todo += imported_folders(path) - seen
+    return seen
+
+
+def test_the_code_version_of_resumable_runs_covers_every_folder_they_run():
+    """A map cell or ensemble realization on disk is reused while the code version
+    (studies.cluster.code_version) is the same: it must digest every folder the studies'
+    code reaches, or an edit of that folder (packings/shear.py, say) would leave stale cells
+    that a rerun takes as current."""
+    from diskfriction.studies.cluster import RUN_SOURCES
+
+    reached = {"diskfriction" if f == "diskfriction" else f"diskfriction.{f}" for f in imported_closure("studies")}
+    assert reached <= set(RUN_SOURCES), reached - set(RUN_SOURCES)
