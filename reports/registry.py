@@ -15,8 +15,12 @@ from typing import Callable
 from diskfriction.files import source_digest
 from diskfriction.scenes import Scene
 
-SWEEP_DEPS = ("diskfriction.scenes", "diskfriction.symbolic", "diskfriction.continuation")
-DYNAMICS_DEPS = SWEEP_DEPS + ("diskfriction.dynamics",)
+SWEEP_DEPS = ("diskfriction", "diskfriction.scenes", "diskfriction.symbolic",
+              "diskfriction.continuation", "diskfriction.disks")
+DYNAMICS_DEPS = SWEEP_DEPS + ("diskfriction.dynamics", "diskfriction.studies", "diskfriction.packings")
+"""The folders a computation's result depends on (tests/test_layers.py reads them from the
+imports): the chain's sweep and equilibria (disks/) were missing until stop 42, so a cached
+result outlived an edit there."""
 
 
 class ComputationFailed(Exception):
@@ -32,7 +36,8 @@ class ComputationFailed(Exception):
 class Computation:
     """name: unique, used in cache keys and paths; function(scene, **params) -> dict;
     depends: modules (packages or single modules) whose sources enter the code version,
-    besides the function's own module."""
+    besides the computations' own package (reports/compute/: they call one another) and the
+    registry and cache."""
 
     name: str
     function: Callable[..., dict]
@@ -40,7 +45,8 @@ class Computation:
 
     @cached_property
     def code(self) -> str:
-        return source_digest((self.function.__module__, "diskfriction.reports.cache") + self.depends)
+        return source_digest(("diskfriction.reports.compute", "diskfriction.reports.registry",
+                              "diskfriction.reports.cache") + self.depends)
 
 
 def computation(name: str, depends: tuple[str, ...] = SWEEP_DEPS):

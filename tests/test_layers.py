@@ -21,18 +21,26 @@ RANK = {folder: k for k, layer in enumerate(LAYERS) for folder in layer}
 ENTRY_POINTS = {"diskfriction/__main__.py"}  # `python -m diskfriction` starts the command line
 
 
-def imported_folders(path: Path) -> set[str]:
-    """The diskfriction.<folder> names a module imports (absolute imports; a relative import
-    stays in its own folder)."""
+def imported_names(nodes) -> set[str]:
+    """The diskfriction.* modules the import statements among `nodes` name (absolute imports;
+    a relative import stays in its own folder)."""
     found = set()
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+    for node in nodes:
         names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
             [node.module or ""] if isinstance(node, ast.ImportFrom) and not node.level else []
-        for name in names:
-            parts = name.split(".")
-            if parts[0] == "diskfriction":
-                found.add(parts[1] if len(parts) > 1 and parts[1] in RANK else "diskfriction")
+        found |= {name for name in names if name.split(".")[0] == "diskfriction"}
     return found
+
+
+def folder_of(name: str) -> str:
+    """The folder of a diskfriction.* module name ("diskfriction" for the bottom modules)."""
+    parts = name.split(".")
+    return parts[1] if len(parts) > 1 and parts[1] in RANK else "diskfriction"
+
+
+def imported_folders(path: Path) -> set[str]:
+    """The diskfriction.<folder> names a module imports, inside functions too."""
+    return {folder_of(name) for name in imported_names(ast.walk(ast.parse(path.read_text(encoding="utf-8"))))}
 
 
 def violations() -> list[str]:
@@ -91,3 +99,26 @@ def test_the_code_version_of_resumable_runs_covers_every_folder_they_run():
 
     reached = {"diskfriction" if f == "diskfriction" else f"diskfriction.{f}" for f in imported_closure("studies")}
     assert reached <= set(RUN_SOURCES), reached - set(RUN_SOURCES)
+
+
+def test_the_code_version_of_cached_report_results_covers_every_folder_they_run():
+    """A report computation's cached result is reused while its code version is the same
+    (reports/registry.py): its depends must hold every folder it reaches (its own imports, its
+    module's, and those of the computations' modules it imports), or an edit there (the
+    chain's sweep in disks/, say) would leave a stale result that the report shows."""
+    import inspect
+    import textwrap
+
+    from diskfriction.reports.compute import COMPUTATIONS
+
+    for each in COMPUTATIONS.values():
+        module = inspect.getmodule(each.function)
+        names = imported_names(ast.parse(Path(module.__file__).read_text(encoding="utf-8")).body)
+        names |= imported_names(ast.walk(ast.parse(textwrap.dedent(inspect.getsource(each.function)))))
+        folders = {folder_of(name) for name in names}
+        for name in names:
+            if name.startswith("diskfriction.reports.compute."):
+                folders |= imported_folders(ROOT / (name.removeprefix("diskfriction.").replace(".", "/") + ".py"))
+        reached = set().union(*(imported_closure(f) for f in folders - {"reports"}))
+        wanted = {"diskfriction" if f == "diskfriction" else f"diskfriction.{f}" for f in reached}
+        assert wanted <= set(each.depends), (each.name, wanted - set(each.depends))
