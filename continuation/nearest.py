@@ -53,6 +53,14 @@ threshold at 0.1 (or partial pivoting) minimum degree lost its order to off-diag
 the chain: 1.02 million."""
 
 
+def start_vector(n: int) -> Array:
+    """ARPACK's start vector for an n x n matrix, the same in every call: ARPACK's own is drawn
+    from a generator whose state carries over from one call to the next in a process, so a
+    result would depend on what the process computed before (a packing's shear resumed after
+    its finished segments differed from the uninterrupted run at the rounding level)."""
+    return np.random.default_rng(n).standard_normal(n)
+
+
 class ShiftInvertFailed(RuntimeError):
     """A - sigma I is singular or ARPACK did not converge."""
 
@@ -70,7 +78,7 @@ def nearest_eigensystem(A: Matrix, sigma: float, k: int) -> tuple[Eigensystem, f
         lu = factorize(A - shift, SHIFT_INVERT_ORDERING)
         inverse = spla.LinearOperator((n, n), matvec=lu.solve, dtype=float)
         inverse_t = spla.LinearOperator((n, n), matvec=lambda r: lu.solve(r, transpose=True), dtype=float)
-        v0 = np.random.default_rng(n).standard_normal(n)  # ARPACK's own start is random: runs would differ
+        v0 = start_vector(n)
         ncv = krylov_size(k, n)
         _, V = spla.eigs(A, k=k, sigma=sigma, OPinv=inverse, v0=v0, ncv=ncv)
         _, W = spla.eigs(A.T, k=k, sigma=sigma, OPinv=inverse_t, v0=v0, ncv=ncv)

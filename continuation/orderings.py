@@ -9,7 +9,9 @@ last few patterns (KEPT) and factorizes a repeated one as M[:, q] (M[q][:, q] wh
 permutes rows and columns alike, SymmetricMode) with the natural order. The factors are those
 of the same elimination: with partial pivoting they are bit for bit the factors SuperLU's own
 ordering gives; with SymmetricMode they agree to rounding (1e-13 relative in a solve, the same
-nonzeros). On matrices of 256 sheared disks (taken from a run, timed once) the bordered
+nonzeros), so there a new pattern, once ordered, is factorized the same way as a repeat: the
+factors never depend on what the process factorized before (a scan worker's history, a shear
+resumed after its finished segments), at the cost of a second factorization per new pattern. On matrices of 256 sheared disks (taken from a run, timed once) the bordered
 corrector matrix takes 1.7 ms against 2.4 ms and the shift-invert's A - sigma I 1.3 ms against
 2.9 ms; benchmarks/solve_speed.py --packing 256 prints the latter.
 
@@ -99,20 +101,28 @@ _kept: list = []
 
 def splu(M: sp.csc_array, options: Optional[dict] = None):
     """SuperLU's factorization of the CSC matrix M with `options` (splu's keywords; None: its
-    defaults), reusing the column order of a pattern seen before (module docstring). Raises
-    RuntimeError as splu does (exactly singular)."""
+    defaults), reusing the column order of a pattern seen before (module docstring). Where
+    SuperLU permutes rows and columns alike (SymmetricMode) a new pattern's own factors are
+    replaced by those of the reordered matrix, as a repeat gets them: the two agree only to
+    rounding, and the factors must not depend on what this process factorized before (a scan
+    worker's history, a shear resumed after its finished segments). Raises RuntimeError as
+    splu does (exactly singular)."""
     options = dict(options or {})
     key = repr(sorted(options.items()))
     for k, pattern in enumerate(_kept):
         if pattern.holds(M, key):
             _kept.insert(0, _kept.pop(k))
-            inner = spla.splu(pattern.permuted(M), **{**options, "permc_spec": "NATURAL"})
-            return Reordered.of(inner, pattern)
+            return _reordered(M, pattern, options)
     lu = spla.splu(M, **options)
     symmetric = bool(options.get("options", {}).get("SymmetricMode"))
     _kept.insert(0, _order_of(M, key, np.argsort(lu.perm_c), symmetric))
     del _kept[KEPT:]
-    return lu
+    return _reordered(M, _kept[0], options) if symmetric else lu
+
+
+def _reordered(M: sp.csc_array, pattern: _Pattern, options: dict) -> Reordered:
+    inner = spla.splu(pattern.permuted(M), **{**options, "permc_spec": "NATURAL"})
+    return Reordered.of(inner, pattern)
 
 
 def _order_of(M: sp.csc_array, key: str, q: Array, symmetric: bool) -> _Pattern:

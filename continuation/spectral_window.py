@@ -41,7 +41,7 @@ import numpy as np
 import scipy.sparse.linalg as spla
 
 from .linalg import Matrix, book
-from .nearest import nearest_eigensystem
+from .nearest import nearest_eigensystem, start_vector
 from .spectra import Eigensystem
 
 Array = np.ndarray
@@ -119,7 +119,8 @@ def sized(window: Window, A: Matrix, margin: float = MARGIN, extra: int = EXTRA)
     k = extra
     n = A.shape[0]
     while True:
-        values = spla.eigs(A, k=min(k, n - 2), sigma=window.sigma, return_eigenvectors=False)
+        values = spla.eigs(A, k=min(k, n - 2), sigma=window.sigma, v0=start_vector(n),
+                           return_eigenvectors=False)
         near = np.abs(values - window.sigma) <= window.reach(values)
         if not near.all() or k >= n - 2:
             return Window(window.lo, window.hi, min(n - 2, int(margin * near.sum()) + extra))
@@ -140,7 +141,7 @@ def window_eigensystem(A: Matrix, window: Window, vectors: bool) -> Eigensystem:
     book("spectra")
     k, sigma = window.k, window.sigma
     if not vectors:
-        values = spla.eigs(A, k=k, sigma=sigma, return_eigenvectors=False)
+        values = spla.eigs(A, k=k, sigma=sigma, v0=start_vector(A.shape[0]), return_eigenvectors=False)
         return _classified(Eigensystem(values.astype(complex)), window)
     return _classified(nearest_eigensystem(A, sigma, k)[0], window)
 

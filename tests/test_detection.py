@@ -256,7 +256,10 @@ def test_a_repeated_pattern_reuses_its_ordering_and_solves_alike(symmetric):
     (orderings.py) and solves like SuperLU's own factorization of it, with SuperLU's solve and
     after the factors are copied (triangular.py), with and without transpose: bit for bit with
     partial pivoting, to rounding with SymmetricMode; the log-determinant from its factors
-    (sign and value) is that of the matrix; another pattern is factorized afresh."""
+    (sign and value) is that of the matrix; another pattern is ordered afresh, and solves bit
+    for bit as it does once its pattern is known (with SymmetricMode its first factors are
+    those of the reordered matrix: a result must not depend on what the process factorized
+    before)."""
     import scipy.sparse as sp
     import scipy.sparse.linalg as spla
     from diskfriction.continuation import orderings
@@ -295,7 +298,11 @@ def test_a_repeated_pattern_reuses_its_ordering_and_solves_alike(symmetric):
     coupled = sp.lil_array(A)
     coupled[0, n - 5] = 1e-3  # one more nonzero
     other = sp.csc_array(bordered(sp.csr_array(coupled) - 0.5 * sp.identity(n, format="csr"), c, b))
-    assert not isinstance(factorize(other, options).lu, orderings.Reordered)
+    fresh = factorize(other, options)
+    assert isinstance(fresh.lu, orderings.Reordered) == symmetric
+    again = factorize(other, options)
+    assert isinstance(again.lu, orderings.Reordered)
+    assert np.array_equal(fresh.solve(rhs[:, 0]), again.solve(rhs[:, 0]))
 
 
 def linalg_parity(permutation):
