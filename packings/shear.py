@@ -5,7 +5,7 @@ the history carried, the spectrum tracked and every birth and death of a complex
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Callable, Optional
+from typing import Callable, Optional, Sequence
 
 import numpy as np
 
@@ -20,6 +20,7 @@ from diskfriction.packings.network import Network
 from diskfriction.packings.plastic import PlasticEvent, past_fold
 from diskfriction.packings.prepare import Packing
 from diskfriction.packings.prepared import prepare_scene
+from diskfriction.packings.segments import Point, ShearSegment
 from diskfriction.scenes.packing import PackingScene
 
 PLASTIC = (StopCode.FOLD, StopCode.COMMIT, StopCode.DS_MIN, StopCode.TURNED_BACK)
@@ -114,7 +115,8 @@ def network_of(scene: PackingScene, packing: Packing) -> Network:
 
 def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearParams(),
           progress: Optional[Callable[[float], None]] = None, plastic_events: int = 0,
-          window: Optional[tuple[float, float]] = None) -> PackingBranch:
+          window: Optional[tuple[float, float]] = None, done: Sequence[ShearSegment] = (),
+          on_segment: Optional[Callable[[ShearSegment], None]] = None) -> PackingBranch:
     """Follow the equilibria of `packing` with friction switched on from gamma = 0 to the end
     of the scene's gamma range (collisions below its start are left out). At a fold (a plastic
     event) the run ends, unless plastic_events > 0: then up to that many events are passed
@@ -122,57 +124,82 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
     from each relaxed state as a new segment. window: (lo, hi) of Re lambda tracked by sparse
     shift-invert (continuation/spectral_window.py; its k sized at the start of every segment,
     and where it crowds sized anew, wider, at the last certified state:
-    spectral_window.widened), or None:
-    every eigenvalue, a dense spectrum per sample."""
+    spectral_window.widened), or None: every eigenvalue, a dense spectrum per sample.
+    done: the finished segments of an interrupted run with the same inputs (packings/segments.py):
+    the run goes on where the next one starts, with the same result as a run never
+    interrupted; on_segment(segment) is told each segment finished here once it is passed."""
     network = network_of(scene, packing)
     mass = mass_diagonal(network, scene.m, scene.inertia)
-    g0, g1 = scene.gamma_range
     affine = float(np.linalg.norm(packing.positions[:, 1]))
     ds_max = params.ds_max or STEP_IN_STRAIN * affine
     options = replace(params, ds_max=ds_max, ds=params.ds or ds_max / 4,
                       ds_min=params.ds_min or 1e-8 * ds_max)
-    records, collisions, events, passed, continued, widenings, kappas = [], [], 0, [], {}, 0, []
-    q, xi, rows = start(network, packing.positions)
-    gamma_start = 0.0
-    while True:  # a window is sized again for every segment: its columns start anew there
-        problem = PackingEquilibria(network, q, xi, rows, gamma_start, mass, scene.matrix,
-                                    params.newton_tol, None if window is None else Window(*window))
-        segment, base = len(passed), len(continued)  # a segment starts a window block
-
-        def record_of(run, problem=problem, segment=segment, base=base):
-            def record(k, gamma, q_k, eigvals):
-                xi_all = problem.trial(q_k, gamma)[0]
-                xi_k, rows_k = xi_all[problem.active], problem.rows_c[problem.active]
-                delta = network.overlaps(q_k, rows_k, gamma)
-                records.append((gamma, q_k.copy(), problem.rows_c.copy(), xi_all, eigvals,
-                                largest_force(problem, q_k, gamma),
-                                int((delta > 0).sum()), int(problem.gauge.loose.sum()),
-                                network.stress(q_k, xi_k, rows_k, gamma), segment, base + run))
-                if progress is not None:
-                    progress(gamma)
-            return record
-
-        runs, widened = solve_in_runs(problem, q, (gamma_start, g1), options, record_of)
-        for run, branch in enumerate(runs):  # a run after the first follows a widened window
-            collisions += branch.collisions
-            events += branch.events
-            continued[base + run] = branch.continued if run == 0 else branch.continued[1:]
-            kappas += list(branch.condition if run == 0 else branch.condition[1:])
-        widenings += widened
-        branch = runs[-1]
-        if branch.status.code not in PLASTIC or len(passed) >= plastic_events:
+    segments = list(done)
+    begin = segments[-1].next_start if segments else (*start(network, packing.positions), 0.0)
+    while True:
+        segment = shear_segment(network, mass, scene, options, window, begin, len(segments),
+                                sum(len(s.continued) for s in segments), progress)
+        segments.append(segment)
+        if segment.status.code not in PLASTIC or len(segments) > plastic_events:
             break
-        gamma_f, q_f, rows_f, xi_f = records[-1][0], records[-1][1], records[-1][2], records[-1][3]
-        q, xi, rows, gamma_start, steps = past_fold(network, q_f, xi_f, rows_f, gamma_f,
+        last = segment.points[-1]
+        q, xi, rows, gamma_start, steps = past_fold(network, last.q, last.xi, last.rows, last.gamma,
                                                     params.newton_tol)
         after = network.stress(q, xi, rows, gamma_start)[2]
-        passed.append(PlasticEvent(gamma_f, float(records[-1][8][2]), float(after),
-                                   float(np.linalg.norm(q - q_f)), steps, str(branch.status.code)))
-    gamma, q_all, rows, xi, eig, res, contacts, loose, stress, segments, blocks = zip(*records)
-    gamma, q_all, res, contacts, loose, stress, segments = (
-        np.array(c) for c in (gamma, q_all, res, contacts, loose, stress, segments))
-    rel_tol = params.detection.rel_tol
-    kept = [c for c in collisions if c.p >= g0]
+        event = PlasticEvent(last.gamma, float(last.stress[2]), float(after),
+                             float(np.linalg.norm(q - last.q)), steps, str(segment.status.code))
+        segments[-1] = segment = replace(segment, plastic=event, next_start=(q, xi, rows, gamma_start))
+        if on_segment is not None:
+            on_segment(segment)
+        begin = segment.next_start
+    return joined(segments, scene, window, params.detection.rel_tol)
+
+
+def shear_segment(network: Network, mass: np.ndarray, scene: PackingScene, options: ShearParams,
+                  window: Optional[tuple[float, float]], begin: tuple, index: int, base: int,
+                  progress: Optional[Callable[[float], None]]) -> ShearSegment:
+    """Segment `index` of a shear run from the relaxed state begin = (q, xi, rows, gamma) to the
+    end of the scene's strain range or the first plastic event; its window blocks are numbered
+    from `base` (a window is sized again for every segment: its columns start anew there)."""
+    q, xi, rows, gamma_start = begin
+    problem = PackingEquilibria(network, q, xi, rows, gamma_start, mass, scene.matrix,
+                                options.newton_tol, None if window is None else Window(*window))
+    records, continued, condition, events, collisions = [], {}, [], 0, []
+
+    def record_of(run):
+        def record(k, gamma, q_k, eigvals):
+            xi_all = problem.trial(q_k, gamma)[0]
+            xi_k, rows_k = xi_all[problem.active], problem.rows_c[problem.active]
+            delta = network.overlaps(q_k, rows_k, gamma)
+            records.append((gamma, q_k.copy(), problem.rows_c.copy(), xi_all, eigvals,
+                            largest_force(problem, q_k, gamma), int((delta > 0).sum()),
+                            int(problem.gauge.loose.sum()), network.stress(q_k, xi_k, rows_k, gamma),
+                            index, base + run))
+            if progress is not None:
+                progress(gamma)
+        return record
+
+    runs, widened = solve_in_runs(problem, q, (gamma_start, scene.gamma_range[1]), options, record_of)
+    for run, branch in enumerate(runs):  # a run after the first follows a widened window
+        collisions += branch.collisions
+        events += branch.events
+        continued[base + run] = branch.continued if run == 0 else branch.continued[1:]
+        condition += list(branch.condition if run == 0 else branch.condition[1:])
+    points = tuple(Point(*record, condition=kappa) for record, kappa in zip(records, condition))
+    return ShearSegment(points, tuple(collisions), events, continued, widened, runs[-1].status)
+
+
+def joined(segments: Sequence[ShearSegment], scene: PackingScene, window: Optional[tuple[float, float]],
+           rel_tol: float) -> PackingBranch:
+    """The branch of a shear run from its segments in order (the last one's status is the
+    run's); collisions below the scene's strain range, or with a window outside it, left out."""
+    points = [p for s in segments for p in s.points]
+    gamma, q, residual, contacts, loose, stress, segment = (
+        np.array([getattr(p, name) for p in points])
+        for name in ("gamma", "q", "residual", "contacts", "loose", "stress", "segment"))
+    eig, kappas = [p.eigenvalues for p in points], [p.condition for p in points]
+    continued = {b: rows for s in segments for b, rows in s.continued.items()}
+    kept = [c for s in segments for c in s.collisions if c.p >= scene.gamma_range[0]]
     if window is None:
         eig, condition = np.array(eig), np.array(kappas)
         n_complex = np.array([count_complex_pairs(e[e != 0], rel_tol) for e in eig])
@@ -180,10 +207,12 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
         band = Window(*window)
         n_complex = np.array([count_complex_pairs(e[band.inside(e)], rel_tol) for e in eig])
         kept = [c for c in kept if band.lo <= c.eigenvalue <= band.hi]
-        eig, condition = block_columns(eig, np.array(blocks), continued, band, kappas)
-    return PackingBranch(gamma, q_all, rows, xi, eig, n_complex, res, contacts, loose, stress,
-                         tuple(kept), Matrix(scene.matrix), branch.status, events, segments,
-                         tuple(passed), window, widenings, condition)
+        eig, condition = block_columns(eig, np.array([p.block for p in points]), continued, band, kappas)
+    return PackingBranch(gamma, q, tuple(p.rows for p in points), tuple(p.xi for p in points), eig,
+                         n_complex, residual, contacts, loose, stress, tuple(kept),
+                         Matrix(scene.matrix), segments[-1].status, sum(s.events for s in segments),
+                         segment, tuple(s.plastic for s in segments if s.plastic is not None),
+                         window, sum(s.widenings for s in segments), condition)
 
 
 def shear_scene(scene: PackingScene, plastic_events: int,

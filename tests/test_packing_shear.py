@@ -4,6 +4,7 @@ complex pairs accounted for by a located collision, and the collisions where the
 say they are."""
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import replace
 
 import numpy as np
@@ -135,13 +136,22 @@ def test_a_contact_sliding_through_steps_fires_no_event_at_their_start():
     assert capped.any() and problem.sliding[capped].all() and (margin[capped] < 0).all()
 
 
-def test_a_plastic_event_is_passed_by_relaxing_with_friction():
+@pytest.fixture(scope="module")
+def passed_run():
+    """32 disks, seed 2, sheared to gamma = 0.0021 passing plastic events: (scene, packing,
+    branch, the segments passed, as shear's on_segment was told them)."""
+    scene = PackingScene(N=32, seed=2, gamma_range=(0.0, 0.0021))
+    packing = prepare_scene(scene)
+    finished = []
+    branch = shear(scene, packing, ShearParams(workers=0), plastic_events=5, on_segment=finished.append)
+    return scene, packing, branch, finished
+
+
+def test_a_plastic_event_is_passed_by_relaxing_with_friction(passed_run):
     """32 disks, seed 2, sheared to gamma = 0.0021: the first segment ends at a fold (its
     smallest eigenvalue near 0: a saddle-node); the packing is relaxed past it and the shear goes
     on to the end as a second segment, every point of which is in force balance."""
-    scene = PackingScene(N=32, seed=2, gamma_range=(0.0, 0.0021))
-    packing = prepare_scene(scene)
-    passed = shear(scene, packing, ShearParams(workers=0), plastic_events=5)
+    passed = passed_run[2]
     assert passed.status.reached and passed.gamma[-1] == 0.0021
     assert len(passed.plastic) >= 1 and passed.segment.max() == len(passed.plastic)
     first = passed.plastic[0]
@@ -151,6 +161,48 @@ def test_a_plastic_event_is_passed_by_relaxing_with_friction():
     assert 0 < smallest[1] <= 1e-4 * smallest[0]
     assert passed.residual.max() <= ShearParams().newton_tol
     assert np.all(np.diff(passed.gamma) > 0)
+
+
+def same(a, b) -> bool:
+    """Whether two results are equal value for value: arrays (nan equal to nan), and
+    dataclasses, tuples, lists and dicts of them, field by field."""
+    if dataclasses.is_dataclass(a):
+        return type(a) is type(b) and all(same(getattr(a, f.name), getattr(b, f.name))
+                                          for f in dataclasses.fields(a))
+    if isinstance(a, (tuple, list)):
+        return len(a) == len(b) and all(same(x, y) for x, y in zip(a, b))
+    if isinstance(a, dict):
+        return a.keys() == b.keys() and all(same(a[k], b[k]) for k in a)
+    if isinstance(a, np.ndarray):
+        return isinstance(b, np.ndarray) and np.array_equal(a, b, equal_nan=a.dtype.kind in "fc")
+    return a == b
+
+
+@pytest.mark.parametrize("window", [None, (0.0, 50.0)])
+def test_a_run_resumed_after_its_finished_segments_equals_one_never_interrupted(passed_run, window, tmp_path):
+    """The segments a run passed, each written to a file and read back (packings/segments.py),
+    and the run resumed after the first of them: its branch equals the uninterrupted run's
+    value for value (points, spectra, collisions with their Jordan chains, plastic events),
+    every eigenvalue tracked or a window (its blocks numbered across the segments); a segment
+    file is refused for another key."""
+    from diskfriction.packings.segments import SegmentFileError, load_segment, save_segment
+
+    scene, packing, whole, finished = passed_run
+    if window is not None:
+        finished = []
+        whole = shear(scene, packing, ShearParams(workers=0), plastic_events=5, window=window,
+                      on_segment=finished.append)
+    assert len(finished) == len(whole.plastic) >= 1
+    for k, segment in enumerate(finished):
+        save_segment(tmp_path / f"{k}.npz", segment, "inputs")
+        assert same(load_segment(tmp_path / f"{k}.npz", "inputs"), segment)
+    with pytest.raises(SegmentFileError, match="other inputs"):
+        load_segment(tmp_path / "0.npz", "other inputs")
+    told = []
+    resumed = shear(scene, packing, ShearParams(workers=0), plastic_events=5, window=window,
+                    done=[load_segment(tmp_path / "0.npz", "inputs")], on_segment=told.append)
+    assert same(resumed, whole) and len(told) == len(finished) - 1
+    assert resumed.gamma.size == whole.gamma.size and len(resumed.collisions) == len(whole.collisions) > 0
 
 
 def test_detection_at_64_disks_agrees_with_dense_spectra_inside_every_step(monkeypatch):
