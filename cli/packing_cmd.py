@@ -1,12 +1,18 @@
 """``diskfriction bifurcate PACKING_SCENE [--matrix J|M^-1J] [--window LO:HI] [--workers K]
 [--out DIR] [--json]``: prepare the scene's packing, shear it quasistatically with friction and locate
-every birth and death of a complex pair (issue 25, docs/packings.md#shear)."""
+every birth and death of a complex pair (issue 25, docs/packings.md#shear).
+
+A long shear keeps what it finished: each segment (the branch up to a plastic event passed,
+packings/segments.py) is written to DIR/segments/ as it is passed, keyed by everything its
+result depends on (resume_key); a rerun of the same command, interrupted or failed, goes on
+after them with the same result, and the directory is removed once the outputs are written."""
 from __future__ import annotations
 
 import argparse
 import collections
 import dataclasses
 import json
+import shutil
 from pathlib import Path
 
 from diskfriction.cli.common import (EXIT_FAILED, CommandError, bracketed_only, matrix_from_args,
@@ -48,6 +54,7 @@ def run_packing(args: argparse.Namespace, scene: PackingScene,
     from diskfriction.packings.plastic import RelaxationFailed
     from diskfriction.packings.prepare import save_packing
     from diskfriction.packings.prepared import prepare_scene
+    from diskfriction.packings.segments import save_segment
     from diskfriction.packings.shear import ShearParams, collision_records, shear
     from diskfriction.reports.packing_outputs import plot_packing_diagram, save_packing_branch
 
@@ -58,20 +65,31 @@ def run_packing(args: argparse.Namespace, scene: PackingScene,
         progress.stage(f"prepare {scene.N} disks to pressure {scene.pressure:g}")
         packing = prepare_scene(scene, progress.part("relax"))
         save_packing(out / "packing.npz", packing)
-        progress.stage(f"shear gamma 0 -> {g1:g}")
+        kept, key = out / "segments", resume_key(scene, window, args.detection)
+        done = finished_segments(kept, key)
+        args.keeps = ("segments", kept)  # what Ctrl-C leaves to resume from (cli.common)
+        resumed = (f" (resumed after {count(len(done), 'segment')}, at gamma = "
+                   f"{done[-1].next_start[3]:.6g})" if done else "")
+        progress.stage(f"shear gamma 0 -> {g1:g}{resumed}")
         params = ShearParams(detection=DetectionParams(mode=args.detection), workers=args.workers)
         try:
             branch = shear(scene, packing, params,
                            lambda gamma: progress(gamma / g1, f"gamma = {gamma:.3e}"),
-                           plastic_events=PLASTIC_EVENTS, window=window)
+                           plastic_events=PLASTIC_EVENTS, window=window, done=done,
+                           on_segment=lambda segment: save_segment(
+                               kept / SEGMENT_FILE.format(segment.points[-1].segment), segment, key))
         except (ContinuationError, MissedContact, RelaxationFailed, WindowCrowded) as error:
-            raise CommandError(f"bifurcate error: {scene.source}: {error}", EXIT_FAILED) from None
+            kept_line = (f" (the segments finished before it are kept in {kept}: a rerun resumes "
+                         "after them)" if any(kept.glob("segment-*.npz")) else "")
+            raise CommandError(f"bifurcate error: {scene.source}: {error}{kept_line}",
+                               EXIT_FAILED) from None
         if window is not None:
             check_window_covered(branch, args.window, matrix, 1.0)
         progress.stage(f"writing {out}/branch.npz, collisions.json")
         save_packing_branch(out, branch, scene)
         progress.stage(f"plotting {out}/diagram.png")
         plot_packing_diagram(branch, scene, out / "diagram.png")
+        shutil.rmtree(kept, ignore_errors=True)
     finally:
         progress.close()
     records = collision_records(branch)
@@ -103,6 +121,35 @@ def run_packing(args: argparse.Namespace, scene: PackingScene,
                            f"{branch.gamma[-1]:.9g}, short of {g1:g}: {why}; what it reached "
                            f"is written", EXIT_FAILED)
     return 0
+
+
+SEGMENT_FILE = "segment-{:04d}.npz"
+"""A finished segment's file in DIR/segments/ (its index in the run)."""
+
+
+def resume_key(scene: PackingScene, window, detection: str) -> str:
+    """What a shear's segments depend on: the scene's physics (its matrix included), the
+    window, the detection, the plastic events passed and the code version
+    (studies.cluster.code_version). Not the scan workers: a run resumed on other workers is
+    the same shear."""
+    from diskfriction.studies.cluster import code_version, task_key
+
+    return task_key(scene.physics_fields(), window, detection, PLASTIC_EVENTS, code_version())
+
+
+def finished_segments(directory: Path, key: str) -> list:
+    """The segments of an earlier run with `key` in `directory`, in order from the first (none
+    if there are none, or from the first one missing, unreadable or written for another key;
+    those are left to be written again)."""
+    from diskfriction.packings.segments import SegmentFileError, load_segment
+
+    done = []
+    while (directory / SEGMENT_FILE.format(len(done))).exists():
+        try:
+            done.append(load_segment(directory / SEGMENT_FILE.format(len(done)), key))
+        except SegmentFileError:
+            break
+    return done
 
 
 def run_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> int:

@@ -306,3 +306,42 @@ def test_simulate_a_packing_without_perturbation_runs_and_fits_no_growth(tmp_pat
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert summary["perturbation"] == "none" and math.isnan(summary["sigma_measured"])
     assert summary["sliding_updates"] == 0
+
+
+def test_an_interrupted_bifurcate_resumes_after_its_finished_segments(tmp_path, monkeypatch, capsys):
+    """`bifurcate` on 32 disks (seed 2, to gamma = 0.0021, a plastic event passed), stopped by
+    Ctrl-C right after its first segment was written to DIR/segments/: it says what it keeps;
+    the rerun goes on after that segment and writes the same branch.npz arrays and
+    collisions.json as a run never interrupted, and removes DIR/segments/."""
+    import json
+
+    import numpy as np
+
+    from diskfriction.cli.common import EXIT_INTERRUPTED
+    from diskfriction.cli.main import main
+    from diskfriction.packings import segments
+
+    scene = write(tmp_path, "[packing]\nN = 32\nseed = 2\n[shear]\ngamma = [0.0, 0.0021]\n")
+    command = ["bifurcate", str(scene), "--workers", "0", "--window", "0:50", "--out"]
+    assert main(command + [str(tmp_path / "whole")]) == 0
+    save = segments.save_segment
+
+    def save_then_interrupt(*args):
+        save(*args)
+        raise KeyboardInterrupt
+
+    out = tmp_path / "resumed"
+    monkeypatch.setattr(segments, "save_segment", save_then_interrupt)
+    assert main(command + [str(out)]) == EXIT_INTERRUPTED
+    kept = out / "segments"
+    assert f"the finished segments are kept in {kept}" in capsys.readouterr().err
+    assert [p.name for p in kept.iterdir()] == ["segment-0000.npz"]
+    monkeypatch.setattr(segments, "save_segment", save)
+    assert main(command + [str(out)]) == 0
+    assert "resumed after 1 segment, at gamma = " in capsys.readouterr().err
+    assert not kept.exists()
+    with np.load(tmp_path / "whole" / "branch.npz") as a, np.load(out / "branch.npz") as b:
+        assert a.files == b.files
+        assert all(np.array_equal(a[k], b[k], equal_nan=a[k].dtype.kind in "fc") for k in a.files)
+    whole, resumed = (json.loads((d / "collisions.json").read_text()) for d in (tmp_path / "whole", out))
+    assert resumed == whole and len(whole["collisions"]) > 0
