@@ -25,8 +25,16 @@ PAST_FOLD = 1e-7
 ds_min of the fold, so this is past it, and small against the strain between events."""
 
 
+STALLED = 1e3
+"""FIRE that ends its steps with max |F| within this factor of the tolerance is taken: the
+next segment starts with Newton at fixed strain from that state (arclength's first corrector
+solve), which takes the last digits in an iteration or two. 256 disks (seed 1) after the
+plastic event at gamma = 0.0212 stalled at 2.5e-11 against 1e-11 after 200 000 steps, and the
+run ended there (stop 42)."""
+
+
 class RelaxationFailed(RuntimeError):
-    """FIRE did not bring the forces below the tolerance after a plastic event."""
+    """FIRE did not bring the forces near the tolerance after a plastic event (STALLED)."""
 
 
 @dataclass(frozen=True)
@@ -47,7 +55,9 @@ class PlasticEvent:
 def relax(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray, gamma: float,
           f_tol: float, max_steps: int = 200_000) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     """FIRE on the frictional forces at fixed strain from (q, xi, rows) until max |F| <= f_tol
-    [force]; returns (q, xi, rows, steps) of the relaxed state. RelaxationFailed otherwise."""
+    [force]; returns (q, xi, rows, steps) of the relaxed state, also where FIRE ran out of
+    steps within STALLED times f_tol (the caller's Newton solve finishes it). RelaxationFailed
+    otherwise."""
     reach = REACH * network.constants[0]
     state = {"q": q.copy(), "xi": xi.copy(), "rows": rows, "searched": q.copy()}
 
@@ -62,7 +72,7 @@ def relax(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray, gam
 
     R, k_n = network.constants[0], network.constants[1]
     result = fire(forces, q, first_time_step(k_n, R), f_tol, max_steps)
-    if not result.converged:
+    if not result.max_force <= STALLED * f_tol:
         raise RelaxationFailed(f"the relaxation after the plastic event at gamma = {gamma:.9g} "
                                f"stopped at max |F| = {result.max_force:.3g} after {result.steps} "
                                f"FIRE steps")

@@ -163,6 +163,30 @@ def test_a_plastic_event_is_passed_by_relaxing_with_friction(passed_run):
     assert np.all(np.diff(passed.gamma) > 0)
 
 
+def test_a_relaxation_that_stalls_near_its_tolerance_is_finished_by_newton(passed_run, monkeypatch):
+    """FIRE after a plastic event made to stop short, within 50 times the tolerance (as 256
+    disks stalled at 2.5e-11 against 1e-11): the next segment's first Newton solve finishes it
+    and the shear goes on to the end, every point in force balance, the first plastic event
+    where it was; one that stops 1e4 times above the tolerance still fails in one line."""
+    from diskfriction.packings import plastic
+
+    scene, packing, whole, _ = passed_run
+    real = plastic.fire
+
+    def stalling(factor):
+        def fire(forces, x0, dt0, f_tol, max_steps):
+            return dataclasses.replace(real(forces, x0, dt0, factor * f_tol, max_steps), converged=False)
+        return fire
+
+    monkeypatch.setattr(plastic, "fire", stalling(50.0))
+    finished = shear(scene, packing, ShearParams(workers=0), plastic_events=5)
+    assert finished.status.reached and finished.residual.max() <= ShearParams().newton_tol
+    assert finished.plastic[0].gamma == whole.plastic[0].gamma and len(finished.plastic) >= 1
+    monkeypatch.setattr(plastic, "fire", stalling(1e4))
+    with pytest.raises(plastic.RelaxationFailed, match="after the plastic event at gamma"):
+        shear(scene, packing, ShearParams(workers=0), plastic_events=5)
+
+
 def same(a, b) -> bool:
     """Whether two results are equal value for value: arrays (nan equal to nan), and
     dataclasses, tuples, lists and dicts of them, field by field."""
