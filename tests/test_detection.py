@@ -699,18 +699,19 @@ def test_a_crossing_through_a_narrow_complex_bubble_is_not_taken_for_decoupled()
 
 
 def test_a_chain_window_that_crowds_is_widened_and_finds_the_same_collisions(monkeypatch):
-    """N = 20, eps = 1e-4, window [0, 0.01] k_n sized with one eigenvalue to spare (guard bands
-    of 0.25 of its width, the default until stop 41): it crowds near F_x = 0.0064, is sized anew, wider, at the last certified point and the sweep goes on
-    (before: an exception that lost the sweep). The same 17 collisions as a generous window, of
+    """N = 20, eps = 1e-4, window [0, 0.02] k_n sized with one eigenvalue to spare: it crowds
+    along the sweep, is sized anew, wider, at the last certified point and the sweep goes on
+    (before: an exception that lost the sweep). The same 20 collisions as a generous window, of
     the same kinds, within 1e-9: the steps after the restart differ, and the history makes the
-    branch depend on its steps by up to 5.9e-10 (docs/continuation.md)."""
+    branch depend on its steps by up to 5.9e-10 (docs/continuation.md). (Until stop 42 the
+    window [0, 0.01] k_n crowded so with guard bands of 0.25; with the reach at the corner of
+    its rectangle, Window.reach, it does not.)"""
     from diskfriction.continuation import spectral_window
     from diskfriction.disks import equilibria
     from diskfriction.disks.sweep import SweepParams, sweep
 
-    monkeypatch.setattr(spectral_window, "GUARD", 0.25)  # as found: with 0.15 it does not crowd
     system = System.from_scene(Scene(N=20, eps=1e-4))
-    window = SweepParams(window=(0.0, 20.0))
+    window = SweepParams(window=(0.0, 40.0))
     generous = sweep(system, 0.0, 0.12, params=window)
     sized = spectral_window.sized
     monkeypatch.setattr(equilibria, "sized", lambda w, A, *_: sized(w, A, 1.0, 1))
@@ -718,6 +719,6 @@ def test_a_chain_window_that_crowds_is_widened_and_finds_the_same_collisions(mon
     assert generous.widenings == 0 and tight.widenings >= 1
     assert tight.status[-1].reached and np.all(np.diff(tight.F_x) > 0)
     assert [c.kind for c in tight.collisions] == [c.kind for c in generous.collisions]
-    assert len(generous.collisions) == 17
+    assert len(generous.collisions) == 20
     assert np.abs(np.array([c.p for c in tight.collisions])
                   - [c.p for c in generous.collisions]).max() <= 1e-9

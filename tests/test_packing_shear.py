@@ -355,23 +355,27 @@ def test_a_spectral_window_finds_the_full_spectrums_collisions_in_it(branch, win
     assert windowed.window == window and windowed.eigenvalues.shape[1] < 3 * SCENE.N
 
 
-def test_a_window_that_crowds_is_widened_and_finds_the_same_collisions(packing, windowed,
-                                                                       monkeypatch):
-    """A window sized with k = the eigenvalues within reach + 1 crowds as the shear softens the
-    packing: the run is not lost (256 disks lost 205 s so), the window is sized anew, wider, at
-    the last certified state and the shear goes on; the collisions equal a generous window's
-    within 1e-12, and each strain is recorded once."""
+def test_a_window_that_crowds_is_widened_and_finds_the_same_collisions(packing, monkeypatch):
+    """A window [0, 40] sized with k = the eigenvalues within reach + 1 crowds as the shear
+    softens the packing: the run is not lost (256 disks lost 205 s so), the window is sized
+    anew, wider, at the last certified state and the shear goes on; the collisions equal a
+    generous window's within 1e-9, and each strain is recorded once. The crowding comes before
+    the collisions here: the steps after the restart differ, and the history makes the branch
+    depend on its steps (measured 1.2e-10; the chain's 5.9e-10, tests/test_detection.py).
+    ([0, 50], the window of the tests above, crowded after its collisions, found 1e-12 apart,
+    until the reach became the rectangle's corner in stop 42; now it does not crowd.)"""
     from diskfriction.packings import equilibria
 
-    generous = windowed
+    window = (0.0, 40.0)
+    generous = shear(SCENE, packing, ShearParams(workers=0), window=window)
     monkeypatch.setattr(equilibria, "WINDOW_MARGIN", 1.0)
     monkeypatch.setattr(equilibria, "WINDOW_EXTRA", 1)
-    tight = shear(SCENE, packing, ShearParams(workers=0), window=WINDOW)
+    tight = shear(SCENE, packing, ShearParams(workers=0), window=window)
     assert generous.widenings == 0 and tight.widenings >= 1
     assert tight.status.reached and np.all(np.diff(tight.gamma) > 0)
     assert len(tight.collisions) == len(generous.collisions) >= 4
     assert np.abs(np.array([c.p for c in tight.collisions])
-                  - [c.p for c in generous.collisions]).max() <= 1e-12
+                  - [c.p for c in generous.collisions]).max() <= 1e-9
     kinds = [(c.p, c.kind) for c in tight.collisions]
     assert unaccounted_pair_changes(tight.gamma, tight.n_complex, kinds) == []
 
