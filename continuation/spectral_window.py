@@ -10,18 +10,18 @@ distance does not exceed the reach of the guard bands (the farthest corner of th
 of Re lambda in [lo - g, hi + g] and |Im lambda| up to the largest |Im| seen there:
 Window.reach), some eigenvalue of the band may be missing and WindowCrowded is raised (choose a
 narrower window). A pair that comes down into the band from a larger |Im| enters the disc
-where its own |Im| puts it within the new reach: the window crowds and is sized anew. The k eigenvalues keep their labels along the branch like a
-full spectrum's; those beyond the guard band are `excluded`, those in the guard band are
-`guard`: an eigenvalue joins or leaves the tracked set only through the guard band
-(verdicts._enters_past_guard). The detection certifies pairs, and locates collisions, only in
-the certified band, W widened by CERTIFIED of the guard band on each side (Window.certified):
-an eigenvalue beyond it at both ends of an interval on the same side (verdicts.beyond_band)
-takes part in no certificate and none of its collisions is located while the cubic model of
-its real part stays beyond the band between the samples, for its value at any collision
-inside the interval lies outside W (the assumption the guard band rests on: an eigenvalue
-does not stray CERTIFIED of the guard band off its model between two samples). A collision
-is reported when its double eigenvalue lies in W (disks/sweep.py, packings/shear.py); the
-certificate covers exactly the window.
+where its own |Im| puts it within the new reach: the window crowds and is sized anew. The k
+eigenvalues keep their labels along the branch like a full spectrum's; those beyond the guard
+band are `excluded`, those in the guard band are `guard`: an eigenvalue joins or leaves the
+tracked set only through the guard band (verdicts._enters_past_guard). The detection certifies
+pairs, and locates collisions, only in the certified band, W widened by CERTIFIED of the guard
+band on each side (Window.certified): an eigenvalue beyond it at both ends of an interval on
+the same side (verdicts.beyond_band) takes part in no certificate and none of its collisions is
+located while the cubic model of its real part stays beyond the band between the samples, for
+its value at any collision inside the interval lies outside W (the assumption the guard band
+rests on: an eigenvalue does not stray CERTIFIED of the guard band off its model between two
+samples). A collision is reported when its double eigenvalue lies in W (disks/sweep.py,
+packings/shear.py); the certificate covers exactly the window.
 
 The set of the k nearest changes along the branch: an eigenvalue beyond the guard band leaves
 the disc and another enters it. Labels are matched so that every eigenvalue present at both
@@ -103,7 +103,8 @@ class Window:
         the sum (hi - lo) / 2 + g + Im, which is farther than any point of the rectangle:
         |Im| = 1.6 there made k 75 where 65 gives the rectangle the same margin."""
         band = values[self.tracked(values)]
-        return math.hypot(0.5 * (self.hi - self.lo) + self.guard, float(np.max(np.abs(band.imag), initial=0.0)))
+        height = float(np.max(np.abs(band.imag), initial=0.0))
+        return math.hypot(0.5 * (self.hi - self.lo) + self.guard, height)
 
     def inside(self, values: Array) -> Array:
         return (values.real >= self.lo) & (values.real <= self.hi)

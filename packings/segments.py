@@ -12,13 +12,13 @@ flat array with offsets.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Optional
 
 import numpy as np
 
-from diskfriction.continuation.branch import Stop
+from diskfriction.continuation.branch import Stop, StopCode
 from diskfriction.continuation.collisions import Collision, Kind
 from diskfriction.files import save_npz
 from diskfriction.packings.plastic import PlasticEvent
@@ -68,6 +68,7 @@ _POINT_SCALARS = ("gamma", "residual", "contacts", "loose", "segment", "block")
 _POINT_RAGGED = ("rows", "xi", "eigenvalues", "condition")
 _COLLISION_SCALARS = ("p", "eigenvalue", "left_right_overlap", "residual", "step", "resolved")
 _COLLISION_RAGGED = ("eigenvector", "generalized_eigenvector", "u")
+_PLASTIC_NUMBERS = ("gamma", "stress_before", "stress_after", "displacement", "steps")
 
 
 def _flat(arrays: list) -> tuple[np.ndarray, np.ndarray]:
@@ -79,6 +80,7 @@ def _flat(arrays: list) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _split(flat: np.ndarray, offsets: np.ndarray) -> list:
+    """The arrays _flat joined."""
     return [flat[offsets[i]:offsets[i + 1]] for i in range(offsets.size - 1)]
 
 
@@ -86,9 +88,11 @@ def save_segment(path: Path, segment: ShearSegment, key: str) -> None:
     """A finished segment (passed: plastic and next_start set) as an .npz, written atomically,
     tagged with `key` (what the caller's results depend on: load_segment refuses another)."""
     P, C = segment.points, segment.collisions
+    status = segment.status
     arrays = {"key": np.array(key), "events": np.array(segment.events),
-              "widenings": np.array(segment.widenings), "status": np.array([str(segment.status.code), segment.status.reason]),
-              "status_p": np.array(np.nan if segment.status.p is None else segment.status.p),
+              "widenings": np.array(segment.widenings),
+              "status": np.array([str(status.code), status.reason]),
+              "status_p": np.array(np.nan if status.p is None else status.p),
               "q": np.array([p.q for p in P]), "stress": np.array([p.stress for p in P])}
     for name in _POINT_SCALARS:
         arrays[f"point_{name}"] = np.array([getattr(p, name) for p in P])
@@ -100,14 +104,15 @@ def save_segment(path: Path, segment: ShearSegment, key: str) -> None:
     for name in _COLLISION_SCALARS:
         arrays[f"collision_{name}"] = np.array([getattr(c, name) for c in C])
     for name in _COLLISION_RAGGED:
-        arrays[f"collision_{name}"], arrays[f"collision_{name}_at"] = _flat([getattr(c, name) for c in C])
+        arrays[f"collision_{name}"], arrays[f"collision_{name}_at"] = _flat([getattr(c, name)
+                                                                             for c in C])
     blocks = sorted(segment.continued)
     arrays["continued_blocks"] = np.array(blocks, dtype=np.int64)
     for b in blocks:  # None: the block's run tracked every eigenvalue (no window)
         if segment.continued[b] is not None:
             arrays[f"continued_{b}"] = np.array(segment.continued[b], dtype=bool)
     event = segment.plastic
-    arrays["plastic"] = np.array([getattr(event, f.name) for f in fields(PlasticEvent)][:-1], dtype=float)
+    arrays["plastic"] = np.array([getattr(event, name) for name in _PLASTIC_NUMBERS], dtype=float)
     arrays["plastic_kind"] = np.array(event.kind)
     q, xi, rows, gamma = segment.next_start
     arrays.update(next_q=q, next_xi=xi, next_rows=rows, next_gamma=np.array(gamma))
@@ -120,8 +125,6 @@ class SegmentFileError(ValueError):
 
 def load_segment(path: Path, key: str) -> ShearSegment:
     """The segment save_segment wrote at `path` with `key`; SegmentFileError otherwise."""
-    from diskfriction.continuation.branch import StopCode
-
     try:
         with np.load(path, allow_pickle=False) as data:
             d = {name: data[name] for name in data.files}
@@ -137,7 +140,8 @@ def load_segment(path: Path, key: str) -> ShearSegment:
                          segment=int(d["point_segment"][i]), block=int(d["point_block"][i]),
                          condition=ragged["condition"][i])
                    for i in range(d["point_gamma"].size))
-    vectors = {name: _split(d[f"collision_{name}"], d[f"collision_{name}_at"]) for name in _COLLISION_RAGGED}
+    vectors = {name: _split(d[f"collision_{name}"], d[f"collision_{name}_at"])
+               for name in _COLLISION_RAGGED}
     collisions = tuple(
         Collision(p=float(d["collision_p"][i]), kind=Kind(str(d["collision_kind"][i])),
                   eigenvalue=float(d["collision_eigenvalue"][i]), eigenvector=vectors["eigenvector"][i],
@@ -150,8 +154,8 @@ def load_segment(path: Path, key: str) -> ShearSegment:
         for i in range(d["collision_p"].size))
     continued = {int(b): list(d[f"continued_{b}"]) if f"continued_{b}" in d else None
                  for b in d["continued_blocks"]}
-    values = [float(v) for v in d["plastic"]]
-    plastic = PlasticEvent(values[0], values[1], values[2], values[3], int(values[4]), str(d["plastic_kind"]))
+    numbers = dict(zip(_PLASTIC_NUMBERS, (float(v) for v in d["plastic"])))
+    plastic = PlasticEvent(**{**numbers, "steps": int(numbers["steps"])}, kind=str(d["plastic_kind"]))
     code, reason = (str(v) for v in d["status"])
     p = float(d["status_p"])
     status = Stop(StopCode(code), reason, None if np.isnan(p) else p)

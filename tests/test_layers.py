@@ -40,7 +40,8 @@ def folder_of(name: str) -> str:
 
 def imported_folders(path: Path) -> set[str]:
     """The diskfriction.<folder> names a module imports, inside functions too."""
-    return {folder_of(name) for name in imported_names(ast.walk(ast.parse(path.read_text(encoding="utf-8"))))}
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    return {folder_of(name) for name in imported_names(ast.walk(tree))}
 
 
 def violations() -> list[str]:
@@ -97,7 +98,8 @@ def test_the_code_version_of_resumable_runs_covers_every_folder_they_run():
     that a rerun takes as current."""
     from diskfriction.studies.cluster import RUN_SOURCES
 
-    reached = {"diskfriction" if f == "diskfriction" else f"diskfriction.{f}" for f in imported_closure("studies")}
+    reached = {"diskfriction" if f == "diskfriction" else f"diskfriction.{f}"
+               for f in imported_closure("studies")}
     assert reached <= set(RUN_SOURCES), reached - set(RUN_SOURCES)
 
 
@@ -118,7 +120,8 @@ def test_the_code_version_of_cached_report_results_covers_every_folder_they_run(
         folders = {folder_of(name) for name in names}
         for name in names:
             if name.startswith("diskfriction.reports.compute."):
-                folders |= imported_folders(ROOT / (name.removeprefix("diskfriction.").replace(".", "/") + ".py"))
+                path = name.removeprefix("diskfriction.").replace(".", "/") + ".py"
+                folders |= imported_folders(ROOT / path)
         reached = set().union(*(imported_closure(f) for f in folders - {"reports"}))
         wanted = {"diskfriction" if f == "diskfriction" else f"diskfriction.{f}" for f in reached}
         assert wanted <= set(each.depends), (each.name, wanted - set(each.depends))

@@ -203,7 +203,8 @@ def same(a, b) -> bool:
 
 
 @pytest.mark.parametrize("window", [None, (0.0, 50.0)])
-def test_a_run_resumed_after_its_finished_segments_equals_one_never_interrupted(passed_run, window, tmp_path):
+def test_a_run_resumed_after_its_finished_segments_equals_one_never_interrupted(passed_run, window,
+                                                                                tmp_path):
     """The segments a run passed, each written to a file and read back (packings/segments.py),
     and the run resumed after the first of them: its branch equals the uninterrupted run's
     value for value (points, spectra, collisions with their Jordan chains, plastic events),
