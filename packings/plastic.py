@@ -32,13 +32,6 @@ solve), which takes the last digits in an iteration or two. 256 disks (seed 1) a
 plastic event at gamma = 0.0212 stalled at 2.5e-11 against 1e-11 after 200 000 steps, and the
 run ended there (stop 42)."""
 
-POLISHED = 1e3
-"""past_fold's FIRE stops at this factor times the force tolerance and leaves the rest to
-that Newton solve (FIRE converges linearly near the minimum: the first 20 relaxations of 256
-disks took 40 % of their steps below 1e-3 times the tolerance; FIRE took 142 of the 1032 s of
-the shear to gamma = 0.05, all of it while the scan workers wait). Where the Newton solve
-fails from there, the shear relaxes on to the tolerance and starts again (packings/shear.py)."""
-
 
 class RelaxationFailed(RuntimeError):
     """FIRE did not bring the forces near the tolerance after a plastic event (STALLED)."""
@@ -89,12 +82,11 @@ def relax(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray, gam
 def past_fold(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray, gamma: float,
               f_tol: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, int]:
     """The state after the plastic event at the fold (q, xi, rows, gamma): strained affinely by
-    PAST_FOLD (x += d gamma y, the histories charged by it), then relaxed to POLISHED times
-    f_tol (the next segment's Newton solve finishes it). Returns (q, xi, rows, gamma +
-    PAST_FOLD, FIRE steps)."""
+    PAST_FOLD (x += d gamma y, the histories charged by it), then relaxed. Returns (q, xi,
+    rows, gamma + PAST_FOLD, FIRE steps)."""
     N, gamma_new = network.N, gamma + PAST_FOLD
     q_affine = q.copy()
     q_affine[:N] += PAST_FOLD * q[N:2 * N]
     xi_affine, _ = network.history_step(q, q_affine, gamma, gamma_new, xi, rows)
-    q1, xi1, rows1, steps = relax(network, q_affine, xi_affine, rows, gamma_new, POLISHED * f_tol)
+    q1, xi1, rows1, steps = relax(network, q_affine, xi_affine, rows, gamma_new, f_tol)
     return q1, xi1, rows1, gamma_new, steps

@@ -10,7 +10,6 @@ from typing import Callable, Optional, Sequence
 import numpy as np
 
 from diskfriction.continuation.api import Options, solve_in_runs
-from diskfriction.continuation.arclength import ContinuationError
 from diskfriction.continuation.branch import Stop, StopCode
 from diskfriction.continuation.collisions import Collision
 from diskfriction.continuation.spectra import count_complex_pairs
@@ -18,7 +17,7 @@ from diskfriction.continuation.spectral_window import Window, block_columns
 from diskfriction.matrices import Matrix
 from diskfriction.packings.equilibria import PackingEquilibria, largest_force, mass_diagonal, start
 from diskfriction.packings.network import Network
-from diskfriction.packings.plastic import PlasticEvent, past_fold, relax
+from diskfriction.packings.plastic import PlasticEvent, past_fold
 from diskfriction.packings.prepare import Packing
 from diskfriction.packings.prepared import prepare_scene
 from diskfriction.packings.segments import Point, ShearSegment
@@ -138,7 +137,8 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
     segments = list(done)
     begin = segments[-1].next_start if segments else (*start(network, packing.positions), 0.0)
     while True:
-        segment = _segment_from(network, mass, scene, options, window, begin, segments, progress)
+        segment = shear_segment(network, mass, scene, options, window, begin, len(segments),
+                                sum(len(s.continued) for s in segments), progress)
         segments.append(segment)
         if segment.status.code not in PLASTIC or len(segments) > plastic_events:
             break
@@ -153,25 +153,6 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
             on_segment(segment)
         begin = segment.next_start
     return joined(segments, scene, window, params.detection.rel_tol)
-
-
-def _segment_from(network: Network, mass: np.ndarray, scene: PackingScene, options: ShearParams,
-                  window: Optional[tuple[float, float]], begin: tuple, segments: list,
-                  progress: Optional[Callable[[float], None]]) -> ShearSegment:
-    """The segment after `segments` from begin = (q, xi, rows, gamma). A state past a plastic
-    event is relaxed only to plastic.POLISHED times the force tolerance; where the segment's
-    first Newton solve fails from there (ContinuationError before any point), it is relaxed on
-    to the tolerance and the segment starts again."""
-    args = (network, mass, scene, options, window)
-    base = sum(len(s.continued) for s in segments)
-    try:
-        return shear_segment(*args, begin, len(segments), base, progress)
-    except ContinuationError:
-        if not segments:
-            raise
-        q, xi, rows, gamma = begin
-        q, xi, rows, _ = relax(network, q, xi, rows, gamma, options.newton_tol)
-        return shear_segment(*args, (q, xi, rows, gamma), len(segments), base, progress)
 
 
 def shear_segment(network: Network, mass: np.ndarray, scene: PackingScene, options: ShearParams,

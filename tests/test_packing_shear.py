@@ -164,12 +164,10 @@ def test_a_plastic_event_is_passed_by_relaxing_with_friction(passed_run):
 
 
 def test_a_relaxation_that_stalls_near_its_tolerance_is_finished_by_newton(passed_run, monkeypatch):
-    """FIRE after a plastic event stops at plastic.POLISHED times the force tolerance, and the
-    next segment's first Newton solve finishes it; FIRE made to run out of steps within
-    STALLED times that (as 256 disks stalled at 2.5e-11 against 1e-11 when FIRE went to the
-    tolerance itself) is taken too, and the shear goes on to the end, every point in force
-    balance, the first plastic event where it was; one that stops 1e4 times above it still
-    fails in one line."""
+    """FIRE after a plastic event made to stop short, within 50 times the tolerance (as 256
+    disks stalled at 2.5e-11 against 1e-11): the next segment's first Newton solve finishes it
+    and the shear goes on to the end, every point in force balance, the first plastic event
+    where it was; one that stops 1e4 times above the tolerance still fails in one line."""
     from diskfriction.packings import plastic
 
     scene, packing, whole, _ = passed_run
@@ -187,32 +185,6 @@ def test_a_relaxation_that_stalls_near_its_tolerance_is_finished_by_newton(passe
     monkeypatch.setattr(plastic, "fire", stalling(1e4))
     with pytest.raises(plastic.RelaxationFailed, match="after the plastic event at gamma"):
         shear(scene, packing, ShearParams(workers=0), plastic_events=5)
-
-
-def test_a_segment_whose_first_newton_solve_fails_is_relaxed_to_the_tolerance(passed_run, monkeypatch):
-    """Where the next segment's first Newton solve fails from the state FIRE left at POLISHED
-    times the tolerance, that state is relaxed on to the tolerance and the segment starts
-    again from there: the shear goes on to the end, every point in force balance."""
-    from diskfriction.continuation.arclength import ContinuationError
-    from diskfriction.packings import plastic, shear as shear_module
-    from diskfriction.packings.fire import max_row_force
-
-    scene, packing, whole, _ = passed_run
-    real, starts = shear_module.shear_segment, []
-
-    def failing_once(network, mass, scene, options, window, begin, index, base, progress):
-        q, xi, rows, gamma = begin
-        starts.append((index, max_row_force(network.forces(q, xi, rows, gamma))))
-        if index == 1 and len(starts) == 2:
-            raise ContinuationError("no equilibrium found (made to fail)")
-        return real(network, mass, scene, options, window, begin, index, base, progress)
-
-    monkeypatch.setattr(shear_module, "shear_segment", failing_once)
-    finished = shear(scene, packing, ShearParams(workers=0), plastic_events=5)
-    assert finished.status.reached and finished.residual.max() <= ShearParams().newton_tol
-    tol = ShearParams().newton_tol
-    assert [k for k, _ in starts[:3]] == [0, 1, 1]
-    assert tol < starts[1][1] <= plastic.POLISHED * tol and starts[2][1] <= tol
 
 
 def same(a, b) -> bool:
