@@ -132,6 +132,14 @@ def load_segment(path: Path, key: str) -> ShearSegment:
         raise SegmentFileError(f"{path}: unreadable ({error})") from None
     if str(d.get("key")) != key:
         raise SegmentFileError(f"{path}: written for other inputs or another code version")
+    try:
+        return _segment_of(d)
+    except (KeyError, IndexError, ValueError) as error:
+        raise SegmentFileError(f"{path}: incomplete ({error})") from None
+
+
+def _segment_of(d: dict) -> ShearSegment:
+    """The ShearSegment of a segment file's arrays (load_segment)."""
     ragged = {name: _split(d[f"point_{name}"], d[f"point_{name}_at"]) for name in _POINT_RAGGED}
     points = tuple(Point(gamma=float(d["point_gamma"][i]), q=d["q"][i], rows=ragged["rows"][i],
                          xi=ragged["xi"][i], eigenvalues=ragged["eigenvalues"][i],

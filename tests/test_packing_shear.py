@@ -209,7 +209,8 @@ def test_a_run_resumed_after_its_finished_segments_equals_one_never_interrupted(
     and the run resumed after the first of them: its branch equals the uninterrupted run's
     value for value (points, spectra, collisions with their Jordan chains, plastic events),
     every eigenvalue tracked or a window (its blocks numbered across the segments); a segment
-    file is refused for another key."""
+    file is refused for another key, or missing arrays (one line, no traceback)."""
+    from diskfriction.files import save_npz
     from diskfriction.packings.segments import SegmentFileError, load_segment, save_segment
 
     scene, packing, whole, finished = passed_run
@@ -223,6 +224,9 @@ def test_a_run_resumed_after_its_finished_segments_equals_one_never_interrupted(
         assert same(load_segment(tmp_path / f"{k}.npz", "inputs"), segment)
     with pytest.raises(SegmentFileError, match="other inputs"):
         load_segment(tmp_path / "0.npz", "other inputs")
+    save_npz(tmp_path / "short.npz", key=np.array("inputs"), q=np.zeros((1, 3)))
+    with pytest.raises(SegmentFileError, match="incomplete"):
+        load_segment(tmp_path / "short.npz", "inputs")
     told = []
     resumed = shear(scene, packing, ShearParams(workers=0), plastic_events=5, window=window,
                     done=[load_segment(tmp_path / "0.npz", "inputs")], on_segment=told.append)
