@@ -81,7 +81,7 @@ def _flat(arrays: list) -> tuple[np.ndarray, np.ndarray]:
 
 def _split(flat: np.ndarray, offsets: np.ndarray) -> list:
     """The arrays _flat joined."""
-    return [flat[offsets[i]:offsets[i + 1]] for i in range(offsets.size - 1)]
+    return np.split(flat, offsets[1:-1])
 
 
 def save_segment(path: Path, segment: ShearSegment, key: str) -> None:
