@@ -114,6 +114,18 @@ class Network:
                                     cap, xi1, slid)
         return xi1, slid
 
+    def carried_forces(self, q0: np.ndarray, q1: np.ndarray, xi0: np.ndarray, delta0: np.ndarray,
+                       contacts: np.ndarray, gamma: float
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(F(q1, xi1), xi1, delta1) at fixed strain: xi1 = history_step(q0, q1, gamma, gamma,
+        xi0, contacts)[0] (the cap on), delta1 the overlaps at q1, given delta0 those at q0
+        (one compiled call: a relaxation's force evaluation)."""
+        m = contacts.shape[0]
+        F, xi1, delta1 = np.empty(self.ndof), np.empty(m), np.empty(m)
+        self.kernels.carried_forces(q0, q1, xi0, delta0, self.radii, contacts, self.params(gamma),
+                                    F, xi1, delta1)
+        return F, xi1, delta1
+
     def stress(self, q: np.ndarray, xi: np.ndarray, contacts: np.ndarray, gamma: float
                ) -> np.ndarray:
         """The contact stress (sigma_xx, sigma_yy, sigma_xy, sigma_yx) [force / length],

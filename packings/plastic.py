@@ -16,9 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from diskfriction.packings.equilibria import REACH, carried
-from diskfriction.packings.fire import fire
+from diskfriction.packings.fire import DT_MAX_RATIO, fire
 from diskfriction.packings.network import Network
-from diskfriction.packings.prepare import first_time_step
 
 PAST_FOLD = 1e-7
 """The strain beyond a fold at which the packing is relaxed [1]: the run ends within about
@@ -31,6 +30,14 @@ next segment starts with Newton at fixed strain from that state (arclength's fir
 solve), which takes the last digits in an iteration or two. 256 disks (seed 1) after the
 plastic event at gamma = 0.0212 stalled at 2.5e-11 against 1e-11 after 200 000 steps, and the
 run ended there (stop 42)."""
+
+
+DT_MAX_STABLE = 1.5
+"""omega dt_max of the relaxation's stiffest mode, at most (time_step). FIRE's step is
+semi-implicit Euler, stable for omega dt < 2. The preparation's dt0 (prepare.first_time_step,
+sized for the overlaps of a random start) made it 0.75 after the plastic events of 256 sheared
+disks (seed 1): the first 8 relaxations took 60 343 steps; at 1.5 (twice the step) 35 787, at
+2.25 (unstable) 73 021."""
 
 
 class RelaxationFailed(RuntimeError):
@@ -52,6 +59,16 @@ class PlasticEvent:
     kind: str = "fold"
 
 
+def time_step(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray,
+              gamma: float) -> float:
+    """FIRE's dt0 for a relaxation from (q, xi, rows) [time with unit masses]: dt_max = 10 dt0
+    = DT_MAX_STABLE / sqrt(||J||_inf), J = -dF/dq there. ||J||_inf (the largest absolute row
+    sum) bounds every |lambda| of J, so the stiffest mode's omega dt_max <= DT_MAX_STABLE,
+    inside the semi-implicit Euler step's limit 2 (DT_MAX_STABLE)."""
+    J = network.evaluate(q, xi, rows, gamma)[1]
+    return DT_MAX_STABLE / (DT_MAX_RATIO * np.sqrt(abs(J).sum(axis=1).max()))
+
+
 def relax(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray, gamma: float,
           f_tol: float, max_steps: int = 200_000) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     """FIRE on the frictional forces at fixed strain from (q, xi, rows) until max |F| <= f_tol
@@ -59,19 +76,22 @@ def relax(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray, gam
     steps within STALLED times f_tol (the caller's Newton solve finishes it). RelaxationFailed
     otherwise."""
     reach = REACH * network.constants[0]
-    state = {"q": q.copy(), "xi": xi.copy(), "rows": rows, "searched": q.copy()}
+    state = {"q": q.copy(), "xi": xi.copy(), "delta": network.overlaps(q, rows, gamma),
+             "rows": rows, "searched": q.copy()}
 
     def forces(x: np.ndarray):
-        xi_new, _ = network.history_step(state["q"], x, gamma, gamma, state["xi"], state["rows"])
-        state["q"], state["xi"] = x.copy(), xi_new
+        F, xi_new, delta = network.carried_forces(state["q"], x, state["xi"], state["delta"],
+                                                  state["rows"], gamma)
+        state["q"], state["xi"], state["delta"] = x.copy(), xi_new, delta
         if np.abs(x - state["searched"]).max() > 0.5 * reach:
             rows_new = network.contacts(x, gamma, reach)
             state["xi"], state["rows"], state["searched"] = (carried(state["rows"], xi_new, rows_new),
                                                             rows_new, x.copy())
-        return network.forces(x, state["xi"], state["rows"], gamma), 0.0
+            state["delta"] = network.overlaps(x, rows_new, gamma)
+            F = network.forces(x, state["xi"], rows_new, gamma)
+        return F, 0.0
 
-    R, k_n = network.constants[0], network.constants[1]
-    result = fire(forces, q, first_time_step(k_n, R), f_tol, max_steps)
+    result = fire(forces, q, time_step(network, q, xi, rows, gamma), f_tol, max_steps)
     if not result.max_force <= STALLED * f_tol:
         raise RelaxationFailed(f"the relaxation after the plastic event at gamma = {gamma:.9g} "
                                f"stopped at max |F| = {result.max_force:.3g} after {result.steps} "

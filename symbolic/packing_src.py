@@ -225,6 +225,21 @@ def history_increment(q0, q1, gamma0, gamma1, radii, contacts, params, dxi):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def carried_forces(q0, q1, xi0, delta0, radii, contacts, params, F, xi1, delta1):
+    """One force evaluation of a relaxation at fixed strain params[6]: the history carried over
+    the straight step q0 -> q1 (history_increment, then commit_history with the Coulomb cap)
+    from xi0 [length] into xi1, the overlaps at q1 into delta1 (delta0: those at q0) [length],
+    and F = F(q1, xi1) [force, torque] into F. One call where history_step and forces take
+    five (256 sheared disks: 37 against 44 microseconds, and the wrappers' calls)."""
+    m, gamma = contacts.shape[0], params[6]
+    dxi, slid = np.empty(m), np.empty(m, np.bool_)
+    history_increment(q0, q1, gamma, gamma, radii, contacts, params, dxi)
+    overlaps(q1, radii, contacts, params, delta1)
+    commit_history(xi0, dxi, delta0, delta1, params, True, xi1, slid)
+    forces(q1, xi1, radii, contacts, params, F)
+
+
+@numba.njit(cache=True, error_model="numpy")
 def tangential_forces(q, xi, radii, contacts, params, ft):
     """F_t of every contact row, the tangential force along s on disk i [force] (0 if open):
     from the torque the kernel writes on disk i, T_i = -R_i F_t."""
@@ -336,6 +351,8 @@ def warm_up(progress=None):
              lambda: overlaps(q + 1e-4, radii, contacts, params, delta1),
              lambda: history_increment(q, q + 1e-4, 0.0, 1e-4, radii, contacts, params, dxi),
              lambda: commit_history(xi, dxi, delta0, delta1, params, True, xi1, slid),
+             lambda: carried_forces(q, q + 1e-4, xi, delta0, radii, contacts, params, F, xi1,
+                                    delta1),
              lambda: frictionless(q[:6].copy(), radii, params[5], params[1], F2),
              lambda: normal_energy_sum(q, radii, contacts, params),
              lambda: advance(q.copy(), np.zeros(n), xi.copy(), radii, contacts, params,

@@ -179,3 +179,16 @@ def test_a_rigid_translation_charges_no_history_and_shear_charges_the_boundary_c
     xi2, _ = net.history_step(q, q, 0.1, 0.1 + 1e-6, xi, contacts, cap=False)
     across = contacts[:, 3] != 0
     assert np.array_equal(xi2[~across], xi[~across]) and np.all(xi2[across] != xi[across])
+
+
+def test_a_relaxations_force_evaluation_is_the_history_step_then_the_forces():
+    """carried_forces in one compiled call equals history_step (the cap on) then forces, bit
+    for bit, with contacts opening, closing and sliding in the step."""
+    net, q, contacts, xi = dense_state(40, seed=5, gamma=0.2)
+    q1 = q + np.random.default_rng(6).normal(scale=0.05, size=q.size)
+    delta0, delta1 = net.overlaps(q, contacts, 0.2), net.overlaps(q1, contacts, 0.2)
+    xi1, slid = net.history_step(q, q1, 0.2, 0.2, xi, contacts)
+    assert np.any((delta0 > 0) != (delta1 > 0)) and np.any(slid)
+    F, xi_carried, delta = net.carried_forces(q, q1, xi, delta0, contacts, 0.2)
+    assert np.array_equal(xi_carried, xi1) and np.array_equal(delta, delta1)
+    assert np.array_equal(F, net.forces(q1, xi1, contacts, 0.2))

@@ -556,3 +556,17 @@ def test_the_locator_starts_from_the_predicted_branch_point(monkeypatch):
     scene = PackingScene(N=256, seed=1, gamma_range=(0.0, 1.27e-4))
     branch = shear(scene, prepare_scene(scene), ShearParams(workers=0), window=(-3.0, 8.0))
     assert len(branch.collisions) >= 5 and failed == []
+
+
+def test_the_relaxations_time_step_is_stable_for_the_stiffest_mode():
+    """time_step's dt_max = 10 dt0 keeps omega dt_max <= DT_MAX_STABLE < 2 for every eigenvalue
+    of J at the state (the dense spectrum), and is not more than 3 times below that bound."""
+    scene = PackingScene(N=32, seed=3)
+    packing = prepare_scene(scene)
+    network = network_of(scene, packing)
+    q, xi, rows = start(network, packing.positions)[:3]
+    from diskfriction.packings import plastic
+
+    dt_max = 10 * plastic.time_step(network, q, xi, rows, 0.0)
+    omega = np.sqrt(np.abs(np.linalg.eigvals(network.evaluate(q, xi, rows, 0.0)[1].toarray())).max())
+    assert plastic.DT_MAX_STABLE / 3 <= omega * dt_max <= plastic.DT_MAX_STABLE < 2
