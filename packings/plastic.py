@@ -24,6 +24,9 @@ PAST_FOLD = 1e-7
 ds_min of the fold, so this is past it, and small against the strain between events."""
 
 
+MAX_STEPS = 200_000
+"""FIRE steps a relaxation may take."""
+
 STALLED = 1e3
 """FIRE that ends its steps with max |F| within this factor of the tolerance is taken: the
 next segment starts with Newton at fixed strain from that state (arclength's first corrector
@@ -33,11 +36,18 @@ run ended there (stop 42)."""
 
 
 DT_MAX_STABLE = 1.5
-"""omega dt_max of the relaxation's stiffest mode, at most (time_step). FIRE's step is
-semi-implicit Euler, stable for omega dt < 2. The preparation's dt0 (prepare.first_time_step,
-sized for the overlaps of a random start) made it 0.75 after the plastic events of 256 sheared
-disks (seed 1): the first 8 relaxations took 60 343 steps; at 1.5 (twice the step) 35 787, at
-2.25 (unstable) 73 021."""
+"""omega dt_max of the relaxation's stiffest mode, at most (time_step), on the first attempt.
+FIRE's step is semi-implicit Euler, stable for omega dt < 2. The preparation's dt0
+(prepare.first_time_step, sized for the overlaps of a random start) made it about 0.75 after
+the plastic events of 256 sheared disks (seed 1): their first 30 relaxations took 456 344
+steps with it, one of them failing (stuck at max |F| = 9.8e-6), against 159 271 with this
+rule, none failing (benchmarks/plastic_relaxations.py, docs/packings.md#plastic-events)."""
+
+ATTEMPTS = 3
+"""Relaxations tried from the same state, each with half the last one's time step, before
+RelaxationFailed. With the Coulomb cap the forces are not a gradient, and FIRE can circle
+without settling: 256 disks (seed 1) after the event at gamma = 0.0147 stayed near max |F| =
+6e-4 for 200 000 steps at omega dt_max <= 1.5 and settled in 15 313 at half of it (stop 43)."""
 
 
 class RelaxationFailed(RuntimeError):
@@ -64,20 +74,20 @@ def time_step(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray,
     """FIRE's dt0 for a relaxation from (q, xi, rows) [time with unit masses]: dt_max = 10 dt0
     = DT_MAX_STABLE / sqrt(||J||_inf), J = -dF/dq there. ||J||_inf (the largest absolute row
     sum) bounds every |lambda| of J, so the stiffest mode's omega dt_max <= DT_MAX_STABLE,
-    inside the semi-implicit Euler step's limit 2 (DT_MAX_STABLE)."""
+    inside the semi-implicit Euler step's limit 2."""
     J = network.evaluate(q, xi, rows, gamma)[1]
     return DT_MAX_STABLE / (DT_MAX_RATIO * np.sqrt(abs(J).sum(axis=1).max()))
 
 
 def relax(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray, gamma: float,
-          f_tol: float, max_steps: int = 200_000) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+          f_tol: float, max_steps: int = MAX_STEPS) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     """FIRE on the frictional forces at fixed strain from (q, xi, rows) until max |F| <= f_tol
     [force]; returns (q, xi, rows, steps) of the relaxed state, also where FIRE ran out of
-    steps within STALLED times f_tol (the caller's Newton solve finishes it). RelaxationFailed
-    otherwise."""
+    steps within STALLED times f_tol (the caller's Newton solve finishes it). Where it stops
+    farther away, FIRE starts again from (q, xi, rows) with half the time step, up to ATTEMPTS
+    runs in all (steps: over all of them); RelaxationFailed after them."""
     reach = REACH * network.constants[0]
-    state = {"q": q.copy(), "xi": xi.copy(), "delta": network.overlaps(q, rows, gamma),
-             "rows": rows, "searched": q.copy()}
+    state = {}
 
     def forces(x: np.ndarray):
         F, xi_new, delta = network.carried_forces(state["q"], x, state["xi"], state["delta"],
@@ -91,12 +101,17 @@ def relax(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray, gam
             F = network.forces(x, state["xi"], rows_new, gamma)
         return F, 0.0
 
-    result = fire(forces, q, time_step(network, q, xi, rows, gamma), f_tol, max_steps)
-    if not result.max_force <= STALLED * f_tol:
-        raise RelaxationFailed(f"the relaxation after the plastic event at gamma = {gamma:.9g} "
-                               f"stopped at max |F| = {result.max_force:.3g} after {result.steps} "
-                               f"FIRE steps")
-    return result.x, state["xi"], state["rows"], result.steps
+    dt0, steps = time_step(network, q, xi, rows, gamma), 0
+    for attempt in range(ATTEMPTS):
+        state.update(q=q.copy(), xi=xi.copy(), delta=network.overlaps(q, rows, gamma), rows=rows,
+                     searched=q.copy())
+        result = fire(forces, q, dt0 / 2 ** attempt, f_tol, max_steps)
+        steps += result.steps
+        if result.max_force <= STALLED * f_tol:
+            return result.x, state["xi"], state["rows"], steps
+    raise RelaxationFailed(f"the relaxation after the plastic event at gamma = {gamma:.9g} "
+                           f"stopped at max |F| = {result.max_force:.3g} after {result.steps} "
+                           f"FIRE steps ({ATTEMPTS} attempts, the time step halved each time)")
 
 
 def past_fold(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray, gamma: float,

@@ -187,6 +187,40 @@ def test_a_relaxation_that_stalls_near_its_tolerance_is_finished_by_newton(passe
         shear(scene, packing, ShearParams(workers=0), plastic_events=5)
 
 
+def test_a_relaxation_that_does_not_settle_starts_again_with_half_the_time_step(passed_run,
+                                                                                monkeypatch):
+    """FIRE made to fail (as it circles with sliding contacts: 256 disks after the event at
+    gamma = 0.0147) at the first time step of the relaxation after the first fold: the
+    relaxation starts again from the fold state with half the step, and gives bit for bit the
+    state of a relaxation whose first step is that half; its steps count both runs. Failing at
+    every attempt raises RelaxationFailed in one line."""
+    from diskfriction.packings import plastic
+
+    scene, packing, branch, _ = passed_run
+    network = network_of(scene, packing)
+    k = np.flatnonzero(branch.segment == 0)[-1]
+    fold = (branch.q[k], branch.xi[k], branch.rows[k], branch.gamma[k])
+    f_tol, real_fire, real_step = ShearParams().newton_tol, plastic.fire, plastic.time_step
+    dt0 = real_step(network, *fold)
+    monkeypatch.setattr(plastic, "time_step", lambda *state: dt0 / 2)
+    halved = plastic.relax(network, *fold, f_tol)
+    monkeypatch.setattr(plastic, "time_step", real_step)
+
+    def failing_from(dt_largest):
+        def fire(forces, x0, dt, f_tol, max_steps):
+            run = real_fire(forces, x0, dt, f_tol, max_steps)
+            return run if dt < dt_largest else dataclasses.replace(run, max_force=1.0, steps=7)
+        return fire
+
+    monkeypatch.setattr(plastic, "fire", failing_from(dt0))
+    again = plastic.relax(network, *fold, f_tol)
+    assert all(np.array_equal(a, b) for a, b in zip(again[:3], halved[:3]))
+    assert again[3] == halved[3] + 7
+    monkeypatch.setattr(plastic, "fire", failing_from(0.0))
+    with pytest.raises(plastic.RelaxationFailed, match=f"{plastic.ATTEMPTS} attempts"):
+        plastic.relax(network, *fold, f_tol)
+
+
 def same(a, b) -> bool:
     """Whether two results are equal value for value: arrays (nan equal to nan), and
     dataclasses, tuples, lists and dicts of them, field by field."""
