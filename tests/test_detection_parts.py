@@ -332,3 +332,37 @@ def test_a_located_double_eigenvalue_must_be_the_pairs_own():
     assert belongs_to_pair(a, b, 0, 1, 1.0, 1.0, 0.5, *d)
     assert not belongs_to_pair(a, b, 0, 1, 3.0, 1.0, 0.5, *d)
     assert belongs_to_pair(a, b, 2, 3, 3.0, 3.0, 0.5, *d)
+
+
+def test_a_branch_that_jumps_within_a_step_fails_its_scan_instead_of_giving_a_collision():
+    """G = (u1^2 - 1, u2): two branches u1 = -1 and u1 = +1 for every p, real eigenvalues of
+    A = [[0, 1], [-u1, 0]] on the first, complex on the second, so no collision anywhere. A
+    step whose corrector lands on the first for s < 1/2 and on the second from 1/2 on (as
+    256 sheared disks' did across an S-shaped stretch of their branch) used to bisect down to
+    min_ds and report a located birth there; now its scan fails with BranchJump, a
+    SegmentSolveError, which rejects the step (scans.run_scan)."""
+    from dataclasses import dataclass
+
+    from diskfriction.continuation.collisions import BranchJump, DetectionParams, scan_step
+    from diskfriction.continuation.segment import SegmentSolveError
+
+    @dataclass(frozen=True)
+    class Jumping(Segment):
+        def point(self, s):
+            x = np.array([-1.0 if s < 0.5 else 1.0, 0.0, s])
+            self.remember(s, x.copy())
+            return x
+
+    problem = FunctionProblem(lambda u, p: np.array([u[0] ** 2 - 1, u[1]]),
+                              lambda u, p: np.array([[2 * u[0], 0.0], [0.0, 1.0]]),
+                              lambda u, p: np.zeros(2),
+                              lambda u, p: np.array([[0.0, 1.0], [-u[0], 0.0]]))
+    x_a, x_b = np.array([-1.0, 0.0, 0.0]), np.array([1.0, 0.0, 1.0])
+    sigma = (x_b - x_a) / np.linalg.norm(x_b - x_a)
+    t_a, t_b = tangent(problem, x_a, sigma), tangent(problem, x_b, sigma)
+    a = sample_at(problem, 0.0, x_a, REL_TOL, None, t_a)
+    b = sample_at(problem, 1.0, x_b, REL_TOL, a, t_b)
+    assert not a.status.any() and b.status.all()  # all real at x_a, a complex pair at x_b
+    with pytest.raises(BranchJump, match="the branch jumps at s = 0.4999") as jump:
+        scan_step(problem, Jumping(problem, x_a, x_b, 1e-12, 10, t_a, t_b), a, b, DetectionParams(), 0)
+    assert isinstance(jump.value, SegmentSolveError)
