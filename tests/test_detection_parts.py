@@ -3,6 +3,7 @@
 the continuation core whose collisions are known in closed form."""
 from __future__ import annotations
 
+import re
 from dataclasses import replace
 
 import numpy as np
@@ -340,7 +341,8 @@ def test_a_branch_that_jumps_within_a_step_fails_its_scan_instead_of_giving_a_co
     step whose corrector lands on the first for s < 1/2 and on the second from 1/2 on (as
     256 sheared disks' did across an S-shaped stretch of their branch) used to bisect down to
     min_ds and report a located birth there; now its scan fails with BranchJump, a
-    SegmentSolveError, which rejects the step (scans.run_scan)."""
+    SegmentSolveError, which rejects the step (scans.run_scan), as soon as the interval's
+    ends lie JUMP_RATIO times farther apart than their tangents allow."""
     from dataclasses import dataclass
 
     from diskfriction.continuation.collisions import BranchJump, DetectionParams, scan_step
@@ -363,6 +365,8 @@ def test_a_branch_that_jumps_within_a_step_fails_its_scan_instead_of_giving_a_co
     a = sample_at(problem, 0.0, x_a, REL_TOL, None, t_a)
     b = sample_at(problem, 1.0, x_b, REL_TOL, a, t_b)
     assert not a.status.any() and b.status.all()  # all real at x_a, a complex pair at x_b
-    with pytest.raises(BranchJump, match="the branch jumps at s = 0.4999") as jump:
+    with pytest.raises(BranchJump, match="the branch jumps between s = ") as jump:
         scan_step(problem, Jumping(problem, x_a, x_b, 1e-12, 10, t_a, t_b), a, b, DetectionParams(), 0)
     assert isinstance(jump.value, SegmentSolveError)
+    s_a, s_b = (float(v) for v in re.findall(r"s = (\S+) and (\S+),", str(jump.value))[0])
+    assert s_a < 0.5 <= s_b and s_b - s_a > 1e-6  # told by the tangents, long before min_ds
