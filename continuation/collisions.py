@@ -63,7 +63,8 @@ __all__ = ["Collision", "DetectionParams", "Kind", "ScanResult", "StepScan", "sc
 
 class BranchJump(SegmentSolveError):
     """The corrector of a step converged on two pieces of the branch on either side of an
-    interval of s min_ds wide: the branch between the step's ends is not one curve across the
+    interval of s (known from the samples' tangents, StepScan.jumped, or at the latest when the
+    interval is min_ds wide): the branch between the step's ends is not one curve across the
     step's hyperplanes (it turns back in p and forth again, S-shaped), so the step passed over
     folds. Its scan fails, and the continuation tries the step shorter (scans.run_scan), as
     for a corrector that fails. 256 sheared disks (seed 1) at gamma = 0.00135: p went back by
