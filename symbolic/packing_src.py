@@ -230,7 +230,8 @@ def carried_forces(q0, q1, xi0, delta0, radii, contacts, params, F, xi1, delta1)
     the straight step q0 -> q1 (history_increment, then commit_history with the Coulomb cap)
     from xi0 [length] into xi1, the overlaps at q1 into delta1 (delta0: those at q0) [length],
     and F = F(q1, xi1) [force, torque] into F. One call where history_step and forces take
-    five (256 sheared disks: 37 against 44 microseconds, and the wrappers' calls)."""
+    five (256 sheared disks, a prototype of it: 37 microseconds against 16.5 + 27.5 for the
+    two wrappers)."""
     m, gamma = contacts.shape[0], params[6]
     dxi, slid = np.empty(m), np.empty(m, np.bool_)
     history_increment(q0, q1, gamma, gamma, radii, contacts, params, dxi)
