@@ -51,10 +51,11 @@ from .locate import jordan_chain_near
 from .newton import residual_norm, tangent
 from .partial_splits import certificates_survive, clusters, partial_allowed
 from .problem import Problem
+from .root_ends import scan_ends
 from .samples import Sample, continuation_perm, known, partial_sample_at, sample_at
 from .segment import Segment, SegmentSolveError
 from .spectra import DEFAULT_REL_TOL
-from .verdicts import Verdict, VerdictKind, band_side
+from .verdicts import Verdict, VerdictKind, band_side, scaled_slopes
 
 Array = np.ndarray
 
@@ -213,9 +214,15 @@ class StepScan:
                     self._continue(k)
         return perm
 
+    def _perm(self, left: Sample, right: Sample) -> Array:
+        """continuation_perm from left to its right neighbour, by the slopes in the segment's
+        coordinate where right is a root end (Sample.root_end: its dlam is not along its
+        tangent)."""
+        return continuation_perm(left, right, scaled_slopes(left, right, self.segment) if right.root_end else None)
+
     def _continue(self, idx: int) -> Optional[Array]:
         """Relabel the samples right of samples[idx] to continue it; the perm, None if identity."""
-        perm = continuation_perm(self.samples[idx], self.samples[idx + 1])
+        perm = self._perm(self.samples[idx], self.samples[idx + 1])
         if np.array_equal(perm, np.arange(perm.size)):
             return None
         for k in range(idx + 1, len(self.samples)):
@@ -244,7 +251,7 @@ class StepScan:
         new = partial_sample_at(self.problem, s, x, l, shifts, t)
         if new is None:
             return False
-        perm = continuation_perm(new, r)
+        perm = self._perm(new, r)
         right = self.samples[idx + 1:]
         relabels = not np.array_equal(perm, np.arange(labels.size))
         trial = self.samples[:idx + 1] + [new] + ([smp.relabel(perm) for smp in right] if relabels else right)
@@ -306,7 +313,8 @@ class StepScan:
             return False
         along = min(float(self.segment.sigma @ a.tangent), float(self.segment.sigma @ b.tangent))
         moved = float(np.linalg.norm(b.x - a.x))
-        return along > 0.0 and moved * along > JUMP_RATIO * (b.s - a.s) * self.segment.length
+        ds = self.segment.real(b.s) - self.segment.real(a.s)
+        return along > 0.0 and moved * along > JUMP_RATIO * ds * self.segment.length
 
     # ---- certifier -------------------------------------------------------------------------
     def verdict(self, idx: int) -> Verdict:
@@ -445,11 +453,14 @@ def scan_step(problem: Problem, segment: Segment, start: Sample, end: Sample,
 
     start: the sample of x_a (its labels are kept); end: the sample of x_b, labels continuing
     start; previous: the accepted point before x_a, the exhaustive detection's stencil (pass
-    None if its step had collisions); ends_at_event: x_b lies just past a contact event.
+    None if its step had collisions); ends_at_event: x_b lies just past a contact event (where
+    it is a square-root point of the spectrum, root_ends.py treats the end apart).
     """
-    a, b = start.at(0.0), end.at(1.0)
     if not params.enabled:
-        return ScanResult([], np.arange(b.eigvals.size), 0, [])
+        return ScanResult([], np.arange(end.eigvals.size), 0, [])
+    if ends_at_event and params.detector.slopes:
+        segment, end = scan_ends(problem, segment, end)
+    a, b = start.at(0.0), end.at(1.0)
     samples = [a, b]
     if previous is not None and params.detector.stencil_from_previous:
         s_prev = float(segment.sigma @ (previous.x - segment.x_a)) / segment.length

@@ -26,6 +26,10 @@ Optional hooks (defaults below):
         end counts as a change from g > 0): the core ends the step on the first event (located
         on the branch), scans it for collisions, and commits there, so no step and no collision
         scan straddles a discrete change.
+    root_events() -> bool mask over the event functions, or None (default: none): the
+        components at whose zero the stability matrix goes as the square root of g on the
+        side g > 0 (a Hertz contact opening or forming, stiffness ~ delta^(1/2)); a scan of a
+        step ending on one treats that end apart (root_ends.py).
     stability_matrix(u, p) -> A(u, p), shape (n, n), dense or sparse; default dG/du.
     eigensystem(u, p, vectors) -> spectra.Eigensystem of A(u, p); default LAPACK dgeev of the
         dense A. Override to exclude exactly decoupled modes from detection or to use a faster
@@ -100,6 +104,11 @@ class Problem(ABC):
 
     def event_functions(self, u: Array, p: float) -> Optional[Array]:
         """Event functions (see the module docstring); None: the problem has no events."""
+        return None
+
+    def root_events(self) -> Optional[Array]:
+        """Mask of the event functions whose zero is a square-root point of the stability
+        matrix (see the module docstring); None: none."""
         return None
 
     def stability_matrix(self, u: Array, p: float):

@@ -52,7 +52,10 @@ class Sample:
     shared between samples, and none collides between a scan worker and this process.
     dA: the stability matrix's derivative d A / d tau along the tangent that gave the slopes
     (dense or sparse), kept with the vectors for pair_coupling. band: a spectral window's
-    certified band (lo, hi) of Re lambda, Eigensystem.band (None: every eigenvalue certified)."""
+    certified band (lo, hi) of Re lambda, Eigensystem.band (None: every eigenvalue certified).
+    root_end: the end sample of a scan whose segment has a root end (Segment.root,
+    root_ends.py): its dlam and dA are derivatives in the segment's coordinate w, finite where
+    those along the tangent are not."""
 
     s: float
     x: Array
@@ -69,6 +72,7 @@ class Sample:
     disc: Optional[tuple[float, float]] = None
     dA: object = None
     band: Optional[tuple[float, float]] = None
+    root_end: bool = False
     uid: object = field(default_factory=object, repr=False, compare=False)
 
     @property
@@ -125,8 +129,12 @@ class Sample:
         return self.eigvals.size if right is None else right.shape[0]
 
     def slopes(self, segment) -> Array:
-        """d lambda / ds on `segment` (s in [0, 1] from x_a to x_b): dlam L / (sigma . t)."""
-        return self.dlam * (segment.length / float(segment.sigma @ self.tangent))
+        """d lambda / dw on `segment` (w its coordinate from x_a to x_b, Segment.real):
+        dlam L / (sigma . t) ds/dw; a root end's dlam is that derivative itself."""
+        if self.root_end:
+            return self.dlam
+        slopes = self.dlam * (segment.length / float(segment.sigma @ self.tangent))
+        return slopes if segment.root is None else slopes * segment.ds_dw(self.s)
 
 
 def on_disk(a: Array) -> Array:
@@ -206,7 +214,8 @@ def predicted_match(ref_values: Array, ref_dlam: Array, values: Array, dlam: Arr
     return linear_sum_assignment(cost)[1]
 
 
-def window_match(left: "Sample", right: "Sample", ds_left: float, ds_right: float) -> Array:
+def window_match(left: "Sample", right: "Sample", ds_left: float, ds_right: float,
+                 dlam_left: Array, dlam_right: Array) -> Array:
     """Labels of the full window sample `right` continuing `left` (both hold the k eigenvalues
     nearest the window's centre sigma, Eigensystem.disc). An eigenvalue of `left` beyond the
     guard bands may have left the disc |lambda - sigma| < radius_right, and one of `right` may
@@ -220,17 +229,18 @@ def window_match(left: "Sample", right: "Sample", ds_left: float, ds_right: floa
     the labels left free take the entered eigenvalues (in the order of least prediction_cost):
     new eigenvalues on them, not continuations. A plain assignment over the pairs alone has
     no such choice: where the set changes it shifts a chain of labels along the real axis (on
-    the line, all such chains cost about the same), relabelling eigenvalues in the window."""
-    cost = prediction_cost(left.eigvals, left.dlam, right.eigvals, right.dlam, ds_left, ds_right)
+    the line, all such chains cost about the same), relabelling eigenvalues in the window.
+    dlam_*: the slopes that ds_* multiply (continuation_perm)."""
+    cost = prediction_cost(left.eigvals, dlam_left, right.eigvals, dlam_right, ds_left, ds_right)
     nearest = np.argmin(cost, axis=1)
     if np.unique(nearest).size == nearest.size:
         return nearest
     (sigma, radius_left), (_, radius_right) = left.disc, right.disc
     k = cost.shape[0]
     leave = np.where(left.excluded, np.maximum(
-        0.0, radius_right - np.abs(left.eigvals + ds_left * left.dlam - sigma)), np.inf)
+        0.0, radius_right - np.abs(left.eigvals + ds_left * dlam_left - sigma)), np.inf)
     enter = np.where(right.excluded, np.maximum(
-        0.0, radius_left - np.abs(right.eigvals - ds_right * right.dlam - sigma)), np.inf)
+        0.0, radius_left - np.abs(right.eigvals - ds_right * dlam_right - sigma)), np.inf)
     full = np.full((2 * k, 2 * k), np.inf)
     full[:k, :k] = cost
     full[np.arange(k), k + np.arange(k)] = leave
@@ -243,18 +253,25 @@ def window_match(left: "Sample", right: "Sample", ds_left: float, ds_right: floa
     return perm
 
 
-def continuation_perm(left: Sample, right: Sample) -> Array:
+def continuation_perm(left: Sample, right: Sample, slopes: Optional[tuple[Array, Array]] = None) -> Array:
     """Labels of `right` continuing `left`: by prediction if both carry slopes, else by the
     nearest eigenvalue (spectra.match_eigenvalues). With a partial sample only the labels known
     at both are matched (the others keep theirs). Free disks' modes (excluded, outside a
     spectral window), as many at both ends, are matched among themselves in order of (Re, Im)
     (the optimal match of real values; identical free disks share their eigenvalues, and an
     assignment over all n labels took a third of a sweep at N = 400, eps = 0), the others by
-    prediction among themselves."""
+    prediction among themselves. slopes: both ends' slopes per unit of the interval between
+    them (verdicts.scaled_slopes), for an interval that ends at a root end (Sample.root_end),
+    whose dlam is not along its tangent; default: dlam times the step projected on each
+    end's tangent."""
     if left.dlam is None or right.dlam is None:
         return match_eigenvalues(left.eigvals, right.eigvals)
-    step = right.x - left.x
-    ds_left, ds_right = float(step @ left.tangent), float(step @ right.tangent)
+    if slopes is None:
+        step = right.x - left.x
+        dlam_left, dlam_right = left.dlam, right.dlam
+        ds_left, ds_right = float(step @ left.tangent), float(step @ right.tangent)
+    else:
+        (dlam_left, dlam_right), ds_left, ds_right = slopes, 1.0, 1.0
     common = known(left) & known(right)
     perm = np.arange(left.eigvals.size)
     free_l, free_r = common & left.excluded, common & right.excluded
@@ -266,11 +283,11 @@ def continuation_perm(left: Sample, right: Sample) -> Array:
         rest_l = np.union1d(np.flatnonzero(common & ~left.excluded), np.delete(by_l, i_l))
         rest_r = np.union1d(np.flatnonzero(common & ~right.excluded), np.delete(by_r, i_r))
     elif left.disc is not None and right.disc is not None and left.known is None and right.known is None:
-        return window_match(left, right, ds_left, ds_right)
+        return window_match(left, right, ds_left, ds_right, dlam_left, dlam_right)
     else:
         rest_l = rest_r = np.flatnonzero(common)
-    perm[rest_l] = rest_r[predicted_match(left.eigvals[rest_l], left.dlam[rest_l], right.eigvals[rest_r],
-                                          right.dlam[rest_r], ds_left, ds_right)]
+    perm[rest_l] = rest_r[predicted_match(left.eigvals[rest_l], dlam_left[rest_l], right.eigvals[rest_r],
+                                          dlam_right[rest_r], ds_left, ds_right)]
     return perm
 
 

@@ -17,6 +17,12 @@ points one Newton update each instead of the three or four a start from the seca
 needs (docs/continuation.md). (Choosing the Hermite interpolant of farther points with
 tangents where a curvature estimate favoured it took 2.1 Newton updates per point against 1.7
 on 256 disks sheared to 1e-3: a bracket's nearest points are the better guide.)
+
+A segment with a root end (Segment.root = s_e: a contact opens at s_e, just before 1, and the
+stability matrix goes as the square root of the distance to it; root_ends.py) is addressed by
+the coordinate w in [0, 1] instead, s = s_e (1 - (1 - w)^2), w = 1 the end x_b: eigenvalues
+~ (s_e - s)^(1/2) are smooth in w. Every method taking a position (point, predicted,
+remember) takes that coordinate; without a root end w = s.
 """
 from __future__ import annotations
 
@@ -49,7 +55,8 @@ class Segment:
     gets at least one Newton update (bordered_newton's polish), for brackets of an event
     function; not for the brackets of a branch point, where the bordered matrix is nearly
     singular and an update from a point already within tol kicks it off the branch (the
-    Brusselator chain's 17 branch points were lost so)."""
+    Brusselator chain's 17 branch points were lost so). root: s_e of a root end (module
+    docstring), None: the coordinate is s itself."""
 
     problem: Problem
     x_a: Array
@@ -59,6 +66,7 @@ class Segment:
     t_a: Optional[Array] = None
     t_b: Optional[Array] = None
     polish: bool = True
+    root: Optional[float] = None
     _known: dict = field(default_factory=dict, compare=False, repr=False)
 
     @cached_property
@@ -76,19 +84,42 @@ class Segment:
         """|x_b - x_a|."""
         return float(np.linalg.norm(self.x_b - self.x_a))
 
+    def real(self, w: float) -> float:
+        """s at the coordinate w: s_e (1 - (1 - w)^2), 1 at w = 1 (the end x_b stands for the
+        root s_e, its spectrum the limit there); w itself without a root end."""
+        if self.root is None:
+            return w
+        return 1.0 if w >= 1.0 else self.root * (1.0 - (1.0 - w) ** 2)
+
+    def coordinate(self, s: float) -> float:
+        """w at s (real's inverse; 1 from s_e on)."""
+        if self.root is None:
+            return s
+        return 1.0 - float(np.sqrt(max(0.0, 1.0 - s / self.root)))
+
+    def ds_dw(self, w: float) -> float:
+        """ds / dw = 2 s_e (1 - w); 1 without a root end."""
+        return 1.0 if self.root is None else 2.0 * self.root * (1.0 - w)
+
     def secant_point(self, s: float) -> Array:
         """(1 - s) x_a + s x_b."""
         return self.x_a + s * (self.x_b - self.x_a)
 
-    def remember(self, s: float, x: Array, t: Optional[Array] = None) -> None:
-        """Keep x(s) (and its unit tangent t, if known) for the predictions of later points."""
+    def remember(self, w: float, x: Array, t: Optional[Array] = None) -> None:
+        """Keep x(w) (and its unit tangent t, if known) for the predictions of later points."""
+        self._keep(self.real(w), x, t)
+
+    def _keep(self, s: float, x: Array, t: Optional[Array] = None) -> None:
         if 0.0 < s < 1.0:
             self._known[s] = (x, t)
 
-    def predicted(self, s: float) -> Array:
-        """x(s) predicted from the two solved points nearest s on either side (module
-        docstring): the cubic Hermite interpolant where both carry tangents along the secant,
-        else the straight line between them."""
+    def predicted(self, w: float) -> Array:
+        """x(w) predicted from the two solved points nearest it on either side (module
+        docstring): the cubic Hermite interpolant in s where both carry tangents along the
+        secant, else the straight line between them."""
+        return self._predicted_at(self.real(w))
+
+    def _predicted_at(self, s: float) -> Array:
         known = {0.0: (self.x_a, self.t_a), 1.0: (self.x_b, self.t_b), **self._known}
         nodes = sorted(known)
         i = bisect.bisect(nodes, s)
@@ -105,8 +136,9 @@ class Segment:
         m1, m2 = t1 * (D / along[0]), t2 * (D / along[1])
         return line + (tau * (1.0 - tau)) * ((1.0 - tau) * (m1 - chord) - tau * (m2 - chord))
 
-    def point(self, s: float) -> Array:
-        """x(s) on the branch, remembered; s = 0 and 1 return the end points without a solve."""
+    def point(self, w: float) -> Array:
+        """x(w) on the branch, remembered; the ends return their points without a solve."""
+        s = self.real(w)
         if s == 0.0:
             return self.x_a.copy()
         if s == 1.0:
@@ -114,10 +146,10 @@ class Segment:
         if s in self._known:
             return self._known[s][0].copy()
         res = bordered_newton(self.problem, self.secant_point(s), self.sigma, self.tol, self.max_iter,
-                              self.predicted(s), self.polish)
+                              self._predicted_at(s), self.polish)
         if not res.converged:
             raise SegmentSolveError(f"corrector failed at s={s:.6g} ({res.failure()})")
-        self.remember(s, res.x.copy())
+        self._keep(s, res.x.copy())
         return res.x
 
 

@@ -345,6 +345,12 @@ class PackingEquilibria(Problem):
                                np.where(self.active, delta - self.delta_hold, 1.0),
                                np.where(self.active, margin, 1.0)])
 
+    def root_events(self) -> np.ndarray:
+        """The overlaps delta among the event functions (event_functions' first block): a
+        Hertz contact's stiffness goes as delta^(1/2) where it opens or forms."""
+        m = self.rows_c.shape[0]
+        return np.concatenate([np.ones(m, bool), np.zeros(2 * m, bool)])
+
     def state(self) -> tuple:
         return self.q_c.copy(), self.xi_c.copy(), self.rows_c.copy(), self.gamma_c, self.sliding
 

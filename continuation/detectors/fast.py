@@ -82,7 +82,7 @@ def locate(scan, idx: int, i: int, j: int, kind: Kind) -> Optional[Collision]:
     except LocatorFailed as err:
         scan.warnings.append(f"step {scan.step}: locator: {err}; splitting")
         return None
-    s = float(segment.sigma @ (found.x - segment.x_a)) / segment.length
+    s = segment.coordinate(float(segment.sigma @ (found.x - segment.x_a)) / segment.length)
     lo, hi = min(a.p, b.p), max(a.p, b.p)
     p = float(found.x[-1])
     if not (a.s - 1e-9 <= s <= b.s + 1e-9 and lo - params.tol_p <= p <= hi + params.tol_p):
