@@ -52,7 +52,7 @@ from .newton import residual_norm, tangent
 from .partial_splits import certificates_survive, clusters, partial_allowed
 from .problem import Problem
 from .root_ends import scan_ends
-from .samples import Sample, continuation_perm, known, partial_sample_at, sample_at
+from .samples import Sample, claimed_outside, continuation_perm, known, partial_sample_at, sample_at
 from .segment import Segment, SegmentSolveError
 from .spectra import DEFAULT_REL_TOL
 from .verdicts import Verdict, VerdictKind, band_side, scaled_slopes
@@ -214,11 +214,15 @@ class StepScan:
                     self._continue(k)
         return perm
 
+    def _slopes(self, left: Sample, right: Sample) -> Optional[tuple[Array, Array]]:
+        """The slopes continuation_perm predicts by from left to its right neighbour: those in
+        the segment's coordinate where right is a root end (Sample.root_end: its dlam is not
+        along its tangent), else None (its default)."""
+        return scaled_slopes(left, right, self.segment) if right.root_end else None
+
     def _perm(self, left: Sample, right: Sample) -> Array:
-        """continuation_perm from left to its right neighbour, by the slopes in the segment's
-        coordinate where right is a root end (Sample.root_end: its dlam is not along its
-        tangent)."""
-        return continuation_perm(left, right, scaled_slopes(left, right, self.segment) if right.root_end else None)
+        """continuation_perm from left to its right neighbour (_slopes)."""
+        return continuation_perm(left, right, self._slopes(left, right))
 
     def _continue(self, idx: int) -> Optional[Array]:
         """Relabel the samples right of samples[idx] to continue it; the perm, None if identity."""
@@ -239,8 +243,10 @@ class StepScan:
     # ---- partial samples (partial_splits.py) ------------------------------------------------
     def _insert_partial(self, idx: int, s: float, labels: Array) -> bool:
         """Split samples[idx], samples[idx + 1] at s with a partial sample of `labels`; False if
-        it cannot be made (too many eigenvalues, not covered) or relabels its right neighbour
-        in a way a certificate does not survive (partial_splits.certificates_survive)."""
+        it cannot be made (too many eigenvalues, not covered), if a label it did not compute
+        continues one of its eigenvalues into a full right neighbour (samples.claimed_outside),
+        or if it relabels its right neighbour in a way a certificate does not survive
+        (partial_splits.certificates_survive)."""
         l, r = self.samples[idx], self.samples[idx + 1]
         reference = next(smp for smp in reversed(self.samples) if smp.s <= l.s and not smp.partial)
         shifts = clusters(l, r, s, np.flatnonzero(labels), reference.eigvals, self.segment,
@@ -249,7 +255,7 @@ class StepScan:
             return False
         x, t = self._point(s)
         new = partial_sample_at(self.problem, s, x, l, shifts, t)
-        if new is None:
+        if new is None or (not r.partial and claimed_outside(new, r, self._slopes(new, r))):
             return False
         perm = self._perm(new, r)
         right = self.samples[idx + 1:]

@@ -13,7 +13,7 @@ from diskfriction.continuation import FunctionProblem
 from diskfriction.continuation.newton import tangent
 from diskfriction.continuation.partial_splits import (PARTIAL_CLUSTERS, PARTIAL_EXTRA, certificates_survive,
                                                       clusters, partial_allowed)
-from diskfriction.continuation.samples import Sample, continuation_perm, label_gaps, sample_at
+from diskfriction.continuation.samples import Sample, claimed_outside, continuation_perm, label_gaps, sample_at
 from diskfriction.continuation.segment import Segment
 from diskfriction.continuation.verdicts import Verdict, judge_exhaustive, judge_fast
 
@@ -370,3 +370,25 @@ def test_a_branch_that_jumps_within_a_step_fails_its_scan_instead_of_giving_a_co
     assert isinstance(jump.value, SegmentSolveError)
     s_a, s_b = (float(v) for v in re.findall(r"s = (\S+) and (\S+),", str(jump.value))[0])
     assert s_a < 0.5 <= s_b and s_b - s_a > 1e-6  # told by the tangents, long before min_ds
+
+
+def test_a_partial_sample_whose_eigenvalue_continues_on_a_label_it_did_not_compute_is_told():
+    """The partial sample knows labels 1 and 2; at the full sample to its right the eigenvalue
+    continuing its label 1 (6.935, slope 0) sits on label 0. continuation_perm, matching only
+    labels 1 and 2, would give label 1 the eigenvalue 7.064, and the interval between them
+    could never be certified (256 disks: 70 partial samples creeping towards the full one);
+    claimed_outside says so, and does not where labels 1 and 2 continue on themselves."""
+    def sample(x_p, values, known=None):
+        values = np.array(values, complex)
+        n = values.size
+        return Sample(0.0, np.array([0.0, x_p]), values, np.zeros(n, np.int8), 1e-12, np.zeros(n, bool),
+                      np.array([0.0, 1.0]), np.zeros(n, complex), None, None,
+                      label_gaps(values, np.zeros(n, bool), None), known)
+
+    known = np.array([False, True, True, False])
+    partial = sample(0.0, [np.nan, 6.935, 6.808, np.nan], known)
+    crossed = sample(1e-9, [6.935, 7.064, 6.808, 7.235])
+    assert claimed_outside(partial, crossed)
+    assert continuation_perm(partial, crossed)[1] == 1  # the restricted match pairs it wrongly
+    kept = sample(1e-9, [7.064, 6.935, 6.808, 7.235])
+    assert not claimed_outside(partial, kept)
