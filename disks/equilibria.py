@@ -284,6 +284,12 @@ class DiskEquilibria(Problem):
         joins = [k % N for d in self.free for k in (d.disk - 1, d.disk)]
         return np.concatenate([g, delta[joins] - self.delta_join])
 
+    def root_events(self) -> np.ndarray:
+        """The overlaps delta among the event functions (their first block): a Hertz
+        contact's stiffness goes as delta^(1/2) where it opens or closes."""
+        m = self.system.overlaps(self.q_c).size
+        return np.concatenate([np.ones(m, bool), np.zeros(m + 2 * len(self.free), bool)])
+
     def state(self) -> tuple:
         """(q, xi, F_x) committed."""
         return self.q_c.copy(), self.xi_c.copy(), self.F_c
