@@ -21,6 +21,7 @@ from diskfriction.packings.prepared import prepare_scene
 from diskfriction.packings.shear import ShearParams, network_of, shear
 from diskfriction.scenes.packing import PackingScene
 from diskfriction.scenes.scene import SceneValueError
+from packing_cases import read_case
 
 
 def fold_states(scene: PackingScene, events: int, window):
@@ -48,14 +49,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("case", nargs="?", default="256:1:8:-3:8")
     case = parser.parse_args().case
-    fields = case.split(":")
-    try:
-        if len(fields) not in (3, 5):
-            raise ValueError("3 or 5 fields")
-        N, seed, events = int(fields[0]), int(fields[1]), int(fields[2])
-        window = (float(fields[3]), float(fields[4])) if len(fields) == 5 else None
-    except ValueError as error:
-        parser.error(f"case {case!r} is not N:SEED:EVENTS[:LO:HI] ({error})")
+    N, seed, events, window = read_case(parser, case, "EVENTS", int)
     try:
         scene = PackingScene(N=N, seed=seed, gamma_range=(0.0, 1.0))
     except SceneValueError as error:

@@ -22,6 +22,7 @@ from diskfriction.packings.prepared import prepare_scene
 from diskfriction.packings.shear import ShearParams, shear
 from diskfriction.scenes.packing import PackingScene
 from diskfriction.scenes.scene import SceneValueError
+from packing_cases import read_case
 
 MATCH = 1e-9
 """Two collisions of the same kind this close in strain are the same one."""
@@ -51,14 +52,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("case", nargs="?", default="256:1:0.003:-3:8")
     case = parser.parse_args().case
-    fields = case.split(":")
-    try:
-        if len(fields) not in (3, 5):
-            raise ValueError("3 or 5 fields")
-        N, seed, gamma = int(fields[0]), int(fields[1]), float(fields[2])
-        window = (float(fields[3]), float(fields[4])) if len(fields) == 5 else None
-    except ValueError as error:
-        parser.error(f"case {case!r} is not N:SEED:GAMMA[:LO:HI] ({error})")
+    N, seed, gamma, window = read_case(parser, case, "GAMMA", float)
     try:
         scene = PackingScene(N=N, seed=seed, gamma_range=(0.0, gamma))
     except SceneValueError as error:
