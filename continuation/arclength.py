@@ -344,7 +344,7 @@ def _advance(problem, scans, here: _Start, index: int, pending: deque, previous,
     except StepRejected as err:
         return _rejected(here, str(err), params)
     except SegmentSolveError as err:
-        return _rejected(here, f"collision scan: {err}", params)
+        return _rejected(here, f"locating the step's first event: {err}", params)
     except SingularMatrix as err:
         return _rejected(here, f"singular matrix: {err}", params)
     except WindowCrowded as err:
