@@ -133,8 +133,7 @@ class Sample:
         dlam L / (sigma . t) ds/dw; a root end's dlam is that derivative itself."""
         if self.root_end:
             return self.dlam
-        slopes = self.dlam * (segment.length / float(segment.sigma @ self.tangent))
-        return slopes if segment.root is None else slopes * segment.ds_dw(self.s)
+        return self.dlam * (segment.length / float(segment.sigma @ self.tangent)) * segment.ds_dw(self.s)
 
 
 def on_disk(a: Array) -> Array:

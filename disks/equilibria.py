@@ -287,7 +287,7 @@ class DiskEquilibria(Problem):
     def root_events(self) -> np.ndarray:
         """The overlaps delta among the event functions (their first block): a Hertz
         contact's stiffness goes as delta^(1/2) where it opens or closes."""
-        m = self.system.overlaps(self.q_c).size
+        m = 2 * self.system.N  # pairs, then substrate (symbolic/system.py, overlaps)
         return np.concatenate([np.ones(m, bool), np.zeros(m + 2 * len(self.free), bool)])
 
     def state(self) -> tuple:

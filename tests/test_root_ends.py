@@ -109,7 +109,7 @@ def test_root_slopes_are_the_derivative_in_the_coordinate():
 def test_forming_end_takes_its_slopes_on_the_steps_side():
     """Just past a forming contact the one-sided slopes into the step straddle the event and
     pick up part of d^(1/2)'s infinite slope (its whole at a difference step below the
-    distance past the event: 1e3 times the step start's slopes at 256 disks); scan_ends takes
+    distance past the event: 3e3 to 8e4 times the step start's slopes at 256 disks); scan_ends takes
     them before it: d lambda / dp = +-0.3 /
     (2 (-d)^(1/2)) i for the complex pair of d = -0.2 + 0.3 (p - C)."""
     problem = toy(_forming, sign=-1.0)
