@@ -5,7 +5,9 @@ with the collision locator's borders as unit vectors and as it scales them
 (nearest.SHIFT_INVERT_ORDERING) against its default (COLAMD, partial pivoting), each also with
 its ordering kept for a repeated pattern (continuation/orderings.py), on the chain's matrix and
 on a sheared packing's A - sigma I (the spectral window's shift-invert, --packing N
-disks, window [-3, 8]; 0: none).
+disks, window [-3, 8]; 0: none); last, the packing's bordered corrector matrix with its
+factor_options (PackingEquilibria: minimum degree on A + A^T, partial pivoting) against
+SuperLU's default.
 
 The chain's matrix is the bordered A - sigma I of the locator and of a shift-invert (A the
 stability matrix J of the chain at F_x = 0.002, sigma in the middle of its spectrum). Run:
@@ -25,6 +27,8 @@ from diskfriction.continuation import orderings as reuse
 from diskfriction.continuation.linalg import bordered, blas_threads
 from diskfriction.continuation.nearest import SHIFT_INVERT_ORDERING
 from diskfriction.continuation.locate import BORDER_SCALE
+from diskfriction.continuation.newton import bordered_matrix, tangent
+from diskfriction.packings.equilibria import PackingEquilibria
 from diskfriction.continuation.triangular import TriangularFactors
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
@@ -84,20 +88,28 @@ def main() -> None:
             print(f"    factorization, {label:<17}{us:9.1f} us   nnz(L + U) = {fill.L.nnz + fill.U.nnz}")
         compare_orderings(f"N = {N}, A - sigma I", sp.csc_array(K), r[:n], calls, args.repeat)
     if args.packing:
-        A = packing_matrix(args.packing)
-        r = np.random.default_rng(0).standard_normal(A.shape[0])
-        compare_orderings(f"{args.packing} sheared disks, A - sigma I", A, r, max(20, 60000 // A.shape[0]),
-                  args.repeat)
+        A, M = packing_matrices(args.packing)
+        rng = np.random.default_rng(0)
+        calls = max(20, 60000 // A.shape[0])
+        compare_orderings(f"{args.packing} sheared disks, A - sigma I", A, rng.standard_normal(A.shape[0]), calls,
+                          args.repeat)
+        compare_orderings(f"{args.packing} sheared disks, the corrector's bordered matrix", M,
+                          rng.standard_normal(M.shape[0]), calls,
+                          args.repeat, (("the packing's (MMD, A + A^T, partial pivoting)",
+                                         PackingEquilibria.factor_options), DEFAULT))
 
 
-def compare_orderings(label: str, M, r, calls: int, repeat: int) -> None:
-    """Factorization, nnz(L + U), substitution and backward error with the shift-invert's
-    ordering and SuperLU's default; the factorization again with the ordering kept for the
-    pattern (continuation/orderings.py: what the core does from the second matrix of a
-    pattern on)."""
+DEFAULT = ("SuperLU's default (COLAMD)", {})
+
+
+def compare_orderings(label: str, M, r, calls: int, repeat: int,
+                      orderings=(("shift-invert's (MMD, A + A^T)", SHIFT_INVERT_ORDERING), DEFAULT)) -> None:
+    """Factorization, nnz(L + U), substitution and backward error with each of `orderings`
+    (name, splu's keywords; default: the shift-invert's and SuperLU's default); the
+    factorization again with the ordering kept for the pattern (continuation/orderings.py: what
+    the core does from the second matrix of a pattern on)."""
     print(f"{label} (n = {M.shape[0]}):")
-    for name, options in (("shift-invert's (MMD, A + A^T)", SHIFT_INVERT_ORDERING),
-                          ("SuperLU's default (COLAMD)", {})):
+    for name, options in orderings:
         with blas_threads():
             lu = spla.splu(M, **options)
             tri = TriangularFactors.of(lu)
@@ -111,10 +123,10 @@ def compare_orderings(label: str, M, r, calls: int, repeat: int) -> None:
               f"backward error {residual:.1e}")
 
 
-def packing_matrix(N: int):
-    """A_red - sigma I (CSC) of N disks (seed 1) at the start of their shear, sigma the centre
-    of the window [-3, 8]."""
-    from diskfriction.packings.equilibria import PackingEquilibria
+def packing_matrices(N: int):
+    """(A_red - sigma I, the corrector's bordered matrix [[G_u, G_p], [t^T]]) (CSC) of N disks
+    (seed 1) at the start of their shear, sigma the centre of the window [-3, 8], t the branch's
+    tangent there."""
     from diskfriction.packings.prepared import prepare_scene
     from diskfriction.packings.shear import mass_diagonal, network_of, start
     from diskfriction.scenes.packing import PackingScene
@@ -125,7 +137,11 @@ def packing_matrix(N: int):
     problem = PackingEquilibria(network, q, xi, rows, 0.0, mass_diagonal(network, scene.m, scene.inertia),
                                 scene.matrix)
     A = problem.reduced(q, 0.0)
-    return sp.csc_array(A - 2.5 * sp.identity(A.shape[0], format="csr"))
+    x = np.append(q, 0.0)
+    e_p = np.zeros(x.size)
+    e_p[-1] = 1.0
+    M = sp.csc_array(bordered_matrix(problem, x, tangent(problem, x, e_p)))
+    return sp.csc_array(A - 2.5 * sp.identity(A.shape[0], format="csr")), M
 
 
 if __name__ == "__main__":

@@ -427,7 +427,7 @@ class StepScan:
         mean_a, mean_b = (a.eigvals[i] + a.eigvals[j]).real / 2, (b.eigvals[i] + b.eigvals[j]).real / 2
         lam = float(mean_a + t * (mean_b - mean_a))
         u, p = x[:-1], float(x[-1])
-        v, w, overlap = jordan_chain_near(self.problem.stability_matrix(u, p), lam)
+        v, w, overlap = jordan_chain_near(self.problem.stability_matrix(u, p), lam, self.problem.factor_options)
         # a sample on the collision itself (real side with D <= 4 thr^2) is its own bracket
         bracket = (min(a.p, b.p), max(a.p, b.p)) if self.narrow(a, b) or not resolved else (p, p)
         return Collision(p=p, kind=kind, eigenvalue=lam, eigenvector=v, generalized_eigenvector=w,

@@ -36,6 +36,7 @@ At the solution, v is the eigenvector and v_lambda (B [v_lambda; gamma] = [v; 0]
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Optional
 
 import numpy as np
 import scipy.sparse as sp
@@ -103,7 +104,7 @@ def locate_double_eigenvalue(problem: Problem, x0: Array, lam0: float, right0: A
         u, p = x[:-1], float(x[-1])
         G = problem.residual(u, p)
         try:
-            branch = factorize(bordered_matrix(problem, x, t))
+            branch = factorize(bordered_matrix(problem, x, t), problem.factor_options)
             a = branch.solve(np.append(-G, 0.0))
             t_new = branch.solve(e)
             t = t_new / np.linalg.norm(t_new) * np.sign(t_new @ t)
@@ -111,7 +112,7 @@ def locate_double_eigenvalue(problem: Problem, x0: Array, lam0: float, right0: A
             if it == 1:
                 scale = _border_scale(A)
                 c, b = scale * c, scale * b
-            B = factorize(bordered(A - lam * _identity(A), b, c))
+            B = factorize(bordered(A - lam * _identity(A), b, c), problem.factor_options)
             vg = B.solve(e_m)
             v, g = vg[:m], vg[m]
             w = B.solve(e_m, transpose=True)[:m]
@@ -170,21 +171,23 @@ def _derivative_products(problem: Problem, x: Array, d: Array, v: Array, w: Arra
 def _finish(problem, x, lam, b, c, residual, dp, iterations, history) -> Located:
     """Eigenvector, Jordan vector and left-right overlap at the converged point."""
     A = problem.stability_matrix(x[:-1], float(x[-1]))
-    v, w, overlap = jordan_chain(A, lam, b, c)
+    v, w, overlap = jordan_chain(A, lam, b, c, problem.factor_options)
     return Located(x, float(lam), v, w, overlap, residual, dp, iterations, history)
 
 
-def jordan_chain(A, lam: float, b: Array, c: Array) -> tuple[Array, Array, float]:
+def jordan_chain(A, lam: float, b: Array, c: Array,
+                 options: Optional[dict] = None) -> tuple[Array, Array, float]:
     """(v, w, overlap) at a double eigenvalue lam of A (dense or sparse), from the bordered
     matrix B = [[A - lam I, b], [c^T, 0]] (module docstring; one factorization, three solves):
     the unit right eigenvector v (B [v; g] = e_(n+1), largest component positive), the
     generalized eigenvector w ((A - lam I) w = v up to the border, made orthogonal to v) and
     overlap = |y . v| for the unit left eigenvector y (B^T [y; .] = e_(n+1); -> 0 at a Jordan
-    block). Raises SingularMatrix if the borders do not make B regular."""
+    block). options: the problem's factor_options (Problem). Raises SingularMatrix if the
+    borders do not make B regular."""
     m = A.shape[0]
     e = np.zeros(m + 1)
     e[-1] = 1.0
-    B = factorize(bordered(A - lam * _identity(A), b, c))
+    B = factorize(bordered(A - lam * _identity(A), b, c), options)
     v = B.solve(e)[:m]
     y = B.solve(e, transpose=True)[:m]
     scale = np.linalg.norm(v)
@@ -195,7 +198,7 @@ def jordan_chain(A, lam: float, b: Array, c: Array) -> tuple[Array, Array, float
     return v_unit, w, float(abs(y @ v_unit) / np.linalg.norm(y))
 
 
-def jordan_chain_near(A, lam: float) -> tuple[Array, Array, float]:
+def jordan_chain_near(A, lam: float, options: Optional[dict] = None) -> tuple[Array, Array, float]:
     """jordan_chain at lam when no approximate eigenvector is at hand (a collision interpolated
     between samples): a first bordered solve with pseudo-random borders (seeded: runs repeat;
     B is singular only for borders orthogonal to a null vector, a set of measure zero) gives
@@ -208,6 +211,6 @@ def jordan_chain_near(A, lam: float) -> tuple[Array, Array, float]:
     e = np.zeros(m + 1)
     e[-1] = 1.0
     B = factorize(bordered(A - lam * _identity(A), scale * _unit(rng.standard_normal(m)),
-                           scale * _unit(rng.standard_normal(m))))
+                           scale * _unit(rng.standard_normal(m))), options)
     v, y = B.solve(e)[:m], B.solve(e, transpose=True)[:m]
-    return jordan_chain(A, lam, scale * _unit(y), scale * _unit(v))
+    return jordan_chain(A, lam, scale * _unit(y), scale * _unit(v), options)

@@ -84,7 +84,7 @@ def bordered_newton(problem: Problem, x_target: Array, border: Array, tol: float
             return NewtonResult(x, max_iter, r, False, ROUNDING * term_size(M, x))
         rhs = np.append(G, border @ (x - x_target))
         try:
-            x = x - factorize(M).solve(rhs)
+            x = x - factorize(M, problem.factor_options).solve(rhs)
         except SingularMatrix:
             return NewtonResult(x, it, r, False)
     # the loop returns at it == max_iter at the latest
@@ -114,5 +114,5 @@ def tangent(problem: Problem, x: Array, border: Array) -> Array:
     """
     rhs = np.zeros(x.size)
     rhs[-1] = 1.0
-    t = factorize(bordered_matrix(problem, x, border)).solve(rhs)
+    t = factorize(bordered_matrix(problem, x, border), problem.factor_options).solve(rhs)
     return t / np.linalg.norm(t)

@@ -69,9 +69,16 @@ class Problem(ABC):
 
     rounding: 0, or the relative rounding of G's evaluation: a Newton iterate with max|G| <=
     rounding * max_i sum_j |dG_i/dx_j| |x_j| (the size of the terms that cancel in G,
-    newton.term_size) is converged whatever newton_tol asks (newton.bordered_newton)."""
+    newton.term_size) is converged whatever newton_tol asks (newton.bordered_newton).
+
+    factor_options: SuperLU's keyword arguments (scipy's splu) for the sparse LU factorizations
+    of the bordered systems (the corrector's, the tangent's, the collision locator's); None:
+    SuperLU's defaults, COLAMD's column order with partial pivoting. A problem whose Jacobian
+    has a symmetric pattern may order by minimum degree on A + A^T instead (PackingEquilibria);
+    the chain keeps COLAMD, under which minimum degree loses its order to the pivots."""
 
     rounding: float = 0.0
+    factor_options: Optional[dict] = None
 
     @abstractmethod
     def residual(self, u: Array, p: float) -> Array:

@@ -61,6 +61,28 @@ def test_the_tracked_spectrum_is_the_networks_without_its_zero_modes(packing):
     assert np.sort(np.abs(full))[zeros - 1] <= 1e-9 * np.abs(full).max()
 
 
+def test_the_bordered_systems_factorized_by_minimum_degree_solve_as_superlus_default(packing, monkeypatch):
+    """PackingEquilibria.factor_options (minimum degree on A + A^T, partial pivoting): the
+    corrector's and the tangent's factorizations take them, with less fill than SuperLU's
+    default (COLAMD), and the bordered solves agree with the default's to 1e-12."""
+    from diskfriction.continuation import linalg, newton
+    problem = problem_at_start(packing)
+    x = np.append(problem.q_c, 0.0)
+    e_p = np.zeros(x.size)
+    e_p[-1] = 1.0
+    M = newton.bordered_matrix(problem, x, e_p)
+    rhs = np.random.default_rng(1).standard_normal(x.size)
+    ours, default = linalg.factorize(M, problem.factor_options), linalg.factorize(M)
+    fill = [f.lu.L.nnz + f.lu.U.nnz for f in (ours, default)]
+    assert fill[0] < fill[1]
+    assert np.allclose(ours.solve(rhs), default.solve(rhs), rtol=0, atol=1e-12 * np.abs(default.solve(rhs)).max())
+    taken = []
+    monkeypatch.setattr(newton, "factorize", lambda M, options=None: taken.append(options) or linalg.factorize(M, options))
+    newton.tangent(problem, x, e_p)
+    newton.bordered_newton(problem, x + 1e-9, e_p, tol=0.0, max_iter=1)
+    assert taken == [problem.factor_options] * 2 and problem.factor_options["permc_spec"] == "MMD_AT_PLUS_A"
+
+
 def test_every_accepted_point_is_in_force_balance(branch):
     assert len(branch) > 10 and branch.gamma[-1] > 0
     assert branch.residual.max() <= ShearParams().newton_tol
