@@ -18,7 +18,8 @@ of every real eigenvalue against its gap (certify.outruns_gaps).
 
 With a spectral window, the labels beyond its certified band at both ends whose cubic model
 stays beyond it in between (beyond_band) are left out of the events and the certificates:
-their collisions lie outside the window.
+their collisions lie outside the window. Their status changes need no explaining either
+(explained_within_band), where all labels' cannot be.
 
 Pure functions of samples (samples.Sample) and the tolerances they are given: rho is the
 certification margin, doubt the weight of a model's cubic term (certify.py); the resolution
@@ -124,14 +125,19 @@ def beyond_band(a: Sample, b: Sample, d_a: Array, d_b: Array, doubt: float) -> A
 
 def judge_fast(a: Sample, b: Sample, segment: Segment, rho: float, doubt: float) -> Verdict:
     """The fast detection's verdict on [a, b] (module docstring; the samples carry slopes). The
-    status change must be explained by births and deaths of all active labels; the events and
+    status change must be explained by births and deaths of all active labels, or, with a
+    window, of those within its certified band (explained_within_band); the events and
     certificates leave out the labels beyond a window's certified band (beyond_band)."""
     active = active_labels(a, b)
     events, consistent = status_events(a, b, active)
-    if not consistent:
+    if not consistent and a.band is None:
         return Verdict(VerdictKind.SPLIT, events, False, 0.5 * (a.s + b.s))
     d_a, d_b = scaled_slopes(a, b, segment)
     beyond = beyond_band(a, b, d_a, d_b, doubt)
+    if not consistent:
+        events, consistent = explained_within_band(a, b, active, beyond, events)
+        if not consistent:
+            return Verdict(VerdictKind.SPLIT, events, False, 0.5 * (a.s + b.s))
     if beyond.any():
         events = [(i, j, kind) for i, j, kind in events if not (beyond[i] or beyond[j])]
         active = active & ~beyond
@@ -140,6 +146,22 @@ def judge_fast(a: Sample, b: Sample, segment: Segment, rho: float, doubt: float)
         t_split, labels = split
         return Verdict(VerdictKind.SPLIT, events, True, a.s + t_split * (b.s - a.s), labels)
     return _settled(events)
+
+
+def explained_within_band(a: Sample, b: Sample, active: Array, beyond: Array, events: list):
+    """(events, consistent) of [a, b] on the active labels whose status change need not be
+    explained by events: those beyond the window's certified band at both ends (beyond_band),
+    and the partners of their events. Their collisions lie outside the window, where the
+    relabelling of a quickly moving guard band is no concern: 256 sheared disks, 6.4e-11 in
+    strain short of a contact opening, a complex pair at Re lambda = 9.06 died and another was
+    born at 9.03 within one interval, past the band's edge at 8.83; the pairing could not
+    explain it, the interval was too narrow to split, and the birth it held at 4.24, inside
+    the window, was reported unresolved."""
+    partners = np.zeros(active.size, bool)
+    for i, j, _ in events:
+        if beyond[i] or beyond[j]:
+            partners[[i, j]] = True
+    return status_events(a, b, active & ~beyond & ~partners)
 
 
 def judge_exhaustive(a: Sample, b: Sample, stencil: Optional[Sample], rho: float) -> Verdict:

@@ -85,6 +85,31 @@ def test_a_verdict_lists_the_birth_of_the_pair_and_its_labels():
     assert kind == "birth" and {i, j} == {label_of(a, V * 0.1995), label_of(a, 2.0)}
 
 
+def test_a_relabelling_beyond_the_windows_band_needs_no_explaining():
+    """The birth of the bubble's pair in [0.1995, 0.2001] beside three eigenvalues 20, 21, 22
+    whose statuses change in a way no birth or death explains (at a: 21 and 22 a 'pair'; at b:
+    20 and 22), as a guard band's pairs relabel where they move fast. With a window whose
+    certified band ends at 10, those three lie beyond it at both ends: the verdict holds the
+    birth, consistent. With the band reaching 30, or with no window, the change must be
+    explained and the interval splits."""
+    problem = bubble_problem((1.0, 2.0, 3.0, 20.0, 21.0, 22.0))
+    a, b, segment = interval(problem, 7, 0.1995, 0.2001)
+    far = [label_of(a, v) for v in (20.0, 21.0, 22.0)]
+    status_a, status_b = a.status.copy(), b.status.copy()
+    status_a[far], status_b[far] = [0, -1, 1], [-1, 0, 1]
+
+    def verdict(band):
+        return judge_fast(replace(a, status=status_a, band=band), replace(b, status=status_b, band=band),
+                          segment, RHO, DOUBT)
+
+    within = verdict((-10.0, 10.0))
+    assert within.kind == "events" and within.consistent and len(within.events) == 1
+    i, j, kind = within.events[0]
+    assert kind == "birth" and {i, j} == {label_of(a, V * 0.1995), label_of(a, 2.0)}
+    for band in [(-10.0, 30.0), None]:
+        assert verdict(band).kind == "split" and not verdict(band).consistent
+
+
 def test_the_exhaustive_verdict_needs_its_stencil():
     """Without slopes an interval is certified by the quadratic through a third sample: with
     none it splits; with one at p = 0.05 (s = 1.5) the pair of the fast eigenvalue and 1,
