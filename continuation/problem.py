@@ -74,8 +74,10 @@ class Problem(ABC):
     factor_options: SuperLU's keyword arguments (scipy's splu) for the sparse LU factorizations
     of the bordered systems (the corrector's, the tangent's, the collision locator's); None:
     SuperLU's defaults, COLAMD's column order with partial pivoting. A problem whose Jacobian
-    has a symmetric pattern may order by minimum degree on A + A^T instead (PackingEquilibria);
-    the chain keeps COLAMD, under which minimum degree loses its order to the pivots."""
+    has a symmetric pattern may order by minimum degree on A + A^T instead (PackingEquilibria:
+    1.44 against 2.08 ms at 256 disks). The chain keeps the default: minimum degree would save
+    11 % there (N = 1000, the corrector's matrix: 1.18 against 1.33 ms) and move its reference
+    sweeps at the rounding level."""
 
     rounding: float = 0.0
     factor_options: Optional[dict] = None
