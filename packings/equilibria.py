@@ -164,10 +164,12 @@ class PackingEquilibria(Problem):
 
     factor_options = dict(permc_spec="MMD_AT_PLUS_A")
     """The bordered systems' LU ordered by minimum degree on the pattern of A + A^T (the contact
-    network's Jacobian is structurally symmetric), with SuperLU's partial pivoting: 256 sheared
-    disks (n + 1 = 769), the corrector's matrix factorized in 1.14 against 2.16 ms under COLAMD,
-    nnz(L + U) 45 700 against 89 400, solves 52 against 69 us, the same backward error (6e-18);
-    the locator's in 1.16 against 1.79 ms (benchmarks/solve_speed.py)."""
+    network's Jacobian is structurally symmetric), with SuperLU's partial pivoting. 256 sheared
+    disks (n + 1 = 769), the corrector's matrix against SuperLU's default (COLAMD): factorized
+    in 1.44 against 2.08 ms with the ordering kept (1.71 against 2.52 ms without), nnz(L + U)
+    45 676 against 89 190, substitution 46 against 91 us, backward errors 2.6e-17 against
+    3.7e-17 (benchmarks/solve_speed.py, 2026-11-28). The collision locator fails as often with
+    it (docs/packings.md, stop 45)."""
 
     def __init__(self, network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray,
                  gamma: float, mass: np.ndarray, matrix: str = "M^-1 J",
