@@ -134,10 +134,10 @@ def judge_fast(a: Sample, b: Sample, segment: Segment, rho: float, doubt: float)
         return Verdict(VerdictKind.SPLIT, events, False, 0.5 * (a.s + b.s))
     d_a, d_b = scaled_slopes(a, b, segment)
     beyond = beyond_band(a, b, d_a, d_b, doubt)
-    if not consistent:
+    if not consistent and beyond.any():
         events, consistent = explained_within_band(a, b, active, beyond, events)
-        if not consistent:
-            return Verdict(VerdictKind.SPLIT, events, False, 0.5 * (a.s + b.s))
+    if not consistent:
+        return Verdict(VerdictKind.SPLIT, events, False, 0.5 * (a.s + b.s))
     if beyond.any():
         events = [(i, j, kind) for i, j, kind in events if not (beyond[i] or beyond[j])]
         active = active & ~beyond
