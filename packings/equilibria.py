@@ -51,7 +51,7 @@ import scipy.sparse as sp
 from diskfriction.continuation.problem import Problem
 from diskfriction.errors import OneLineError
 from diskfriction.continuation.spectra import Eigensystem, eigensystem
-from diskfriction.continuation.spectral_window import (EXTRA, MARGIN, Window, sized, widened,
+from diskfriction.continuation.spectral_window import (Window, sized, widened,
                                                        window_eigensystem)
 from diskfriction.matrices import Matrix
 from diskfriction.packings.assembly import Assembly
@@ -87,13 +87,15 @@ row sum at the committed state: below every eigenvalue of A_red (Gershgorin), so
 shift-invert near the tracked spectrum (a partial sample near a fold's zero eigenvalue) never
 meets the gauge rows, and constant along a step, so that dA/dgamma is zero there."""
 
-WINDOW_MARGIN, WINDOW_EXTRA = MARGIN, EXTRA
+WINDOW_MARGIN, WINDOW_EXTRA = 1.2, 4
 """A spectral window's k at the start of a segment: WINDOW_MARGIN times the eigenvalues within
-its reach there, plus WINDOW_EXTRA: the chain's (spectral_window.MARGIN, EXTRA: 1.5 and 8). Where shear softens the low spectrum and
-the window crowds, it is sized anew and the run goes on (packings/shear.py). The cost of a
-window sample grows about as k: with 2 and 16 (k = 68 against 47 at the start) 256 disks took
-188.5 s to gamma = 2e-3 against 135.0 s, on the same 207 points with the same 150
-collisions (to 1.7e-15), neither widening (docs/packings.md)."""
+its reach there, plus WINDOW_EXTRA (the chain keeps spectral_window.MARGIN and EXTRA, 1.5 and
+8). Where shear softens the low spectrum and the window crowds, it is sized anew and the run
+goes on (packings/shear.py). The cost of a window sample grows about as k: 256 disks (window
+[-3, 8]) to gamma = 1e-3 inline, the same 60 points and 53 collisions, took 15.8 s with 1.2
+and 4 (k = 31) against 18.3 s with 1.5 and 8 (k = 42), and 16.3 s with 1.1 and 4; with 2 and
+16 (k = 68 against 47 then) 188.5 s to gamma = 2e-3 against 135.0 s. A smaller margin crowds
+more often: to gamma = 0.01 on two workers 3 widenings against none (docs/packings.md)."""
 
 SLIP_BAND = 1e-3
 """A contact that the cap held at a commit is sliding while its history lies within this
