@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 import scipy.sparse as sp
 
@@ -39,22 +40,15 @@ class Assembly:
         """The map for J's pattern (rows, cols) (one entry per value, duplicates allowed), L
         (m x n), R (n x k) and C (m x k, or None: zero)."""
         L, R = sp.csc_array(L), sp.csr_array(R)
+        C = sp.coo_array((L.shape[0], R.shape[1]) if C is None else C)
         shape = (L.shape[0], R.shape[1])
-        e = np.arange(rows.size)
-        # every value e reaches A[a, b] through L[a, rows[e]] and R[cols[e], b]
-        e_l, a, w_l = _expand(L.indptr, L.indices, L.data, rows, e)
-        e_lr, b, w_r = _expand(R.indptr, R.indices, R.data, cols[e_l], np.arange(e_l.size))
-        a, e_all, w = a[e_lr], e_l[e_lr], w_l[e_lr] * w_r
-        C = sp.coo_array((0, 0) if C is None else C)
-        keys = np.concatenate([a * shape[1] + b, C.row.astype(np.int64) * shape[1] + C.col])
-        slots, slot_of = np.unique(keys, return_inverse=True)
-        S = sp.csr_array((w, (slot_of[:a.size], e_all)), shape=(slots.size, rows.size))
-        constant = np.zeros(slots.size)
-        np.add.at(constant, slot_of[a.size:], C.data)
-        row_of = slots // shape[1]
-        indptr = np.zeros(shape[0] + 1, dtype=np.int64)
-        np.cumsum(np.bincount(row_of, minlength=shape[0]), out=indptr[1:])
-        return cls(shape, indptr, (slots % shape[1]).astype(np.int64), S, constant)
+        indptr, indices, s_indptr, s_indices, s_data, constant = _linear_map(
+            np.asarray(rows, np.int64), np.asarray(cols, np.int64),
+            L.indptr.astype(np.int64), L.indices.astype(np.int64), L.data.astype(float),
+            R.indptr.astype(np.int64), R.indices.astype(np.int64), R.data.astype(float),
+            C.row.astype(np.int64), C.col.astype(np.int64), C.data.astype(float), shape[0], shape[1])
+        S = sp.csr_array((s_data, s_indices, s_indptr), shape=(indices.size, len(rows)))
+        return cls(shape, indptr, indices, S, constant)
 
     def __call__(self, values: Array, constant: bool = True) -> sp.csr_array:
         """A(values) (CSR, sorted indices, the same pattern at every call); without C if not
@@ -65,11 +59,83 @@ class Assembly:
         return A
 
 
-def _expand(indptr: Array, indices: Array, data: Array, lines: Array, owner: Array):
-    """For each owner k and the compressed line lines[k] (a CSC column or CSR row): its
-    entries, as (owner repeated, index, value)."""
-    counts = indptr[lines + 1] - indptr[lines]
-    repeated = np.repeat(owner, counts)
-    starts = np.repeat(indptr[lines] - np.cumsum(counts) + counts, counts)
-    at = starts + np.arange(repeated.size)
-    return repeated, indices[at], data[at]
+@numba.njit(cache=True)
+def _linear_map(rows, cols, Lp, Li, Lx, Rp, Ri, Rx, Crow, Ccol, Cdata, m, k):
+    """A's pattern and the map S of Assembly.of, in O(contributions): value e reaches A[a, b]
+    with weight L[a, rows[e]] R[cols[e], b]; A's columns sorted within each row (Gustavson's
+    symbolic product, a marker per column), S's rows (A's entries) holding their values e in
+    increasing order. Returns (indptr, indices) of A and (indptr, indices, data) of S (int32
+    indices: scipy keeps them without a check or a copy) and C on A's pattern."""
+    nv = rows.size
+    count = 0
+    for e in range(nv):
+        count += (Lp[rows[e] + 1] - Lp[rows[e]]) * (Rp[cols[e] + 1] - Rp[cols[e]])
+    a_of, b_of = np.empty(count, np.int64), np.empty(count, np.int64)
+    e_of, w_of = np.empty(count, np.int64), np.empty(count)
+    c = 0
+    for e in range(nv):
+        for p in range(Lp[rows[e]], Lp[rows[e] + 1]):
+            for q in range(Rp[cols[e]], Rp[cols[e] + 1]):
+                a_of[c], b_of[c], e_of[c], w_of[c] = Li[p], Ri[q], e, Lx[p] * Rx[q]
+                c += 1
+    # the contributions and C's entries grouped by row of A (counting sort)
+    total = count + Crow.size
+    per_row = np.zeros(m + 1, np.int64)
+    for c in range(count):
+        per_row[a_of[c] + 1] += 1
+    for c in range(Crow.size):
+        per_row[Crow[c] + 1] += 1
+    for a in range(m):
+        per_row[a + 1] += per_row[a]
+    fill = per_row[:-1].copy()
+    by_row = np.empty(total, np.int64)  # c < count: a contribution; else C's entry c - count
+    for c in range(count):
+        by_row[fill[a_of[c]]] = c
+        fill[a_of[c]] += 1
+    for c in range(Crow.size):
+        by_row[fill[Crow[c]]] = count + c
+        fill[Crow[c]] += 1
+    # A's pattern row by row, and the slot of every contribution and C entry
+    indptr = np.zeros(m + 1, np.int32)
+    indices = np.empty(total, np.int32)
+    slot_of = np.empty(total, np.int64)
+    position = np.full(k, -1, np.int64)
+    nnz = 0
+    for a in range(m):
+        start = nnz
+        for r in range(per_row[a], per_row[a + 1]):
+            c = by_row[r]
+            b = b_of[c] if c < count else Ccol[c - count]
+            if position[b] < 0:
+                position[b] = 0
+                indices[nnz] = b
+                nnz += 1
+        for t in range(start + 1, nnz):  # insertion sort: a row holds a few tens of columns
+            b, u = indices[t], t
+            while u > start and indices[u - 1] > b:
+                indices[u] = indices[u - 1]
+                u -= 1
+            indices[u] = b
+        for t in range(start, nnz):
+            position[indices[t]] = t
+        for r in range(per_row[a], per_row[a + 1]):
+            c = by_row[r]
+            slot_of[c] = position[b_of[c] if c < count else Ccol[c - count]]
+        for t in range(start, nnz):
+            position[indices[t]] = -1
+        indptr[a + 1] = nnz
+    # S: one row per slot, its values in increasing e (the contributions are generated so)
+    s_indptr = np.zeros(nnz + 1, np.int32)
+    for c in range(count):
+        s_indptr[slot_of[c] + 1] += 1
+    for t in range(nnz):
+        s_indptr[t + 1] += s_indptr[t]
+    at = s_indptr[:-1].astype(np.int64)
+    s_indices, s_data = np.empty(count, np.int32), np.empty(count)
+    for c in range(count):
+        s_indices[at[slot_of[c]]], s_data[at[slot_of[c]]] = e_of[c], w_of[c]
+        at[slot_of[c]] += 1
+    constant = np.zeros(nnz)
+    for c in range(Crow.size):
+        constant[slot_of[count + c]] += Cdata[c]
+    return indptr, indices[:nnz].copy(), s_indptr, s_indices, s_data, constant
