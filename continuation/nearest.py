@@ -13,6 +13,10 @@ KRYLOV_EXTRA vectors larger than k (krylov_size).
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Optional
+
+import numba
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
@@ -61,29 +65,82 @@ def start_vector(n: int) -> Array:
     return np.random.default_rng(n).standard_normal(n)
 
 
+@dataclass(frozen=True)
+class Deflated:
+    """A matrix B to shift-invert in place of A (same coordinates) where its LU fills less:
+    B's nonzero spectrum off its null space is A's, B T = 0 and U^T B = 0 (T, U: n x r, U^T T
+    invertible), and the maps take B's eigenvectors to A's: right vectors r_A = right_map r_B,
+    left vectors l_A = left_map l_B (sparse n x n). The shift-invert iterates with the
+    projected (B - sigma I)^-1, v -> x - T (U^T T)^-1 U^T x (and its transpose for the left
+    side), on which B's null space has eigenvalue 0, never among the largest: the eigenvalues
+    nearest sigma are those of B's other eigenvalues, A's (packings/equilibria.py: the
+    network's M^-1 J, whose translations T and total forces U are its null spaces, against
+    A_g, whose coordinates relative to a reference disk couple every row to that disk's:
+    nnz(L + U) 38 600 against 54 900 at 256 disks)."""
+
+    matrix: object
+    right_null: Array
+    left_null: Array
+    right_map: object
+    left_map: object
+
+    def operators(self, lu, n: int) -> tuple:
+        """The projected solves with B - sigma I's factorization `lu` (direct, transposed)."""
+        T, U = np.ascontiguousarray(self.right_null), np.ascontiguousarray(self.left_null)
+        C = np.linalg.inv(U.T @ T)
+        Ct = np.ascontiguousarray(C.T)
+        return (spla.LinearOperator((n, n), matvec=lambda r: _project(lu.solve(r), T, C, U), dtype=float),
+                spla.LinearOperator((n, n), matvec=lambda r: _project(lu.solve(r, transpose=True), U, Ct, T),
+                                    dtype=float))
+
+
+@numba.njit(cache=True)
+def _project(x: Array, T: Array, C: Array, U: Array) -> Array:
+    """x - T C U^T x in place (T, U: n x r, C: r x r); returns x. One compiled pass instead of
+    four numpy calls (about 5 us a solve at n = 768, a tenth of the solve)."""
+    n, r = T.shape
+    u = np.zeros(r)
+    for i in range(n):
+        for a in range(r):
+            u[a] += U[i, a] * x[i]
+    c = C @ u
+    for i in range(n):
+        for a in range(r):
+            x[i] -= T[i, a] * c[a]
+    return x
+
+
 class ShiftInvertFailed(RuntimeError):
     """A - sigma I is singular or ARPACK did not converge."""
 
 
-def nearest_eigensystem(A: Matrix, sigma: float, k: int) -> tuple[Eigensystem, float]:
+def nearest_eigensystem(A: Matrix, sigma: float, k: int,
+                        deflated: Optional[Deflated] = None) -> tuple[Eigensystem, float]:
     """(the eigensystem of the k eigenvalues of A nearest sigma with normalised left and right
     vectors, radius: the largest |lambda - sigma| among them); every eigenvalue of A strictly
-    closer to sigma than radius is among the k. Raises ShiftInvertFailed. The caller books it
+    closer to sigma than radius is among the k. With `deflated`, its matrix is shift-inverted
+    and its vectors mapped to A's (Deflated). Raises ShiftInvertFailed. The caller books it
     (linalg.book)."""
     n = A.shape[0]
     if not 0 < k < n - 1:
         raise ShiftInvertFailed(f"k = {k} must lie in 1..{n - 2} for an {n} x {n} matrix")
-    shift = sp.identity(n, format="csr") * sigma if sp.issparse(A) else sigma * np.eye(n)
+    B = A if deflated is None else deflated.matrix
+    shift = sp.identity(n, format="csr") * sigma if sp.issparse(B) else sigma * np.eye(n)
     try:
-        lu = factorize(A - shift, SHIFT_INVERT_ORDERING)
-        inverse = spla.LinearOperator((n, n), matvec=lu.solve, dtype=float)
-        inverse_t = spla.LinearOperator((n, n), matvec=lambda r: lu.solve(r, transpose=True), dtype=float)
+        lu = factorize(B - shift, SHIFT_INVERT_ORDERING)
+        if deflated is None:
+            inverse = spla.LinearOperator((n, n), matvec=lu.solve, dtype=float)
+            inverse_t = spla.LinearOperator((n, n), matvec=lambda r: lu.solve(r, transpose=True), dtype=float)
+        else:
+            inverse, inverse_t = deflated.operators(lu, n)
         v0 = start_vector(n)
         ncv = krylov_size(k, n)
-        _, V = spla.eigs(A, k=k, sigma=sigma, OPinv=inverse, v0=v0, ncv=ncv)
-        _, W = spla.eigs(A.T, k=k, sigma=sigma, OPinv=inverse_t, v0=v0, ncv=ncv)
+        _, V = spla.eigs(B, k=k, sigma=sigma, OPinv=inverse, v0=v0, ncv=ncv)
+        _, W = spla.eigs(B.T, k=k, sigma=sigma, OPinv=inverse_t, v0=v0, ncv=ncv)
     except (np.linalg.LinAlgError, spla.ArpackError, spla.ArpackNoConvergence) as err:
         raise ShiftInvertFailed(f"shift-invert at sigma = {sigma:.6g}: {err}") from None
+    if deflated is not None:
+        V, W = deflated.right_map @ V, deflated.left_map @ W
     # A^T w = lambda w makes w^T (not w^H) a left row for lambda, and conj(w) the left
     # vector l (l^H A = lambda l^H); with w^H the projection pairs a complex eigenvalue's right
     # vector with its conjugate's left one, which is wrong when the k nearest hold one member

@@ -124,6 +124,11 @@ class Problem(ABC):
         """The matrix A(u, p) whose eigenvalues are tracked; default dG/du."""
         return self.jacobian(u, p)
 
+    def deflated(self, u: Array, p: float):
+        """A nearest.Deflated to shift-invert in place of stability_matrix(u, p) (its LU fills
+        less), or None (default): the matrix itself."""
+        return None
+
     def spectrum_matrix(self, u: Array, p: float):
         """What eigensystem(u, p) is computed from: two points where it is the same matrix
         (linalg.same_matrix) have the same eigensystem. Default: stability_matrix(u, p)."""

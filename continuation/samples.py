@@ -445,6 +445,7 @@ def partial_sample_at(problem: Problem, s: float, x: Array, left: Sample, cluste
     spectrum would offer), when two groups claim the same eigenvalue, or when a shift-invert
     fails."""
     A = problem.stability_matrix(x[:-1], float(x[-1]))
+    deflated = problem.deflated(x[:-1], float(x[-1]))
     dA = matrix_derivative(problem, x, tangent)
     step = x - left.x
     ds_left, ds_new = float(step @ left.tangent), float(step @ tangent)
@@ -454,7 +455,7 @@ def partial_sample_at(problem: Problem, s: float, x: Array, left: Sample, cluste
     for labels, sigma, k in clusters:
         book("spectra_partial")
         try:
-            system, radius = nearest_eigensystem(A, sigma, k)
+            system, radius = nearest_eigensystem(A, sigma, k, deflated)
         except ShiftInvertFailed:
             return None
         dlam = eigenvalue_slopes(system, dA)

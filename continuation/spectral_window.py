@@ -140,16 +140,17 @@ def widened(window: Window, A: Matrix, margin: float = MARGIN, extra: int = EXTR
     return Window(window.lo, window.hi, min(k, A.shape[0] - 2))
 
 
-def window_eigensystem(A: Matrix, window: Window, vectors: bool) -> Eigensystem:
+def window_eigensystem(A: Matrix, window: Window, vectors: bool, deflated=None) -> Eigensystem:
     """The window.k eigenvalues of the sparse A nearest the window's centre (module docstring),
-    with normalised left and right vectors if `vectors`; excluded beyond the guard bands,
-    guard within them. Raises WindowCrowded."""
+    with normalised left and right vectors if `vectors` (shift-inverting `deflated`'s matrix
+    if given: nearest.Deflated); excluded beyond the guard bands, guard within them. Raises
+    WindowCrowded."""
     book("spectra")
     k, sigma = window.k, window.sigma
     if not vectors:
         values = spla.eigs(A, k=k, sigma=sigma, v0=start_vector(A.shape[0]), return_eigenvectors=False)
         return _classified(Eigensystem(values.astype(complex)), window)
-    return _classified(nearest_eigensystem(A, sigma, k)[0], window)
+    return _classified(nearest_eigensystem(A, sigma, k, deflated)[0], window)
 
 
 def _classified(system: Eigensystem, window: Window) -> Eigensystem:

@@ -43,11 +43,12 @@ values (packings/assembly.py), set up at every commit.
 from __future__ import annotations
 
 import hashlib
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
 
+from diskfriction.continuation.nearest import Deflated
 from diskfriction.continuation.problem import Problem
 from diskfriction.errors import OneLineError
 from diskfriction.continuation.spectra import Eigensystem, eigensystem
@@ -245,6 +246,21 @@ class PackingEquilibria(Problem):
                              shape=(n, g.kept.size))
         self._stability = Assembly.of(rows, cols, embed @ g.P @ inverse_mass, E @ embed.T,
                                       sp.diags_array(parked))
+        self._deflation = self._deflation_of(inverse_mass, parked[g.rows[0]], embed @ g.P, embed @ E.T)
+
+    def _deflation_of(self, inverse_mass, parked: float, right_map, left_map) -> tuple:
+        """The parts of deflated() fixed by the committed state: the assembly of A (J or
+        M^-1 J) with the loose disks' dofs parked on its diagonal, A's null spaces without the
+        loose disks (the x and y translations T; the total x and y forces U = M T, U = T for
+        J), and the maps from A's eigenvectors to A_g's (module docstring)."""
+        g, N, n = self.gauge, self.network.N, self.network.ndof
+        rows, cols = self._pattern
+        loose = np.concatenate([g.loose] * D)
+        full = Assembly.of(rows, cols, inverse_mass, sp.eye_array(n), sp.diags_array(np.where(loose, parked, 0.0)))
+        T = np.zeros((n, 2))
+        T[:N, 0], T[N:2 * N, 1] = ~g.loose, ~g.loose
+        U = T if self.matrix is Matrix.J else T * self.mass[:, None]
+        return full, T, U, sp.csr_array(right_map), sp.csr_array(left_map)
 
     def coulomb_limit(self, delta: np.ndarray) -> np.ndarray:
         """t* of every row at overlaps delta (0 where open) [length]."""
@@ -298,6 +314,14 @@ class PackingEquilibria(Problem):
         gauge rows' diagonal, zeros elsewhere (module docstring)."""
         return self._stability(self._evaluate(q, gamma)[1])
 
+    def deflated(self, q, gamma) -> Deflated:
+        """A (J or M^-1 J) with the loose disks parked, to shift-invert in place of A_g: the same
+        spectrum but for A's two translation zeros, which the shift-invert projects out, and
+        the reference disk's rows of A_g coupled to no other row (nearest.Deflated): nnz(L + U)
+        38 600 against 54 900 at 256 disks."""
+        full, T, U, right_map, left_map = self._deflation
+        return Deflated(full(self._evaluate(q, gamma)[1]), T, U, right_map, left_map)
+
     def spectrum_matrix(self, q, gamma) -> sp.csr_array:
         """A_red at the kept dofs, zeros elsewhere (A_g without the gauge rows' PARKED diagonal,
         a constant of the committed state): what eigensystem() is computed from."""
@@ -312,13 +336,10 @@ class PackingEquilibria(Problem):
         vectors; or with a spectral window, the window's k eigenvalues of A_red."""
         kept, n = self.gauge.kept, q.size
         if self.window is not None:
-            found = window_eigensystem(self.reduced(q, gamma), self.window, vectors)
-            if found.right is None:
-                return found
-            right = np.zeros((n, found.right.shape[1]), complex)
-            left = np.zeros((found.left.shape[0], n), complex)
-            right[kept], left[:, kept] = found.right, found.left
-            return replace(found, right=right, left=left)
+            if not vectors:
+                return window_eigensystem(self.reduced(q, gamma), self.window, vectors)
+            return window_eigensystem(self.stability_matrix(q, gamma), self.window, vectors,
+                                      self.deflated(q, gamma))
         found = eigensystem(self.reduced(q, gamma).toarray(), vectors)
         values, excluded = np.zeros(n, complex), np.ones(n, bool)
         values[kept], excluded[kept] = found.values, False
@@ -462,7 +483,8 @@ class PackingEquilibria(Problem):
 
 KEPT_STATES = 6
 """Committed states whose derived part PackingEquilibria keeps for restore."""
-_DERIVED = ("gauge", "active", "sliding", "_band", "kappa", "_pattern", "_dG_dq", "_reduced", "_stability")
+_DERIVED = ("gauge", "active", "sliding", "_band", "kappa", "_pattern", "_dG_dq", "_reduced", "_stability",
+            "_deflation")
 """What _set_committed derives from a state (q, xi, rows, gamma, sliding)."""
 
 

@@ -453,9 +453,9 @@ def test_a_window_that_crowds_at_its_first_point_is_widened_there(packing, windo
     sized, decompose = spectral_window.sized, equilibria.window_eigensystem
     points, crowded_at = [], []
 
-    def watched(A, window, vectors):
+    def watched(A, window, vectors, deflated=None):
         try:
-            return decompose(A, window, vectors)
+            return decompose(A, window, vectors, deflated)
         except spectral_window.WindowCrowded:
             crowded_at.append(len(points))
             raise
@@ -555,6 +555,39 @@ def test_the_assembled_matrices_are_the_products_of_the_gauge(packing):
                           (problem.reduced(q, gamma), A_red), (problem.stability_matrix(q, gamma), A_g)):
         assert np.abs((got - expected).toarray()).max() <= 1e-14 * np.abs(expected.toarray()).max()
     assert np.all(parked < 0) and np.ptp(parked) == 0.0
+
+
+def test_the_deflated_shift_invert_finds_the_tracked_matrix_eigensystem(branch, packing):
+    """nearest_eigensystem with the problem's Deflated (A with the loose disks parked, its
+    translations projected out) against the shift-invert of A_g itself, at a sheared state
+    with complex pairs and with sigma next to 0, where A's translation zeros would be the
+    nearest: the same k eigenvalues to 1e-12 of the largest, eigenvectors of A_g (residuals
+    1e-9), and the LU of A sparser than A_g's."""
+    from diskfriction.continuation.linalg import factorize
+    from diskfriction.continuation.nearest import SHIFT_INVERT_ORDERING, nearest_eigensystem
+
+    problem = problem_at_start(packing)
+    point = int(np.argmax(branch.n_complex[branch.segment == 0]))
+    q, gamma = branch.q[point], float(branch.gamma[point])
+    problem._set_committed(q, branch.xi[point], branch.rows[point], gamma)
+    A, deflated = problem.stability_matrix(q, gamma), problem.deflated(q, gamma)
+    assert np.abs(deflated.matrix @ deflated.right_null).max() <= 1e-12 * np.abs(deflated.matrix).max()
+    k = 12
+    for sigma in (0.05, 3.0):
+        plain, r_plain = nearest_eigensystem(A, sigma, k)
+        fast_, r_fast = nearest_eigensystem(A, sigma, k, deflated)
+        scale = np.abs(plain.values).max()
+        distance = np.abs(plain.values[:, None] - fast_.values[None, :])
+        assert max(distance.min(axis=0).max(), distance.min(axis=1).max()) <= 1e-12 * scale
+        assert abs(r_plain - r_fast) <= 1e-12 * scale
+        assert np.abs(fast_.values).min() > 1e-6  # no translation zero among them
+        right = A @ fast_.right - fast_.right * fast_.values
+        left = fast_.left @ A - fast_.values[:, None] * fast_.left
+        assert np.abs(right).max() <= 1e-9 * scale * np.abs(fast_.right).max()
+        assert np.abs(left).max() <= 1e-9 * scale * np.abs(fast_.left).max()
+    fill = [factorize(M - 3.0 * sp.identity(M.shape[0], format="csr"), SHIFT_INVERT_ORDERING).lu
+            for M in (A, deflated.matrix)]
+    assert fill[1].L.nnz + fill[1].U.nnz < fill[0].L.nnz + fill[0].U.nnz
 
 
 def test_a_restored_state_is_the_state_set_afresh(packing):
