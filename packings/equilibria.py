@@ -37,7 +37,10 @@ and a constant far below A_red's spectrum on the gauge rows' diagonal (PARKED), 
 sample has n eigenvalues; those of the gauge rows are reported as 0 and excluded from detection.
 With a spectral window (continuation/spectral_window.py) only the k eigenvalues of A_red nearest
 the window's centre are computed, by sparse shift-invert: the translations and loose disks never
-crowd a window at 0. Within a committed state dG/dq, A_red and A_g are fixed linear maps of J's
+crowd a window at 0. The shift-invert factorizes A itself, the loose disks' dofs parked on its
+diagonal, and projects its two translation zeros out (deflated, nearest.Deflated): A_red's rows
+each carry the reference disk's too, and its LU fills a third more; the eigenvectors found are
+mapped to A_g's (right: P, left: the kept dofs), on which the Rayleigh-Ritz projection is taken. Within a committed state dG/dq, A_red and A_g are fixed linear maps of J's
 values (packings/assembly.py), set up at every commit.
 """
 from __future__ import annotations
