@@ -17,8 +17,7 @@ Step control (arclength ds in the Euclidean norm of x):
   * with stop_at_fold, a step whose first event lies past a fold, -> ds / 2, retry; below
     or across which a real tracked eigenvalue changed sign (a          ds_min: stop at x_k,
     step that jumped the fold)                                         Stop FOLD
-  * accepted with <= fast_newton factorizations (Newton updates  -> ds = min(growth ds, ds_max).
-    but chord ones, Problem.chord)
+  * accepted with <= fast_newton updates                        -> ds = min(growth ds, ds_max).
 End: when the corrected p leaves [p_min, p_max] the step is clipped: x is re-solved at the end
 value p_end (fixed-p Newton from the secant point at p_end), stored, and the run stops: REACHED
 at the end the run heads for (p_max for direction +1, p_min for -1), TURNED_BACK at the
@@ -364,7 +363,7 @@ def _advance(problem, scans, here: _Start, index: int, pending: deque, previous,
     if committed is None:
         return here, Stop(StopCode.COMMIT, "no equilibrium after the commit", float(end.p))
     ds = here.ds
-    if committed.newton.factorizations <= params.fast_newton:
+    if committed.newton.iterations <= params.fast_newton:
         ds = min(ds * params.growth, params.ds_max)
     g = problem.event_functions(committed.x[:-1], committed.x[-1]) if here.g is not None else None
     if committed.fold and not committed.event:
@@ -502,8 +501,7 @@ def _commit(problem: Problem, x: Array, step: _Step, end: Sample, par: Continuat
         end = _moved(problem, end, res.x, t_new if detection.slopes else None)
     else:
         end = _sample(problem, 0.0, res.x, t_new, detection, end, side=+1)
-    newton = replace(res, iterations=step.newton.iterations + res.iterations,
-                     factorizations=step.newton.factorizations + res.factorizations)
+    newton = replace(res, iterations=step.newton.iterations + res.iterations)
     return _Step(res.x, t_new, newton, step.last, step.event, step.fold), end
 
 

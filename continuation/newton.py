@@ -15,8 +15,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Optional
 
-import math
-
 import numpy as np
 
 from .linalg import SingularMatrix, bordered, factorize
@@ -28,16 +26,13 @@ Array = np.ndarray
 @dataclass(frozen=True)
 class NewtonResult:
     """x: last iterate; iterations: Newton updates made; residual: max|G(x)|; rounding: what
-    G rounds to at x, ROUNDING times the size of its terms (term_size; 0 if not evaluated);
-    factorizations: of those updates, the ones that factorized the bordered matrix anew (all
-    of them but chord updates, Problem.chord)."""
+    G rounds to at x, ROUNDING times the size of its terms (term_size; 0 if not evaluated)."""
 
     x: Array
     iterations: int
     residual: float
     converged: bool
     rounding: float = 0.0
-    factorizations: int = 0
 
     def failure(self) -> str:
         """Why the corrector failed, in words: its residual, and, where that is within 10 times
@@ -75,30 +70,23 @@ def bordered_newton(problem: Problem, x_target: Array, border: Array, tol: float
     """
     x = np.array(x_target if start is None else start, dtype=float)
     first = 1 if polish else 0
-    lu, r_last, made = None, math.inf, 0  # a chord update's factorization, max|G| before that update
     for it in range(max_iter + 1):
         G = problem.residual(x[:-1], x[-1])
         r = float(np.max(np.abs(G), initial=0.0))
         if not np.isfinite(r):
-            return NewtonResult(x, it, r, False, factorizations=made)
+            return NewtonResult(x, it, r, False)
         if r <= tol and it >= first:
-            return NewtonResult(x, it, r, True, factorizations=made)
-        rhs = np.append(G, border @ (x - x_target))
-        if lu is not None and r <= problem.chord * r_last and it < max_iter:
-            r_last, x = r, x - lu.solve(rhs)  # the chord contracts: keep its factorization
-            continue
+            return NewtonResult(x, it, r, True)
         M = bordered_matrix(problem, x, border)
         if problem.rounding and it >= first and r <= problem.rounding * term_size(M, x):
-            return NewtonResult(x, it, r, True, factorizations=made)  # G is not computed closer to 0 than this
+            return NewtonResult(x, it, r, True)  # G is not computed closer to 0 than this
         if it == max_iter:
-            return NewtonResult(x, max_iter, r, False, ROUNDING * term_size(M, x), made)
+            return NewtonResult(x, max_iter, r, False, ROUNDING * term_size(M, x))
+        rhs = np.append(G, border @ (x - x_target))
         try:
-            lu = factorize(M, problem.factor_options)
-            r_last, x, made = r, x - lu.solve(rhs), made + 1
+            x = x - factorize(M, problem.factor_options).solve(rhs)
         except SingularMatrix:
-            return NewtonResult(x, it, r, False, factorizations=made)
-        if not problem.chord:
-            lu = None
+            return NewtonResult(x, it, r, False)
     # the loop returns at it == max_iter at the latest
 
 

@@ -81,10 +81,6 @@ class Problem(ABC):
 
     rounding: float = 0.0
     factor_options: Optional[dict] = None
-    chord: float = 0.0
-    """0, or the contraction a Newton update with an earlier iterate's factorization (a chord
-    update) must reach, max|G| shrinking by at least this factor, for the corrector to keep that
-    factorization (newton.bordered_newton); 0: every update factorizes anew."""
 
     @abstractmethod
     def residual(self, u: Array, p: float) -> Array:

@@ -168,10 +168,6 @@ class Gauge:
 class PackingEquilibria(Problem):
     """The continuation problem of a packing's Network in the strain (module docstring)."""
 
-    chord = 0.1
-    """A corrector keeps its factorization while each update shrinks max|G| tenfold
-    (Problem.chord)."""
-
     factor_options = dict(permc_spec="MMD_AT_PLUS_A")
     """The bordered systems' LU ordered by minimum degree on the pattern of A + A^T (the contact
     network's Jacobian is structurally symmetric), with SuperLU's partial pivoting. 256 sheared

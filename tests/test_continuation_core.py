@@ -562,29 +562,3 @@ def test_a_sign_change_is_bracketed_to_1e_12_in_few_evaluations(f, root, most):
         a, b = refine_sign_change(lambda s: calls.append(s) or f(s), 0.0, f(0.0), 1.0, f(1.0),
                                   lambda a, b: b - a <= 1e-12, tol=tol)
         assert a - 1e-16 <= root <= b + 1e-16 and b - a <= 1e-12 and len(calls) <= most
-
-
-def test_chord_updates_reach_the_same_root_with_fewer_factorizations():
-    """Problem.chord: a corrector that keeps its factorization while each update shrinks max|G|
-    by the chord factor finds Newton's root of a nonlinear system (to its tolerance), with fewer
-    factorizations than updates; without chord every update factorizes (factorizations =
-    iterations), and a chord that does not contract falls back to a fresh factorization."""
-    from diskfriction.continuation.newton import bordered_newton
-
-    def G(u, p):
-        return np.array([u[0] ** 3 + u[1] - p, np.sin(u[1]) + 2.0 * u[0] - 0.3 * p])
-
-    def G_u(u, p):
-        return np.array([[3 * u[0] ** 2, 1.0], [2.0, np.cos(u[1])]])
-
-    x_target = np.array([0.4, 0.2, 1.0])
-    border = np.array([0.0, 0.0, 1.0])  # fixed p = 1
-    results = {}
-    for chord in (0.0, 0.3):
-        problem = type("Chord", (FunctionProblem,), {"chord": chord})(G, G_u, lambda u, p: np.array([-1.0, -0.3]))
-        results[chord] = bordered_newton(problem, x_target, border, 1e-12, 30)
-        assert results[chord].converged and results[chord].residual <= 1e-12
-    full, chord = results[0.0], results[0.3]
-    assert full.factorizations == full.iterations
-    assert 1 <= chord.factorizations < chord.iterations
-    assert np.abs(chord.x - full.x).max() <= 1e-11
