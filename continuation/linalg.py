@@ -25,6 +25,7 @@ import functools
 from dataclasses import astuple, dataclass, fields
 from typing import Optional, Union
 
+import numba
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
@@ -192,17 +193,28 @@ def factorize(M: Matrix, ordering: Optional[dict] = None) -> Factorization:
 
 def _empty_line(M: sp.csc_array) -> Optional[str]:
     """"row" or "column" if the sparse M has one without a nonzero value (exactly singular),
-    else None."""
-    stored = M.data != 0.0  # O(nnz): no sparse copies (1.5 ms at n = 770 took a quarter of an LU)
-    column = np.zeros(M.shape[1], bool)
-    column[np.repeat(np.arange(M.shape[1]), np.diff(M.indptr))[stored]] = True
-    if not column.all():
-        return "column"
-    row = np.zeros(M.shape[0], bool)
-    row[M.indices[stored]] = True
-    if not row.all():
-        return "row"
-    return None
+    else None. O(nnz), one compiled pass, no sparse copies (1.5 ms at n = 770 took a quarter
+    of an LU; numpy's masks and repeats 0.11 ms, 1.4 % of 256 sheared disks' shear)."""
+    return (None, "column", "row")[_empty_kind(M.indptr, M.indices, M.data, M.shape[0])]
+
+
+@numba.njit(cache=True)
+def _empty_kind(indptr, indices, data, rows: int) -> int:
+    """0: every row and column of the CSC arrays holds a nonzero; 1: a column does not; 2: a
+    row does not (columns first)."""
+    seen = np.zeros(rows, np.bool_)
+    for j in range(indptr.size - 1):
+        empty = True
+        for k in range(indptr[j], indptr[j + 1]):
+            if data[k] != 0.0:
+                empty = False
+                seen[indices[k]] = True
+        if empty:
+            return 1
+    for i in range(rows):
+        if not seen[i]:
+            return 2
+    return 0
 
 
 def log_determinant(M: Matrix) -> tuple[float, float]:
