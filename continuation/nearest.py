@@ -72,8 +72,8 @@ class Deflated:
     invertible), and the maps take B's eigenvectors to A's: right vectors r_A = right_map r_B,
     left vectors l_A = left_map l_B (sparse n x n). The shift-invert iterates with the
     projected (B - sigma I)^-1, v -> x - T (U^T T)^-1 U^T x (and its transpose for the left
-    side), on which B's null space has eigenvalue 0, never among the largest: the eigenvalues
-    nearest sigma are those of B's other eigenvalues, A's (packings/equilibria.py: the
+    side), on which B's null space has eigenvalue 0, never among the largest, so that the
+    eigenvalues found nearest sigma are A's (packings/equilibria.py: the
     network's M^-1 J, whose translations T and total forces U are its null spaces, against
     A_g, whose coordinates relative to a reference disk couple every row to that disk's:
     nnz(L + U) 38 600 against 54 900 at 256 disks)."""
@@ -96,8 +96,8 @@ class Deflated:
 
 @numba.njit(cache=True)
 def _project(x: Array, T: Array, C: Array, U: Array) -> Array:
-    """x - T C U^T x in place (T, U: n x r, C: r x r); returns x. One compiled pass instead of
-    four numpy calls (about 5 us a solve at n = 768, a tenth of the solve)."""
+    """x - T C U^T x in place (T, U: n x r, C: r x r); returns x. Compiled: four numpy calls
+    took about 5 us a solve at n = 768, a tenth of the solve."""
     n, r = T.shape
     u = np.zeros(r)
     for i in range(n):
