@@ -46,7 +46,7 @@ values (packings/assembly.py), set up at every commit.
 from __future__ import annotations
 
 import hashlib
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.sparse as sp
@@ -247,15 +247,18 @@ class PackingEquilibria(Problem):
         parked[g.rows] = -PARKED * max(float(np.abs(A).sum(axis=1).max(initial=0.0)), 1.0)
         embed = sp.csr_array((np.ones(g.kept.size), (g.kept, np.arange(g.kept.size))),
                              shape=(n, g.kept.size))
-        self._stability = Assembly.of(rows, cols, embed @ g.P @ inverse_mass, E @ embed.T,
+        relative = sp.csr_array(embed @ g.P)  # q -> A_g's coordinates
+        self._stability = Assembly.of(rows, cols, relative @ inverse_mass, E @ embed.T,
                                       sp.diags_array(parked))
-        self._deflation = self._deflation_of(inverse_mass, parked[g.rows[0]], embed @ g.P, embed @ E.T)
+        self._deflation = self._deflation_of(inverse_mass, parked[g.rows[0]], relative,
+                                             sp.csr_array(embed @ E.T))
 
     def _deflation_of(self, inverse_mass, parked: float, right_map, left_map) -> tuple:
         """The parts of deflated() fixed by the committed state: the assembly of A (J or
-        M^-1 J) with the loose disks' dofs parked on its diagonal, A's null spaces without the
-        loose disks (the x and y translations T; the total x and y forces U = M T, U = T for
-        J), and the maps from A's eigenvectors to A_g's (module docstring)."""
+        M^-1 J) with the loose disks' dofs parked on its diagonal, and a Deflated without its
+        matrix: A's null spaces without the loose disks (the x and y translations T; the total
+        x and y forces U = M T, U = T for J) and the maps from A's eigenvectors to A_g's
+        (module docstring)."""
         g, N, n = self.gauge, self.network.N, self.network.ndof
         rows, cols = self._pattern
         loose = np.concatenate([g.loose] * D)
@@ -263,7 +266,7 @@ class PackingEquilibria(Problem):
         T = np.zeros((n, 2))
         T[:N, 0], T[N:2 * N, 1] = ~g.loose, ~g.loose
         U = T if self.matrix is Matrix.J else T * self.mass[:, None]
-        return full, T, U, sp.csr_array(right_map), sp.csr_array(left_map)
+        return full, Deflated(None, T, U, right_map, left_map)
 
     def coulomb_limit(self, delta: np.ndarray) -> np.ndarray:
         """t* of every row at overlaps delta (0 where open) [length]."""
@@ -322,8 +325,8 @@ class PackingEquilibria(Problem):
         spectrum but for A's two translation zeros, which the shift-invert projects out, and
         the reference disk's rows of A_g coupled to no other row (nearest.Deflated): nnz(L + U)
         38 600 against 54 900 at 256 disks."""
-        full, T, U, right_map, left_map = self._deflation
-        return Deflated(full(self._evaluate(q, gamma)[1]), T, U, right_map, left_map)
+        full, deflation = self._deflation
+        return replace(deflation, matrix=full(self._evaluate(q, gamma)[1]))
 
     def spectrum_matrix(self, q, gamma) -> sp.csr_array:
         """A_red at the kept dofs, zeros elsewhere (A_g without the gauge rows' PARKED diagonal,
