@@ -165,6 +165,58 @@ class Gauge:
         return cls(ref, loose, rows, kept, P)
 
 
+@dataclass(frozen=True)
+class _Maps:
+    """A committed state's matrices as fixed linear maps of J's values (packings/assembly.py):
+    J's pattern (rows, cols), dG/dq, A_red, A_g and the deflation's parts (full, Deflated
+    without its matrix: PackingEquilibria._deflation_of)."""
+
+    pattern: tuple
+    dG_dq: Assembly
+    reduced: Assembly
+    stability: Assembly
+    deflation: tuple
+
+
+@dataclass(frozen=True)
+class _GaugeMaps:
+    """The constant sparse factors of a state's maps that depend on its gauge alone (n = 3N
+    dofs, kept: A_red's): -1 on the non-gauge diagonal and the gauge rows' pattern (dG/dq),
+    the identity, M^-1 (or I for J), P M^-1 and the kept columns E (A_red = P A E), the map
+    to A_g's coordinates (relative = embed P) times M^-1 and E embed^T (A_g), T and U (the
+    translations and total forces of the network) and the map of left vectors to A_g's."""
+
+    minus_kept: sp.dia_array
+    gauge_diagonal: sp.dia_array
+    identity: sp.csr_array
+    inverse_mass: sp.dia_array
+    reduce: sp.csr_array
+    E: sp.csr_array
+    relative: sp.csr_array
+    relative_reduce: sp.csr_array
+    E_embed: sp.csr_array
+    T: np.ndarray
+    U: np.ndarray
+    left_map: sp.csr_array
+
+    @classmethod
+    def of(cls, g: "Gauge", network: Network, mass: np.ndarray, matrix: Matrix) -> "_GaugeMaps":
+        n, N = network.ndof, network.N
+        keep, gauge = np.ones(n), np.zeros(n)
+        keep[g.rows], gauge[g.rows] = 0.0, 1.0
+        inverse_mass = sp.diags_array(1.0 if matrix is Matrix.J else 1.0 / mass, shape=(n, n))
+        E = sp.eye_array(n, format="csr")[:, g.kept]
+        embed = sp.csr_array((np.ones(g.kept.size), (g.kept, np.arange(g.kept.size))),
+                             shape=(n, g.kept.size))
+        relative = sp.csr_array(embed @ g.P)  # q -> A_g's coordinates
+        T = np.zeros((n, 2))
+        T[:N, 0], T[N:2 * N, 1] = ~g.loose, ~g.loose
+        U = T if matrix is Matrix.J else T * mass[:, None]
+        return cls(sp.diags_array(-keep), sp.diags_array(gauge), sp.eye_array(n), inverse_mass,
+                   g.P @ inverse_mass, E, relative, relative @ inverse_mass, E @ embed.T, T, U,
+                   sp.csr_array(embed @ E.T))
+
+
 class PackingEquilibria(Problem):
     """The continuation problem of a packing's Network in the strain (module docstring)."""
 
@@ -187,6 +239,7 @@ class PackingEquilibria(Problem):
         delta = network.overlaps(q, rows, gamma)
         self.delta_hold = LOOSE_OVERLAP * float(np.median(delta[delta > 0]))
         self._kept: dict = {}
+        self._fixed = None
         self._set_committed(q, xi, rows, gamma)
         self.window = window
         if window is not None and window.k == 0:  # sized once, here, at the start state
@@ -218,8 +271,9 @@ class PackingEquilibria(Problem):
         scale = np.median(delta[delta > 0]) if (delta > 0).any() else self.network.constants[0]
         self.kappa = float(self.network.kernels.normal_stiffness(scale, self.network.constants[1]))
         self._last = (None, None)
-        self._assemble()
-        self._keep(_digest((self.q_c, self.xi_c, self.rows_c, self.gamma_c, self.sliding)))
+        self._maps = None
+        self._key = _digest((self.q_c, self.xi_c, self.rows_c, self.gamma_c, self.sliding))
+        self._keep(self._key)
 
     def _keep(self, key: bytes) -> None:
         """Remember the committed state's derived part under its snapshot's digest (the most
@@ -230,43 +284,50 @@ class PackingEquilibria(Problem):
         while len(self._kept) > KEPT_STATES:
             del self._kept[next(iter(self._kept))]
 
-    def _assemble(self) -> None:
+    @property
+    def maps(self) -> "_Maps":
+        """The committed state's matrices as fixed linear maps of J's values, assembled at their
+        first use after the state is set (_assemble): a state restored only to record a point
+        (arclength._record) needs none."""
+        if self._maps is None:
+            self._maps = self._assemble()
+            if self._key in self._kept:
+                self._kept[self._key] = tuple(getattr(self, name) for name in _DERIVED)
+        return self._maps
+
+    def _assemble(self) -> "_Maps":
         """The committed state's matrices as fixed linear maps of J's values
-        (packings/assembly.py): dG/dq, A_red and A_g (module docstring)."""
-        g, n = self.gauge, self.network.ndof
-        self._pattern = rows, cols = self.network.jacobian_pattern(self.rows_c[self.active])
-        keep, gauge = np.ones(n), np.zeros(n)
-        keep[g.rows], gauge[g.rows] = 0.0, self.kappa
-        self._dG_dq = Assembly.of(rows, cols, sp.diags_array(-keep), sp.eye_array(n),
-                                  sp.diags_array(gauge))
-        inverse_mass = sp.diags_array(1.0 if self.matrix is Matrix.J else 1.0 / self.mass, shape=(n, n))
-        E = sp.eye_array(n, format="csr")[:, g.kept]
-        self._reduced = Assembly.of(rows, cols, g.P @ inverse_mass, E)
-        A = self._reduced(self._evaluate(self.q_c, self.gamma_c)[1])
+        (packings/assembly.py): dG/dq, A_red and A_g (module docstring), and the deflation's
+        parts (_deflation_of); those fixed by the gauge alone come from _GaugeMaps."""
+        g, n, fixed = self.gauge, self.network.ndof, self._gauge_maps()
+        rows, cols = pattern = self.network.jacobian_pattern(self.rows_c[self.active])
+        dG_dq = Assembly.of(rows, cols, fixed.minus_kept, fixed.identity, fixed.gauge_diagonal * self.kappa)
+        reduced = Assembly.of(rows, cols, fixed.reduce, fixed.E)
+        A = reduced(self._evaluate(self.q_c, self.gamma_c)[1])
         parked = np.zeros(n)
         parked[g.rows] = -PARKED * max(float(np.abs(A).sum(axis=1).max(initial=0.0)), 1.0)
-        embed = sp.csr_array((np.ones(g.kept.size), (g.kept, np.arange(g.kept.size))),
-                             shape=(n, g.kept.size))
-        relative = sp.csr_array(embed @ g.P)  # q -> A_g's coordinates
-        self._stability = Assembly.of(rows, cols, relative @ inverse_mass, E @ embed.T,
-                                      sp.diags_array(parked))
-        self._deflation = self._deflation_of(inverse_mass, parked[g.rows[0]], relative,
-                                             sp.csr_array(embed @ E.T))
+        stability = Assembly.of(rows, cols, fixed.relative_reduce, fixed.E_embed, sp.diags_array(parked))
+        return _Maps(pattern, dG_dq, reduced, stability,
+                     self._deflation_of(rows, cols, fixed, parked[g.rows[0]]))
 
-    def _deflation_of(self, inverse_mass, parked: float, right_map, left_map) -> tuple:
+    def _gauge_maps(self) -> "_GaugeMaps":
+        """_GaugeMaps of the committed gauge, kept for the last one (it changes only where a
+        disk turns loose or the reference disk changes)."""
+        key = (self.gauge.ref, self.gauge.loose.tobytes())
+        if self._fixed is None or self._fixed[0] != key:
+            self._fixed = (key, _GaugeMaps.of(self.gauge, self.network, self.mass, self.matrix))
+        return self._fixed[1]
+
+    def _deflation_of(self, rows, cols, fixed: "_GaugeMaps", parked: float) -> tuple:
         """The parts of deflated() fixed by the committed state: the assembly of A (J or
         M^-1 J) with the loose disks' dofs parked on its diagonal, and a Deflated without its
         matrix: A's null spaces without the loose disks (the x and y translations T; the total
         x and y forces U = M T, U = T for J) and the maps from A's eigenvectors to A_g's
         (module docstring)."""
-        g, N, n = self.gauge, self.network.N, self.network.ndof
-        rows, cols = self._pattern
-        loose = np.concatenate([g.loose] * D)
-        full = Assembly.of(rows, cols, inverse_mass, sp.eye_array(n), sp.diags_array(np.where(loose, parked, 0.0)))
-        T = np.zeros((n, 2))
-        T[:N, 0], T[N:2 * N, 1] = ~g.loose, ~g.loose
-        U = T if self.matrix is Matrix.J else T * self.mass[:, None]
-        return full, Deflated(None, T, U, right_map, left_map)
+        loose = np.concatenate([self.gauge.loose] * D)
+        full = Assembly.of(rows, cols, fixed.inverse_mass, fixed.identity,
+                           sp.diags_array(np.where(loose, parked, 0.0)))
+        return full, Deflated(None, fixed.T, fixed.U, fixed.relative, fixed.left_map)
 
     def coulomb_limit(self, delta: np.ndarray) -> np.ndarray:
         """t* of every row at overlaps delta (0 where open) [length]."""
@@ -298,7 +359,7 @@ class PackingEquilibria(Problem):
 
     def jacobian(self, q, gamma):
         """dG/dq = -J with the gauge rows (sparse)."""
-        return self._dG_dq(self._evaluate(q, gamma)[1])
+        return self.maps.dG_dq(self._evaluate(q, gamma)[1])
 
     def dG_dp(self, q, gamma):
         F_gamma = self._evaluate(q, gamma)[2].copy()
@@ -308,30 +369,30 @@ class PackingEquilibria(Problem):
     def physical(self, q, gamma):
         """The network's J or M^-1 J at (q, gamma), sparse (loose disks' rows and columns 0)."""
         n = self.network.ndof
-        J = sp.csr_array((self._evaluate(q, gamma)[1], self._pattern), shape=(n, n))
+        J = sp.csr_array((self._evaluate(q, gamma)[1], self.maps.pattern), shape=(n, n))
         return J if self.matrix is Matrix.J else sp.diags_array(1.0 / self.mass) @ J
 
     def reduced(self, q, gamma) -> sp.csr_array:
         """A_red = P A E: the tracked spectrum without the translations and the loose disks."""
-        return self._reduced(self._evaluate(q, gamma)[1])
+        return self.maps.reduced(self._evaluate(q, gamma)[1])
 
     def stability_matrix(self, q, gamma) -> sp.csr_array:
         """A_g (sparse): A_red at the kept dofs, the committed state's PARKED constant on the
         gauge rows' diagonal, zeros elsewhere (module docstring)."""
-        return self._stability(self._evaluate(q, gamma)[1])
+        return self.maps.stability(self._evaluate(q, gamma)[1])
 
     def deflated(self, q, gamma) -> Deflated:
         """A (J or M^-1 J) with the loose disks parked, to shift-invert in place of A_g: the same
         spectrum but for A's two translation zeros, which the shift-invert projects out, and
         the reference disk's rows of A_g coupled to no other row (nearest.Deflated): nnz(L + U)
         38 600 against 54 900 at 256 disks."""
-        full, deflation = self._deflation
+        full, deflation = self.maps.deflation
         return replace(deflation, matrix=full(self._evaluate(q, gamma)[1]))
 
     def spectrum_matrix(self, q, gamma) -> sp.csr_array:
         """A_red at the kept dofs, zeros elsewhere (A_g without the gauge rows' PARKED diagonal,
         a constant of the committed state): what eigensystem() is computed from."""
-        return self._stability(self._evaluate(q, gamma)[1], constant=False)
+        return self.maps.stability(self._evaluate(q, gamma)[1], constant=False)
 
     def dense_spectra(self) -> bool:
         """Dense spectra unless a spectral window is tracked (eigensystem)."""
@@ -404,7 +465,7 @@ class PackingEquilibria(Problem):
         self.q_c, self.xi_c, self.rows_c, self.gamma_c = q.copy(), xi.copy(), rows, float(gamma)
         for name, value in zip(_DERIVED, kept):
             setattr(self, name, value)
-        self._last = (None, None)
+        self._last, self._key = (None, None), key
         self._keep(key)
 
     def commit(self, q_old, gamma_old, q_new, gamma_new) -> bool:
@@ -489,8 +550,7 @@ class PackingEquilibria(Problem):
 
 KEPT_STATES = 6
 """Committed states whose derived part PackingEquilibria keeps for restore."""
-_DERIVED = ("gauge", "active", "sliding", "_band", "kappa", "_pattern", "_dG_dq", "_reduced", "_stability",
-            "_deflation")
+_DERIVED = ("gauge", "active", "sliding", "_band", "kappa", "_maps")
 """What _set_committed derives from a state (q, xi, rows, gamma, sliding)."""
 
 

@@ -593,7 +593,9 @@ def test_the_deflated_shift_invert_finds_the_tracked_matrix_eigensystem(branch, 
 def test_a_restored_state_is_the_state_set_afresh(packing):
     """restore of a state() snapshot kept from an earlier commit (PackingEquilibria._kept) gives
     the residual, dG/dq and A_g of a problem set to that state afresh, bit for bit, without
-    assembling again; an unknown snapshot is set afresh; only the last KEPT_STATES are kept."""
+    assembling again; an unknown snapshot is set afresh, its matrices assembled at their first
+    use only (a restore to record a point assembles nothing); only the last KEPT_STATES are
+    kept."""
     from diskfriction.packings import equilibria
 
     problem = problem_at_start(packing)
@@ -603,6 +605,7 @@ def test_a_restored_state_is_the_state_set_afresh(packing):
     for k in range(equilibria.KEPT_STATES + 1):  # other committed states: the disks moved by ~1e-9
         problem._set_committed(first[0] + 1e-9 * (k + 1) * rng.standard_normal(first[0].size), first[1],
                                first[2], first[3], first[4])
+        problem.jacobian(problem.q_c, problem.gamma_c)  # assembled at the first use
         states.append(problem.state())
     assert len(problem._kept) == equilibria.KEPT_STATES
     fresh = problem_at_start(packing)
@@ -622,6 +625,10 @@ def test_a_restored_state_is_the_state_set_afresh(packing):
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(equilibria.Assembly, "of", lambda *a, **k: assembled.append(1) or original(*a, **k))
         problem.restore(first)  # dropped from the kept states long ago
+        assert not assembled
+        problem.residual(x, 1e-6)
+        assert not assembled  # the residual needs no assembled matrix
+        problem.stability_matrix(x, 1e-6)
     assert assembled
 
 
