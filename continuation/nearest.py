@@ -28,6 +28,16 @@ from .spectra import Eigensystem
 Array = np.ndarray
 
 
+ARPACK_TOL = 1e-10
+"""ARPACK's stopping tolerance (Ritz estimates relative to the eigenvalues of the shift-inverted
+operator; scipy's default 0 asks for the machine precision). The two-sided Rayleigh-Ritz
+projection on A that follows (_two_sided) gives the eigenvalues to second order in the
+vectors' error. At 256 sheared disks (k = 31, n = 768) each ARPACK run took 96 operator
+applications against 98-114 at the default, the residuals of the vectors after the projection
+at most 1.4e-10 against 1.1e-10 (29 captured matrices); the shear to gamma = 3e-3 (inline) took
+81.5 against 89.8 s with the same 399 collisions (locations within 7e-16), and the chain's
+reference sweeps came out within 1e-12 (benchmarks/reference_sweeps.py; docs/packings.md,
+Stop 48). 1e-12 took 84.7 s."""
 KRYLOV_EXTRA = 60
 """Most Arnoldi vectors ARPACK keeps beyond the k wanted (module docstring)."""
 
@@ -135,8 +145,8 @@ def nearest_eigensystem(A: Matrix, sigma: float, k: int,
             inverse, inverse_t = deflated.operators(lu, n)
         v0 = start_vector(n)
         ncv = krylov_size(k, n)
-        _, V = spla.eigs(B, k=k, sigma=sigma, OPinv=inverse, v0=v0, ncv=ncv)
-        _, W = spla.eigs(B.T, k=k, sigma=sigma, OPinv=inverse_t, v0=v0, ncv=ncv)
+        _, V = spla.eigs(B, k=k, sigma=sigma, OPinv=inverse, v0=v0, ncv=ncv, tol=ARPACK_TOL)
+        _, W = spla.eigs(B.T, k=k, sigma=sigma, OPinv=inverse_t, v0=v0, ncv=ncv, tol=ARPACK_TOL)
     except (np.linalg.LinAlgError, spla.ArpackError, spla.ArpackNoConvergence) as err:
         raise ShiftInvertFailed(f"shift-invert at sigma = {sigma:.6g}: {err}") from None
     if deflated is not None:
