@@ -68,26 +68,61 @@ def bordered_newton(problem: Problem, x_target: Array, border: Array, tol: float
     Fails on max_iter updates without convergence (saying what G rounds to there,
     NewtonResult.failure), a non-finite residual or a singular bordered matrix.
     """
+    return factored_newton(problem, x_target, border, tol, max_iter, start, polish)[0]
+
+
+def factored_newton(problem: Problem, x_target: Array, border: Array, tol: float, max_iter: int,
+                    start: Optional[Array] = None, polish: bool = False):
+    """bordered_newton's (result, the factorization of its last update's bordered matrix, or
+    None where it made none): for chord_newton at points nearby."""
     x = np.array(x_target if start is None else start, dtype=float)
-    first = 1 if polish else 0
+    first, lu = (1 if polish else 0), None
     for it in range(max_iter + 1):
         G = problem.residual(x[:-1], x[-1])
         r = float(np.max(np.abs(G), initial=0.0))
         if not np.isfinite(r):
-            return NewtonResult(x, it, r, False)
+            return NewtonResult(x, it, r, False), lu
         if r <= tol and it >= first:
-            return NewtonResult(x, it, r, True)
+            return NewtonResult(x, it, r, True), lu
         M = bordered_matrix(problem, x, border)
         if problem.rounding and it >= first and r <= problem.rounding * term_size(M, x):
-            return NewtonResult(x, it, r, True)  # G is not computed closer to 0 than this
+            return NewtonResult(x, it, r, True), lu  # G is not computed closer to 0 than this
         if it == max_iter:
-            return NewtonResult(x, max_iter, r, False, ROUNDING * term_size(M, x))
+            return NewtonResult(x, max_iter, r, False, ROUNDING * term_size(M, x)), lu
         rhs = np.append(G, border @ (x - x_target))
         try:
-            x = x - factorize(M, problem.factor_options).solve(rhs)
+            lu = factorize(M, problem.factor_options)
+            x = x - lu.solve(rhs)
         except SingularMatrix:
-            return NewtonResult(x, it, r, False)
+            return NewtonResult(x, it, r, False), None
     # the loop returns at it == max_iter at the latest
+
+
+CHORD_STEPS = 4
+"""The most updates chord_newton makes before it gives up."""
+CHORD_RATE = 0.1
+"""chord_newton gives up where an update leaves the residual above this fraction of the last."""
+
+
+def chord_newton(problem: Problem, x_target: Array, border: Array, tol: float, lu, start: Array,
+                 polish: bool = False) -> Optional[NewtonResult]:
+    """bordered_newton's system solved from `start` with a fixed factorization `lu` of the
+    bordered matrix at a point nearby (the chord method: no new factorization, convergence
+    linear at a rate of the order of the points' distance), or None where it does not converge
+    to tol within CHORD_STEPS updates each shrinking the residual by CHORD_RATE (the caller
+    then runs bordered_newton). polish as in bordered_newton."""
+    x, first, last = np.array(start, dtype=float), (1 if polish else 0), np.inf
+    for it in range(CHORD_STEPS + 1):
+        G = problem.residual(x[:-1], x[-1])
+        r = float(np.max(np.abs(G), initial=0.0))
+        if not np.isfinite(r) or r > CHORD_RATE * last:
+            return None
+        if r <= tol and it >= first:
+            return NewtonResult(x, it, r, True)
+        if it == CHORD_STEPS:
+            return None
+        x, last = x - lu.solve(np.append(G, border @ (x - x_target))), r
+    return None
 
 
 def term_size(M, x: Array) -> float:

@@ -96,7 +96,7 @@ def run_scan(problem: Problem, job: ScanJob) -> ScanOutcome:
     with measured() as spent:
         try:
             result = scan_step(problem, Segment(problem, job.x_a, job.x_b, job.tol, job.max_iter,
-                                                    job.start.tangent, job.end.tangent),
+                                                    job.start.tangent, job.end.tangent, chord=True),
                                job.start, job.end, job.detection, job.step, job.previous,
                                job.ends_at_event)
         except SegmentSolveError as err:

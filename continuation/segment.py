@@ -33,7 +33,7 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from .newton import bordered_newton
+from .newton import chord_newton, factored_newton
 from .problem import Problem
 
 Array = np.ndarray
@@ -67,7 +67,9 @@ class Segment:
     t_b: Optional[Array] = None
     polish: bool = True
     root: Optional[float] = None
+    chord: bool = False
     _known: dict = field(default_factory=dict, compare=False, repr=False)
+    _factors: dict = field(default_factory=dict, compare=False, repr=False)
 
     @cached_property
     def sigma(self) -> Array:
@@ -145,8 +147,17 @@ class Segment:
             return self.x_b.copy()
         if s in self._known:
             return self._known[s][0].copy()
-        res = bordered_newton(self.problem, self.secant_point(s), self.sigma, self.tol, self.max_iter,
-                              self._predicted_at(s), self.polish)
+        target, start = self.secant_point(s), self._predicted_at(s)
+        res = None
+        if self.chord and self._factors:  # the chord from the factorization of the nearest point solved anew
+            near = min(self._factors, key=lambda known: abs(known - s))
+            res = chord_newton(self.problem, target, self.sigma, self.tol, self._factors[near], start,
+                               self.polish)
+        if res is None:
+            res, lu = factored_newton(self.problem, target, self.sigma, self.tol, self.max_iter, start,
+                                      self.polish)
+            if self.chord and lu is not None:
+                self._factors[s] = lu
         if not res.converged:
             raise SegmentSolveError(f"corrector failed at s={s:.6g} ({res.failure()})")
         self._keep(s, res.x.copy())

@@ -562,3 +562,44 @@ def test_a_sign_change_is_bracketed_to_1e_12_in_few_evaluations(f, root, most):
         a, b = refine_sign_change(lambda s: calls.append(s) or f(s), 0.0, f(0.0), 1.0, f(1.0),
                                   lambda a, b: b - a <= 1e-12, tol=tol)
         assert a - 1e-16 <= root <= b + 1e-16 and b - a <= 1e-12 and len(calls) <= most
+
+
+def test_segment_points_by_the_chord_method_match_newtons():
+    """A segment with chord=True solves its later points with the factorization kept from the
+    first (newton.chord_newton, no new LU), to the same points as Newton's within the
+    tolerance; chord_newton gives up (None) with a factorization from too far away, where
+    the Segment falls back to Newton."""
+    from diskfriction.continuation.linalg import factorize
+    from diskfriction.continuation.newton import bordered_matrix, chord_newton
+    from diskfriction.continuation.segment import Segment
+
+    # G(u, p) = (u0^3 + u0 - p, u1 - sin(u0)): a curved branch u0(p)
+    problem = FunctionProblem(G=lambda u, p: np.array([u[0] ** 3 + u[0] - p, u[1] - np.sin(u[0])]),
+                              G_u=lambda u, p: np.array([[3 * u[0] ** 2 + 1, 0.0], [-np.cos(u[0]), 1.0]]),
+                              G_p=lambda u, p: np.array([-1.0, 0.0]))
+
+    def on_branch(u0):
+        return np.array([u0, np.sin(u0), u0 ** 3 + u0])
+
+    x_a, x_b = on_branch(0.2), on_branch(0.6)
+    factorized = []
+    original = factorize
+    with pytest.MonkeyPatch.context() as mp:
+        import diskfriction.continuation.newton as newton
+        mp.setattr(newton, "factorize", lambda *a: factorized.append(1) or original(*a))
+        chord = Segment(problem, x_a, x_b, 1e-12, 20, chord=True)
+        plain = Segment(problem, x_a, x_b, 1e-12, 20)
+        first = chord.point(0.5)
+        after_first = len(factorized)
+        points = [chord.point(s) for s in (0.499, 0.5015, 0.4995)]
+        assert len(factorized) == after_first  # the kept factorization served them all
+        for s, x in zip((0.499, 0.5015, 0.4995), points):
+            assert np.abs(problem.residual(x[:-1], x[-1])).max() <= 1e-12
+            assert np.allclose(x, plain.point(s), rtol=0.0, atol=1e-11)
+    assert np.allclose(first, plain.point(0.5), rtol=0.0, atol=1e-11)
+    sigma = chord.sigma
+    far = factorize(bordered_matrix(problem, on_branch(3.0), sigma))
+    target = x_a + 0.5 * (x_b - x_a)
+    assert chord_newton(problem, target, sigma, 1e-12, far, target) is None
+    near = factorize(bordered_matrix(problem, first, sigma))
+    assert chord_newton(problem, target, sigma, 1e-12, near, target).converged
