@@ -40,10 +40,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse.linalg as spla
 
 from .linalg import Matrix, book
-from .nearest import nearest_eigensystem, start_vector
+from .nearest import nearest_eigensystem, nearest_values
 from .spectra import Eigensystem
 
 Array = np.ndarray
@@ -125,8 +124,7 @@ def sized(window: Window, A: Matrix, margin: float = MARGIN, extra: int = EXTRA)
     k = extra
     n = A.shape[0]
     while True:
-        values = spla.eigs(A, k=min(k, n - 2), sigma=window.sigma, v0=start_vector(n),
-                           return_eigenvectors=False)
+        values = nearest_values(A, window.sigma, min(k, n - 2))
         near = np.abs(values - window.sigma) <= window.reach(values)
         if not near.all() or k >= n - 2:
             return Window(window.lo, window.hi, min(n - 2, int(margin * near.sum()) + extra))
@@ -148,7 +146,7 @@ def window_eigensystem(A: Matrix, window: Window, vectors: bool, deflated=None) 
     book("spectra")
     k, sigma = window.k, window.sigma
     if not vectors:
-        values = spla.eigs(A, k=k, sigma=sigma, v0=start_vector(A.shape[0]), return_eigenvectors=False)
+        values = nearest_values(A, sigma, k)
         return _classified(Eigensystem(values.astype(complex)), window)
     return _classified(nearest_eigensystem(A, sigma, k, deflated)[0], window)
 
