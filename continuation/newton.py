@@ -121,7 +121,10 @@ def chord_newton(problem: Problem, x_target: Array, border: Array, tol: float, l
             return NewtonResult(x, it, r, True)
         if it == CHORD_STEPS:
             return None
-        x, last = x - lu.solve(np.append(G, border @ (x - x_target))), r
+        try:
+            x, last = x - lu.solve(np.append(G, border @ (x - x_target))), r
+        except SingularMatrix:
+            return None
     return None
 
 

@@ -44,6 +44,10 @@ HERMITE_ALONG = 0.1
 runs along the secant); otherwise the straight line between the two points."""
 
 
+CHORD_KEPT = 8
+"""Factorizations a Segment with chord=True keeps for the chord method (the most recent)."""
+
+
 class SegmentSolveError(RuntimeError):
     """The corrector failed at an intermediate point of a step."""
 
@@ -56,7 +60,11 @@ class Segment:
     function; not for the brackets of a branch point, where the bordered matrix is nearly
     singular and an update from a point already within tol kicks it off the branch (the
     Brusselator chain's 17 branch points were lost so). root: s_e of a root end (module
-    docstring), None: the coordinate is s itself."""
+    docstring), None: the coordinate is s itself. chord: a point is first solved by the chord
+    method from the factorization kept at the nearest point Newton solved (newton.chord_newton;
+    the last CHORD_KEPT are kept), Newton where that does not converge fast; for the collision
+    scans only (scans.run_scan): the continuation's own event and fold points move the branch
+    after them if they move by rounding."""
 
     problem: Problem
     x_a: Array
@@ -158,6 +166,8 @@ class Segment:
                                       self.polish)
             if self.chord and lu is not None:
                 self._factors[s] = lu
+                if len(self._factors) > CHORD_KEPT:
+                    del self._factors[next(iter(self._factors))]
         if not res.converged:
             raise SegmentSolveError(f"corrector failed at s={s:.6g} ({res.failure()})")
         self._keep(s, res.x.copy())
