@@ -188,7 +188,7 @@ class _GaugeMaps:
 
     minus_kept: sp.dia_array
     gauge_diagonal: sp.dia_array
-    identity: sp.csr_array
+    identity: sp.dia_array
     inverse_mass: sp.dia_array
     reduce: sp.csr_array
     E: sp.csr_array
