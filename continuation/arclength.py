@@ -44,7 +44,8 @@ import numpy as np
 from .branch import Branch, BranchRecorder, Stop, StopCode
 from .collisions import DetectionParams
 from .linalg import SingularMatrix, blas_threads, same_matrix
-from .newton import NewtonResult, bordered_newton, fixed_p_newton, residual_norm, tangent
+from .newton import (NewtonResult, factored_fixed_p, factored_newton, fixed_p_newton, residual_norm,
+                     tangent)
 from .problem import Problem
 from .samples import Sample, make_sample, matrix_derivative, sample_at
 from .scans import ScanJob, default_workers, pending_full, scans_for
@@ -149,7 +150,7 @@ def _cut_at_event(problem: Problem, x: Array, t: Array, step: _Step, g0: Array, 
             x_e = pts[up]
             break
         hi, x_hi, g1 = lo, pts[lo], g_lo
-    t_e = tangent(problem, x_e, step.tangent)
+    t_e = tangent(problem, x_e, step.tangent, seg.near(up))
     return _Step(x_e, t_e, replace(step.newton, x=x_e, residual=residual_norm(problem, x_e)),
                  False, True)
 
@@ -168,12 +169,12 @@ def _angle(t0: Array, t1: Array) -> float:
 
 def _attempt(problem: Problem, x: Array, t: Array, ds: float, par: ContinuationParams) -> _Step:
     """One predictor-corrector step of length ds; raises StepRejected."""
-    res = bordered_newton(problem, x + ds * t, t, par.newton_tol, par.max_newton)
+    res, lu = factored_newton(problem, x + ds * t, t, par.newton_tol, par.max_newton)
     if not res.converged:
         raise StepRejected(f"corrector failed ({res.failure()})")
     x_new, last = res.x, False
     try:
-        t_new = tangent(problem, x_new, t)
+        t_new = tangent(problem, x_new, t, None if lu is None else (lu, t))
         if _angle(t, t_new) > par.max_angle:
             raise StepRejected(f"tangent turned by {_angle(t, t_new):.3g} rad")
         p_new = x_new[-1]
@@ -398,7 +399,7 @@ def _before_fold(problem: Problem, here: _Start, step: _Step, params: Continuati
     tangents = {0.0: here.t}
 
     def f(s: float) -> float:
-        tangents[s] = tangent(problem, seg.point(s), here.t)
+        tangents[s] = tangent(problem, seg.point(s), here.t, seg.near(s))
         return direction * float(tangents[s][-1])
 
     try:
@@ -490,11 +491,11 @@ def _commit(problem: Problem, x: Array, step: _Step, end: Sample, par: Continuat
         if step.event and detection.slopes:
             end = _moved(problem, end, step.x, step.tangent)
         return step, end
-    res = fixed_p_newton(problem, problem.resolve_start(u), p, par.newton_tol, par.max_newton)
+    res, near = factored_fixed_p(problem, problem.resolve_start(u), p, par.newton_tol, par.max_newton)
     if not res.converged:
         return None, end
     try:
-        t_new = tangent(problem, res.x, step.tangent)
+        t_new = tangent(problem, res.x, step.tangent, near)
     except SingularMatrix:
         return None, end
     if before is not None and same_matrix(before, problem.spectrum_matrix(res.x[:-1], p)):

@@ -189,7 +189,9 @@ class StepScan:
                 raise _Budget
             x = self.segment.point(s)
             self.solves += 1
-            self._points[s] = (x, tangent(self.problem, x, self.segment.sigma) if self.detector.slopes else None)
+            t = (tangent(self.problem, x, self.segment.sigma, self.segment.near(s))
+                 if self.detector.slopes else None)
+            self._points[s] = (x, t)
             self.segment.remember(s, x.copy(), self._points[s][1])
         return self._points[s]
 

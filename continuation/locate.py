@@ -41,7 +41,7 @@ from typing import Optional
 import numpy as np
 import scipy.sparse as sp
 
-from .linalg import SingularMatrix, bordered, factorize
+from .linalg import Refined, SingularMatrix, bordered, factorize
 from .newton import bordered_matrix
 from .problem import Problem
 
@@ -147,8 +147,17 @@ def locate_double_eigenvalue(problem: Problem, x0: Array, lam0: float, right0: A
             raise LocatorFailed("non-finite Newton iterate")
         residual = float(np.max(np.abs(problem.residual(x[:-1], x[-1]))))
         if abs(dx[-1]) <= 0.01 * tol_p and residual <= newton_tol:
-            return _finish(problem, x, lam, b, c, residual, abs(dx[-1]), it, tuple(history))
+            return _finish(problem, x, lam, b, c, residual, abs(dx[-1]), it, tuple(history),
+                           B if B.sparse else None)
     raise LocatorFailed(f"no convergence in {max_iter} Newton iterations (|dp| = {history[-1]:.3g})")
+
+
+def _shifted(A, lam: float, b: Array, c: Array, near, options) -> Refined:
+    """B = [[A - lam I, b], [c^T, 0]] as a Refined on `near` (the last iterate's B)."""
+    return Refined(lambda: bordered(A - lam * _identity(A), b, c),
+                   lambda y: np.append(A @ y[:-1] - lam * y[:-1] + b * y[-1], c @ y[:-1]),
+                   lambda y: np.append(A.T @ y[:-1] - lam * y[:-1] + c * y[-1], b @ y[:-1]),
+                   near, options)
 
 
 def _border_scale(A) -> float:
@@ -168,26 +177,29 @@ def _derivative_products(problem: Problem, x: Array, d: Array, v: Array, w: Arra
     return (A_plus @ v - A_minus @ v) / (2 * h), (A_plus.T @ w - A_minus.T @ w) / (2 * h)
 
 
-def _finish(problem, x, lam, b, c, residual, dp, iterations, history) -> Located:
-    """Eigenvector, Jordan vector and left-right overlap at the converged point."""
+def _finish(problem, x, lam, b, c, residual, dp, iterations, history, near=None) -> Located:
+    """Eigenvector, Jordan vector and left-right overlap at the converged point (near: the last
+    iterate's sparse factorization of B, refined on: jordan_chain; a dense one costs less to
+    make again than to refine on)."""
     A = problem.stability_matrix(x[:-1], float(x[-1]))
-    v, w, overlap = jordan_chain(A, lam, b, c, problem.factor_options)
+    v, w, overlap = jordan_chain(A, lam, b, c, problem.factor_options, near)
     return Located(x, float(lam), v, w, overlap, residual, dp, iterations, history)
 
 
 def jordan_chain(A, lam: float, b: Array, c: Array,
-                 options: Optional[dict] = None) -> tuple[Array, Array, float]:
+                 options: Optional[dict] = None, near=None) -> tuple[Array, Array, float]:
     """(v, w, overlap) at a double eigenvalue lam of A (dense or sparse), from the bordered
     matrix B = [[A - lam I, b], [c^T, 0]] (module docstring; one factorization, three solves):
     the unit right eigenvector v (B [v; g] = e_(n+1), largest component positive), the
     generalized eigenvector w ((A - lam I) w = v up to the border, made orthogonal to v) and
     overlap = |y . v| for the unit left eigenvector y (B^T [y; .] = e_(n+1); -> 0 at a Jordan
-    block). options: the problem's factor_options (Problem). Raises SingularMatrix if the
-    borders do not make B regular."""
+    block). options: the problem's factor_options (Problem). near: the factorization of B at a
+    point nearby (the locator's last iterate), refined on instead of factorizing (Refined).
+    Raises SingularMatrix if the borders do not make B regular."""
     m = A.shape[0]
     e = np.zeros(m + 1)
     e[-1] = 1.0
-    B = factorize(bordered(A - lam * _identity(A), b, c), options)
+    B = _shifted(A, lam, b, c, near, options)
     v = B.solve(e)[:m]
     y = B.solve(e, transpose=True)[:m]
     scale = np.linalg.norm(v)

@@ -45,7 +45,8 @@ runs along the secant); otherwise the straight line between the two points."""
 
 
 CHORD_KEPT = 8
-"""Factorizations a Segment with chord=True keeps for the chord method (the most recent)."""
+"""Factorizations a Segment keeps (the most recent of its Newton solves): for the chord method
+(chord=True) and the tangents at its points (Segment.near)."""
 
 
 class SegmentSolveError(RuntimeError):
@@ -164,7 +165,7 @@ class Segment:
         if res is None:
             res, lu = factored_newton(self.problem, target, self.sigma, self.tol, self.max_iter, start,
                                       self.polish)
-            if self.chord and lu is not None:
+            if lu is not None:
                 self._factors[s] = lu
                 if len(self._factors) > CHORD_KEPT:
                     del self._factors[next(iter(self._factors))]
@@ -172,6 +173,14 @@ class Segment:
             raise SegmentSolveError(f"corrector failed at s={s:.6g} ({res.failure()})")
         self._keep(s, res.x.copy())
         return res.x
+
+    def near(self, w: float) -> Optional[tuple]:
+        """(lu, sigma): the factorization kept from the Newton solve nearest x(w) and its
+        border, for the tangent there (newton.tangent's near), or None where none is kept."""
+        if not self._factors:
+            return None
+        s = self.real(w)
+        return self._factors[min(self._factors, key=lambda known: abs(known - s))], self.sigma
 
 
 def refine_sign_change(f: Callable[[float], Optional[float]], a: float, fa: float, b: float, fb: float,

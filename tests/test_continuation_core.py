@@ -603,3 +603,81 @@ def test_segment_points_by_the_chord_method_match_newtons():
     assert chord_newton(problem, target, sigma, 1e-12, far, target) is None
     near = factorize(bordered_matrix(problem, first, sigma))
     assert chord_newton(problem, target, sigma, 1e-12, near, target).converged
+
+
+def test_tangents_refined_on_a_nearby_factorization_match_fresh_ones(monkeypatch):
+    """newton.tangent with near = (an LU of the bordered matrix at a point nearby, its border):
+    on a sparse problem the tangent is refined on it, with the border changed by
+    Sherman-Morrison, without a factorization, and equals a fresh one's to 1e-14; an LU from
+    far away (or a dense one) falls back to a factorization, with the same tangent."""
+    import scipy.sparse as sp
+    from diskfriction.continuation import linalg
+    from diskfriction.continuation.newton import bordered_matrix, tangent
+
+    problem = FunctionProblem(G=lambda u, p: np.array([u[0] ** 3 + u[0] - p, u[1] - np.sin(u[0])]),
+                              G_u=lambda u, p: sp.csr_array([[3 * u[0] ** 2 + 1, 0.0], [-np.cos(u[0]), 1.0]]),
+                              G_p=lambda u, p: np.array([-1.0, 0.0]))
+
+    def on_branch(u0):
+        return np.array([u0, np.sin(u0), u0 ** 3 + u0])
+
+    x, sigma = on_branch(0.5), np.array([0.6, 0.0, 0.8])
+    fresh = tangent(problem, x, sigma)
+    previous = fresh + np.array([0.01, -0.02, 0.0])
+    fresh_previous = tangent(problem, x, previous)
+    factorized, original = [], linalg.factorize
+    monkeypatch.setattr(linalg, "factorize", lambda *a: factorized.append(1) or original(*a))
+    near = (original(bordered_matrix(problem, on_branch(0.5 + 1e-7), sigma)), sigma)
+    for border, expected in ((sigma, fresh), (previous, fresh_previous)):
+        assert np.allclose(tangent(problem, x, border, near), expected, rtol=0.0, atol=1e-14)
+    assert factorized == []
+    far = (original(bordered_matrix(problem, on_branch(3.0), sigma)), sigma)
+    assert np.allclose(tangent(problem, x, sigma, far), fresh, rtol=0.0, atol=1e-14)
+    dense = (original(bordered_matrix(problem, on_branch(0.5 + 1e-7), sigma).toarray()), sigma)
+    assert np.allclose(tangent(problem, x, sigma, dense), fresh, rtol=0.0, atol=1e-14)
+    assert len(factorized) == 2
+
+
+def test_solve_near_refines_to_a_fresh_solve_or_gives_up():
+    """linalg.solve_near on the LU of a matrix 1e-8 away reaches the fresh solve to 1e-13 in
+    a few corrections, for M and for M^T; on one 10 % away it gives up (None) after one."""
+    import scipy.sparse as sp
+    from diskfriction.continuation.linalg import factorize, solve_near
+
+    rng = np.random.default_rng(7)
+    M = sp.random_array((60, 60), density=0.1, random_state=rng) + 4.0 * sp.eye_array(60)
+    M = sp.csr_array(M)
+    r = rng.standard_normal(60)
+    exact, exact_t = np.linalg.solve(M.toarray(), r), np.linalg.solve(M.toarray().T, r)
+    E = sp.random_array((60, 60), density=0.1, random_state=rng)
+    near = factorize(M + 1e-8 * E)
+    assert np.allclose(solve_near(near, lambda y: M @ y, r), exact, rtol=0.0, atol=1e-13)
+    assert np.allclose(solve_near(near, lambda y: M.T @ y, r, transpose=True), exact_t, rtol=0.0, atol=1e-13)
+    far = factorize(M + 0.4 * E)
+    assert solve_near(far, lambda y: M @ y, r) is None
+
+
+def test_bordered_sparse_matrix_is_canonical_and_keeps_stored_zeros():
+    """linalg.bordered of a sparse K (CSR or CSC, with duplicate entries and a stored zero):
+    [[K, c], [b^T, d]] in CSC with sorted row indices, duplicates summed, the stored zero and
+    every border entry kept (the pattern depends on K's pattern alone)."""
+    import scipy.sparse as sp
+    from diskfriction.continuation.linalg import bordered
+
+    rows, cols = np.array([0, 2, 2, 1, 0, 3, 1]), np.array([1, 0, 0, 3, 1, 2, 1])
+    values = np.array([1.0, 2.0, 3.0, 0.0, 4.0, 5.0, 6.0])
+    c, b = np.array([1.0, 0.0, 2.0, 3.0]), np.array([0.5, 0.0, -1.0, 2.0])
+    expected = np.zeros((5, 5))
+    np.add.at(expected, (rows, cols), values)
+    expected[:4, 4], expected[4, :4], expected[4, 4] = c, b, 7.0
+    order = np.lexsort((cols, rows))  # CSR arrays as given, the duplicates (2, 0) unsummed
+    raw = sp.csr_array((values[order], cols[order], np.searchsorted(rows[order], np.arange(5))),
+                       shape=(4, 4))
+    assert raw.nnz == 7
+    for K in (raw, sp.coo_array((values, (rows, cols)), shape=(4, 4)).asformat("csc")):
+        M = bordered(K, c, b, 7.0)
+        assert M.format == "csc" and np.array_equal(M.toarray(), expected)
+        for j in range(5):
+            column = M.indices[M.indptr[j]:M.indptr[j + 1]]
+            assert np.all(np.diff(column) > 0)
+        assert M.nnz == 5 + 4 + 5  # K's 5 positions (the stored zero too), b's 4, [c; d]

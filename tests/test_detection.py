@@ -137,6 +137,31 @@ def test_jordan_chain_near_a_double_eigenvalue_dense_or_sparse(sparse, offset, m
     assert np.allclose(w / np.linalg.norm(w), e1, atol=tol)
 
 
+def test_jordan_chain_refined_on_the_locators_last_factorization(monkeypatch):
+    """jordan_chain with near = the LU of B at lambda 1e-9 away (the locator's last iterate):
+    the same v, w and overlap as with a factorization of its own, to 1e-12, without one."""
+    import scipy.sparse as sps
+
+    from diskfriction.continuation import linalg
+    from diskfriction.continuation.locate import _identity, jordan_chain
+
+    a, n = -0.7, 400
+    rng = np.random.default_rng(3)
+    A = sps.diags_array(np.concatenate([[a, a], 1.0 + rng.random(n - 2)])).tolil()
+    A[0, 1] = 1.0
+    A = sps.csr_array(A)
+    b, c = 1e-6 * np.eye(n)[1], 1e-6 * np.eye(n)[0]
+    own = jordan_chain(A, a, b, c)
+    near = linalg.factorize(linalg.bordered(A - (a + 1e-9) * _identity(A), b, c))
+    factorized, original = [], linalg.factorize
+    monkeypatch.setattr(linalg, "factorize", lambda *args: factorized.append(1) or original(*args))
+    refined = jordan_chain(A, a, b, c, near=near)
+    assert factorized == []
+    assert np.allclose(refined[0], own[0], rtol=0, atol=1e-12)
+    assert np.allclose(refined[1], own[1], rtol=0, atol=1e-12)
+    assert abs(refined[2] - own[2]) <= 1e-12
+
+
 def test_eps_zero_runs_to_the_end_with_free_rolling_modes_excluded(chain_sweep):
     """N = 20 at eps = 0: disks beyond the load front touch their neighbours at overlaps of
     rounding size and are held by the substrate alone. Their rolling modes are counted at

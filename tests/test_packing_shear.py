@@ -76,8 +76,10 @@ def test_the_bordered_systems_factorized_by_minimum_degree_solve_as_superlus_def
     fill = [f.lu.L.nnz + f.lu.U.nnz for f in (ours, default)]
     assert fill[0] < fill[1]
     assert np.allclose(ours.solve(rhs), default.solve(rhs), rtol=0, atol=1e-12 * np.abs(default.solve(rhs)).max())
-    taken = []
-    monkeypatch.setattr(newton, "factorize", lambda M, options=None: taken.append(options) or linalg.factorize(M, options))
+    taken, factorize = [], linalg.factorize
+    recorded = lambda M, options=None: taken.append(options) or factorize(M, options)  # noqa: E731
+    monkeypatch.setattr(newton, "factorize", recorded)
+    monkeypatch.setattr(linalg, "factorize", recorded)  # the tangent's (linalg.Refined)
     newton.tangent(problem, x, e_p)
     newton.bordered_newton(problem, x + 1e-9, e_p, tol=0.0, max_iter=1)
     assert taken == [problem.factor_options] * 2 and problem.factor_options["permc_spec"] == "MMD_AT_PLUS_A"
@@ -478,12 +480,12 @@ def test_a_commit_that_leaves_the_matrix_the_same_keeps_the_spectrum(packing, wi
     from diskfriction.continuation import arclength
 
     kept, updates, same_matrix = [], {}, arclength.same_matrix
-    real_newton = arclength.fixed_p_newton
+    real_newton = arclength.factored_fixed_p
 
     def counting_newton(*args, **kwargs):
-        result = real_newton(*args, **kwargs)
+        result, near = real_newton(*args, **kwargs)
         updates["last"] = result.iterations
-        return result
+        return result, near
 
     def counting_same(A, B):
         same = same_matrix(A, B)
@@ -491,7 +493,7 @@ def test_a_commit_that_leaves_the_matrix_the_same_keeps_the_spectrum(packing, wi
             kept.append(updates["last"])
         return same
 
-    monkeypatch.setattr(arclength, "fixed_p_newton", counting_newton)
+    monkeypatch.setattr(arclength, "factored_fixed_p", counting_newton)
     monkeypatch.setattr(arclength, "same_matrix", counting_same)
     counted = shear(SCENE, packing, ShearParams(workers=0), window=WINDOW)
     assert len(kept) >= 5 and set(kept) == {0}
