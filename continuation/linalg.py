@@ -288,7 +288,8 @@ class Refined:
     `near`, the factorization of a matrix nearby (solve_near, anything with Factorization's
     solve; None: none); where that does not converge, M is built (matrix()) and factorized
     once, and every later solve uses that factorization. Worth it where M is solved a few
-    times at most: every solve on `near` is refined on its own."""
+    times at most: every solve on `near` is refined on its own. apply_t may be None where M^T
+    is never solved."""
 
     matrix: object
     apply: object

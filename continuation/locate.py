@@ -189,7 +189,8 @@ def _finish(problem, x, lam, b, c, residual, dp, iterations, history, near=None)
 def jordan_chain(A, lam: float, b: Array, c: Array,
                  options: Optional[dict] = None, near=None) -> tuple[Array, Array, float]:
     """(v, w, overlap) at a double eigenvalue lam of A (dense or sparse), from the bordered
-    matrix B = [[A - lam I, b], [c^T, 0]] (module docstring; one factorization, three solves):
+    matrix B = [[A - lam I, b], [c^T, 0]] (module docstring; one factorization at most, three
+    solves):
     the unit right eigenvector v (B [v; g] = e_(n+1), largest component positive), the
     generalized eigenvector w ((A - lam I) w = v up to the border, made orthogonal to v) and
     overlap = |y . v| for the unit left eigenvector y (B^T [y; .] = e_(n+1); -> 0 at a Jordan

@@ -177,8 +177,11 @@ def _tangent_system(problem: Problem, x: Array, border: Array, near: Optional[tu
     if near is not None and near[0].sparse:
         lu, b_lu = near
         if not np.array_equal(b_lu, border):
-            lu = _Rebordered(lu, b_lu, border)
-            if not (np.isfinite(lu.denominator) and lu.denominator != 0.0):
+            try:
+                lu = _Rebordered(lu, b_lu, border)
+            except SingularMatrix:  # near's own solve is not finite: factorize M
+                lu = None
+            if lu is not None and not (np.isfinite(lu.denominator) and lu.denominator != 0.0):
                 lu = None
         G_u, G_p = problem.jacobian(u, p), problem.dG_dp(u, p)
         return Refined(lambda: bordered_matrix(problem, x, border),
