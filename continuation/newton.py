@@ -174,20 +174,14 @@ def tangent(problem: Problem, x: Array, border: Array, near: Optional[tuple] = N
 def _tangent_system(problem: Problem, x: Array, border: Array, near: Optional[tuple]) -> Refined:
     """The bordered matrix at x with border b as a Refined on near = (lu, b_lu) (tangent)."""
     u, p = x[:-1], x[-1]
+    G_u, G_p = problem.jacobian(u, p), problem.dG_dp(u, p)
+    lu = None
     if near is not None and near[0].sparse:
         lu, b_lu = near
         if not np.array_equal(b_lu, border):
-            try:
-                lu = _Rebordered(lu, b_lu, border)
-            except SingularMatrix:  # near's own solve is not finite: factorize M
-                lu = None
-            if lu is not None and not (np.isfinite(lu.denominator) and lu.denominator != 0.0):
-                lu = None
-        G_u, G_p = problem.jacobian(u, p), problem.dG_dp(u, p)
-        return Refined(lambda: bordered_matrix(problem, x, border),
-                       lambda y: np.append(G_u @ y[:-1] + G_p * y[-1], border @ y), None, lu,
-                       problem.factor_options)
-    return Refined(lambda: bordered_matrix(problem, x, border), None, None, None,
+            lu = _Rebordered.of(lu, b_lu, border)
+    return Refined(lambda: bordered(G_u, G_p, border[:-1], border[-1]),
+                   lambda y: np.append(G_u @ y[:-1] + G_p * y[-1], border @ y), None, lu,
                    problem.factor_options)
 
 
@@ -198,15 +192,26 @@ class _Rebordered:
         M^-1 r = y - z (d . y) / (1 + d . z),    y = M_0^-1 r,  z = M_0^-1 e_(n+1).
 
     1 + d . z = b . z, regular where b is not orthogonal to the branch's tangent (z is along
-    it, with b_lu . z = 1; where it is 0, M is factorized instead: _tangent_system).
-    One solve more than lu, once."""
+    it, with b_lu . z = 1). One solve more than lu, once."""
 
-    def __init__(self, lu, b_lu: Array, b: Array):
+    def __init__(self, lu, d: Array, z: Array, denominator: float):
+        self.lu, self.d, self.z, self.denominator = lu, d, z, denominator
+
+    @classmethod
+    def of(cls, lu, b_lu: Array, b: Array) -> Optional["_Rebordered"]:
+        """The solver, or None where lu's own solve is not finite or 1 + d . z is 0 (M is
+        then factorized)."""
         e = np.zeros(b.size)
         e[-1] = 1.0
-        self.lu, self.d = lu, b - b_lu
-        self.z = lu.solve(e)
-        self.denominator = 1.0 + float(self.d @ self.z)
+        try:
+            z = lu.solve(e)
+        except SingularMatrix:
+            return None
+        d = b - b_lu
+        denominator = 1.0 + float(d @ z)
+        if not np.isfinite(denominator) or denominator == 0.0:
+            return None
+        return cls(lu, d, z, denominator)
 
     def solve(self, r: Array, transpose: bool = False) -> Array:
         if transpose:

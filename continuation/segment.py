@@ -157,11 +157,9 @@ class Segment:
         if s in self._known:
             return self._known[s][0].copy()
         target, start = self.secant_point(s), self._predicted_at(s)
-        res = None
-        if self.chord and self._factors:  # the chord from the factorization of the nearest point solved anew
-            near = min(self._factors, key=lambda known: abs(known - s))
-            res = chord_newton(self.problem, target, self.sigma, self.tol, self._factors[near], start,
-                               self.polish)
+        res, near = None, self.near(w)
+        if self.chord and near is not None:  # the chord from the factorization of the nearest point solved anew
+            res = chord_newton(self.problem, target, self.sigma, self.tol, near[0], start, self.polish)
         if res is None:
             res, lu = factored_newton(self.problem, target, self.sigma, self.tol, self.max_iter, start,
                                       self.polish)
