@@ -136,13 +136,17 @@ def test_pairs_of_a_degenerate_eigenvalue_are_refined_again_together(monkeypatch
     assert refined()[1] is None
 
 
-def test_a_pair_born_in_the_step_is_refined_together():
+@pytest.mark.parametrize("crowded", [False, True])
+def test_a_pair_born_in_the_step_is_refined_together(crowded):
     """Two real eigenvalues 10 +- 0.01 that become the complex pair 10 +- 0.01 i between the
     guess and the matrix (a 2 x 2 block [[10, 1], [-t, 10]], t from -1e-4 to 1e-4, weakly
     coupled to the rest): alone, a real guess stays real and never converges; each pair above
-    tol is refined again with the pair whose guess is nearest, and the two span the invariant
-    subspace in which the projected problem finds the pair. The result is LAPACK's and is
-    certified; with groups of at most one pair it is not."""
+    tol is refined again with the pairs whose guesses are nearest, and the two span the
+    invariant subspace in which the projected problem finds the pair. The result is LAPACK's
+    and is certified; with groups of at most one pair it is not. crowded: two more eigenvalues,
+    10 +- 0.018, each nearer one member's guess than its partner is (as in the chain of 400
+    disks, where the partner was 1.5 to 2.9 times farther): with only the nearest guess
+    (PARTNERS = 1) neither group spans the pair and the result is not certified."""
     N, b = 5, 2
 
     def blocks_at(t):
@@ -150,27 +154,40 @@ def test_a_pair_born_in_the_step_is_refined_together():
         blocks.lower[:] *= 0.01
         blocks.upper[:] *= 0.01
         blocks.diag[0] = [[10.0, 1.0], [-t, 10.0]]
+        if crowded:
+            blocks.diag[2] = [[10.018, 0.0], [0.0, 9.982]]  # not a neighbour of block 0
         return blocks
 
     old, new = eigensystem(blocks_at(-1e-4).dense(), vectors=True), blocks_at(1e-4)
     exact = np.linalg.eigvals(new.dense())
-    near = np.abs(exact.real - 10.0) < 0.1
+    near = np.abs(exact.real - 10.0) < 0.015
     assert near.sum() == 2 and np.all(np.abs(exact[near].imag) > 5e-3)
-    assert np.all(old.values[np.abs(old.values.real - 10.0) < 0.1].imag == 0.0)
+    pair = np.abs(old.values - 10.0) < 0.015
+    assert np.all(old.values[pair].imag == 0.0)
+    if crowded:  # each member's nearest other guess is a bystander
+        for z in old.values[pair]:
+            assert not pair[np.argsort(np.abs(old.values - z))[1]]
     scale = np.abs(old.values).max()
-    values, right, left, residual = bt.refine_eigenpairs(new, old.values, old.right, old.left, 6, 1e-13 * scale)
+
+    def refined():
+        return bt.refine_eigenpairs(new, old.values, old.right, old.left, 6, 1e-13 * scale)
+
+    values, right, left, residual = refined()
     assert np.abs(track(exact, values) - exact).max() <= 1e-12 * scale
     assert refinement.certified(new, values, right, left, residual, scale) is not None
     monkey = pytest.MonkeyPatch()
     with monkey.context() as m:
         m.setattr(bt, "LARGEST_CLUSTER", 1)
-        alone = bt.refine_eigenpairs(new, old.values, old.right, old.left, 6, 1e-13 * scale)
-    assert refinement.certified(new, *alone, scale) is None
+        assert refinement.certified(new, *refined(), scale) is None
+    if crowded:
+        with monkey.context() as m:
+            m.setattr(bt, "PARTNERS", 1)
+            assert refinement.certified(new, *refined(), scale) is None
 
 
 def test_the_groups_refined_again_are_meeting_discs_and_pairs_left_above_tol():
     """refinement_groups: two converged pairs whose discs kappa rho meet form a group; a pair
-    above tol joins the pair whose guess is nearest its own although their discs are far apart
+    above tol joins the pairs whose guesses are nearest its own although their discs are far apart
     (the chain of 1000 disks declined three spectra for such pairs near a collision, with
     residuals 1e-8 to 1e-4 of the spectral radius); a converged pair alone is in none."""
     guess = np.array([0.0, 1.0, 1.001, 5.0, 7.0, 7.0 + 1e-9])
@@ -178,7 +195,11 @@ def test_the_groups_refined_again_are_meeting_discs_and_pairs_left_above_tol():
     residual = np.array([1e-16, 1e-6, 1e-16, 1e-16, 1e-9, 1e-9])
     kappa = np.ones(guess.size)
     groups = bt.refinement_groups(guess, values, residual, kappa, 1e-13)
-    assert [g.tolist() for g in groups] == [[1, 2], [4, 5]]
+    assert [g.tolist() for g in groups] == [[1, 2], [4, 5]]  # 0 is 1000 times farther than 2
+    # the second nearest guess joins within PARTNER_REACH times the nearest one's distance
+    guess[0] = 1.0 - 0.003
+    groups = bt.refinement_groups(guess, values, residual, kappa, 1e-13)
+    assert [g.tolist() for g in groups] == [[0, 1, 2], [4, 5]]
     assert bt.refinement_groups(guess, values, np.full(guess.size, 1e-16), kappa, 1e-13) == []
 
 
