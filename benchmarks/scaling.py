@@ -14,12 +14,15 @@ Run: python benchmarks/scaling.py [--N 10,20,40,100,200,400,1000] [--budget 600]
                                   [--exhaustive-up-to 100] [--eps 1e-4,0]
                                   [--window-N 1000 --window 0.0715:0.08] [--workers K]
                                   [--spectra cpu|gpu|auto[,...]] [--refine-from n|inf[,...]]
+                                  [--progress SECONDS]
 With --window-N, also a run tracking only that spectral window (bifurcate --window; lambda / k_n)
 at each of those N. --spectra: where the dense spectra run (bifurcate --spectra; default auto);
 with several, each fast run is repeated for each and compared with the first. --refine-from:
 the n from which full spectra are refined from the previous sample's (continuation/refinement.py;
 inf: never), several compared the same way; "refined + declined" counts the full spectra so
 refined and the refinements whose certificate failed (a dense spectrum was taken instead).
+--progress S: each fast run prints the F_x it reached, with the seconds since its sweep started,
+to stderr at most every S seconds (where a long sweep spends its time).
 """
 from __future__ import annotations
 
@@ -52,6 +55,7 @@ workers = None if sys.argv[6] == "auto" else int(sys.argv[6])
 DEVICE = spectra_on(sys.argv[7])  # held for the whole child process (a dropped one restores "auto")
 DEVICE.__enter__()
 refinement.REFINE_FROM = float(sys.argv[8])
+every = float(sys.argv[9])  # seconds between progress lines on stderr (0: none)
 system = System.from_scene(scene)
 reached = {"F_x": 0.0}
 
@@ -62,6 +66,10 @@ class OutOfTime(Exception):
 
 def progress(F_x):
     reached["F_x"] = F_x
+    elapsed = time.perf_counter() - t0
+    if every and (elapsed - reached.get("said", -every) >= every or F_x >= 0.12):
+        reached["said"] = elapsed
+        print(f"N = {N}: F_x = {F_x:.6f} at {elapsed:.1f} s", file=sys.stderr, flush=True)
 
 
 def out_of_time(signum, frame):
@@ -98,12 +106,13 @@ print(json.dumps(out))
 
 
 def run(N: int, eps: float, mode: str, budget: float, window: str = "-", workers: str = "auto",
-        spectra: str = "auto", refine_from: str = "default") -> dict:
+        spectra: str = "auto", refine_from: str = "default", progress: float = 0.0) -> dict:
     from diskfriction.continuation.refinement import REFINE_FROM
 
     refine = str(REFINE_FROM) if refine_from == "default" else refine_from
     proc = subprocess.run([sys.executable, "-c", CHILD, str(N), str(eps), mode, str(budget), window, workers,
-                           spectra, refine], capture_output=True, text=True)
+                           spectra, refine, str(progress)], stdout=subprocess.PIPE,
+                          stderr=None if progress else subprocess.PIPE, text=True)
     if proc.returncode != 0:
         return {"N": N, "eps": eps, "mode": mode, "done": False,
                 "error": proc.stderr.strip().splitlines()[-1] if proc.stderr else "failed"}
@@ -151,6 +160,8 @@ def main() -> None:
     ap.add_argument("--refine-from", default="default",
                     help="n from which full spectra are refined (refinement.REFINE_FROM; inf: never); several: "
                          "each fast run for each")
+    ap.add_argument("--progress", type=float, default=0.0,
+                    help="print the F_x each fast run reached to stderr, at most every this many seconds")
     args = ap.parse_args()
     devices, refines = args.spectra.split(","), args.refine_from.split(",")
     sizes = [int(n) for n in args.N.split(",") if n]
@@ -166,10 +177,11 @@ def main() -> None:
         for N in sizes:
             variants = [(device, refine) for device in devices for refine in refines]
             r = results[(N, eps, "fast")] = run(N, eps, "fast", args.budget, workers=args.workers,
-                                                 spectra=devices[0], refine_from=refines[0])
+                                                 spectra=devices[0], refine_from=refines[0], progress=args.progress)
             print(row(r, *variants[0]), flush=True)
             for device, refine in variants[1:]:
-                other = run(N, eps, "fast", args.budget, workers=args.workers, spectra=device, refine_from=refine)
+                other = run(N, eps, "fast", args.budget, workers=args.workers, spectra=device, refine_from=refine,
+                            progress=args.progress)
                 print(row(other, device, refine) + f" {agreement(other, r)}", flush=True)
             if eps and N <= args.exhaustive_up_to:
                 e = results[(N, eps, "exhaustive")] = run(N, eps, "exhaustive", args.budget)
