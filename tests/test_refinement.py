@@ -185,6 +185,52 @@ def test_a_pair_born_in_the_step_is_refined_together(crowded):
             assert refinement.certified(new, *refined(), scale) is None
 
 
+def test_a_group_that_does_not_converge_replaces_only_the_members_it_improved(monkeypatch):
+    """A pair above tol (a far guess) is refined again with its nearest guesses; where the
+    group's iteration leaves a member above tol, only the members whose residual fell are
+    written: a group returning worse pairs (here a stand-in for _refine_cluster that moves
+    every value and reports residual 1e3 R) leaves the result as without groups, and one
+    that improves only the rough pair writes that pair alone."""
+    blocks = random_blocks(6, 2, seed=3)
+    exact = eigensystem(blocks.dense(), vectors=True)
+    scale = np.abs(exact.values).max()
+    tol = 1e-13 * scale
+    values, right, left = exact.values.copy(), exact.right.copy(), exact.left.copy()
+    rough = int(np.argmin(np.abs(values.imag)))
+    assert values[rough].imag == 0.0
+    # a guess far from its eigenpair (value and vectors): one Rayleigh step leaves it above tol
+    values[rough] += 0.3 * scale
+    rng = np.random.default_rng(0)
+    right[:, rough] = rng.standard_normal(values.size)
+    left[rough] = rng.standard_normal(values.size)
+    right[:, rough] /= np.linalg.norm(right[:, rough])
+    left[rough] /= left[rough] @ right[:, rough]
+    refine = lambda: bt.refine_eigenpairs(blocks, values, right, left, 1, tol)  # noqa: E731
+    with monkeypatch.context() as m:
+        m.setattr(bt, "LARGEST_CLUSTER", 1)
+        alone = refine()
+    assert alone[3][rough] > tol
+
+    def worse(blocks, v, r, lft, iterations, tol):
+        v += 0.01 * scale
+        return np.full(v.size, 1e3 * scale)  # above any unit vector's residual
+
+    monkeypatch.setattr(bt, "_refine_cluster", worse)
+    kept = refine()
+    assert np.array_equal(kept[0], alone[0]) and np.array_equal(kept[3], alone[3])
+
+    def rough_only(blocks, v, r, lft, iterations, tol):
+        v += 0.01 * scale
+        return np.where(np.arange(v.size) == 0, 0.0, 1e3 * scale)  # member 0: the lowest index
+
+    monkeypatch.setattr(bt, "_refine_cluster", rough_only)
+    groups = bt.refinement_groups(values, alone[0], alone[3], np.ones(values.size), tol)
+    first = min(g[0] for g in groups if rough in g)
+    mixed = refine()
+    changed = np.flatnonzero(mixed[0] != alone[0])
+    assert changed.tolist() == [first]
+
+
 def test_the_groups_refined_again_are_meeting_discs_and_pairs_left_above_tol():
     """refinement_groups: two converged pairs whose discs kappa rho meet form a group; a pair
     above tol joins the pairs whose guesses are nearest its own although their discs are far apart
