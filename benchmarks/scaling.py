@@ -163,6 +163,8 @@ def main() -> None:
     ap.add_argument("--progress", type=float, default=0.0,
                     help="print the F_x each fast run reached to stderr, at most every this many seconds")
     args = ap.parse_args()
+    if args.progress < 0:
+        ap.error(f"--progress: seconds between lines must be >= 0 (got {args.progress:g})")
     devices, refines = args.spectra.split(","), args.refine_from.split(",")
     sizes = [int(n) for n in args.N.split(",") if n]
     eps_values = [float(e) for e in args.eps.split(",")]
