@@ -105,6 +105,16 @@ class PeriodicBlocks:
         values = np.concatenate([self.diag.ravel(), self.lower.ravel(), self.upper.ravel()])
         return sp.csr_array((values, (rows, cols)), shape=(self.n, self.n))
 
+    def original(self) -> sp.csr_array:
+        """The n x n matrix in its original order (from_matrix's A: row and column order[i]
+        is block order's i), sparse."""
+        A = self.sparse()
+        if self.order is None:
+            return A
+        back = np.empty(self.n, np.int64)
+        back[np.asarray(self.order)] = np.arange(self.n)
+        return A[back][:, back]
+
     def dense(self) -> Array:
         """The n x n matrix (tests)."""
         return self.sparse().toarray()

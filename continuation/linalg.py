@@ -41,9 +41,9 @@ Matrix = Union[Array, sp.spmatrix, sp.sparray]
 class Work:
     """What the core spent: full eigendecompositions (dense, O(n^3)), partial ones (a few
     eigenvalues near a shift: nearest.py), LU factorizations and triangular solves; full
-    spectra refined from a nearby sample's instead of decomposed, and refinements declined by
-    their certificate (refinement.py; a dense spectrum was taken instead). Printed by
-    benchmarks/scaling.py."""
+    spectra refined from a nearby sample's instead of decomposed, those of them certified only
+    after a repair by shift-invert, and refinements declined by their certificate
+    (refinement.py; a dense spectrum was taken instead). Printed by benchmarks/scaling.py."""
 
     spectra: int = 0
     spectra_partial: int = 0
@@ -51,6 +51,7 @@ class Work:
     solves: int = 0
     spectra_refined: int = 0
     refinements_declined: int = 0
+    refinements_repaired: int = 0
 
     def counts(self) -> tuple[int, ...]:
         return astuple(self)

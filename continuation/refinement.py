@@ -15,9 +15,13 @@ reference sample is carried to the new point x:
 O(n^2 b^2) for the n = N b pairs against LAPACK's O(n^3): 6.7 times faster at n = 3000 on one
 core (2.45 against 16.5 s; docs/continuation.md, Eigenpair continuation).
 
-The result is used only when it is certified; otherwise (None) the caller takes the dense
-spectrum, and the work ledger counts both outcomes (linalg.Work: spectra_refined,
-refinements_declined). Certificate, with rho_i = |A r_i - lambda_i r_i| (|r_i| = 1), kappa_i =
+The result is used only when it is certified. Where it is not, the pairs that fail (a
+residual above RESIDUAL R, a pair found twice, a nearly defective pair among meeting discs)
+are repaired by shift-invert near their guesses (repaired: ARPACK's k eigenpairs nearest a
+real shift on the sparse matrix, nearest.py, those not held by a certified pair given to the
+failing ones) and the whole is certified again; otherwise (None) the caller takes the dense
+spectrum. The work ledger counts the outcomes (linalg.Work: spectra_refined, of them
+refinements_repaired, and refinements_declined). Certificate, with rho_i = |A r_i - lambda_i r_i| (|r_i| = 1), kappa_i =
 |l_i| |r_i| / |l_i^H r_i| and R = max|lambda| of the reference:
   - every rho_i <= RESIDUAL R (a backward error, relative to the spectral radius);
   - the discs |z - lambda_i| <= kappa_i rho_i (the first-order bound of each eigenvalue's error,
@@ -36,8 +40,13 @@ from typing import TYPE_CHECKING, Optional
 
 import numpy as np
 
-from .block_tridiagonal import meeting_discs, refine_eigenpairs
+from scipy.optimize import linear_sum_assignment
+from scipy.sparse.csgraph import connected_components
+import scipy.sparse as sp
+
+from .block_tridiagonal import _pivoted_rqi, close_pairs, meeting_discs, refine_eigenpairs
 from .linalg import book, row_norms
+from .nearest import ShiftInvertFailed, nearest_eigensystem
 from .spectra import Eigensystem, on_gpu
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -73,6 +82,24 @@ eigenvalue of the chain has kappa 1 to 10, a pair near a collision a diverging o
 BIORTHOGONAL = 1e-8
 """Largest |l_i^H r_j| (l_i^H r_i = 1) of two members of meeting discs (degenerate_only)."""
 
+REPAIR_LINK = 1e-4
+"""Failing pairs whose guesses lie within this many R of each other are repaired by one
+shift-invert (repaired)."""
+
+REPAIR_EXTRA = 4
+"""Eigenpairs a repair's shift-invert computes beyond the failing pairs and the certified ones
+near them (repaired)."""
+
+REPAIR_TRIES = 3
+"""Shift-inverts per cluster of failing pairs at most, k doubled each time, until it holds as
+many eigenvalues that no certified pair holds as the cluster has pairs (repaired)."""
+
+POLISH = 1e-13
+"""Residual (relative to R) above which a repaired pair gets two pivoted Rayleigh quotient steps
+(block_tridiagonal._pivoted_rqi): ARPACK's tolerance is relative to the shift-inverted
+eigenvalues, and a pair far from the shift came out at 1.07e-12 R, above RESIDUAL (the chain
+of 400 disks)."""
+
 EPS = np.finfo(float).eps
 
 
@@ -103,12 +130,17 @@ def refined_eigensystem(problem: Problem, x: Array, reference: Sample) -> Option
     move = np.zeros(values.size, complex)
     if reference.dlam is not None and reference.tangent is not None:
         move = reference.dlam * float((x - reference.x) @ reference.tangent)
-    refined = refine_eigenpairs(blocks, values + move, old.right, old.left, ITERATIONS, 1e-13 * scale,
+    guess = values + move
+    refined = refine_eigenpairs(blocks, guess, old.right, old.left, ITERATIONS, 1e-13 * scale,
                                 old.columns)  # columns: label i's vectors
     system = certified(blocks, *refined, scale)
     if system is None:
-        book("refinements_declined")
-        return None
+        fixed = repaired(blocks, guess, *refined, scale)
+        system = None if fixed is None else certified(blocks, *fixed, scale)
+        if system is None:
+            book("refinements_declined")
+            return None
+        book("refinements_repaired")
     book("spectra_refined")
     return Eigensystem(system.values, system.right, system.left, np.zeros(values.size, bool))
 
@@ -135,12 +167,94 @@ def certified(blocks, values: Array, right: Array, left: Array, residual: Array,
 def degenerate_only(i: Array, j: Array, cross: Array, kappa: Array) -> bool:
     """Whether the pairs (i, j) whose discs meet (block_tridiagonal.meeting_discs) are all
     members of a semisimple degenerate eigenvalue (a ring's standing waves, a mode repeated by
-    symmetry): well conditioned (kappa <= KAPPA) with biorthogonal vectors, cross = max(|l_i^H
-    r_j|, |l_j^H r_i|) <= BIORTHOGONAL; their discs then hold as many eigenvalues as they are.
-    A pair found twice (r_i = r_j) fails the second, a pair near a collision (kappa diverging)
-    the first."""
-    if i.size == 0:
-        return True
-    if np.any(kappa[i] > KAPPA) or np.any(kappa[j] > KAPPA):
-        return False
-    return bool(np.all(cross <= BIORTHOGONAL))
+    symmetry; not_degenerate); their discs then hold as many eigenvalues as they are."""
+    return not np.any(not_degenerate(i, j, cross, kappa))
+
+
+def not_degenerate(i: Array, j: Array, cross: Array, kappa: Array) -> Array:
+    """For each meeting pair (i, j): whether it is not two members of a semisimple degenerate
+    eigenvalue, which are well conditioned (kappa <= KAPPA) with biorthogonal vectors, cross =
+    max(|l_i^H r_j|, |l_j^H r_i|) <= BIORTHOGONAL. A pair found twice (r_i = r_j) fails the
+    second, a pair near a collision (kappa diverging) the first."""
+    return (kappa[i] > KAPPA) | (kappa[j] > KAPPA) | (cross > BIORTHOGONAL)
+
+
+def failing(values: Array, right: Array, left: Array, residual: Array, scale: float) -> Array:
+    """The pairs (ascending) that fail the certificate's first two tests by themselves: a
+    residual above RESIDUAL scale, or a member of meeting discs (those of the pairs within
+    the residual) that are not a degenerate eigenvalue's (not_degenerate)."""
+    rough = ~(residual <= RESIDUAL * scale)
+    kappa = row_norms(left)
+    i, j, cross = meeting_discs(values, kappa * np.where(rough, 0.0, residual), right, left)
+    bad = not_degenerate(i, j, cross, kappa)
+    return np.union1d(np.flatnonzero(rough), np.concatenate([i[bad], j[bad]]))
+
+
+def repaired(blocks, guess: Array, values: Array, right: Array, left: Array, residual: Array,
+             scale: float) -> Optional[tuple[Array, Array, Array, Array]]:
+    """The refinement (values, right, left, residual: refine_eigenpairs' result in the matrix's
+    order) with its failing pairs (failing) replaced by shift-invert in place, or None where it cannot
+    be (none fail and yet the certificate refused, a shift-invert failed, too few eigenvalues
+    found). The failing pairs are clustered by their guesses (REPAIR_LINK R apart at most);
+    for each cluster, ARPACK's k eigenpairs nearest sigma, the real part of the mean guess
+    (nearest.nearest_eigensystem on the sparse matrix, both vectors, k the pairs within twice
+    the cluster's spread of sigma plus REPAIR_EXTRA), are matched first to the pairs that
+    passed inside their disc (each within 10 kappa rho + RESIDUAL R of its own value); those
+    left over (k doubled, up to REPAIR_TRIES runs, until as many are left as the cluster has
+    pairs) go to the cluster's pairs by least distance from the guesses. Where the failing
+    pairs were nearly defective pairs that the Rayleigh iterations could not split, or a pair
+    found twice, shift-invert sees the eigenvalues themselves. The result is certified again
+    as a whole by the caller: a wrong match leaves two pairs on one eigenvalue, whose discs
+    meet."""
+    bad = failing(values, right, left, residual, scale)
+    if bad.size == 0:
+        return None
+    A = blocks.original()
+    held = np.ones(values.size, bool)
+    held[bad] = False
+    bound = row_norms(left) * np.where(held, residual, 0.0)
+    i, j = close_pairs(guess[bad], REPAIR_LINK * scale)
+    cluster = connected_components(sp.coo_array((np.ones(i.size), (i, j)), shape=(bad.size, bad.size)),
+                                   directed=False)[1]
+    for c in range(cluster.max() + 1):
+        members = bad[cluster == c]
+        sigma = float(guess[members].real.mean())
+        reach = 2.0 * float(np.abs(guess[members] - sigma).max())
+        k = int(np.count_nonzero(held & (np.abs(values - sigma) <= reach))) + members.size + REPAIR_EXTRA
+        for _ in range(REPAIR_TRIES):
+            if k >= values.size - 1:
+                return None
+            try:
+                found, radius = nearest_eigensystem(A, sigma, k)
+            except ShiftInvertFailed:
+                return None
+            near = 10.0 * bound + RESIDUAL * scale  # a certified pair's value against ARPACK's
+            # (the farthest eigenvalue found lies on the disc's edge: a certified pair holding it
+            # may lie outside by its rounding)
+            inside = np.flatnonzero(held & (np.abs(values - sigma) <= radius + near))
+            a, b = linear_sum_assignment(np.abs(values[inside][:, None] - found.values[None, :]))
+            same = np.abs(values[inside[a]] - found.values[b]) <= near[inside[a]]
+            free = np.setdiff1d(np.arange(k), b[same])
+            if free.size >= members.size:
+                break
+            k *= 2
+        else:
+            return None
+        free = free[linear_sum_assignment(np.abs(guess[members][:, None] - found.values[free][None, :]))[1]]
+        v, r, lft = found.values[free], found.right[:, free], found.left[free]
+        norm = np.linalg.norm(r, axis=0)
+        r, lft = r / norm, lft * norm[:, None]  # |r| = 1, l^H r = 1
+        res = np.linalg.norm(A @ r - r * v, axis=0)
+        rough = np.flatnonzero(res > POLISH * scale)
+        if rough.size:  # ARPACK's tolerance is relative to the shift-inverted values: polish
+            order = np.arange(values.size) if blocks.order is None else np.asarray(blocks.order)
+            v_b, r_b, l_b = v[rough], r[order][:, rough], lft[rough][:, order]  # block order
+            polished = _pivoted_rqi(blocks, v_b, r_b, l_b, 2, POLISH * scale)
+            better = polished < res[rough]
+            take = rough[better]
+            v[take], res[take] = v_b[better], polished[better]
+            r[np.ix_(order, take)], lft[np.ix_(take, order)] = r_b[:, better], l_b[better]
+        values[members], right[:, members], left[members], residual[members] = v, r, lft, res
+        held[members] = True
+        bound[members] = row_norms(lft) * residual[members]
+    return values, right, left, residual
