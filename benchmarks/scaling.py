@@ -19,8 +19,9 @@ With --window-N, also a run tracking only that spectral window (bifurcate --wind
 at each of those N. --spectra: where the dense spectra run (bifurcate --spectra; default auto);
 with several, each fast run is repeated for each and compared with the first. --refine-from:
 the n from which full spectra are refined from the previous sample's (continuation/refinement.py;
-inf: never), several compared the same way; "refined + declined" counts the full spectra so
-refined and the refinements whose certificate failed (a dense spectrum was taken instead).
+inf: never), several compared the same way; "refined (repaired) + declined" counts the full
+spectra so refined, of them those certified only after their failing pairs were repaired by
+shift-invert, and the refinements whose certificate failed (a dense spectrum was taken instead).
 --progress S: each fast run prints the F_x it reached, with the seconds since its sweep started,
 to stderr at most every S seconds (where a long sweep spends its time).
 """
@@ -98,7 +99,7 @@ with measured() as work:
         out.update(done=False, points=None, collisions=None)
 signal.alarm(0)
 out.update(seconds=time.perf_counter() - t0, reached=reached["F_x"], spectra=work.spectra,
-           partial=work.spectra_partial, refined=work.spectra_refined, declined=work.refinements_declined, factorizations=work.factorizations, solves=work.solves,
+           partial=work.spectra_partial, refined=work.spectra_refined, repaired=work.refinements_repaired, declined=work.refinements_declined, factorizations=work.factorizations, solves=work.solves,
            peak_mb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
            worker_mb=resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024)
 print(json.dumps(out))
@@ -132,7 +133,7 @@ def row(r: dict, spectra: str = "auto", refine_from: str = "default") -> str:
     status = "0.12" if r["done"] else f"stopped at F_x = {r['reached']:.4g}"
     memory = f"{r['peak_mb']:.0f}" + (f" + {r['workers']} x {r['worker_mb']:.0f}" if r["workers"] else "")
     return (f"| {r['N']} | {r['eps']:g} | {r['mode']} | {r['workers']} | {r['seconds']:.1f} | {status} | "
-            f"{r['spectra']} + {r['partial']} | {r['refined']} + {r['declined']} | {r['factorizations']} | {r['solves']} | {coll} | {memory} |")
+            f"{r['spectra']} + {r['partial']} | {r['refined']} ({r['repaired']}) + {r['declined']} | {r['factorizations']} | {r['solves']} | {coll} | {memory} |")
 
 
 def agreement(fast: dict, exhaustive: dict) -> str:
@@ -169,7 +170,7 @@ def main() -> None:
     sizes = [int(n) for n in args.N.split(",") if n]
     eps_values = [float(e) for e in args.eps.split(",")]
     print(f"{time.strftime('%Y-%m-%d %H:%M')}, load average {open('/proc/loadavg').read().split()[0]}")
-    print("| N | eps | detection | workers | s | reached | spectra full + partial | refined + declined | LU | "
+    print("| N | eps | detection | workers | s | reached | spectra full + partial | refined (repaired) + declined | LU | "
           "solves | collisions | peak MB (sweep + workers x largest) |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     results = {}

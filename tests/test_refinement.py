@@ -83,6 +83,39 @@ def test_refined_eigenpairs_are_lapacks_at_the_next_point():
     assert refinement.certified(blocks, values, right, left, residual, scale) is not None
 
 
+def test_a_real_eigenvalue_with_complex_phased_vectors_is_refined_in_real_arithmetic(monkeypatch):
+    """The N = 30 refinement above from guesses whose real eigenvalues carry vectors times a
+    phase e^{0.7 i} and an imaginary part of 1e-17 (as complex arithmetic leaves them): refined
+    in real arithmetic (Guesses.made_real), the simple ones come out real, vectors with no
+    imaginary part, and all are LAPACK's values; with NEAR_REAL = 0 they stay complex."""
+    A0, system = chain_matrix(30, 0.0499)
+    A1 = chain_matrix(30, 0.05)[0]
+    old = eigensystem(dense(A0), vectors=True)
+    N, b = 30, system.ndof // 30
+    blocks = bt.PeriodicBlocks.from_matrix(A1, b, bt.disk_major(N, b))
+    scale = np.abs(old.values).max()
+    real = np.flatnonzero(old.values.imag == 0.0)
+    values, right, left = old.values.astype(complex), old.right.astype(complex), old.left.astype(complex)
+    values[real] += 1e-17j * scale
+    right[:, real] *= np.exp(0.7j)
+    left[real] *= np.exp(-0.7j)  # l^H r unchanged
+    exact = np.linalg.eigvals(dense(A1))
+
+    def refined():
+        return bt.refine_eigenpairs(blocks, values, right, left, 6, 1e-13 * scale)
+
+    out = refined()
+    # a simple eigenvalue (a degenerate one's pairs are refined again together, in complex arithmetic)
+    gap = np.sort(np.abs(old.values[real][:, None] - old.values[None, :]), axis=1)[:, 1]
+    alone = real[gap > 1e-9 * scale]
+    assert alone.size > 0.8 * real.size
+    assert np.all(out[0][alone].imag == 0.0) and not np.any(out[1][:, alone].imag) and not np.any(out[2][alone].imag)
+    assert np.abs(track(exact, out[0]) - exact).max() <= 1e-12 * scale
+    assert refinement.certified(blocks, *out, scale) is not None
+    monkeypatch.setattr(bt, "NEAR_REAL", 0.0)
+    assert np.any(refined()[1][:, real].imag)
+
+
 def test_a_shift_that_breaks_the_blocks_lu_is_refined_with_pivoting():
     """A pair whose eigenvalue is also one of the first diagonal block's (e_0 an exact
     eigenvector): the blocks' LU without pivoting between blocks meets a singular pivot block,
