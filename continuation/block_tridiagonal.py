@@ -904,6 +904,21 @@ def _pivoted_rqi(blocks: PeriodicBlocks, values: Array, right: Array, left: Arra
     return residual
 
 
+def polish(blocks: PeriodicBlocks, pairs: Array, values: Array, right: Array, left: Array, residual: Array,
+           tol: float, iterations: int = 2) -> Array:
+    """_pivoted_rqi on the given pairs (indices into values (k,), right (n, k) columns, left (k,
+    n) rows, in the matrix's own order, complex), each replaced in place where its residual
+    fell below `residual` (theirs now); returns the pairs' residuals."""
+    order = np.arange(blocks.n) if blocks.order is None else np.asarray(blocks.order)
+    v, r, lft = values[pairs], right[order][:, pairs], left[pairs][:, order]  # block order
+    polished = _pivoted_rqi(blocks, v, r, lft, iterations, tol)
+    better = polished < residual
+    take = pairs[better]
+    values[take] = v[better]
+    right[np.ix_(order, take)], left[np.ix_(take, order)] = r[:, better], lft[better]
+    return np.where(better, polished, residual)
+
+
 def touching(values: Array, bounds: Array) -> tuple[Array, Array]:
     """Index pairs (i < j) whose discs |z - values_i| <= bounds_i meet."""
     values, bounds = np.asarray(values, np.complex128), np.asarray(bounds, float)

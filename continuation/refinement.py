@@ -21,8 +21,8 @@ are repaired by shift-invert near their guesses (repaired: ARPACK's k eigenpairs
 real shift on the sparse matrix, nearest.py, those not held by a certified pair given to the
 failing ones) and the whole is certified again; otherwise (None) the caller takes the dense
 spectrum. The work ledger counts the outcomes (linalg.Work: spectra_refined, of them
-refinements_repaired, and refinements_declined). Certificate, with rho_i = |A r_i - lambda_i r_i| (|r_i| = 1), kappa_i =
-|l_i| |r_i| / |l_i^H r_i| and R = max|lambda| of the reference:
+refinements_repaired, and refinements_declined). Certificate, with rho_i = |A r_i - lambda_i
+r_i| (|r_i| = 1), kappa_i = |l_i| |r_i| / |l_i^H r_i| and R = max|lambda| of the reference:
   - every rho_i <= RESIDUAL R (a backward error, relative to the spectral radius);
   - the discs |z - lambda_i| <= kappa_i rho_i (the first-order bound of each eigenvalue's error,
     Wilkinson) are pairwise disjoint: n disjoint discs each hold a different eigenvalue, so the
@@ -44,7 +44,7 @@ from scipy.optimize import linear_sum_assignment
 from scipy.sparse.csgraph import connected_components
 import scipy.sparse as sp
 
-from .block_tridiagonal import _pivoted_rqi, close_pairs, meeting_discs, refine_eigenpairs
+from .block_tridiagonal import close_pairs, meeting_discs, polish, refine_eigenpairs
 from .linalg import book, row_norms
 from .nearest import ShiftInvertFailed, nearest_eigensystem
 from .spectra import Eigensystem, on_gpu
@@ -190,18 +190,31 @@ def failing(values: Array, right: Array, left: Array, residual: Array, scale: fl
     return np.union1d(np.flatnonzero(rough), np.concatenate([i[bad], j[bad]]))
 
 
+def left_over(found: Array, values: Array, held: Array, near: Array, sigma: float, radius: float) -> Array:
+    """The indices of the eigenvalues `found` (the k nearest sigma, within radius) that no held
+    (certified) pair holds: each held pair inside the disc is matched to one of them (least
+    total distance), and holds it if it lies within near (10 kappa rho + RESIDUAL R: its own
+    value against ARPACK's). The farthest eigenvalue found lies on the disc's edge, so a held
+    pair within near outside it counts as inside."""
+    inside = np.flatnonzero(held & (np.abs(values - sigma) <= radius + near))
+    a, b = linear_sum_assignment(np.abs(values[inside][:, None] - found[None, :]))
+    same = np.abs(values[inside[a]] - found[b]) <= near[inside[a]]
+    return np.setdiff1d(np.arange(found.size), b[same])
+
+
 def repaired(blocks, guess: Array, values: Array, right: Array, left: Array, residual: Array,
              scale: float) -> Optional[tuple[Array, Array, Array, Array]]:
     """The refinement (values, right, left, residual: refine_eigenpairs' result in the matrix's
-    order) with its failing pairs (failing) replaced by shift-invert in place, or None where it cannot
-    be (none fail and yet the certificate refused, a shift-invert failed, too few eigenvalues
-    found). The failing pairs are clustered by their guesses (REPAIR_LINK R apart at most);
-    for each cluster, ARPACK's k eigenpairs nearest sigma, the real part of the mean guess
-    (nearest.nearest_eigensystem on the sparse matrix, both vectors, k the pairs within twice
-    the cluster's spread of sigma plus REPAIR_EXTRA), are matched first to the pairs that
-    passed inside their disc (each within 10 kappa rho + RESIDUAL R of its own value); those
-    left over (k doubled, up to REPAIR_TRIES runs, until as many are left as the cluster has
-    pairs) go to the cluster's pairs by least distance from the guesses. Where the failing
+    order) with its failing pairs (failing) replaced by shift-invert, in place, or None where
+    it cannot be (none fail and yet the certificate refused, a shift-invert failed, too few
+    eigenvalues found). The failing pairs are clustered by their guesses (REPAIR_LINK R apart
+    at most); for each cluster, ARPACK's k eigenpairs nearest sigma, the real part of the mean
+    guess (nearest.nearest_eigensystem on the sparse matrix, both vectors; k: the certified
+    pairs within twice the cluster's spread of sigma, the cluster's, and REPAIR_EXTRA), are
+    matched first to the certified pairs inside their disc (left_over); those left over (k
+    doubled, up to REPAIR_TRIES runs, until as many are left as the cluster has pairs) go to
+    the cluster's pairs by least distance from the guesses, polished where ARPACK left them
+    above POLISH R (block_tridiagonal.polish). Where the failing
     pairs were nearly defective pairs that the Rayleigh iterations could not split, or a pair
     found twice, shift-invert sees the eigenvalues themselves. The result is certified again
     as a whole by the caller: a wrong match leaves two pairs on one eigenvalue, whose discs
@@ -228,13 +241,7 @@ def repaired(blocks, guess: Array, values: Array, right: Array, left: Array, res
                 found, radius = nearest_eigensystem(A, sigma, k)
             except ShiftInvertFailed:
                 return None
-            near = 10.0 * bound + RESIDUAL * scale  # a certified pair's value against ARPACK's
-            # (the farthest eigenvalue found lies on the disc's edge: a certified pair holding it
-            # may lie outside by its rounding)
-            inside = np.flatnonzero(held & (np.abs(values - sigma) <= radius + near))
-            a, b = linear_sum_assignment(np.abs(values[inside][:, None] - found.values[None, :]))
-            same = np.abs(values[inside[a]] - found.values[b]) <= near[inside[a]]
-            free = np.setdiff1d(np.arange(k), b[same])
+            free = left_over(found.values, values, held, 10.0 * bound + RESIDUAL * scale, sigma, radius)
             if free.size >= members.size:
                 break
             k *= 2
@@ -246,14 +253,8 @@ def repaired(blocks, guess: Array, values: Array, right: Array, left: Array, res
         r, lft = r / norm, lft * norm[:, None]  # |r| = 1, l^H r = 1
         res = np.linalg.norm(A @ r - r * v, axis=0)
         rough = np.flatnonzero(res > POLISH * scale)
-        if rough.size:  # ARPACK's tolerance is relative to the shift-inverted values: polish
-            order = np.arange(values.size) if blocks.order is None else np.asarray(blocks.order)
-            v_b, r_b, l_b = v[rough], r[order][:, rough], lft[rough][:, order]  # block order
-            polished = _pivoted_rqi(blocks, v_b, r_b, l_b, 2, POLISH * scale)
-            better = polished < res[rough]
-            take = rough[better]
-            v[take], res[take] = v_b[better], polished[better]
-            r[np.ix_(order, take)], lft[np.ix_(take, order)] = r_b[:, better], l_b[better]
+        if rough.size:  # ARPACK's tolerance is relative to the shift-inverted values
+            res[rough] = polish(blocks, rough, v, r, lft, res[rough], POLISH * scale)
         values[members], right[:, members], left[members], residual[members] = v, r, lft, res
         held[members] = True
         bound[members] = row_norms(lft) * residual[members]

@@ -170,6 +170,29 @@ def test_pairs_of_a_degenerate_eigenvalue_are_refined_again_together(monkeypatch
     assert refined()[1] is None
 
 
+def unit_eigensystem(blocks: bt.PeriodicBlocks):
+    """(LAPACK's eigensystem, its right vectors scaled to |r| = 1, its left ones to l^H r = 1,
+    the residuals, the spectral radius) of the blocks' matrix."""
+    exact = eigensystem(blocks.dense(), vectors=True)
+    right = exact.right / np.linalg.norm(exact.right, axis=0)
+    left = exact.left * np.linalg.norm(exact.right, axis=0)[:, None]
+    residual = np.linalg.norm(blocks.dense() @ right - right * exact.values, axis=0)
+    return exact, right, left, residual, np.abs(exact.values).max()
+
+
+def born_pair_blocks(N: int, t: float, crowded: bool) -> bt.PeriodicBlocks:
+    """N random 2 x 2 blocks weakly coupled (0.01), block 0 [[10, 1], [-t, 10]]: the real pair
+    10 +- sqrt(-t) for t < 0, the complex pair 10 +- sqrt(t) i for t > 0; crowded: block 2
+    diag(10.018, 9.982), two more eigenvalues near the pair (not a neighbour of block 0)."""
+    blocks = random_blocks(N, 2, seed=6)
+    blocks.lower[:] *= 0.01
+    blocks.upper[:] *= 0.01
+    blocks.diag[0] = [[10.0, 1.0], [-t, 10.0]]
+    if crowded:
+        blocks.diag[2] = [[10.018, 0.0], [0.0, 9.982]]
+    return blocks
+
+
 @pytest.mark.parametrize("crowded", [False, True])
 def test_a_pair_born_in_the_step_is_refined_together(crowded):
     """Two real eigenvalues 10 +- 0.01 that become the complex pair 10 +- 0.01 i between the
@@ -181,18 +204,7 @@ def test_a_pair_born_in_the_step_is_refined_together(crowded):
     10 +- 0.018, each nearer one member's guess than its partner is (as in the chain of 400
     disks, where the partner was 1.5 to 2.9 times farther): with only the nearest guess
     (PARTNERS = 1) neither group spans the pair and the result is not certified."""
-    N, b = 5, 2
-
-    def blocks_at(t):
-        blocks = random_blocks(N, b, seed=6)
-        blocks.lower[:] *= 0.01
-        blocks.upper[:] *= 0.01
-        blocks.diag[0] = [[10.0, 1.0], [-t, 10.0]]
-        if crowded:
-            blocks.diag[2] = [[10.018, 0.0], [0.0, 9.982]]  # not a neighbour of block 0
-        return blocks
-
-    old, new = eigensystem(blocks_at(-1e-4).dense(), vectors=True), blocks_at(1e-4)
+    old, new = eigensystem(born_pair_blocks(5, -1e-4, crowded).dense(), vectors=True), born_pair_blocks(5, 1e-4, crowded)
     exact = np.linalg.eigvals(new.dense())
     near = np.abs(exact.real - 10.0) < 0.015
     assert near.sum() == 2 and np.all(np.abs(exact[near].imag) > 5e-3)
@@ -225,17 +237,7 @@ def test_pairs_the_groups_leave_rough_are_repaired_by_shift_invert(monkeypatch):
     certificate at the two members, left real; repaired gives them the two eigenvalues of the
     pair that the certified pairs near them do not hold, and the whole is certified and
     LAPACK's."""
-    N, b = 12, 2
-
-    def blocks_at(t):
-        blocks = random_blocks(N, b, seed=6)
-        blocks.lower[:] *= 0.01
-        blocks.upper[:] *= 0.01
-        blocks.diag[0] = [[10.0, 1.0], [-t, 10.0]]
-        blocks.diag[2] = [[10.018, 0.0], [0.0, 9.982]]
-        return blocks
-
-    old, new = eigensystem(blocks_at(-1e-4).dense(), vectors=True), blocks_at(1e-4)
+    old, new = eigensystem(born_pair_blocks(12, -1e-4, True).dense(), vectors=True), born_pair_blocks(12, 1e-4, True)
     scale = np.abs(old.values).max()
     monkeypatch.setattr(bt, "PARTNERS", 1)
     out = bt.refine_eigenpairs(new, old.values, old.right, old.left, 6, 1e-13 * scale)
@@ -257,11 +259,7 @@ def test_a_pair_found_twice_is_repaired_and_a_wrong_trace_is_not():
     off its eigenvalue with a small claimed residual fails only the traces: no pair to repair
     (None)."""
     blocks = random_blocks(20, 3, seed=4)
-    exact = eigensystem(blocks.dense(), vectors=True)
-    right = exact.right / np.linalg.norm(exact.right, axis=0)
-    left = exact.left * np.linalg.norm(exact.right, axis=0)[:, None]
-    scale = np.abs(exact.values).max()
-    residual = np.linalg.norm(blocks.dense() @ right - right * exact.values, axis=0)
+    exact, right, left, residual, scale = unit_eigensystem(blocks)
     real = np.flatnonzero(exact.values.imag == 0.0)
     i, j = real[0], real[np.argmin(np.abs(exact.values[real[1:]] - exact.values[real[0]])) + 1]
     values, r2, l2, res2 = exact.values.copy(), right.copy(), left.copy(), residual.copy()
@@ -275,6 +273,37 @@ def test_a_pair_found_twice_is_repaired_and_a_wrong_trace_is_not():
     moved[i] += 0.5 * np.min(np.abs(np.delete(exact.values, i) - exact.values[i]))
     assert refinement.certified(blocks, moved, right, left, residual, scale) is None
     assert refinement.repaired(blocks, moved, moved, right, left, residual, scale) is None
+
+
+def test_the_repairs_parts_left_over_and_polish():
+    """left_over: of the eigenvalues found, those no held pair holds within its tolerance (a
+    held pair just outside the disc's edge still holds; a pair not held holds nothing).
+    polish: a pair in the matrix's order 1e-6 off its eigenvector (the order shuffled) comes
+    back to a residual within 1e-13 R and LAPACK's value; one that does not improve is left."""
+    found = np.array([1.0, 2.0, 3.0 + 1e-16])
+    values = np.array([1.0 + 1e-15, 3.0 + 2e-16, 2.0])
+    near = np.full(3, 1e-12)
+    assert refinement.left_over(found, values, np.array([True, True, False]), near, 2.0, 1.0).tolist() == [1]
+    assert refinement.left_over(found, values, np.ones(3, bool), near, 2.0, 1.0 - 1e-13).tolist() == []
+    N, b = 8, 3
+    blocks = random_blocks(N, b, seed=5)
+    order = np.random.default_rng(3).permutation(N * b)
+    shuffled = bt.PeriodicBlocks.from_matrix(blocks.original()[order][:, order], b, np.argsort(order))
+    exact, right, left, residual, scale = unit_eigensystem(shuffled)
+    i = int(np.argmax(exact.values.real))
+    v, r, lft = exact.values.copy(), right.copy(), left.copy()
+    r[:, i] += 1e-6 * np.random.default_rng(4).standard_normal(N * b)
+    r[:, i] /= np.linalg.norm(r[:, i])
+    v[i] += 1e-6 * scale
+    A = shuffled.original()
+    rough = np.linalg.norm(A @ r[:, [i]] - v[i] * r[:, [i]], axis=0)
+    assert rough[0] > 1e-8 * scale
+    res = bt.polish(shuffled, np.array([i]), v, r, lft, rough, 1e-13 * scale)
+    assert res[0] <= 1e-13 * scale and abs(v[i] - exact.values[i]) <= 1e-12 * scale
+    assert np.linalg.norm(A @ r[:, i] - v[i] * r[:, i]) == pytest.approx(res[0], rel=1e-6, abs=1e-15 * scale)
+    kept = v.copy()
+    assert bt.polish(shuffled, np.array([i]), v, r, lft, np.zeros(1), 1e-13 * scale)[0] == 0.0
+    assert np.array_equal(v, kept)
 
 
 def test_a_group_that_does_not_converge_replaces_only_the_members_it_improved(monkeypatch):
@@ -356,11 +385,7 @@ def test_the_certificate_refuses_a_duplicate_and_a_wrong_eigenvalue():
     """Two pairs converged to one eigenvalue (overlapping discs), and a value moved away from
     its eigenvalue with small claimed residuals (disjoint discs, but the traces disagree)."""
     blocks = random_blocks(5, 3, seed=4)
-    exact = eigensystem(blocks.dense(), vectors=True)
-    right = exact.right / np.linalg.norm(exact.right, axis=0)
-    left = exact.left * np.linalg.norm(exact.right, axis=0)[:, None]
-    scale = np.abs(exact.values).max()
-    residual = np.linalg.norm(blocks.dense() @ right - right * exact.values, axis=0)
+    exact, right, left, residual, scale = unit_eigensystem(blocks)
     assert refinement.certified(blocks, exact.values, right, left, residual, scale) is not None
     real = np.flatnonzero(exact.values.imag == 0.0)
     i, j = real[0], real[1]
