@@ -665,8 +665,7 @@ def _unphased(rows: Array) -> Array:
     """The real parts of the rows (k, n) each rotated by the phase of its largest entry."""
     rows = np.asarray(rows, np.complex128)
     top = rows[np.arange(rows.shape[0]), np.argmax(np.abs(rows), axis=1)]
-    phase = np.where(top != 0.0, top / np.where(top != 0.0, np.abs(top), 1.0), 1.0)
-    return (rows / phase[:, None]).real
+    return (rows * np.exp(-1j * np.angle(top))[:, None]).real
 
 
 @dataclass(frozen=True)
