@@ -49,7 +49,7 @@ import numpy as np
 from .detectors import DETECTORS, Collision, Detector, Kind, sample_discriminant
 from .locate import jordan_chain_near
 from .newton import residual_norm, tangent
-from .partial_splits import certificates_survive, clusters, partial_allowed
+from .partial_splits import certificates_survive, clusters, most_clusters, partial_allowed
 from .problem import Problem
 from .root_ends import scan_ends
 from .samples import Sample, claimed_outside, continuation_perm, known, partial_sample_at, sample_at
@@ -252,7 +252,7 @@ class StepScan:
         l, r = self.samples[idx], self.samples[idx + 1]
         reference = next(smp for smp in reversed(self.samples) if smp.s <= l.s and not smp.partial)
         shifts = clusters(l, r, s, np.flatnonzero(labels), reference.eigvals, self.segment,
-                          self.params.partial_max_k)
+                          self.params.partial_max_k, most_clusters(l))
         if shifts is None:
             return False
         x, t = self._point(s)

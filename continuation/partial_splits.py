@@ -33,8 +33,12 @@ Array = np.ndarray
 PARTIAL_EXTRA = 6
 """Eigenvalues a partial sample computes beyond those expected near its labels."""
 PARTIAL_CLUSTERS = 3
-"""Shift-inverts a partial sample may take (each costs about 1/5 of a full spectrum at n = 300;
-more did not pay at N = 100 or 200, docs/continuation.md)."""
+"""Shift-inverts a partial sample may take at least (each costs about 1/5 of a full spectrum at
+n = 300; more did not pay at N = 100, docs/continuation.md), and always where the full sample is
+a spectral window's (most_clusters)."""
+ROWS_PER_CLUSTER = 100
+"""Where the full sample is the whole spectrum, a partial sample may take one shift-invert per
+this many rows of the stability matrix (most_clusters)."""
 
 
 def partial_allowed(a: Sample, b: Sample, labels: Optional[Array], partial_from: int) -> bool:
@@ -51,14 +55,29 @@ def partial_allowed(a: Sample, b: Sample, labels: Optional[Array], partial_from:
             and not np.any(labels & ~active_labels(a, b)))
 
 
+def most_clusters(sample: Sample) -> int:
+    """The shift-inverts a partial sample next to `sample` may take: PARTIAL_CLUSTERS where
+    the full sample would be a spectral window's (a shift-invert itself: 5 clusters gained
+    nothing on 256 sheared disks, docs/packings.md), else n // ROWS_PER_CLUSTER if that is
+    more. A whole spectrum costs O(n^2) refined or O(n^3) decomposed, a cluster's
+    shift-invert O(n): at the chain of 400 disks (n = 1200) a full sample took 0.30 s and a
+    partial one 0.011 s, and 427 of 479 full split samples had been taken because the labels
+    in trouble (16 at the median, 61 at the 90th percentile) fell into more than 3 clusters.
+    Whole sweeps from rest to 0.12 (two workers): N = 400 with 3, 12, 24, 40 clusters 129.9,
+    100.3, 107.9, 113.0 s; N = 200 with 3, 6, 12 24.6, 24.0, 25.8 s (docs/continuation.md)."""
+    if sample.guard is not None:
+        return PARTIAL_CLUSTERS
+    return max(PARTIAL_CLUSTERS, sample.eigvals.size // ROWS_PER_CLUSTER)
+
+
 def clusters(l: Sample, r: Sample, s: float, labels: Array, reference: Array, segment: Segment,
-             max_k: int) -> Optional[list]:
+             max_k: int, most: int = PARTIAL_CLUSTERS) -> Optional[list]:
     """The shift-inverts of a partial sample at s in [l, r] for `labels` (int array):
     [(labels of the cluster, sigma, k), ...]. The labels' eigenvalues predicted at s (cubic
     Hermite over [l, r]) are taken in order of real part and grouped while the group's k stays
     within max_k: sigma the middle of its real parts, k the eigenvalues of `reference` (those
     of the nearest full sample to the left) within twice its reach of sigma, plus
-    PARTIAL_EXTRA. None if that takes more than PARTIAL_CLUSTERS groups."""
+    PARTIAL_EXTRA. None if that takes more than `most` groups (most_clusters)."""
     d_l, d_r = scaled_slopes(l, r, segment)
     mu = certify.cubic_at(certify.hermite_coefficients(l.eigvals[labels], r.eigvals[labels],
                                                        d_l[labels], d_r[labels]), (s - l.s) / (r.s - l.s))
@@ -77,7 +96,7 @@ def clusters(l: Sample, r: Sample, s: float, labels: Array, reference: Array, se
         else:
             groups.append([i])
     found = [(labels[group], *shift(group)) for group in groups]
-    if len(found) > PARTIAL_CLUSTERS or any(k > k_max for _, _, k in found):
+    if len(found) > most or any(k > k_max for _, _, k in found):
         return None
     return found
 

@@ -11,8 +11,9 @@ import pytest
 
 from diskfriction.continuation import FunctionProblem
 from diskfriction.continuation.newton import tangent
-from diskfriction.continuation.partial_splits import (PARTIAL_CLUSTERS, PARTIAL_EXTRA, certificates_survive,
-                                                      clusters, partial_allowed)
+from diskfriction.continuation.partial_splits import (PARTIAL_CLUSTERS, PARTIAL_EXTRA, ROWS_PER_CLUSTER,
+                                                      certificates_survive, clusters, most_clusters,
+                                                      partial_allowed)
 from diskfriction.continuation.samples import Sample, claimed_outside, continuation_perm, label_gaps, sample_at
 from diskfriction.continuation.segment import Segment
 from diskfriction.continuation.verdicts import Verdict, judge_exhaustive, judge_fast
@@ -142,7 +143,8 @@ def test_partial_samples_are_allowed_by_size_and_known_labels_only():
 
 def test_clusters_group_the_labels_by_their_predicted_eigenvalues():
     """n = 40, eigenvalues V p and 1..39: labels near 1 and 2 share one shift, the one at 39
-    gets its own; four far-apart groups are more than PARTIAL_CLUSTERS."""
+    gets its own; four far-apart groups are more than PARTIAL_CLUSTERS, and are taken where four
+    are allowed."""
     diagonal = tuple(float(k) for k in range(1, 40))
     problem = bubble_problem(diagonal)
     a, b, segment = interval(problem, 40, 0.03, 0.07)
@@ -154,7 +156,21 @@ def test_clusters_group_the_labels_by_their_predicted_eigenvalues():
         ([at[39.0]], pytest.approx(39.0), 1 + PARTIAL_EXTRA)]
     spread = np.array([at[1.0], at[12.0], at[25.0], at[39.0]])
     assert PARTIAL_CLUSTERS < 4 and clusters(a, b, 0.5, spread, reference, segment, 16) is None
+    four = clusters(a, b, 0.5, spread, reference, segment, 16, most=4)
+    assert [lab.tolist() for lab, _, _ in four] == [[at[v]] for v in (1.0, 12.0, 25.0, 39.0)]
     assert clusters(a, b, 0.5, np.array([at[1.0]]), reference, segment, PARTIAL_EXTRA) is None  # k > max_k
+
+
+def test_most_clusters_grow_with_a_whole_spectrum_only():
+    """A partial sample may take n // ROWS_PER_CLUSTER shift-inverts where the full sample is
+    the whole spectrum, never fewer than PARTIAL_CLUSTERS, and PARTIAL_CLUSTERS next to a
+    spectral window's sample."""
+    a, _, _ = interval(bubble_problem(), 4, 0.19, 0.21)
+    n = 12 * ROWS_PER_CLUSTER + ROWS_PER_CLUSTER // 2
+    large = replace(a, eigvals=np.zeros(n, complex))
+    assert most_clusters(a) == PARTIAL_CLUSTERS  # n = 4
+    assert most_clusters(large) == 12 > PARTIAL_CLUSTERS
+    assert most_clusters(replace(large, guard=np.zeros(n, bool))) == PARTIAL_CLUSTERS
 
 
 def test_certificates_survive_only_within_the_labels_the_new_sample_knows():
