@@ -141,6 +141,98 @@ def _crossing(g_a: float, g_b: float, dg_a: float, dg_b: float, rho: float,
     return False, 0.5 * (lo + hi)
 
 
+FAR_SLACK = 1.001
+"""Factor on the reaches (reaches): a pair it skips passes the pair test with a margin far above
+the test's rounding."""
+
+
+@numba.njit(cache=True, error_model="numpy")
+def reaches(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, labels: Array, rho: float,
+            doubt: float) -> Array:
+    """Each label's reach r over the interval: two labels i, j with |Re lambda_i - Re lambda_j|
+    >= r_i + r_j at its start pass the pair test of uncertified_pairs. With delta_i =
+    |lambda_i(b) - lambda_i(a)|, s_i = max(|d_a|, |d_b|) (per unit of the interval) and D =
+    |lambda_i(a) - lambda_j(a)|, the pair's gap g has |g_a| = D, ||g_b| - D| <= delta =
+    delta_i + delta_j and |dg| <= s = s_i + s_j, so y_min >= (D - delta)^2, |dy_a| + |dy_b| <=
+    2 s (2D + delta) and |y_a - y_b| <= delta (2D + delta). The Hermite basis gives min H >=
+    y_min - (4/27)(|dy_a| + |dy_b|), and |c3| <= 2|y_a - y_b| + |dy_a| + |dy_b|, so the test
+    holds where (1 - rho) u^2 >= (2u + 3 delta) K, u = D - delta, K = 2 (4/27 + doubt) s +
+    2 doubt delta (floor >= 0 only helps): for u >= 2K / (1 - rho) + sqrt(3 delta K / (1 -
+    rho)), so (sqrt(delta K) <= (delta + K) / 2) wherever D >= (1 + gamma) delta + (2 / (1 -
+    rho) + gamma) K, gamma = sqrt(3 / (1 - rho)) / 2: a sum of one term per label, r_i =
+    FAR_SLACK ((1 + gamma) delta_i + (2 / (1 - rho) + gamma) K_i), K_i = 2 (4/27 + doubt) s_i
+    + 2 doubt delta_i (nan where a label's values are not finite)."""
+    gamma = 0.5 * math.sqrt(3.0 / (1.0 - rho))
+    out = np.empty(labels.size)
+    for a in range(labels.size):
+        i = labels[a]
+        moved = abs(lam_b[i] - lam_a[i])
+        k = 2.0 * (4.0 / 27.0 + doubt) * max(abs(d_a[i]), abs(d_b[i])) + 2.0 * doubt * moved
+        out[a] = FAR_SLACK * ((1.0 + gamma) * moved + (2.0 / (1.0 - rho) + gamma) * k)
+    return out
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _real_pair(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, i: int, j: int, rho: float,
+               floor: float, doubt: float, resolution: float) -> tuple[bool, float, float, bool]:
+    """The test of two real labels (uncertified_pairs): (uncertified?, min(y_a, y_b), where to
+    split: the model minimum or a crossing's root, crossing?)."""
+    bad, y, t = _pair_margin(lam_a[i] - lam_a[j], lam_b[i] - lam_b[j], d_a[i] - d_a[j],
+                             d_b[i] - d_b[j], rho, floor, doubt)
+    if not bad:
+        return False, y, t, False
+    passed, root = _crossing((lam_a[i] - lam_a[j]).real, (lam_b[i] - lam_b[j]).real,
+                             (d_a[i] - d_a[j]).real, (d_b[i] - d_b[j]).real, rho, resolution)
+    if passed:
+        return False, y, t, False
+    return True, y, (t if math.isnan(root) else root), not math.isnan(root)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _uncertified_real_pairs(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, real: Array,
+                            rho: float, floor: float, doubt: float):
+    """The uncertified pairs of two real labels (_real_pair), as arrays (i, j, min(y_a, y_b),
+    where to split, crossing?) in pair order (a double loop over the positions in `real`). Pairs
+    whose real parts lie their reaches apart (reaches) pass and are not looked at: a sweep over
+    the labels by Re lambda, each looking ahead while the gap is below its reach plus the
+    largest one, O(n log n + the pairs looked at) time and memory for the uncertified ones;
+    where a value is not finite, every pair is looked at in order."""
+    n = real.size
+    resolution = math.sqrt(floor)
+    x = lam_a[real].real
+    r = reaches(lam_a, lam_b, d_a, d_b, real, rho, doubt)
+    finite = bool(np.all(np.isfinite(x)) and np.all(np.isfinite(r)))
+    order = np.argsort(x) if finite else np.arange(n)
+    top = r.max() if finite and n > 0 else np.inf
+    K = []
+    Y = []
+    T = []
+    C = []
+    for p in range(n):
+        a = order[p]
+        for q in range(p + 1, n):
+            b = order[q]
+            if finite:
+                gap = x[b] - x[a]
+                if gap >= r[a] + top:
+                    break
+                if gap >= r[a] + r[b]:
+                    continue
+            lo, hi = min(a, b), max(a, b)
+            bad, y, t, crossing = _real_pair(lam_a, lam_b, d_a, d_b, real[lo], real[hi], rho, floor,
+                                             doubt, resolution)
+            if bad:
+                K.append(lo * n + hi)
+                Y.append(y)
+                T.append(t)
+                C.append(crossing)
+    keys = np.array(K, np.int64)
+    first = np.argsort(keys)
+    keys = keys[first]
+    return (real[keys // max(n, 1)], real[keys % max(n, 1)], np.array(Y, np.float64)[first],
+            np.array(T, np.float64)[first], np.array(C, np.bool_)[first])
+
+
 @numba.njit(cache=True, error_model="numpy")
 def uncertified_pairs(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, real: Array,
                       upper: Array, partner: Array, rho: float, floor: float,
@@ -156,30 +248,15 @@ def uncertified_pairs(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, real: 
         min_[0,1] H - doubt |c3| < rho min(y_a, y_b) - floor,
     and, for two real ones, _crossing does not certify them either. Returns arrays (i, j,
     min(y_a, y_b), where to split: the model minimum or a crossing's root, crossing?) in pair
-    order. O(pairs) time; arrays only of the uncertified pairs."""
-    I = []
-    J = []
-    Y = []
-    T = []
-    C = []
+    order. Two real ones whose real parts lie their reaches apart pass the test and are not
+    looked at (_uncertified_real_pairs); the other pairs are O(pairs) time. Arrays only of the
+    uncertified pairs."""
+    I, J, Y, T, C = _uncertified_real_pairs(lam_a, lam_b, d_a, d_b, real, rho, floor, doubt)
+    UI = []
+    UJ = []
+    UY = []
+    UT = []
     n_real = real.size
-    resolution = math.sqrt(floor)
-    for a in range(n_real):
-        i = real[a]
-        for b in range(a + 1, n_real):
-            j = real[b]
-            bad, y, t = _pair_margin(lam_a[i] - lam_a[j], lam_b[i] - lam_b[j], d_a[i] - d_a[j],
-                                     d_b[i] - d_b[j], rho, floor, doubt)
-            if bad:
-                passed, root = _crossing((lam_a[i] - lam_a[j]).real, (lam_b[i] - lam_b[j]).real,
-                                         (d_a[i] - d_a[j]).real, (d_b[i] - d_b[j]).real, rho,
-                                         resolution)
-                if not passed:
-                    I.append(i)
-                    J.append(j)
-                    Y.append(y)
-                    T.append(t if math.isnan(root) else root)
-                    C.append(not math.isnan(root))
     n_upper, n_partner = upper.size, partner.size
     for k in range(n_upper * n_real + n_partner):  # upper x real, then upper with partner
         if k < n_upper * n_real:
@@ -189,13 +266,14 @@ def uncertified_pairs(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, real: 
         bad, y, t = _pair_margin(lam_a[i] - lam_a[j], lam_b[i] - lam_b[j], d_a[i] - d_a[j],
                                  d_b[i] - d_b[j], rho, floor, doubt)
         if bad:
-            I.append(i)
-            J.append(j)
-            Y.append(y)
-            T.append(t)
-            C.append(False)
-    return (np.array(I, np.int64), np.array(J, np.int64), np.array(Y, np.float64),
-            np.array(T, np.float64), np.array(C, np.bool_))
+            UI.append(i)
+            UJ.append(j)
+            UY.append(y)
+            UT.append(t)
+    m = len(UI)
+    return (np.concatenate((I, np.array(UI, np.int64))), np.concatenate((J, np.array(UJ, np.int64))),
+            np.concatenate((Y, np.array(UY, np.float64))), np.concatenate((T, np.array(UT, np.float64))),
+            np.concatenate((C, np.zeros(m, np.bool_))))
 
 
 def worst_uncertified_pair(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, real: Array,

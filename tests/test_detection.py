@@ -769,3 +769,72 @@ def test_a_chain_window_that_crowds_is_widened_and_finds_the_same_collisions(mon
     assert len(generous.collisions) == 20
     assert np.abs(np.array([c.p for c in tight.collisions])
                   - [c.p for c in generous.collisions]).max() <= 1e-9
+
+
+def test_pairs_beyond_their_reaches_pass_the_pair_test():
+    """certify.reaches: any two eigenvalues whose real parts lie r_i + r_j apart at the start
+    pass the pair test (certify._pair_margin, the full test uncertified_pairs skips for them),
+    however they move and turn within their bounds; drawn at the bound itself, where the skip
+    is tightest, with every end datum at its extreme."""
+    from diskfriction.continuation import certify
+    rng = np.random.default_rng(11)
+    rho, doubt, tested = 0.5, 0.25, 0
+    for _ in range(20000):
+        lam_a = rng.normal(size=2) + 1j * rng.normal(size=2) * (rng.random() < 0.3)
+        moved = rng.exponential(size=2) * 10.0 ** rng.uniform(-6, 0)
+        lam_b = lam_a + moved * np.exp(2j * np.pi * rng.random(2))
+        slopes = rng.exponential(size=2) * 10.0 ** rng.uniform(-6, 1)
+        d_a = slopes * np.exp(2j * np.pi * rng.random(2))
+        d_b = slopes * np.exp(2j * np.pi * rng.random(2)) * rng.choice([1.0, rng.random()])
+        r = certify.reaches(lam_a, lam_b, d_a, d_b, np.arange(2), rho, doubt)
+        shift = r.sum() * (1.0 + rng.choice([0.0, 1e-3, 1.0])) - (lam_a[1] - lam_a[0]).real
+        lam_a[1], lam_b[1] = lam_a[1] + shift, lam_b[1] + shift  # |Re gap| >= r_0 + r_1 at a
+        bad, _, _ = certify._pair_margin(lam_a[0] - lam_a[1], lam_b[0] - lam_b[1], d_a[0] - d_a[1],
+                                         d_b[0] - d_b[1], rho, 0.0, doubt)
+        assert not bad
+        tested += 1
+    assert tested == 20000
+
+
+def test_uncertified_pairs_skip_only_pairs_that_pass():
+    """uncertified_pairs with its far-pair skip (certify._uncertified_real_pairs) returns what the plain
+    double loop over every pair returns, in the same order: a crowded spectrum with crossings,
+    near misses and a fast eigenvalue sweeping through it, a few complex ones, and one label
+    that is not finite (then every pair is tested)."""
+    from diskfriction.continuation import certify
+    rng = np.random.default_rng(5)
+    for case in range(60):
+        n = int(rng.integers(2, 300))
+        lam_a = np.sort(rng.uniform(0, 10, n)) + 0j
+        d_a = rng.normal(scale=10.0 ** rng.uniform(-4, 0), size=n) + 0j
+        d_b = d_a + rng.normal(scale=1e-3, size=n)
+        lam_b = lam_a + 0.5 * (d_a + d_b) + rng.normal(scale=1e-4, size=n)
+        lam_b[0] = lam_a[0] + 8.0  # a fast one through the whole crowd
+        d_a[0] = d_b[0] = 8.0
+        upper = np.flatnonzero(rng.random(n) < 0.05)
+        lam_a[upper] += 0.3j
+        lam_b[upper] += 0.3j
+        real = np.setdiff1d(np.arange(n), upper)
+        if case % 10 == 9:
+            lam_b[real[-1]] = np.nan
+        rho, floor, doubt = 0.5, 1e-12, 0.25
+        got = certify.uncertified_pairs(lam_a, lam_b, d_a, d_b, real, upper, np.zeros(0, np.int64),
+                                        rho, floor, doubt)
+        want = [[], [], [], [], []]
+        resolution = np.sqrt(floor)
+        for a in range(real.size):
+            for b in range(a + 1, real.size):
+                i, j = real[a], real[b]
+                bad, y, t = certify._pair_margin(lam_a[i] - lam_a[j], lam_b[i] - lam_b[j], d_a[i] - d_a[j],
+                                                 d_b[i] - d_b[j], rho, floor, doubt)
+                if bad:
+                    passed, root = certify._crossing((lam_a[i] - lam_a[j]).real, (lam_b[i] - lam_b[j]).real,
+                                                     (d_a[i] - d_a[j]).real, (d_b[i] - d_b[j]).real, rho,
+                                                     resolution)
+                    if not passed:
+                        for k, v in enumerate((i, j, y, t if np.isnan(root) else root, not np.isnan(root))):
+                            want[k].append(v)
+        real_pairs = np.isin(got[0], real) & np.isin(got[1], real)
+        assert got[0][real_pairs].tolist() == want[0] and got[1][real_pairs].tolist() == want[1]
+        assert got[2][real_pairs].tolist() == want[2] and got[3][real_pairs].tolist() == want[3]
+        assert got[4][real_pairs].tolist() == want[4]
