@@ -157,11 +157,11 @@ def reaches(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, labels: Array, r
     2 s (2D + delta) and |y_a - y_b| <= delta (2D + delta). The Hermite basis gives min H >=
     y_min - (4/27)(|dy_a| + |dy_b|), and |c3| <= 2|y_a - y_b| + |dy_a| + |dy_b|, so the test
     holds where (1 - rho) u^2 >= (2u + 3 delta) K, u = D - delta, K = 2 (4/27 + doubt) s +
-    2 doubt delta (floor >= 0 only helps): for u >= 2K / (1 - rho) + sqrt(3 delta K / (1 -
-    rho)), so (sqrt(delta K) <= (delta + K) / 2) wherever D >= (1 + gamma) delta + (2 / (1 -
-    rho) + gamma) K, gamma = sqrt(3 / (1 - rho)) / 2: a sum of one term per label, r_i =
-    FAR_SLACK ((1 + gamma) delta_i + (2 / (1 - rho) + gamma) K_i), K_i = 2 (4/27 + doubt) s_i
-    + 2 doubt delta_i (nan where a label's values are not finite)."""
+    2 doubt delta (floor >= 0 only helps), i.e. for u >= 2K / (1 - rho) + sqrt(3 delta K /
+    (1 - rho)); since sqrt(delta K) <= (delta + K) / 2, that holds wherever D >= (1 + gamma)
+    delta + (2 / (1 - rho) + gamma) K, gamma = sqrt(3 / (1 - rho)) / 2: a sum of one term per
+    label, r_i = FAR_SLACK ((1 + gamma) delta_i + (2 / (1 - rho) + gamma) K_i), K_i =
+    2 (4/27 + doubt) s_i + 2 doubt delta_i (nan where a label's values are not finite)."""
     gamma = 0.5 * math.sqrt(3.0 / (1.0 - rho))
     out = np.empty(labels.size)
     for a in range(labels.size):
