@@ -14,7 +14,8 @@ from diskfriction.continuation.newton import tangent
 from diskfriction.continuation.partial_splits import (PARTIAL_CLUSTERS, PARTIAL_EXTRA, ROWS_PER_CLUSTER,
                                                       certificates_survive, clusters, most_clusters,
                                                       partial_allowed)
-from diskfriction.continuation.samples import Sample, claimed_outside, continuation_perm, label_gaps, sample_at
+from diskfriction.continuation.samples import (Sample, claimed_outside, continuation_perm, label_gaps, nearest_predicted,
+                                               prediction_cost, sample_at)
 from diskfriction.continuation.segment import Segment
 from diskfriction.continuation.verdicts import Verdict, judge_exhaustive, judge_fast
 
@@ -433,3 +434,28 @@ def test_a_partial_sample_whose_eigenvalue_continues_on_a_label_it_did_not_compu
     assert continuation_perm(partial, crossed)[1] == 1  # the restricted match pairs it wrongly
     kept = sample(1e-9, [7.064, 6.935, 6.808, 7.235])
     assert not claimed_outside(partial, kept)
+
+
+def test_nearest_predicted_is_the_dense_argmin_ties_and_all():
+    """nearest_predicted (a k-d tree's candidates) returns exactly np.argmin of the whole
+    prediction_cost matrix, rows by rows: on random spectra with conjugate pairs, values
+    repeated up to six times (exact ties: the first index wins, and a row whose candidates
+    all tie is computed whole), a value nearly tied in the last bits, and a non-finite one."""
+    rng = np.random.default_rng(7)
+    for trial in range(40):
+        n = int(rng.integers(2, 300))
+        values = rng.normal(size=n) + 1j * np.where(rng.random(n) < 0.3, rng.normal(size=n), 0.0)
+        dlam = rng.normal(size=n) + 0j
+        copies = rng.integers(0, n, size=int(rng.integers(0, 4)))
+        into = rng.integers(0, n, size=copies.size)
+        values[into], dlam[into] = values[copies], dlam[copies]  # exact ties
+        if n > 8 and trial % 2:
+            values[1:6], dlam[1:6] = values[n - 1], dlam[n - 1]  # more ties than candidates
+        values[0] = values[n // 2] * (1.0 + 4e-16)
+        ref = values + 1e-3 * rng.normal(size=n) * (trial % 3 != 0)  # every third: the same values
+        ref_dlam = rng.normal(size=n) + 0j
+        if trial % 7 == 6:
+            ref[int(rng.integers(0, n))] = np.nan
+        ds_ref, ds_new = 1e-3 * rng.random(), 1e-3 * rng.random()
+        dense = np.argmin(prediction_cost(ref, ref_dlam, values, dlam, ds_ref, ds_new), axis=1)
+        assert np.array_equal(nearest_predicted(ref, ref_dlam, values, dlam, ds_ref, ds_new), dense)
