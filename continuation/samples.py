@@ -199,8 +199,18 @@ def prediction_cost(ref_values: Array, ref_dlam: Array, values: Array, dlam: Arr
                     ds_ref: float, ds_new: float) -> Array:
     """|ref_i + ds_ref ref_dlam_i / 2 - (values_j - ds_new dlam_j / 2)|: how far eigenvalue j
     lies from the trapezoid prediction of reference i (ds_* = the step projected on each end's
-    unit tangent)."""
-    return np.abs((ref_values + 0.5 * ds_ref * ref_dlam)[:, None] - (values - 0.5 * ds_new * dlam)[None, :])
+    unit tangent). Built COST_ROWS rows at a time: the whole complex difference at n = m =
+    3000 is a 144 MB temporary, and the cost took 0.18 s a call in a sweep of 1000 disks
+    against 0.02 s in rows (the same values)."""
+    a, z = ref_values + 0.5 * ds_ref * ref_dlam, values - 0.5 * ds_new * dlam
+    out = np.empty((a.size, z.size))
+    for start in range(0, a.size, COST_ROWS):
+        np.abs(a[start:start + COST_ROWS, None] - z[None, :], out=out[start:start + COST_ROWS])
+    return out
+
+
+COST_ROWS = 128
+"""Rows of prediction_cost computed at once."""
 
 
 def nearest_predicted(ref_values: Array, ref_dlam: Array, values: Array, dlam: Array,

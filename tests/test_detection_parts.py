@@ -8,6 +8,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from scipy.optimize import linear_sum_assignment
 
 from diskfriction.continuation import FunctionProblem
 from diskfriction.continuation.newton import tangent
@@ -15,7 +16,7 @@ from diskfriction.continuation.partial_splits import (PARTIAL_CLUSTERS, PARTIAL_
                                                       certificates_survive, clusters, most_clusters,
                                                       partial_allowed)
 from diskfriction.continuation.samples import (Sample, claimed_outside, continuation_perm, label_gaps, nearest_predicted,
-                                               prediction_cost, sample_at)
+                                               predicted_match, prediction_cost, sample_at)
 from diskfriction.continuation.segment import Segment
 from diskfriction.continuation.verdicts import Verdict, judge_exhaustive, judge_fast
 
@@ -459,3 +460,29 @@ def test_nearest_predicted_is_the_dense_argmin_ties_and_all():
         ds_ref, ds_new = 1e-3 * rng.random(), 1e-3 * rng.random()
         dense = np.argmin(prediction_cost(ref, ref_dlam, values, dlam, ds_ref, ds_new), axis=1)
         assert np.array_equal(nearest_predicted(ref, ref_dlam, values, dlam, ds_ref, ds_new), dense)
+
+
+def test_predicted_match_costs_what_the_whole_assignment_costs():
+    """predicted_match is a perm of least total prediction_cost (that of linear_sum_assignment
+    over the whole matrix) where the nearest predictions are all different and where they
+    collide (degenerate pairs, twelve labels predicted at one eigenvalue repeated twelve
+    times); prediction_cost, built in rows, is the whole np.abs of the differences."""
+    rng = np.random.default_rng(11)
+    for trial in range(30):
+        n = int(rng.integers(20, 400))
+        values = np.sort(rng.normal(size=n)) + 1j * np.where(rng.random(n) < 0.3, 1e-2 * rng.normal(size=n), 0.0)
+        dlam = rng.normal(size=n) + 0j
+        pairs = rng.choice(n - 1, size=n // 10, replace=False)
+        values[pairs], dlam[pairs] = values[pairs + 1], dlam[pairs + 1]  # degenerate pairs
+        shuffle = rng.permutation(n)  # the labels continue eigenvalues in another order
+        ref = values[shuffle] + 1e-3 * rng.normal(size=n)
+        if trial % 3 == 0:  # a crowd beyond the candidates
+            values[:12], dlam[:12] = values[12], dlam[12]
+            ref[:12] = values[12] + 1e-9 * rng.normal(size=12)
+        ref_dlam = rng.normal(size=n) + 0j
+        cost = prediction_cost(ref, ref_dlam, values, dlam, 1e-3, 2e-3)
+        assert np.array_equal(cost, np.abs((ref + 0.5e-3 * ref_dlam)[:, None] - (values - 1e-3 * dlam)[None, :]))
+        perm = predicted_match(ref, ref_dlam, values, dlam, 1e-3, 2e-3)
+        assert np.array_equal(np.sort(perm), np.arange(n))
+        best = cost[np.arange(n), linear_sum_assignment(cost)[1]].sum()
+        assert cost[np.arange(n), perm].sum() == pytest.approx(best, rel=1e-12, abs=1e-15)
