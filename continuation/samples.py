@@ -202,7 +202,17 @@ def prediction_cost(ref_values: Array, ref_dlam: Array, values: Array, dlam: Arr
     unit tangent). Built COST_ROWS rows at a time: the whole complex difference at n = m =
     3000 is a 144 MB temporary, and the cost took 0.18 s a call in a sweep of 1000 disks
     against 0.02 s in rows (the same values)."""
-    a, z = ref_values + 0.5 * ds_ref * ref_dlam, values - 0.5 * ds_new * dlam
+    return _distances(*_predictions(ref_values, ref_dlam, values, dlam, ds_ref, ds_new))
+
+
+def _predictions(ref_values: Array, ref_dlam: Array, values: Array, dlam: Array,
+                 ds_ref: float, ds_new: float) -> tuple[Array, Array]:
+    """The two ends' trapezoid predictions, whose distances are prediction_cost."""
+    return ref_values + 0.5 * ds_ref * ref_dlam, values - 0.5 * ds_new * dlam
+
+
+def _distances(a: Array, z: Array) -> Array:
+    """|a_i - z_j| (n, m), COST_ROWS rows at a time."""
     out = np.empty((a.size, z.size))
     for start in range(0, a.size, COST_ROWS):
         np.abs(a[start:start + COST_ROWS, None] - z[None, :], out=out[start:start + COST_ROWS])
@@ -222,11 +232,9 @@ def nearest_predicted(ref_values: Array, ref_dlam: Array, values: Array, dlam: A
     lie within relative 1e-12 of the nearest (the tree's distances may differ from |z| in the
     last bit, so a farther candidate might tie), or any value that is not finite, is computed
     whole."""
-    a = ref_values + 0.5 * ds_ref * ref_dlam
-    z = values - 0.5 * ds_new * dlam
-    m = z.size
-    if m <= NEAREST_CANDIDATES or a.size == 0 or not (np.all(np.isfinite(a)) and np.all(np.isfinite(z))):
-        return np.argmin(np.abs(a[:, None] - z[None, :]), axis=1)
+    a, z = _predictions(ref_values, ref_dlam, values, dlam, ds_ref, ds_new)
+    if z.size <= NEAREST_CANDIDATES or a.size == 0 or not (np.all(np.isfinite(a)) and np.all(np.isfinite(z))):
+        return np.argmin(_distances(a, z), axis=1)
     distance, candidates = cKDTree(np.column_stack([z.real, z.imag])).query(
         np.column_stack([a.real, a.imag]), k=NEAREST_CANDIDATES)
     candidates = np.sort(candidates, axis=1)  # ties: the first index, as np.argmin
