@@ -188,9 +188,11 @@ def hermite_split(a: Sample, b: Sample, d_a: Array, d_b: Array, events: list, ac
                   rho: float, doubt: float):
     """Fast: None if every candidate pair and every label is certified by the cubic models
     (slopes d_a, d_b per unit of the interval: scaled_slopes), else (where to split: t in
-    [0, 1], the worst pair's model minimum kept SPLIT_OFF_ENDS off the ends; the mask of labels
-    in trouble, with the event pairs and conjugate partners, or None if the next sample must be
-    full)."""
+    [0, 1], where the first refusing test puts it, kept SPLIT_OFF_ENDS off the ends; the mask of
+    labels in trouble, or None if the next sample must be full). The trouble is the union of
+    every test's refusals, with the event pairs and conjugate partners: a partial split computes
+    only those labels and rests on every other being certified on [a, b] (partial_splits.py;
+    the first test's labels alone lost a pair of the chain of 400 disks, docs/continuation.md)."""
     real, upper, partner = _fast_candidates(a, b, active)
     thr = max(a.thr, b.thr)
     t_worst, pairs, crossing = certify.worst_uncertified_pair(a.eigvals, b.eigvals, d_a, d_b, real,
@@ -201,20 +203,18 @@ def hermite_split(a: Sample, b: Sample, d_a: Array, d_b: Array, events: list, ac
                                                  rho, 2.0 * thr)
     in_events = event_labels(events, active.size)
 
-    def split(t: float, trouble: Array, off: float = SPLIT_OFF_ENDS):
-        return float(np.clip(t, off, 1.0 - off)), _with_partners(a, b, trouble | in_events)
-
     if _enters_past_guard(a, b).any():
         return 0.5, None
+    refusals = []  # (where to split, labels in trouble), in the order of the tests
     if not math.isnan(t_worst):
-        return split(t_worst, pairs, CROSSING_OFF_ENDS if crossing else SPLIT_OFF_ENDS)
+        refusals.append((t_worst, pairs, CROSSING_OFF_ENDS if crossing else SPLIT_OFF_ENDS))
     if wrong.any():
-        return split(0.5, _near_path(a, b, wrong))
+        refusals.append((0.5, _near_path(a, b, wrong), SPLIT_OFF_ENDS))
     others = np.flatnonzero((a.status == b.status) & (a.status >= 0) & ~a.excluded & ~b.excluded & active)
     models = [event_model(a, b, i, j, d_a, d_b) for i, j, _ in events]
     for (i, j, _), (m, D) in zip(events, models):  # one sign change of D per event, each pair apart
         if len(certify.cubic_roots_in_unit(D)) != 1:
-            return split(0.5, in_events)
+            refusals.append((0.5, in_events, SPLIT_OFF_ENDS))
         bad, t_min = certify.event_pair_clearance(m, D, a.eigvals[others], b.eigvals[others],
                                                   d_a[others], d_b[others], rho, 4.0 * thr * thr)
         if bad.any():  # an eigenvalue decoupled from both members may pass them
@@ -223,12 +223,16 @@ def hermite_split(a: Sample, b: Sample, d_a: Array, d_b: Array, events: list, ac
         if bad.any():
             near = np.zeros(active.size, bool)
             near[others[bad]] = True
-            return split(t_min[np.argmax(bad)], near)
+            refusals.append((t_min[np.argmax(bad)], near, SPLIT_OFF_ENDS))
     if len(models) > 1:
-        apart, t_worst = certify.event_pairs_apart(models, rho, 4.0 * thr * thr)
+        apart, t_apart = certify.event_pairs_apart(models, rho, 4.0 * thr * thr)
         if not apart:
-            return split(t_worst, in_events)
-    return None
+            refusals.append((t_apart, in_events, SPLIT_OFF_ENDS))
+    if not refusals:
+        return None
+    t, _, off = refusals[0]
+    return float(np.clip(t, off, 1.0 - off)), _with_partners(a, b, np.logical_or.reduce(
+        [trouble for _, trouble, _ in refusals]) | in_events)
 
 
 def _decoupled(a: Sample, b: Sample, I: Array, J: Array) -> Array:

@@ -658,10 +658,13 @@ def test_a_failing_locator_costs_partial_samples_and_finds_the_same_collisions(m
     """Where the locator fails, the event's interval is split by a partial sample of the event
     pairs' labels (with partial samples forced, partial_from = 0): with every locator call
     failing, the N = 10 sweep brackets each collision to tol_p and reports the same collisions
-    within 1e-9, with at most 1.5 times the full spectra of the sweep whose locator works.
-    (With full splits, as until stop 40, it took 1225 full spectra against 95 at N = 20; a
-    partial sample of the first event pair's labels alone missed a death: the labels split
-    for must be all the events' with their partners.)"""
+    within 1e-9, with at most 3 full spectra per collision beyond the sweep whose locator
+    works. (With full splits, as until stop 40, it took 1225 full spectra against 95 at N = 20,
+    about 45 more per collision; a partial sample of the first event pair's labels alone missed
+    a death: the labels split for must be all the events' with their partners. Until stop 55
+    the bound was 1.5 times the working sweep's spectra, 135 against 91; a split's labels then
+    became the union of every refusing test's (verdicts.hermite_split), which took the working
+    sweep to 84 and the failing one to 138, 2.6 more per collision for 21.)"""
     from diskfriction.continuation.detectors import fast
     from diskfriction.continuation.locate import LocatorFailed
 
@@ -680,7 +683,7 @@ def test_a_failing_locator_costs_partial_samples_and_finds_the_same_collisions(m
     assert [c.kind for c in bracketed.collisions] == [c.kind for c in located.collisions]
     assert np.max(np.abs([a.p - b.p for a, b in zip(bracketed.collisions, located.collisions)])) <= 1e-9
     assert failed.spectra_partial > working.spectra_partial
-    assert failed.spectra <= 1.5 * working.spectra
+    assert failed.spectra - working.spectra <= 3 * len(located.collisions)
 
 
 def test_modes_that_cross_without_interacting_cost_no_extra_spectrum():

@@ -488,11 +488,8 @@ def test_predicted_match_costs_what_the_whole_assignment_costs():
         assert cost[np.arange(n), perm].sum() == pytest.approx(best, rel=1e-12, abs=1e-15)
 
 
-@pytest.mark.xfail(strict=True, reason="open bug (stop 54): hermite_split returns at its first refusing test, "
-                   "with that test's labels only; the union broke the 1.5x cost bound of "
-                   "test_a_failing_locator_costs_partial_samples (138 against 126 full spectra)")
 def test_a_split_holds_every_label_a_later_test_refuses():
-    """hermite_split's trouble should be the union of every test's refusals, not the first one's: on
+    """hermite_split's trouble is the union of every test's refusals, not the first one's: on
     an interval where a label is inconsistent (the label test refuses first) and a birth's
     members (1 and 3, real at the start) have a real eigenvalue between them (2: the event
     pair's clearance refuses it), the split's labels hold that eigenvalue too. A partial split
