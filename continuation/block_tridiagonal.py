@@ -10,9 +10,12 @@ neighbours, disk N to disk 1):
 Shifted solves. M = A - sigma I (sigma complex) is factorized with the last block row and
 column as a border: T (the first N - 1 block rows and columns) is block tridiagonal without
 corners, factorized by block LU without pivoting between blocks (partial pivoting inside each
-b x b block), and the border by its Schur complement S = M_ll - F T^-1 E (E: the last block
-column, nonzero in block rows 0 and N - 2; F: the last block row). Solves with M and with M^T
-each cost O(N b^2) after the factorization. The compiled kernels factorize K shifts side by
+b x b block), T = L U, and the border by its Schur complement S = M_ll - F T^-1 E (E: the last
+block column, nonzero in block rows 0 and N - 2; F: the last block row), from the border's
+fill-in L^-1 E and F U^-1, each one forward recurrence (the block LU of the whole matrix with
+the border last: about 8 b^3 multiplications per block row, where the columns T^-1 E and
+T^-T F^T, each a forward and a backward pass, took 10 b^3). Solves with M and with M^T each
+cost O(N b^2) after the factorization. The compiled kernels factorize K shifts side by
 side (arrays with the shift last, every loop over the shifts innermost: _work, _factor,
 _solve). No pivoting between blocks: where a pivot block is singular for the shift the
 factorization reports it (ok False), and where one nearly is the solves lose accuracy;
@@ -37,7 +40,7 @@ from typing import Optional
 import numba
 import numpy as np
 import scipy.sparse as sp
-from scipy.linalg.lapack import zgbtrf, zgbtrs
+from scipy.linalg.lapack import dgbtrf, dgbtrs, zgbtrf, zgbtrs
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
@@ -144,17 +147,15 @@ def disk_major(N: int, b: int) -> Array:
 @numba.njit(cache=True)
 def _work(N, b, K, proto):
     """The arrays of K shifted factorizations side by side, of proto's dtype (real for real
-    shifts): the pivot blocks' inverses P^-1, the multipliers G, T^-1 E and T^-T F^T (m, b, b,
-    K), S^-1 (b, b, K), m = N - 1; _factor's scratch E, F^T, W (m, b, b, K), aug (b, 2 b, K),
-    ok (K,), f (K,); _solve's head, y, w1 (m, b, 1, K) and tail (b, K)."""
+    shifts): the pivot blocks' inverses P, the multipliers G, the border's fill-in e and f
+    (m, b, b, K), m = N - 1, and S^-1 (b, b, K) (_factor); _factor's scratch aug (b, 2 b, K),
+    ok (K,), f (K,); _solve's scratch v and tail (b, K)."""
     m = N - 1
     dt = proto.dtype
     factors = (np.empty((m, b, b, K), dt), np.empty((m, b, b, K), dt), np.empty((m, b, b, K), dt),
                np.empty((m, b, b, K), dt), np.empty((b, b, K), dt))
-    scratch = (np.empty((m, b, b, K), dt), np.empty((m, b, b, K), dt), np.empty((m, b, b, K), dt),
-               np.empty((b, 2 * b, K), dt), np.ones(K, np.bool_), np.empty(K, dt))
-    columns = (np.empty((m, b, 1, K), dt), np.empty((m, b, 1, K), dt), np.empty((m, b, 1, K), dt),
-               np.empty((b, K), dt))
+    scratch = (np.empty((b, 2 * b, K), dt), np.ones(K, np.bool_), np.empty(K, dt))
+    columns = (np.empty((b, K), dt), np.empty((b, K), dt))
     return factors, scratch, columns
 
 
@@ -169,7 +170,7 @@ class Shifted:
         self.blocks, self.shape = blocks, (N, b, 1)
         self.factors, self.scratch, self.columns = _work(N, b, 1, shift)
         _factor(blocks.diag, blocks.lower, blocks.upper, shift, *self.factors, *self.scratch)
-        self.ok = bool(self.scratch[4][0])
+        self.ok = bool(self.scratch[1][0])
 
     def solve(self, rhs: Array, transpose: bool = False) -> Array:
         """(A - sigma I)^-1 rhs (or with the transpose): rhs and the result (n,) or (n, k)."""
@@ -222,70 +223,18 @@ def _invert(aug, out, ok, f):
 
 
 @numba.njit(cache=True)
-def _tsolve(P, G, upper, rhs, transpose, out, w):
-    """out = T^-1 rhs (or T^-T rhs) for each of the K factorizations (slot s, last index), c
-    right-hand sides each: rhs, out and the scratch w (m, b, c, K)."""
-    m, b, ncol, K = rhs.shape
-    if not transpose:
-        for k in range(m):
-            for i in range(b):
-                for c in range(ncol):
-                    for s in range(K):
-                        w[k, i, c, s] = rhs[k, i, c, s]
-                    if k > 0:
-                        for j in range(b):
-                            for s in range(K):
-                                w[k, i, c, s] -= G[k, i, j, s] * w[k - 1, j, c, s]
-        for k in range(m - 1, -1, -1):
-            if k < m - 1:
-                for i in range(b):
-                    for j in range(b):
-                        u = upper[k, i, j]
-                        for c in range(ncol):
-                            for s in range(K):
-                                w[k, i, c, s] -= u * out[k + 1, j, c, s]
-            for i in range(b):
-                for c in range(ncol):
-                    for s in range(K):
-                        out[k, i, c, s] = 0.0
-                    for j in range(b):
-                        for s in range(K):
-                            out[k, i, c, s] += P[k, i, j, s] * w[k, j, c, s]
-    else:
-        for k in range(m):
-            for i in range(b):
-                for c in range(ncol):
-                    for s in range(K):
-                        out[k, i, c, s] = rhs[k, i, c, s]
-                    if k > 0:
-                        for j in range(b):
-                            u = upper[k - 1, j, i]
-                            for s in range(K):
-                                out[k, i, c, s] -= u * w[k - 1, j, c, s]
-            for i in range(b):
-                for c in range(ncol):
-                    for s in range(K):
-                        w[k, i, c, s] = 0.0
-                    for j in range(b):
-                        for s in range(K):
-                            w[k, i, c, s] += P[k, j, i, s] * out[k, j, c, s]
-        for k in range(m - 1, -1, -1):
-            for i in range(b):
-                for c in range(ncol):
-                    for s in range(K):
-                        out[k, i, c, s] = w[k, i, c, s]
-                    if k < m - 1:
-                        for j in range(b):
-                            for s in range(K):
-                                out[k, i, c, s] -= G[k + 1, j, i, s] * out[k + 1, j, c, s]
-
-
-@numba.njit(cache=True)
-def _factor(diag, lower, upper, sigma, P, G, Z, ZT, S, E, FT, W, aug, ok, f):
+def _factor(diag, lower, upper, sigma, P, G, e, fr, S, aug, ok, f):
     """Factorize M_s = A - sigma_s I (module docstring) for the shifts sigma (K,) side by side,
-    every loop over them innermost: P, G, Z, ZT (m, b, b, K), S (b, b, K); E, FT, W (m, b, b,
-    K), aug (b, 2 b, K) and f (K,) scratch (_work); ok[s] False where shift s met a singular
-    pivot block or Schur complement."""
+    every loop over them innermost, as
+
+        M = [[L, 0], [fr, I]] [[U, e], [0, S^-1]],
+
+    L unit lower block-bidiagonal (G[k] below the diagonal, block row k), U upper
+    block-bidiagonal (pivot blocks P[k]^-1, upper[k] above); e = L^-1 E by the forward
+    recurrence e_k = E_k - G_k e_{k-1}, fr = F U^-1 by fr_k = (F_k - fr_{k-1} upper_{k-1}) P_k,
+    and S^-1 = M_ll - sum_k fr_k e_k (E_k, F_k nonzero at k = 0 and m - 1 only: the corners).
+    P, G, e, fr (m, b, b, K), S (b, b, K); aug (b, 2 b, K) and f (K,) scratch (_work); ok[s]
+    False where shift s met a singular pivot block or Schur complement."""
     N, b, K = diag.shape[0], diag.shape[1], sigma.size
     m = N - 1
     ok[:] = True
@@ -313,62 +262,118 @@ def _factor(diag, lower, upper, sigma, P, G, Z, ZT, S, E, FT, W, aug, ok, f):
                         for s in range(K):
                             aug[i, j, s] -= G[k, i, t, s] * u
         _invert(aug, P[k], ok, f)
-    E[:] = 0.0
-    FT[:] = 0.0
-    for i in range(b):
-        for j in range(b):
-            for s in range(K):
-                E[0, i, j, s] += lower[0, i, j]
-                E[m - 1, i, j, s] += upper[m - 1, i, j]
-                FT[0, i, j, s] += upper[N - 1, j, i]
-                FT[m - 1, i, j, s] += lower[N - 1, j, i]
-    _tsolve(P, G, upper, E, False, Z, W)
-    _tsolve(P, G, upper, FT, True, ZT, W)
-    for i in range(b):
-        for j in range(b):
-            for s in range(K):
-                aug[i, j, s] = diag[N - 1, i, j] - (sigma[s] if i == j else 0.0)
-            for t in range(b):
-                u, low = upper[N - 1, i, t], lower[N - 1, i, t]
+        for i in range(b):
+            for j in range(b):
+                corner = (lower[0, i, j] if k == 0 else 0.0) + (upper[m - 1, i, j] if k == m - 1 else 0.0)
                 for s in range(K):
-                    aug[i, j, s] -= u * Z[0, t, j, s] + low * Z[m - 1, t, j, s]
+                    e[k, i, j, s] = corner
+                if k > 0:
+                    for t in range(b):
+                        for s in range(K):
+                            e[k, i, j, s] -= G[k, i, t, s] * e[k - 1, t, j, s]
+                corner = (upper[N - 1, i, j] if k == 0 else 0.0) + (lower[N - 1, i, j] if k == m - 1 else 0.0)
+                for s in range(K):
+                    aug[i, j, s] = corner
+                if k > 0:
+                    for t in range(b):
+                        u = upper[k - 1, t, j]
+                        for s in range(K):
+                            aug[i, j, s] -= fr[k - 1, i, t, s] * u
+        for i in range(b):
+            for j in range(b):
+                for s in range(K):
+                    fr[k, i, j, s] = 0.0
+                for t in range(b):
+                    for s in range(K):
+                        fr[k, i, j, s] += aug[i, t, s] * P[k, t, j, s]
+    for i in range(b):
+        for j in range(b):
+            d = diag[N - 1, i, j]
+            for s in range(K):
+                aug[i, j, s] = d - (sigma[s] if i == j else 0.0)
+    for k in range(m):
+        for i in range(b):
+            for j in range(b):
+                for t in range(b):
+                    for s in range(K):
+                        aug[i, j, s] -= fr[k, i, t, s] * e[k, t, j, s]
     _invert(aug, S, ok, f)
 
 
 @numba.njit(cache=True)
-def _solve(lower, upper, rhs, transpose, out, P, G, Z, ZT, S, head, y, w1, tail):
-    """out[..., s] = M_s^-1 rhs[..., s] (or M_s^-T) for each factorization s: rhs, out (N, b, K);
-    head, y, w1 (m, b, 1, K), tail (b, K) scratch (_work)."""
+def _solve(lower, upper, rhs, transpose, out, P, G, e, fr, S, v, tail):
+    """out[..., s] = M_s^-1 rhs[..., s] (or M_s^-T) for each factorization s (_factor's): rhs
+    and out (N, b, K), distinct; v, tail (b, K) scratch (_work). M x = rhs: z = L^-1 rhs (head),
+    x_last = S (rhs_last - fr z), x_k = P_k (z_k - e_k x_last - upper_k x_{k+1}). M^T x = rhs:
+    w = U^-T rhs (head), x_last = S^T (rhs_last - e^T w), x_k = w_k - fr_k^T x_last -
+    G_{k+1}^T x_{k+1}."""
     N, b, K = rhs.shape
     m = N - 1
-    for k in range(m):
-        for i in range(b):
-            for s in range(K):
-                head[k, i, 0, s] = rhs[k, i, s]
-    _tsolve(P, G, upper, head, transpose, y, w1)
     for i in range(b):
         for s in range(K):
             tail[i, s] = rhs[N - 1, i, s]
-        for t in range(b):
-            if transpose:
-                a, c = lower[0, t, i], upper[m - 1, t, i]
-            else:
-                a, c = upper[N - 1, i, t], lower[N - 1, i, t]
-            for s in range(K):
-                tail[i, s] -= a * y[0, t, 0, s] + c * y[m - 1, t, 0, s]
+    for k in range(m):  # forward: z (or w) into out's head, and the border's rhs_last - fr z (- e^T w)
+        if not transpose:
+            for i in range(b):
+                for s in range(K):
+                    out[k, i, s] = rhs[k, i, s]
+                if k > 0:
+                    for j in range(b):
+                        for s in range(K):
+                            out[k, i, s] -= G[k, i, j, s] * out[k - 1, j, s]
+        else:
+            for i in range(b):
+                for s in range(K):
+                    v[i, s] = rhs[k, i, s]
+                if k > 0:
+                    for j in range(b):
+                        u = upper[k - 1, j, i]
+                        for s in range(K):
+                            v[i, s] -= u * out[k - 1, j, s]
+            for i in range(b):
+                for s in range(K):
+                    out[k, i, s] = 0.0
+                for t in range(b):
+                    for s in range(K):
+                        out[k, i, s] += P[k, t, i, s] * v[t, s]
+        for i in range(b):
+            for t in range(b):
+                for s in range(K):
+                    tail[i, s] -= (e[k, t, i, s] if transpose else fr[k, i, t, s]) * out[k, t, s]
     for i in range(b):
         for s in range(K):
             out[N - 1, i, s] = 0.0
         for t in range(b):
             for s in range(K):
                 out[N - 1, i, s] += (S[t, i, s] if transpose else S[i, t, s]) * tail[t, s]
-    for k in range(m):
-        for i in range(b):
-            for s in range(K):
-                out[k, i, s] = y[k, i, 0, s]
-            for t in range(b):
+    for k in range(m - 1, -1, -1):  # backward
+        if not transpose:
+            for i in range(b):
                 for s in range(K):
-                    out[k, i, s] -= (ZT[k, i, t, s] if transpose else Z[k, i, t, s]) * out[N - 1, t, s]
+                    v[i, s] = out[k, i, s]
+                for t in range(b):
+                    for s in range(K):
+                        v[i, s] -= e[k, i, t, s] * out[N - 1, t, s]
+                if k < m - 1:
+                    for j in range(b):
+                        u = upper[k, i, j]
+                        for s in range(K):
+                            v[i, s] -= u * out[k + 1, j, s]
+            for i in range(b):
+                for s in range(K):
+                    out[k, i, s] = 0.0
+                for t in range(b):
+                    for s in range(K):
+                        out[k, i, s] += P[k, i, t, s] * v[t, s]
+        else:
+            for i in range(b):
+                for t in range(b):
+                    for s in range(K):
+                        out[k, i, s] -= fr[k, t, i, s] * out[N - 1, t, s]
+                if k < m - 1:
+                    for j in range(b):
+                        for s in range(K):
+                            out[k, i, s] -= G[k + 1, j, i, s] * out[k + 1, j, s]
 
 
 @numba.njit(cache=True)
@@ -420,7 +425,7 @@ def _rqi_many(diag, lower, upper, guess, right, left, rows, source, target, mirr
     if K == 0:
         return residual, kappa
     dt = guess.dtype
-    (P, G, Z, ZT, S), (E, FT, W, aug, ok, f), (head, y, w1, tail) = _work(N, b, K, guess[:1])
+    (P, G, e, fr, S), (aug, ok, f), (v, tail) = _work(N, b, K, guess[:1])
     r, lc = np.zeros((N, b, K), dt), np.zeros((N, b, K), dt)
     x, ax = np.empty((N, b, K), dt), np.empty((N, b, K), dt)
     lam = np.zeros(K, dt)
@@ -444,10 +449,10 @@ def _rqi_many(diag, lower, upper, guess, right, left, rows, source, target, mirr
                 active += 1
         if active == 0:
             break
-        _factor(diag, lower, upper, lam, P, G, Z, ZT, S, E, FT, W, aug, ok, f)
-        _solve(lower, upper, r, False, x, P, G, Z, ZT, S, head, y, w1, tail)
+        _factor(diag, lower, upper, lam, P, G, e, fr, S, aug, ok, f)
+        _solve(lower, upper, r, False, x, P, G, e, fr, S, v, tail)
         r[:] = x
-        _solve(lower, upper, lc, True, x, P, G, Z, ZT, S, head, y, w1, tail)
+        _solve(lower, upper, lc, True, x, P, G, e, fr, S, v, tail)
         lc[:] = x
         for s in range(K):
             if pair[s] < 0:
@@ -855,6 +860,9 @@ def _pivoted_rqi(blocks: PeriodicBlocks, values: Array, right: Array, left: Arra
     _rqi_many), the shifted solves by LAPACK's banded LU with partial pivoting (zgbtrf) of the
     matrix in the folded order: stable where the blocks' LU without pivoting between blocks
     grows (a shift near an eigenvalue of a leading sub-chain), at about three times its cost.
+    A pair whose value and vectors are real is iterated in real arithmetic (dgbtrf: the rough
+    pairs the blocks' LU leaves are mostly real ones), in complex arithmetic from where its
+    shift must be nudged (a singular shifted matrix) or known pairs are deflated.
     deflated: (right vectors as columns, left vectors as rows) of known eigenpairs projected
     out of each iterate (x - R L^H x, l - L (R^T l) in the rows' conjugate layout), so that the
     iteration finds another eigenvalue. Returns the residuals (inf where a factorization
@@ -863,26 +871,33 @@ def _pivoted_rqi(blocks: PeriodicBlocks, values: Array, right: Array, left: Arra
     n, kl = N * b, 3 * b - 1
     perm = (b * folded(N)[:, None] + np.arange(b)).ravel()  # folded position -> unknown
     A = sp.coo_array(blocks.sparse()[perm][:, perm])
-    band = np.zeros((3 * kl + 1, n), np.complex128)  # zgbtrf's layout: ab[2 kl + i - j, j] = M[i, j]
-    band[2 * kl + A.row - A.col, A.col] = A.data
+    real_band = np.zeros((3 * kl + 1, n))  # LAPACK's layout: ab[2 kl + i - j, j] = M[i, j]
+    real_band[2 * kl + A.row - A.col, A.col] = A.data
+    band = real_band.astype(np.complex128)
     residual = np.full(values.size, np.inf)
     if deflated is not None:
         known_r, known_l = deflated[0][perm], deflated[1][:, perm]
     for p in range(values.size):
         lam, r, lc = complex(values[p]), right[perm, p].astype(np.complex128), left[p, perm].astype(np.complex128)
+        real = deflated is None and lam.imag == 0.0 and not (np.any(r.imag) or np.any(lc.imag))
+        if real:
+            lam, r, lc = lam.real, r.real.copy(), lc.real.copy()
         res = np.inf
         for _ in range(iterations):
             for shift in (lam, nudged(lam)):
-                shifted = band.copy()
+                if real and isinstance(shift, complex):  # nudged off the real axis
+                    real, r, lc = False, r.astype(np.complex128), lc.astype(np.complex128)
+                shifted = (real_band if real else band).copy()
                 shifted[2 * kl] -= shift
-                lu, piv, info = zgbtrf(shifted, kl, kl)
+                lu, piv, info = (dgbtrf if real else zgbtrf)(shifted, kl, kl)
                 if info == 0:
                     break
             if info != 0:
                 res = np.inf
                 break
-            r, info_r = zgbtrs(lu, kl, kl, r, piv)
-            lc, info_l = zgbtrs(lu, kl, kl, lc, piv, trans=1)
+            solve = dgbtrs if real else zgbtrs
+            r, info_r = solve(lu, kl, kl, r, piv)
+            lc, info_l = solve(lu, kl, kl, lc, piv, trans=1)
             if deflated is not None:
                 r = r - known_r @ (known_l @ r)
                 lc = lc - (lc @ known_r) @ known_l
@@ -893,7 +908,7 @@ def _pivoted_rqi(blocks: PeriodicBlocks, values: Array, right: Array, left: Arra
                 break
             r, lc = r / norm, lc / overlap
             ar = A @ r
-            lam = complex(np.sum(lc * ar))
+            lam = (float if real else complex)(np.sum(lc * ar))
             res = float(np.linalg.norm(ar - lam * r))
             if res <= tol:
                 break

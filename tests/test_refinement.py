@@ -53,6 +53,58 @@ def test_periodic_blocks_are_the_matrix_and_solve_with_it():
         bt.PeriodicBlocks.from_matrix(far, b)
 
 
+@pytest.mark.parametrize("N", [3, 4, 5, 12])
+@pytest.mark.parametrize("sigma", [0.3, 0.3 + 0.2j])
+def test_shifted_solves_are_numpys_for_every_chain_length(N, sigma):
+    """The bordered block LU (the border's fill-in by forward recurrences) solves with M =
+    A - sigma I and M^T for short chains, where the corners' block rows 0 and N - 2 are
+    neighbours or one apart (N = 3, 4), for real and complex shifts; and _rqi_many's batched
+    factorization of K shifts side by side gives each shift's solves."""
+    b = 3
+    blocks = random_blocks(N, b, seed=N)
+    A, rng = blocks.dense(), np.random.default_rng(7)
+    rhs = rng.standard_normal(N * b) + 1j * rng.standard_normal(N * b)
+    M = A - sigma * np.eye(N * b)
+    assert np.allclose(blocks.solve(sigma, rhs), np.linalg.solve(M, rhs), rtol=1e-11, atol=1e-11)
+    assert np.allclose(blocks.solve(sigma, rhs, transpose=True), np.linalg.solve(M.T, rhs), rtol=1e-11, atol=1e-11)
+    shifts = np.array([sigma, -0.4, 1.1 - 0.3j], complex)
+    factors, scratch, columns = bt._work(N, b, shifts.size, shifts)
+    bt._factor(blocks.diag, blocks.lower, blocks.upper, shifts, *factors, *scratch)
+    x, many = rng.standard_normal((N, b, shifts.size)) + 0j, np.empty((N, b, shifts.size), complex)
+    for transpose in (False, True):
+        bt._solve(blocks.lower, blocks.upper, x, transpose, many, *factors, *columns)
+        for k, shift in enumerate(shifts):
+            M = A - shift * np.eye(N * b)
+            want = np.linalg.solve(M.T if transpose else M, x[:, :, k].ravel())
+            assert np.allclose(many[:, :, k].ravel(), want, rtol=1e-11, atol=1e-11)
+
+
+def test_the_pivoted_iteration_keeps_a_real_pair_real(monkeypatch):
+    """_pivoted_rqi refines a pair whose value and vectors are real with the real banded LU
+    (dgbtrf), to LAPACK's eigenvalue and the complex iteration's (the same vectors with a
+    complex phase) within 1e-13 R."""
+    N, b = 8, 3
+    blocks = random_blocks(N, b, seed=11)
+    exact, right, left, residual, scale = unit_eigensystem(blocks)
+    i = int(np.flatnonzero(exact.values.imag == 0.0)[0])
+    rng = np.random.default_rng(2)
+    v, r, lft = exact.values[[i]] + 1e-6 * scale, right[:, [i]].real.copy(), left[[i]].real.copy()
+    r[:, 0] += 1e-6 * rng.standard_normal(N * b)
+    used = []
+    real_lu = bt.dgbtrf
+    monkeypatch.setattr(bt, "dgbtrf", lambda *args: used.append(1) or real_lu(*args))
+    one = (v.copy() + 0j, r + 0j, lft + 0j)
+    res = bt._pivoted_rqi(blocks, *one, 4, 1e-13 * scale)
+    assert used and one[0].imag[0] == 0.0 and not np.any(one[1].imag)
+    phase = np.exp(0.7j)
+    other = (v.copy() + 0j, r * phase, lft / phase)
+    calls = len(used)
+    res_c = bt._pivoted_rqi(blocks, *other, 4, 1e-13 * scale)
+    assert len(used) == calls  # complex vectors: the complex LU
+    assert res[0] <= 1e-13 * scale and res_c[0] <= 1e-13 * scale
+    assert abs(one[0][0] - exact.values[i]) <= 1e-13 * scale and abs(one[0][0] - other[0][0]) <= 1e-13 * scale
+
+
 @pytest.mark.parametrize("N", [3, 4, 5, 8, 9])
 def test_the_folded_order_makes_the_periodic_matrix_banded(N):
     b = 2
