@@ -301,6 +301,23 @@ def _factor(diag, lower, upper, sigma, P, G, e, fr, S, aug, ok, f):
 
 
 @numba.njit(cache=True)
+def _times(M, v, out, transpose):
+    """out[i, s] = sum_t M[i, t, s] v[t, s] (M[t, i, s] where transpose) for each slot s: M
+    (b, b, K), v and out (b, K)."""
+    b, K = v.shape
+    for i in range(b):
+        for s in range(K):
+            out[i, s] = 0.0
+        for t in range(b):
+            if transpose:
+                for s in range(K):
+                    out[i, s] += M[t, i, s] * v[t, s]
+            else:
+                for s in range(K):
+                    out[i, s] += M[i, t, s] * v[t, s]
+
+
+@numba.njit(cache=True)
 def _solve(lower, upper, rhs, transpose, out, P, G, e, fr, S, v, tail):
     """out[..., s] = M_s^-1 rhs[..., s] (or M_s^-T) for each factorization s (_factor's): rhs
     and out (N, b, K), distinct; v, tail (b, K) scratch (_work). M x = rhs: z = L^-1 rhs (head),
@@ -330,22 +347,12 @@ def _solve(lower, upper, rhs, transpose, out, P, G, e, fr, S, v, tail):
                         u = upper[k - 1, j, i]
                         for s in range(K):
                             v[i, s] -= u * out[k - 1, j, s]
-            for i in range(b):
-                for s in range(K):
-                    out[k, i, s] = 0.0
-                for t in range(b):
-                    for s in range(K):
-                        out[k, i, s] += P[k, t, i, s] * v[t, s]
+            _times(P[k], v, out[k], True)
         for i in range(b):
             for t in range(b):
                 for s in range(K):
                     tail[i, s] -= (e[k, t, i, s] if transpose else fr[k, i, t, s]) * out[k, t, s]
-    for i in range(b):
-        for s in range(K):
-            out[N - 1, i, s] = 0.0
-        for t in range(b):
-            for s in range(K):
-                out[N - 1, i, s] += (S[t, i, s] if transpose else S[i, t, s]) * tail[t, s]
+    _times(S, tail, out[N - 1], transpose)
     for k in range(m - 1, -1, -1):  # backward
         if not transpose:
             for i in range(b):
@@ -359,12 +366,7 @@ def _solve(lower, upper, rhs, transpose, out, P, G, e, fr, S, v, tail):
                         u = upper[k, i, j]
                         for s in range(K):
                             v[i, s] -= u * out[k + 1, j, s]
-            for i in range(b):
-                for s in range(K):
-                    out[k, i, s] = 0.0
-                for t in range(b):
-                    for s in range(K):
-                        out[k, i, s] += P[k, i, t, s] * v[t, s]
+            _times(P[k], v, out[k], False)
         else:
             for i in range(b):
                 for t in range(b):
