@@ -193,6 +193,8 @@ def hermite_split(a: Sample, b: Sample, d_a: Array, d_b: Array, events: list, ac
     every test's refusals, with the event pairs and conjugate partners: a partial split computes
     only those labels and rests on every other being certified on [a, b] (partial_splits.py;
     the first test's labels alone lost a pair of the chain of 400 disks, docs/continuation.md)."""
+    if _enters_past_guard(a, b).any():
+        return 0.5, None
     real, upper, partner = _fast_candidates(a, b, active)
     thr = max(a.thr, b.thr)
     t_worst, pairs, crossing = certify.worst_uncertified_pair(a.eigvals, b.eigvals, d_a, d_b, real,
@@ -202,10 +204,7 @@ def hermite_split(a: Sample, b: Sample, d_a: Array, d_b: Array, events: list, ac
     wrong = labels & certify.inconsistent_labels(a.eigvals, b.eigvals, d_a, d_b, a.gaps, b.gaps,
                                                  rho, 2.0 * thr)
     in_events = event_labels(events, active.size)
-
-    if _enters_past_guard(a, b).any():
-        return 0.5, None
-    refusals = []  # (where to split, labels in trouble), in the order of the tests
+    refusals = []  # (where to split, labels in trouble, how far off the ends), in the tests' order
     if not math.isnan(t_worst):
         refusals.append((t_worst, pairs, CROSSING_OFF_ENDS if crossing else SPLIT_OFF_ENDS))
     if wrong.any():

@@ -660,7 +660,7 @@ def test_a_failing_locator_costs_partial_samples_and_finds_the_same_collisions(m
     failing, the N = 10 sweep brackets each collision to tol_p and reports the same collisions
     within 1e-9, with at most 3 full spectra per collision beyond the sweep whose locator
     works. (With full splits, as until stop 40, it took 1225 full spectra against 95 at N = 20,
-    about 45 more per collision; a partial sample of the first event pair's labels alone missed
+    and 572 against 116 here, about 22 more for each of its 21 collisions; a partial sample of the first event pair's labels alone missed
     a death: the labels split for must be all the events' with their partners. Until stop 55
     the bound was 1.5 times the working sweep's spectra, 135 against 91; a split's labels then
     became the union of every refusing test's (verdicts.hermite_split), which took the working
