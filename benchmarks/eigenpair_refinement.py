@@ -20,7 +20,7 @@ import time
 import numpy as np
 
 from diskfriction.continuation.block_tridiagonal import PeriodicBlocks, disk_major, refine_eigenpairs
-from diskfriction.continuation.refinement import certified
+from diskfriction.continuation.refinement import TOLERANCE, certified
 from diskfriction.continuation.linalg import blas_threads, dense
 from diskfriction.continuation.spectra import eigensystem, eigenvalue_slopes, spectra_on, track
 from diskfriction.disks.equilibria import DiskEquilibria, relax
@@ -70,7 +70,7 @@ def main() -> None:
             step = eigenvalue_slopes(old, A - stability(system, q0, xi0, 0.002))
             guess = old.values + step
             scale = np.abs(old.values).max()
-            tol = 1e-13 * scale
+            tol = TOLERANCE * scale
             refined_s, (values, right, left, residual) = seconds(
                 lambda: refine_eigenpairs(blocks, guess, old.right, old.left, args.iterations, tol),
                 args.repeat)

@@ -43,7 +43,7 @@ import numpy as np
 
 from .branch import Branch, BranchRecorder, Stop, StopCode
 from .collisions import DetectionParams
-from .linalg import SingularMatrix, blas_threads, same_matrix
+from .linalg import SingularMatrix, blas_threads, heap_kept, same_matrix
 from .newton import (NewtonResult, factored_fixed_p, factored_newton, fixed_p_newton, residual_norm,
                      tangent)
 from .problem import Problem
@@ -212,7 +212,7 @@ def continuation(problem: Problem, u0: Array, p0: float,
     """
     _validate_start(p0, params)
     workers = default_workers(problem, np.size(u0), detection, workers)
-    with blas_threads():
+    with blas_threads(), heap_kept():
         return _continuation(problem, np.asarray(u0, dtype=float), float(p0), params, detection, workers,
                              callback)
 

@@ -185,6 +185,12 @@ class Shifted:
 
 
 @numba.njit(cache=True)
+def _square(z):
+    """|z|^2 of a real or complex number."""
+    return z.real * z.real + z.imag * z.imag
+
+
+@numba.njit(cache=True)
 def _invert(aug, out, ok, f):
     """For each shift s: out[:, :, s] = the inverse of aug[:, :b, s] (Gauss-Jordan with partial
     pivoting; aug (b, 2 b, K) overwritten); ok[s] = False where singular. f: (K,) scratch."""
@@ -195,10 +201,10 @@ def _invert(aug, out, ok, f):
                 aug[i, b + j, s] = 1.0 if i == j else 0.0
     for c in range(b):
         for s in range(K):
-            p, best = c, abs(aug[c, c, s])
+            p, best = c, _square(aug[c, c, s])  # |.|^2: no hypot for a complex entry
             for r in range(c + 1, b):
-                if abs(aug[r, c, s]) > best:
-                    p, best = r, abs(aug[r, c, s])
+                if _square(aug[r, c, s]) > best:
+                    p, best = r, _square(aug[r, c, s])
             if best == 0.0:
                 ok[s] = False
                 aug[c, c, s] = 1.0
@@ -393,6 +399,53 @@ def _matvec(diag, lower, upper, x, y):
                     y[k, i, s] += d * x[k, j, s] + low * x[prev, j, s] + u * x[nxt, j, s]
 
 
+
+@numba.njit(cache=True)
+def _sums(a, c, lc, square, overlap):
+    """For each slot s of the (N, b, K) arrays: square[s] = sum |a[..., s]|^2 and overlap[s] =
+    sum lc[..., s] c[..., s], the slots innermost."""
+    N, b, K = a.shape
+    for s in range(K):
+        square[s] = 0.0
+        overlap[s] = 0.0
+    for k in range(N):
+        for i in range(b):
+            for s in range(K):
+                square[s] += _square(a[k, i, s])
+                overlap[s] += lc[k, i, s] * c[k, i, s]
+
+
+@numba.njit(cache=True)
+def _scale(r, norm, lc, overlap):
+    """r[..., s] /= norm[s] and lc[..., s] /= overlap[s] for each slot s."""
+    N, b, K = r.shape
+    for k in range(N):
+        for i in range(b):
+            for s in range(K):
+                r[k, i, s] /= norm[s]
+                lc[k, i, s] /= overlap[s]
+
+
+@numba.njit(cache=True)
+def _rayleigh(r, lc, ax, lam, res, size):
+    """For each slot s: lam[s] = lc^H-row times A r (ax = A r; l^H r = 1), res[s] = |A r - lam r|^2
+    and size[s] = |lc|^2, the slots innermost."""
+    N, b, K = r.shape
+    for s in range(K):
+        lam[s] = 0.0
+        res[s] = 0.0
+        size[s] = 0.0
+    for k in range(N):
+        for i in range(b):
+            for s in range(K):
+                lam[s] += lc[k, i, s] * ax[k, i, s]
+    for k in range(N):
+        for i in range(b):
+            for s in range(K):
+                res[s] += _square(ax[k, i, s] - lam[s] * r[k, i, s])
+                size[s] += _square(lc[k, i, s])
+
+
 STALLED = 0.1
 """_rqi_many stops a pair whose residual fell by less than this factor in a step (cubic
 convergence falls by orders of magnitude): the blocks' LU has reached its accuracy (pivot
@@ -418,7 +471,7 @@ def _rqi_many(diag, lower, upper, guess, right, left, rows, source, target, mirr
     stops at tol, after `iterations` steps, or where its residual stalled (STALLED). BATCH
     pairs at a time, each with its own shift, side by side in every loop (a slot whose pair is
     done takes the next one). Returns the residuals |A r - lambda r| (|r| = 1) and the norms |l|
-    (l^H r = 1), inf and nan where a factorization failed (nothing written then)."""
+    (l^H r = 1), inf and nan where a factorization failed (its vectors written as zeros)."""
     N, b = diag.shape[0], diag.shape[1]
     n, k = N * b, guess.size
     residual = np.full(k, np.inf)
@@ -430,9 +483,11 @@ def _rqi_many(diag, lower, upper, guess, right, left, rows, source, target, mirr
     (P, G, e, fr, S), (aug, ok, f), (v, tail) = _work(N, b, K, guess[:1])
     r, lc = np.zeros((N, b, K), dt), np.zeros((N, b, K), dt)
     x, ax = np.empty((N, b, K), dt), np.empty((N, b, K), dt)
-    lam = np.zeros(K, dt)
+    lam, overlap = np.zeros(K, dt), np.zeros(K, dt)
+    norm, res, size = np.zeros(K), np.zeros(K), np.zeros(K)
     last = np.full(K, np.inf)  # each slot's previous residual
     pair = np.full(K, -1)
+    failed = np.zeros(K, np.bool_)
     steps = np.zeros(K, np.int64)
     upcoming = 0
     for s in range(K):
@@ -456,49 +511,38 @@ def _rqi_many(diag, lower, upper, guess, right, left, rows, source, target, mirr
         r[:] = x
         _solve(lower, upper, lc, True, x, P, G, e, fr, S, v, tail)
         lc[:] = x
+        _sums(r, r, lc, norm, overlap)
         for s in range(K):
-            if pair[s] < 0:
-                continue
-            norm, overlap = 0.0, 0.0 * lam[s]
-            for kk in range(N):
-                for i in range(b):
-                    norm += abs(r[kk, i, s]) ** 2
-                    overlap += lc[kk, i, s] * r[kk, i, s]
-            norm = np.sqrt(norm)
-            good = ok[s] and np.isfinite(norm) and norm > 0.0
+            norm[s] = np.sqrt(norm[s])
+            good = pair[s] >= 0 and ok[s] and np.isfinite(norm[s]) and norm[s] > 0.0
             if good:
-                overlap /= norm
-                good = np.isfinite(abs(overlap)) and overlap != 0.0
-            if good:
-                for kk in range(N):
-                    for i in range(b):
-                        r[kk, i, s] /= norm
-                        lc[kk, i, s] /= overlap
-            steps[s] += 1
-            if not good:
-                pair[s] = -2  # failed: its residual stays inf, nothing written
+                overlap[s] /= norm[s]
+                good = np.isfinite(abs(overlap[s])) and overlap[s] != 0.0
+            if pair[s] >= 0:
+                steps[s] += 1
+                failed[s] = not good  # its residual stays inf, its vectors zero
+            if not good:  # unchanged below
+                norm[s], overlap[s] = 1.0, 1.0
+        _scale(r, norm, lc, overlap)
         _matvec(diag, lower, upper, r, ax)
+        _rayleigh(r, lc, ax, lam, res, size)
         for s in range(K):
             p = pair[s]
             if p == -1:
                 continue
-            done = p == -2
-            if not done:
-                q = 0.0 * lam[s]
-                for kk in range(N):
-                    for i in range(b):
-                        q += lc[kk, i, s] * ax[kk, i, s]
-                lam[s] = q
-                res, size = 0.0, 0.0
-                for kk in range(N):
-                    for i in range(b):
-                        res += abs(ax[kk, i, s] - q * r[kk, i, s]) ** 2
-                        size += abs(lc[kk, i, s]) ** 2
-                res = np.sqrt(res)
-                stalled = res > STALLED * last[s]
-                last[s] = res
-                if res <= tol or steps[s] >= iterations or stalled:
-                    residual[p], kappa[p] = res, np.sqrt(size)
+            done = failed[s]
+            if done:
+                for c in (target[p], mirror[p]):
+                    if c >= 0:
+                        right_out[:, c] = 0.0
+                        left_out[c, :] = 0.0
+            else:
+                q = lam[s]
+                res[s] = np.sqrt(res[s])
+                stalled = res[s] > STALLED * last[s]
+                last[s] = res[s]
+                if res[s] <= tol or steps[s] >= iterations or stalled:
+                    residual[p], kappa[p] = res[s], np.sqrt(size[s])
                     c, m = target[p], mirror[p]
                     values_out[c] = q
                     for t in range(n):
@@ -512,6 +556,7 @@ def _rqi_many(diag, lower, upper, guess, right, left, rows, source, target, mirr
                     done = True
             if done:  # the next pair into this slot
                 steps[s] = 0
+                failed[s] = False
                 last[s] = np.inf
                 if upcoming < k:
                     p = upcoming
@@ -691,9 +736,11 @@ class Refined:
     def empty(cls, rows: Array) -> "Refined":
         n = rows.size
         # the right vectors column by column, the left ones row by row, as LAPACK leaves them:
-        # each pair's reads and writes are contiguous
-        return cls(np.zeros(n, np.complex128), np.zeros((n, n), np.complex128, order="F"),
-                   np.zeros((n, n), np.complex128), np.full(n, np.inf), np.full(n, np.nan), rows)
+        # each pair's reads and writes are contiguous. Not zeroed: _rqi_many writes every
+        # column and row (refine_eigenpairs gives it every pair), and zeroing 288 MB at
+        # N = 1000 cost as much as writing them
+        return cls(np.zeros(n, np.complex128), np.empty((n, n), np.complex128, order="F"),
+                   np.empty((n, n), np.complex128), np.full(n, np.inf), np.full(n, np.nan), rows)
 
     def rqi(self, blocks: PeriodicBlocks, guess: Guesses, pairs: Array, mirror: Array, iterations: int,
             tol: float, real: bool = False) -> None:

@@ -72,6 +72,15 @@ a continuation)."""
 RESIDUAL = 1e-12
 """Largest residual rho_i accepted, relative to the spectral radius."""
 
+TOLERANCE = 5e-13
+"""Residual, relative to the spectral radius, at which a pair's Rayleigh quotient iteration
+stops (block_tridiagonal.refine_eigenpairs: below it a pair is converged, above it it goes on
+to the pivoted LU and the groups): half of RESIDUAL. Most pairs converge far below it (median
+3e-15 R); it decides the pairs whose iteration stalls in the blocks' LU (pivot growth) at 1e-13
+to 1e-12 R. On the captured matrix of 1000 disks (docs/continuation.md, Stop 56) 250 pairs
+stalled above 1e-13 R and went to the pivoted LU, 131 above 5e-13 R. Until stop 56 it was
+1e-13."""
+
 TRACE = 10.0
 """Slack of the trace identities over their error bounds."""
 
@@ -131,7 +140,7 @@ def refined_eigensystem(problem: Problem, x: Array, reference: Sample) -> Option
     if reference.dlam is not None and reference.tangent is not None:
         move = reference.dlam * float((x - reference.x) @ reference.tangent)
     guess = values + move
-    refined = refine_eigenpairs(blocks, guess, old.right, old.left, ITERATIONS, 1e-13 * scale,
+    refined = refine_eigenpairs(blocks, guess, old.right, old.left, ITERATIONS, TOLERANCE * scale,
                                 old.columns)  # columns: label i's vectors
     system = certified(blocks, *refined, scale)
     if system is None:

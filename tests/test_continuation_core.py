@@ -681,3 +681,32 @@ def test_bordered_sparse_matrix_is_canonical_and_keeps_stored_zeros():
             column = M.indices[M.indptr[j]:M.indptr[j + 1]]
             assert np.all(np.diff(column) > 0)
         assert M.nnz == 5 + 4 + 5  # K's 5 positions (the stored zero too), b's 4, [c; d]
+
+
+def test_heap_kept_reuses_freed_memory():
+    """Inside linalg.heap_kept (the continuation runs in it) a large array freed and allocated
+    again reuses the process's memory: no page faults, where glibc's default unmaps it and the
+    kernel hands out fresh (zeroed) pages; nested contexts restore the default only at the
+    outermost exit."""
+    import resource
+
+    from diskfriction.continuation import linalg
+
+    if linalg._glibc() is None:
+        pytest.skip("the C library is not glibc: heap_kept changes nothing")
+
+    def faults_of_a_second_allocation() -> int:
+        a = np.ones(8 << 20)  # 64 MB, above glibc's largest mmap threshold (32 MiB)
+        del a
+        before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+        a = np.ones(8 << 20)
+        del a
+        return resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before
+
+    with linalg.heap_kept():
+        with linalg.heap_kept():
+            kept = faults_of_a_second_allocation()
+        assert linalg._kept[0] == 1
+    assert linalg._kept[0] == 0
+    default = faults_of_a_second_allocation()
+    assert kept < 16 <= default, (kept, default)

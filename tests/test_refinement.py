@@ -185,9 +185,11 @@ def test_a_shift_that_breaks_the_blocks_lu_is_refined_with_pivoting():
     guess[i] = mu  # the exact eigenvalue: the pivot block diag[0] - mu I is singular
     values, right, left = guess[[i]].copy(), exact.right[:, [i]].copy(), exact.left[[i]].copy()
     one, n = np.zeros(1, np.int64), N * b
+    out_r, out_l = np.full((n, 1), np.nan, complex), np.full((1, n), np.nan, complex)  # as if never zeroed
     residual = bt._rqi_many(blocks.diag, blocks.lower, blocks.upper, values.copy(), right, left, np.arange(n), one,
-                            one, one - 1, values, right, left, 3, 0.0)[0]
+                            one, one - 1, values, out_r, out_l, 3, 0.0)[0]
     assert np.isinf(residual[0])
+    assert not np.any(out_r) and not np.any(out_l)  # a failed pair's vectors are written as zeros
     values, right, left, residual = bt.refine_eigenpairs(blocks, guess, exact.right, exact.left, 4, 1e-14)
     assert residual[i] <= 1e-13 and abs(values[i] - mu) <= 1e-13
 
