@@ -248,21 +248,18 @@ def uncertified_pairs(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, real: 
         min_[0,1] H - doubt |c3| < rho min(y_a, y_b) - floor,
     and, for two real ones, _crossing does not certify them either. Returns arrays (i, j,
     min(y_a, y_b), where to split: the model minimum or a crossing's root, crossing?) in pair
-    order. Two real ones whose real parts lie their reaches apart pass the test and are not
-    looked at (_uncertified_real_pairs); the other pairs are O(pairs) time. Arrays only of the
+    order. Two real ones, or an upper one and a real one, whose real parts lie their reaches
+    apart pass the test and are not looked at (_uncertified_real_pairs,
+    _uncertified_mixed_pairs); the conjugate pairs are O(pairs) time. Arrays only of the
     uncertified pairs."""
     I, J, Y, T, C = _uncertified_real_pairs(lam_a, lam_b, d_a, d_b, real, rho, floor, doubt)
+    MI, MJ, MY, MT = _uncertified_mixed_pairs(lam_a, lam_b, d_a, d_b, upper, real, rho, floor, doubt)
     UI = []
     UJ = []
     UY = []
     UT = []
-    n_real = real.size
-    n_upper, n_partner = upper.size, partner.size
-    for k in range(n_upper * n_real + n_partner):  # upper x real, then upper with partner
-        if k < n_upper * n_real:
-            i, j = upper[k // n_real], real[k % n_real]
-        else:
-            i, j = upper[k - n_upper * n_real], partner[k - n_upper * n_real]
+    for k in range(partner.size):  # each upper one with its partner
+        i, j = upper[k], partner[k]
         bad, y, t = _pair_margin(lam_a[i] - lam_a[j], lam_b[i] - lam_b[j], d_a[i] - d_a[j],
                                  d_b[i] - d_b[j], rho, floor, doubt)
         if bad:
@@ -270,10 +267,56 @@ def uncertified_pairs(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, real: 
             UJ.append(j)
             UY.append(y)
             UT.append(t)
-    m = len(UI)
-    return (np.concatenate((I, np.array(UI, np.int64))), np.concatenate((J, np.array(UJ, np.int64))),
-            np.concatenate((Y, np.array(UY, np.float64))), np.concatenate((T, np.array(UT, np.float64))),
+    m = MI.size + len(UI)
+    return (np.concatenate((I, MI, np.array(UI, np.int64))), np.concatenate((J, MJ, np.array(UJ, np.int64))),
+            np.concatenate((Y, MY, np.array(UY, np.float64))), np.concatenate((T, MT, np.array(UT, np.float64))),
             np.concatenate((C, np.zeros(m, np.bool_))))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _uncertified_mixed_pairs(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, upper: Array,
+                             real: Array, rho: float, floor: float, doubt: float):
+    """The uncertified pairs of an upper complex label with a real one (_pair_margin), as arrays
+    (i, j, min(y_a, y_b), where to split) in pair order (upper by upper, each with the real
+    labels in their order). A pair whose real parts lie their reaches apart (reaches, whose
+    bound holds for complex labels too: |lambda_i - lambda_j| >= |Re lambda_i - Re lambda_j|)
+    passes and is not looked at: the real labels sorted by Re lambda, each upper one looks only
+    within its reach plus the largest real one of its real part; where a value is not finite,
+    every pair is looked at."""
+    n_real, n_upper = real.size, upper.size
+    x = lam_a[real].real
+    r_real = reaches(lam_a, lam_b, d_a, d_b, real, rho, doubt)
+    r_upper = reaches(lam_a, lam_b, d_a, d_b, upper, rho, doubt)
+    finite = (bool(np.all(np.isfinite(x))) and bool(np.all(np.isfinite(r_real)))
+              and bool(np.all(np.isfinite(r_upper))) and bool(np.all(np.isfinite(lam_a[upper].real))))
+    order = np.argsort(x) if finite else np.arange(n_real)
+    xs = x[order]
+    top = r_real.max() if finite and n_real > 0 else np.inf
+    K = []
+    Y = []
+    T = []
+    for u in range(n_upper):
+        i = upper[u]
+        lo, hi = 0, n_real
+        if finite:
+            lo = np.searchsorted(xs, lam_a[i].real - r_upper[u] - top)
+            hi = np.searchsorted(xs, lam_a[i].real + r_upper[u] + top, side="right")
+        for q in range(lo, hi):
+            p = order[q]
+            if finite and abs(x[p] - lam_a[i].real) >= r_upper[u] + r_real[p]:
+                continue
+            j = real[p]
+            bad, y, t = _pair_margin(lam_a[i] - lam_a[j], lam_b[i] - lam_b[j], d_a[i] - d_a[j],
+                                     d_b[i] - d_b[j], rho, floor, doubt)
+            if bad:
+                K.append(u * n_real + p)
+                Y.append(y)
+                T.append(t)
+    keys = np.array(K, np.int64)
+    first = np.argsort(keys)
+    keys = keys[first]
+    return (upper[keys // max(n_real, 1)], real[keys % max(n_real, 1)], np.array(Y, np.float64)[first],
+            np.array(T, np.float64)[first])
 
 
 def worst_uncertified_pair(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, real: Array,

@@ -800,12 +800,14 @@ def test_pairs_beyond_their_reaches_pass_the_pair_test():
 
 
 def test_uncertified_pairs_skip_only_pairs_that_pass():
-    """uncertified_pairs with its far-pair skip (certify._uncertified_real_pairs) returns what the plain
-    double loop over every pair returns, in the same order: a crowded spectrum with crossings,
+    """uncertified_pairs with its far-pair skips (certify._uncertified_real_pairs, and
+    _uncertified_mixed_pairs for an upper complex label with a real one) returns what the plain
+    double loops over every pair return, in the same order: a crowded spectrum with crossings,
     near misses and a fast eigenvalue sweeping through it, a few complex ones, and one label
     that is not finite (then every pair is tested)."""
     from diskfriction.continuation import certify
     rng = np.random.default_rng(5)
+    mixed = 0
     for case in range(60):
         n = int(rng.integers(2, 300))
         lam_a = np.sort(rng.uniform(0, 10, n)) + 0j
@@ -837,7 +839,14 @@ def test_uncertified_pairs_skip_only_pairs_that_pass():
                     if not passed:
                         for k, v in enumerate((i, j, y, t if np.isnan(root) else root, not np.isnan(root))):
                             want[k].append(v)
-        real_pairs = np.isin(got[0], real) & np.isin(got[1], real)
-        assert got[0][real_pairs].tolist() == want[0] and got[1][real_pairs].tolist() == want[1]
-        assert got[2][real_pairs].tolist() == want[2] and got[3][real_pairs].tolist() == want[3]
-        assert got[4][real_pairs].tolist() == want[4]
+        for i in upper:  # then each upper one with each real one (_uncertified_mixed_pairs)
+            for j in real:
+                bad, y, t = certify._pair_margin(lam_a[i] - lam_a[j], lam_b[i] - lam_b[j], d_a[i] - d_a[j],
+                                                 d_b[i] - d_b[j], rho, floor, doubt)
+                if bad:
+                    mixed += 1
+                    for k, v in enumerate((i, j, y, t, False)):
+                        want[k].append(v)
+        for k in range(5):
+            assert got[k].tolist() == want[k]
+    assert mixed > 0  # the fast eigenvalue meets complex ones
