@@ -399,7 +399,6 @@ def _matvec(diag, lower, upper, x, y):
                     y[k, i, s] += d * x[k, j, s] + low * x[prev, j, s] + u * x[nxt, j, s]
 
 
-
 @numba.njit(cache=True)
 def _sums(a, c, lc, square, overlap):
     """For each slot s of the (N, b, K) arrays: square[s] = sum |a[..., s]|^2 and overlap[s] =

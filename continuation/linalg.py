@@ -17,6 +17,10 @@ eigendecomposition (values and both vectors) of a 600 x 600 matrix took 1.6 s on
 6.5 s on two, 1200 x 1200 6.5 s and 70 s. `blas_threads()` therefore runs the core on one BLAS
 thread (threadpoolctl) whatever the size; the other core stays free for another job (a dask
 worker, a second sweep).
+
+Memory. A continuation runs inside `heap_kept()`: glibc keeps the memory the process frees
+and hands it out again, instead of unmapping every large block and having the kernel zero
+fresh pages for the next one (23 % of a sweep of 1000 disks' CPU time before, stop 56).
 """
 from __future__ import annotations
 
