@@ -137,12 +137,12 @@ class DetectionParams:
         return self.enabled and self.detector.slopes
 
 
-SCAN_MEMORY = 2 << 30
+SCAN_MEMORY = 1 << 30
 """Bytes of inner samples' eigenvectors a scan keeps in memory; beyond, the samples farthest
-from its work go to disk (StepScan._spill): 7 full samples of the chain of 1000 disks, the
-whole step at N = 300 (26 MB a sample). 1 GiB until stop 56: the chain of 1000 disks wrote 93 GB
-of spilled vectors (58 GB with 2 GiB) and took 912.0 and 913.5 s (878.9 s with 2 GiB), its
-largest process peaking at 7.42 GB (7.66 GB; docs/continuation.md, Stop 56)."""
+from its work go to disk (StepScan._spill): 3 full samples of the chain of 1000 disks, the
+whole step at N = 300 (26 MB a sample). Twice this (stop 56) took the chain of 1000 disks from
+912.0 and 913.5 s to 878.9 s (58 GB of spilled vectors written against 93 GB) but its three
+processes together to 16.4 GB on a 24 GB machine: not kept (docs/continuation.md, Stop 56)."""
 
 
 class _Budget(Exception):
