@@ -226,11 +226,17 @@ def _uncertified_real_pairs(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array, 
                 Y.append(y)
                 T.append(t)
                 C.append(crossing)
-    keys = np.array(K, np.int64)
-    first = np.argsort(keys)
-    keys = keys[first]
+    keys, first = _key_order(K)
     return (real[keys // max(n, 1)], real[keys % max(n, 1)], np.array(Y, np.float64)[first],
             np.array(T, np.float64)[first], np.array(C, np.bool_)[first])
+
+
+@numba.njit(cache=True)
+def _key_order(K):
+    """The pair keys K (a list of int64) in ascending order, and the order that sorts them."""
+    keys = np.array(K, np.int64)
+    first = np.argsort(keys)
+    return keys[first], first
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -312,9 +318,7 @@ def _uncertified_mixed_pairs(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array,
                 K.append(u * n_real + p)
                 Y.append(y)
                 T.append(t)
-    keys = np.array(K, np.int64)
-    first = np.argsort(keys)
-    keys = keys[first]
+    keys, first = _key_order(K)
     return (upper[keys // max(n_real, 1)], real[keys % max(n_real, 1)], np.array(Y, np.float64)[first],
             np.array(T, np.float64)[first])
 
