@@ -400,18 +400,18 @@ def _matvec(diag, lower, upper, x, y):
 
 
 @numba.njit(cache=True)
-def _sums(a, c, lc, square, overlap):
-    """For each slot s of the (N, b, K) arrays: square[s] = sum |a[..., s]|^2 and overlap[s] =
-    sum lc[..., s] c[..., s], the slots innermost."""
-    N, b, K = a.shape
+def _sums(r, lc, square, overlap):
+    """For each slot s of the (N, b, K) arrays: square[s] = sum |r[..., s]|^2 and overlap[s] =
+    sum lc[..., s] r[..., s], the slots innermost."""
+    N, b, K = r.shape
     for s in range(K):
         square[s] = 0.0
         overlap[s] = 0.0
     for k in range(N):
         for i in range(b):
             for s in range(K):
-                square[s] += _square(a[k, i, s])
-                overlap[s] += lc[k, i, s] * c[k, i, s]
+                square[s] += _square(r[k, i, s])
+                overlap[s] += lc[k, i, s] * r[k, i, s]
 
 
 @numba.njit(cache=True)
@@ -510,7 +510,7 @@ def _rqi_many(diag, lower, upper, guess, right, left, rows, source, target, mirr
         r[:] = x
         _solve(lower, upper, lc, True, x, P, G, e, fr, S, v, tail)
         lc[:] = x
-        _sums(r, r, lc, norm, overlap)
+        _sums(r, lc, norm, overlap)
         for s in range(K):
             norm[s] = np.sqrt(norm[s])
             good = pair[s] >= 0 and ok[s] and np.isfinite(norm[s]) and norm[s] > 0.0

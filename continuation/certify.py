@@ -293,8 +293,8 @@ def _uncertified_mixed_pairs(lam_a: Array, lam_b: Array, d_a: Array, d_b: Array,
     x = lam_a[real].real
     r_real = reaches(lam_a, lam_b, d_a, d_b, real, rho, doubt)
     r_upper = reaches(lam_a, lam_b, d_a, d_b, upper, rho, doubt)
-    finite = (bool(np.all(np.isfinite(x))) and bool(np.all(np.isfinite(r_real)))
-              and bool(np.all(np.isfinite(r_upper))) and bool(np.all(np.isfinite(lam_a[upper].real))))
+    # a finite reach needs finite values at both ends
+    finite = bool(np.all(np.isfinite(r_real))) and bool(np.all(np.isfinite(r_upper)))
     order = np.argsort(x) if finite else np.arange(n_real)
     xs = x[order]
     top = r_real.max() if finite and n_real > 0 else np.inf
