@@ -51,6 +51,7 @@ from .samples import Sample, make_sample, matrix_derivative, sample_at
 from .scans import ScanJob, default_workers, pending_full, scans_for
 from .segment import Segment, SegmentSolveError, refine_sign_change
 from .spectra import Eigensystem, eigenvalue_slopes
+from .spill import files_kept
 from .spectral_window import WindowCrowded
 
 Array = np.ndarray
@@ -212,7 +213,7 @@ def continuation(problem: Problem, u0: Array, p0: float,
     """
     _validate_start(p0, params)
     workers = default_workers(problem, np.size(u0), detection, workers)
-    with blas_threads(), heap_kept():
+    with blas_threads(), heap_kept(), files_kept():
         return _continuation(problem, np.asarray(u0, dtype=float), float(p0), params, detection, workers,
                              callback)
 

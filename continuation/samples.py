@@ -17,7 +17,6 @@ eigenvalue beyond the guard bands may leave it and another join it (window_match
 """
 from __future__ import annotations
 
-import tempfile
 from dataclasses import dataclass, field, replace
 from typing import Optional
 
@@ -30,6 +29,7 @@ from .linalg import book
 from .nearest import ShiftInvertFailed, nearest_eigensystem
 from .problem import Problem
 from .refinement import refinable, refined_eigensystem
+from .spill import is_on_disk, on_disk
 from .spectra import (Eigensystem, eigen_status, eigenvalue_slopes, imag_threshold, match_eigenvalues,
                       status_at)
 
@@ -135,28 +135,6 @@ class Sample:
         if self.root_end:
             return self.dlam
         return self.dlam * (segment.length / float(segment.sigma @ self.tangent)) * segment.ds_dw(self.s)
-
-
-def on_disk(a: Array) -> Array:
-    """a written to an unlinked temporary file (tempfile's directory: TMPDIR) and mapped
-    read-only in its own memory order: the same values, which the operating system pages in on
-    use and may drop again under memory pressure (clean file pages, unlike the process's own
-    memory); the file's space is freed with the last view of it."""
-    fortran = a.flags.f_contiguous and not a.flags.c_contiguous
-    with tempfile.TemporaryFile() as f:
-        np.ascontiguousarray(a.T if fortran else a).tofile(f)
-        f.flush()
-        mapped = np.memmap(f, dtype=a.dtype, mode="r", shape=a.shape, order="F" if fortran else "C")
-    return np.asarray(mapped)  # a plain ndarray (compiled kernels take it) whose base keeps the map
-
-
-def is_on_disk(a: Array) -> bool:
-    """Whether a is (a view of) on_disk's mapped file."""
-    while isinstance(a, np.ndarray):
-        if isinstance(a, np.memmap):
-            return True
-        a = a.base
-    return False
 
 
 def matrix_derivative(problem: Problem, x: Array, t: Array, side: int = 0):

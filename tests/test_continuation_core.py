@@ -710,3 +710,52 @@ def test_heap_kept_reuses_freed_memory():
     assert linalg._kept[0] == 0
     default = faults_of_a_second_allocation()
     assert kept < 16 <= default, (kept, default)
+
+
+def test_spilled_files_are_reused_in_place_but_never_under_a_live_mapping():
+    """Inside spill.files_kept (the continuation runs in it) the file of a spilled array whose
+    views are all gone is overwritten by the next spill (the same file, new values), while a
+    mapping still alive keeps its values; a file still mapped when the process forks is closed,
+    not reused, so the child's inherited view keeps its values while the parent spills on;
+    leaving the context closes the idle files, and outside it nothing is kept."""
+    import os
+
+    from diskfriction.continuation import spill
+
+    a = np.arange(24.0).reshape(4, 6) * (1 + 1j)
+    with spill.files_kept():
+        x = spill.on_disk(a)
+        y = spill.on_disk(2 * a)
+        view = x[:, 2]
+        del x
+        assert spill._idle == []  # a view keeps the mapping
+        del view
+        assert len(spill._idle) == 1
+        idle = spill._idle[0]
+        z = spill.on_disk(3 * a)  # into x's file
+        assert spill._idle == [] and np.array_equal(z, 3 * a) and np.array_equal(y, 2 * a)
+        del z
+        assert spill._idle == [idle]
+
+        read, write = os.pipe()
+        pid = os.fork()
+        if pid == 0:  # the child holds y's inherited mapping while the parent spills over
+            os.close(write)
+            os.read(read, 1)
+            os._exit(0 if np.array_equal(y, 2 * a) and spill._idle == [] else 1)
+        os.close(read)
+        del y  # mapped before the fork: closed, not kept
+        assert len(spill._idle) == 1
+        w = [spill.on_disk(k * a) for k in (5, 6)]
+        os.write(write, b"x")
+        os.close(write)
+        assert os.waitpid(pid, 0)[1] == 0
+        assert np.array_equal(w[0], 5 * a) and np.array_equal(w[1], 6 * a)
+        del w
+        assert len(spill._idle) == 2
+        u = spill.on_disk(np.arange(5.0))  # an idle file of another size, cut to this one
+        assert np.array_equal(u, np.arange(5.0)) and len(spill._idle) == 1
+    assert spill._idle == [] and spill._kept[0] == 0
+    x = spill.on_disk(a)
+    del x
+    assert spill._idle == []

@@ -621,7 +621,8 @@ def test_samples_spilled_to_disk_leave_the_scan_unchanged(monkeypatch):
     refuses (OSError: the samples stay in memory). on_disk keeps values and memory order,
     read-only."""
     from diskfriction.continuation import collisions
-    from diskfriction.continuation.samples import Sample, is_on_disk, on_disk
+    from diskfriction.continuation.samples import Sample
+    from diskfriction.continuation.spill import is_on_disk, on_disk
 
     a = np.asfortranarray(np.arange(12.0).reshape(3, 4) * (1 + 2j))
     for x in (a, np.ascontiguousarray(a)):
