@@ -38,7 +38,8 @@ def _forked_child() -> None:
     _idle.clear()  # the parent's idle files are the parent's to reuse
 
 
-os.register_at_fork(before=_forked, after_in_child=_forked_child)
+if hasattr(os, "register_at_fork"):  # not on Windows, which has no fork
+    os.register_at_fork(before=_forked, after_in_child=_forked_child)
 
 
 def on_disk(a: Array) -> Array:

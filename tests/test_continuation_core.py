@@ -722,6 +722,8 @@ def test_spilled_files_are_reused_in_place_but_never_under_a_live_mapping():
 
     from diskfriction.continuation import spill
 
+    if not hasattr(os, "fork"):
+        pytest.skip("no fork on this platform")
     a = np.arange(24.0).reshape(4, 6) * (1 + 1j)
     with spill.files_kept():
         x = spill.on_disk(a)
