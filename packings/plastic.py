@@ -2,22 +2,26 @@
 the branch is lost), the packing is strained a little further and relaxed with friction to the
 next mechanically stable state, from which the shear goes on (docs/packings.md#plastic-events).
 
-The relaxation is FIRE (packings/fire.py) on the frictional forces, the history following the
-relaxation path by the chain's rule (the Coulomb cap included: contacts slide during the
-rearrangement), the contact rows found again whenever the disks may have moved half the reach.
-FIRE's quenches (velocities zeroed going uphill) stand for the dissipation of a real
-rearrangement; the state it finds is an equilibrium with the history the path charged, not the
-one an undamped run would settle in (which needs the dynamics: packings/dynamics.py).
+The relaxation (the scene's `relaxation`) is either FIRE (packings/fire.py, "fire", the default)
+on the frictional forces, or Newtonian dynamics with a viscous drag ("damped": damped), the
+history following the relaxation path by the chain's rule (the Coulomb cap included: contacts
+slide during the rearrangement) either way, the contact rows found again whenever the disks may
+have moved a fraction of the reach. The model has no damping (docs/model.md): FIRE's quenches
+(velocities zeroed going uphill) or the drag stand for the dissipation of a real
+rearrangement, and the state found is an equilibrium with the history its path charged, which
+depends on that choice (docs/packings.md#plastic-events compares them).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Optional
 
 import numpy as np
 
 from diskfriction.packings.equilibria import REACH, carried
 from diskfriction.packings.fire import DT_MAX_RATIO, fire
 from diskfriction.packings.network import Network
+from diskfriction.scenes.packing import PackingScene
 
 PAST_FOLD = 1e-7
 """The strain beyond a fold at which the packing is relaxed [1]: the run ends within about
@@ -115,14 +119,79 @@ def relax(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray, gam
                            f"FIRE steps ({ATTEMPTS} attempts, the time step halved each time)")
 
 
+DT_DAMPED = 0.5
+"""omega_max dt of the damped relaxation's velocity Verlet step, at most: a quarter of its
+stability limit 2, omega_max^2 bounded by ||M^-1 J||_inf (damped_time_step)."""
+
+CHUNK = 200
+"""Steps of the damped relaxation between checks of its forces (one compiled call)."""
+
+SEARCH_SHARE = 0.25
+"""The damped relaxation finds the contact rows again once a disk may have moved this fraction
+of the reach since the last search, and moves at most this fraction between checks (from its
+speed and acceleration then): a pair that was no row has then closed at most the reach."""
+
+
+def drag_rate(scene: PackingScene) -> Optional[float]:
+    """The damped relaxation's drag rate eta = damping omega_0 [1 / time] (F_d = -eta M q' on
+    every disk, translation and rotation; damping = 2 damps a small disk on one contact at the
+    typical overlap critically: PackingScene.omega_0), or None where the scene relaxes by FIRE."""
+    return scene.damping * scene.omega_0 if scene.relaxation == "damped" else None
+
+
+def damped_time_step(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray,
+                     gamma: float, mass: np.ndarray) -> float:
+    """DT_DAMPED / sqrt(||M^-1 J||_inf) [time]: every |lambda| of M^-1 J is at most its largest
+    absolute row sum, so the stiffest mode's omega dt <= DT_DAMPED."""
+    J = network.evaluate(q, xi, rows, gamma)[1]
+    return DT_DAMPED / np.sqrt((abs(J).sum(axis=1).A1 / mass).max())
+
+
+def damped(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray, gamma: float,
+           f_tol: float, mass: np.ndarray, eta: float, max_steps: int = MAX_STEPS
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """Newtonian dynamics from rest at (q, xi, rows), M q'' = F(q, xi) - eta M q' (eta [1 / time]; velocity
+    Verlet with the exact drag and the Coulomb cap, the kernels' advance), until max |F| <=
+    f_tol [force]; returns (q, xi, rows, steps), also where it ran out of steps within STALLED
+    times f_tol (the caller's Newton solve finishes it); RelaxationFailed farther away."""
+    q, xi, v = q.copy(), xi.copy(), np.zeros(q.size)
+    N, inv_mass, params = network.N, 1.0 / mass, network.params(gamma)
+    dt = damped_time_step(network, q, xi, rows, gamma, mass)
+    share = SEARCH_SHARE * REACH * network.constants[0]
+    F, work = np.empty(q.size), np.zeros(1)
+    network.kernels.forces(q, xi, network.radii, rows, params, F)
+    searched, steps = q.copy(), 0
+    while np.abs(F).max() > f_tol and steps < max_steps:
+        speed = float(np.hypot(v[:N], v[N:2 * N]).max())
+        accel = float(np.hypot(F[:N] * inv_mass[:N], F[N:2 * N] * inv_mass[N:2 * N]).max())
+        t = min(0.5 * share / max(speed, 1e-300), np.sqrt(share / max(accel, 1e-300)))
+        chunk = int(max(1, min(CHUNK, max_steps - steps, t / dt)))
+        network.kernels.advance(q, v, xi, network.radii, rows, params, inv_mass, dt, chunk, F, work,
+                                eta)
+        steps += chunk
+        if np.hypot(q[:N] - searched[:N], q[N:2 * N] - searched[N:2 * N]).max() > share:
+            new_rows = network.contacts(q, gamma, REACH * network.constants[0])
+            xi, rows, searched = carried(rows, xi, new_rows), new_rows, q.copy()
+            network.kernels.forces(q, xi, network.radii, rows, params, F)
+    largest = float(np.abs(F).max())
+    if largest > STALLED * f_tol:
+        raise RelaxationFailed(f"the damped relaxation after the plastic event at gamma = {gamma:.9g} "
+                               f"stopped at max |F| = {largest:.3g} after {steps} steps")
+    return q, xi, rows, steps
+
+
 def past_fold(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray, gamma: float,
-              f_tol: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, int]:
+              f_tol: float, mass: np.ndarray, eta: Optional[float] = None
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, int]:
     """The state after the plastic event at the fold (q, xi, rows, gamma): strained affinely by
-    PAST_FOLD (x += d gamma y, the histories charged by it), then relaxed. Returns (q, xi,
-    rows, gamma + PAST_FOLD, FIRE steps)."""
+    PAST_FOLD (x += d gamma y, the histories charged by it), then relaxed: by FIRE (eta None)
+    or by damped dynamics with the drag rate eta (drag_rate). Returns (q, xi, rows, gamma + PAST_FOLD, steps)."""
     N, gamma_new = network.N, gamma + PAST_FOLD
     q_affine = q.copy()
     q_affine[:N] += PAST_FOLD * q[N:2 * N]
     xi_affine, _ = network.history_step(q, q_affine, gamma, gamma_new, xi, rows)
-    q1, xi1, rows1, steps = relax(network, q_affine, xi_affine, rows, gamma_new, f_tol)
+    if eta is None:
+        q1, xi1, rows1, steps = relax(network, q_affine, xi_affine, rows, gamma_new, f_tol)
+    else:
+        q1, xi1, rows1, steps = damped(network, q_affine, xi_affine, rows, gamma_new, f_tol, mass, eta)
     return q1, xi1, rows1, gamma_new, steps

@@ -17,7 +17,7 @@ from diskfriction.continuation.spectral_window import Window, block_columns
 from diskfriction.matrices import Matrix
 from diskfriction.packings.equilibria import PackingEquilibria, largest_force, mass_diagonal, start
 from diskfriction.packings.network import Network
-from diskfriction.packings.plastic import PlasticEvent, past_fold
+from diskfriction.packings.plastic import PlasticEvent, drag_rate, past_fold
 from diskfriction.packings.prepare import Packing
 from diskfriction.packings.prepared import prepare_scene
 from diskfriction.packings.segments import Point, ShearSegment
@@ -144,7 +144,7 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
             break
         last = segment.points[-1]
         q, xi, rows, gamma_start, steps = past_fold(network, last.q, last.xi, last.rows, last.gamma,
-                                                    params.newton_tol)
+                                                    params.newton_tol, mass, drag_rate(scene))
         after = network.stress(q, xi, rows, gamma_start)[2]
         event = PlasticEvent(last.gamma, float(last.stress[2]), float(after),
                              float(np.linalg.norm(q - last.q)), steps, str(segment.status.code))

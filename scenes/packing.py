@@ -12,6 +12,8 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
+import numpy as np
+
 from diskfriction.scenes.rules import NORMAL_LAWS, PACKING_RULES
 from diskfriction.scenes.scene import Effects, SceneValueError, _check_fields
 
@@ -23,7 +25,9 @@ class PackingScene:
     `pressure`; then friction is switched on (every history zero) and the box sheared from
     gamma_range[0] to gamma_range[1]. Contacts obey the chain's laws (Hertz normal force
     k_n delta^p with one k_n for every pair, smoothed Mindlin with k_t and mu; Effects) with
-    lever arms R_i, R_j; the disks rotate."""
+    lever arms R_i, R_j; the disks rotate. After a plastic event the packing relaxes by
+    `relaxation` (packings/plastic.py): FIRE, or Newtonian dynamics with a drag of rate
+    damping omega_0 (omega_0: PackingScene.omega_0; `damping` is read only then)."""
 
     N: int = 256
     size_ratio: float = 1.4
@@ -37,6 +41,8 @@ class PackingScene:
     k_t: float = 2000.0 * 2.0 / 7.0
     mu: float = 10.0
     gamma_range: tuple[float, float] = (0.0, 0.05)
+    relaxation: str = "fire"
+    damping: float = 0.1
     matrix: str = "M^-1 J"
     effects: Effects = Effects(wall_friction=False)
     name: str = "packing"
@@ -70,6 +76,13 @@ class PackingScene:
         """The overlap of a contact carrying the force P 2R, (2 R P / k_n)^(1/p): the typical
         overlap at the target pressure [length]."""
         return (2.0 * self.R * self.pressure / self.k_n) ** float(1 / NORMAL_LAWS[self.effects.normal])
+
+    @property
+    def omega_0(self) -> float:
+        """sqrt(k' / m), k' = dF_n / ddelta = p k_n delta_0^(p - 1): the frequency of a small disk
+        on one contact at the typical overlap delta_0 [1 / time]."""
+        p = float(NORMAL_LAWS[self.effects.normal])
+        return float(np.sqrt(p * self.k_n * self.delta_0 ** (p - 1.0) / self.m))
 
     def physics_fields(self) -> dict:
         """Every field that enters physics (all but name and source), as JSON values."""

@@ -170,6 +170,10 @@ SCENE_RULES: dict[str, Rule] = {
 }
 """Scene field -> its rule (``effects`` is an Effects, which checks its own fields)."""
 
+RELAXATIONS = ("fire", "damped")
+"""How a packing relaxes after a plastic event (packings/plastic.py): FIRE, or Newtonian dynamics
+with a viscous drag of rate `damping` omega_0."""
+
 GEOMETRIES = ("chain", "packing")
 """What a scene file's top-level ``geometry`` names: the paper's chain on a substrate (the
 default), or a 2D packing in a sheared periodic box (scenes/packing.py, docs/packings.md)."""
@@ -187,6 +191,8 @@ PACKING_RULES: dict[str, Rule] = {
     "k_t": POSITIVE,
     "mu": _number_rule(lambda x: x >= 0.0, ">= 0"),
     "gamma_range": Rule(_strain_range, "0 <= start < stop"),
+    "relaxation": _one_of(RELAXATIONS, "relaxation"),
+    "damping": POSITIVE,
     "matrix": _one_of(MATRICES, "stability matrix"),
     "name": TEXT,
     "source": TEXT,

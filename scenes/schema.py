@@ -106,6 +106,8 @@ PACKING_FIELDS = {
     "k_t": "contacts.k_t",
     "mu": "contacts.mu",
     "gamma_range": "shear.gamma",
+    "relaxation": "shear.relaxation",
+    "damping": "shear.damping",
     "matrix": "stability.matrix",
 }
 PACKING_EFFECTS = {"normal": "effects.normal", "tangential": "effects.tangential"}
@@ -125,6 +127,10 @@ PACKING_SCHEMA: dict[str, Key] = {
     "contacts.mu": SCHEMA["contacts.mu"],
     "shear.gamma": Key(PACKING_RULES["gamma_range"], "quasistatic range [start, stop] of the "
                                                       "shear strain (Lees-Edwards)"),
+    "shear.relaxation": Key(PACKING_RULES["relaxation"], "relaxation after a plastic event: FIRE, "
+                                                         "or dynamics with a drag"),
+    "shear.damping": Key(PACKING_RULES["damping"], "drag rate of the damped relaxation, in units "
+                                                   "of omega_0 (2: critical)"),
     "effects.normal": SCHEMA["effects.normal"],
     "effects.tangential": SCHEMA["effects.tangential"],
     "effects.friction": Key(Rule(packing_friction, "[] or [\"disk-disk\"]"),

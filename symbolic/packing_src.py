@@ -266,13 +266,15 @@ def normal_energy_sum(q, radii, contacts, params):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def advance(q, v, xi, radii, contacts, params, inv_mass, dt, steps, F, work):
-    """`steps` velocity Verlet steps of M q'' = F(q, xi) over fixed contact rows (the strain
-    fixed): kick, drift, the history of the drift by the chain's rule (midpoint increment,
-    reset on opening, the part after first contact on closing, the Coulomb cap: the only
-    dissipation), forces, kick. F holds the forces at q on entry and on return. work[0] gains
-    the trapezoid work of the tangential forces on the disks, sum F_t dxi [energy], so that
-    E_k + U_n - work is conserved while nothing slides. Returns the number of capped
+def advance(q, v, xi, radii, contacts, params, inv_mass, dt, steps, F, work, damping):
+    """`steps` velocity Verlet steps of M q'' = F(q, xi) - damping M q' over fixed contact rows
+    (the strain fixed): drag, kick, drift, the history of the drift by the chain's rule
+    (midpoint increment, reset on opening, the part after first contact on closing, the
+    Coulomb cap), forces, kick, drag. The drag is exact, v *= exp(-damping dt / 2) at either
+    end of a step (Strang splitting; damping [1 / time], 0: none, and the Coulomb cap is the only
+    dissipation). F holds the forces at q on entry and on return. work[0] gains the trapezoid
+    work of the tangential forces on the disks, sum F_t dxi [energy], so that E_k + U_n - work
+    is conserved while nothing slides and nothing is damped. Returns the number of capped
     (sliding) contact updates."""
     n, m = q.shape[0], contacts.shape[0]
     dxi, xi1, slid = np.empty(m), np.empty(m), np.empty(m, np.bool_)
@@ -281,9 +283,10 @@ def advance(q, v, xi, radii, contacts, params, inv_mass, dt, steps, F, work):
     gamma, capped = params[6], 0
     overlaps(q, radii, contacts, params, delta0)
     tangential_forces(q, xi, radii, contacts, params, ft0)
+    drag = math.exp(-0.5 * damping * dt)
     for _ in range(steps):
         for k in range(n):
-            v[k] += 0.5 * dt * F[k] * inv_mass[k]
+            v[k] = v[k] * drag + 0.5 * dt * F[k] * inv_mass[k]
             q0[k] = q[k]
             q[k] += dt * v[k]
         history_increment(q0, q, gamma, gamma, radii, contacts, params, dxi)
@@ -295,7 +298,7 @@ def advance(q, v, xi, radii, contacts, params, inv_mass, dt, steps, F, work):
             xi[c], ft0[c], delta0[c] = xi1[c], ft1[c], delta1[c]
         forces(q, xi, radii, contacts, params, F)
         for k in range(n):
-            v[k] += 0.5 * dt * F[k] * inv_mass[k]
+            v[k] = (v[k] + 0.5 * dt * F[k] * inv_mass[k]) * drag
     return capped
 
 
@@ -357,7 +360,7 @@ def warm_up(progress=None):
              lambda: frictionless(q[:6].copy(), radii, params[5], params[1], F2),
              lambda: normal_energy_sum(q, radii, contacts, params),
              lambda: advance(q.copy(), np.zeros(n), xi.copy(), radii, contacts, params,
-                             np.ones(n), 1e-3, 2, F.copy(), np.zeros(1))]
+                             np.ones(n), 1e-3, 2, F.copy(), np.zeros(1), 0.0)]
     for k, call in enumerate(calls):
         call()
         if progress is not None:

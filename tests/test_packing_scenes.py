@@ -49,6 +49,8 @@ BAD = [("packing.N", "1", "must be >= 2"),
        ("contacts.mu", "-1", "must be >= 0"),
        ("shear.gamma", "[0.1, 0.0]", "reversed range"),
        ("shear.gamma", "[-0.1, 0.1]", "must be >= 0"),
+       ("shear.relaxation", '"quench"', "unknown effect"),
+       ("shear.damping", "0", "must be > 0"),
        ("effects.friction", '["substrate"]', "a packing has no substrate"),
        ("effects.normal", '"coulomb"', "unknown effect"),
        ("stability.matrix", '"K"', "unknown effect")]

@@ -187,6 +187,43 @@ def test_a_plastic_event_is_passed_by_relaxing_with_friction(passed_run):
     assert np.all(np.diff(passed.gamma) > 0)
 
 
+def test_a_damped_relaxation_passes_the_same_fold_to_force_balance(passed_run):
+    """The same shear with relaxation = "damped" (Newtonian dynamics with a drag after each
+    plastic event, packings/plastic.damped): the first segment and its fold are the FIRE run's
+    to the bit (the relaxation acts only past a fold), the relaxed state takes dynamics steps,
+    and the shear goes on to the end with every point in force balance."""
+    scene, packing, fire_run, _ = passed_run
+    damped = shear(replace(scene, relaxation="damped", damping=0.5), packing, ShearParams(workers=0),
+                   plastic_events=5)
+    assert damped.status.reached and damped.gamma[-1] == scene.gamma_range[1]
+    assert len(damped.plastic) >= 1 and damped.plastic[0].gamma == fire_run.plastic[0].gamma
+    first = np.flatnonzero(fire_run.segment == 0)
+    assert np.array_equal(damped.q[first], fire_run.q[first])
+    assert damped.plastic[0].steps > 0 and damped.plastic[0].stress_after < damped.plastic[0].stress_before
+    assert damped.residual.max() <= ShearParams().newton_tol
+
+
+def test_the_damped_steps_drag_is_exact_and_its_drift_second_order(passed_run):
+    """advance with a drag on disks without contacts: v(t) = v0 exp(-eta t) to rounding (the
+    drag is applied exactly, half a step at either end), and x(t) within O(dt^2) of
+    x0 + v0 (1 - exp(-eta t)) / eta (halving dt divides the error by about 4)."""
+    scene, packing, _, _ = passed_run
+    network = network_of(scene, packing)
+    q0 = start(network, packing.positions)[0]
+    v0 = np.linspace(-1.0, 1.0, q0.size)
+    rows = np.empty((0, 4), dtype=start(network, packing.positions)[2].dtype)
+    eta, T = 3.0, 0.5
+    errors = []
+    for steps in (100, 200):
+        q, v, xi = q0.copy(), v0.copy(), np.zeros(0)
+        F = np.zeros(q.size)
+        network.kernels.advance(q, v, xi, network.radii, rows, network.params(0.0), np.ones(q.size),
+                                T / steps, steps, F, np.zeros(1), eta)
+        assert np.allclose(v, v0 * np.exp(-eta * T), rtol=1e-13, atol=0)
+        errors.append(np.abs(q - (q0 + v0 * (1 - np.exp(-eta * T)) / eta)).max())
+    assert 0 < errors[1] < errors[0] / 3.5
+
+
 def test_a_relaxation_that_stalls_near_its_tolerance_is_finished_by_newton(passed_run, monkeypatch):
     """FIRE after a plastic event made to stop short, within 50 times the tolerance (as 256
     disks stalled at 2.5e-11 against 1e-11): the next segment's first Newton solve finishes it
