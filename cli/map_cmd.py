@@ -111,6 +111,9 @@ def grid(scene, texts: list[str]):
                            f"{', '.join(keys)})")
     if len(set(keys)) < len(keys):
         raise CommandError(f"map error: --vary: {keys[0]} given twice (got {texts[1]!r})")
+    if "shear.damping" in keys and scene.relaxation != "damped":
+        raise CommandError(f"map error: --vary {texts[keys.index('shear.damping')]}: shear.damping acts only "
+                           f"where [shear] relaxation = \"damped\" (the scene's is {scene.relaxation!r})")
     try:
         return axes, map_cells(scene, axes, scene.source)
     except SceneError as error:

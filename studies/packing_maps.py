@@ -15,7 +15,7 @@ shift-invert) and summarises the branch (PACKING_COLUMNS):
     pairs_mean, the mean number of pairs per state;
   * sigma_median, sigma_max: the fastest pair's growth rate sigma = |Im sqrt(lambda)| of
     M^-1 J [1 / time], median over the states with a complex pair, and largest; omega_c =
-    sqrt(k_c / m), k_c = dF_n/ddelta at the typical overlap delta_0 (PackingScene.delta_0), the
+    sqrt(k_c / m) (PackingScene.omega_0), k_c = dF_n/ddelta at the typical overlap delta_0, the
     frequency of one small disk on one typical contact [1 / time], to read them against
     (sigma / omega_c is comparable across pressures and stiffnesses). None for "J";
   * collisions located, plastic_events passed, max_drop the largest relative drop of
@@ -66,15 +66,6 @@ def packing_cell_seconds(scene: PackingScene, params: PackingMapParams) -> float
     return CELL_START_SECONDS + SECONDS_PER_STRAIN_N2 * scene.N ** 2 * scene.gamma_range[1]
 
 
-def contact_frequency(scene: PackingScene) -> float:
-    """omega_c = sqrt(p k_n delta_0^(p - 1) / m): one small disk on one contact at the typical
-    overlap delta_0 [1 / time] (p = 3/2 for Hertz, 1 for Hooke)."""
-    from diskfriction.scenes.rules import NORMAL_LAWS
-
-    p = float(NORMAL_LAWS[scene.effects.normal])
-    return float(np.sqrt(p * scene.k_n * scene.delta_0 ** (p - 1.0) / scene.m))
-
-
 def growth_rates(branch) -> np.ndarray:
     """The fastest pair's sigma = |Im sqrt(lambda)| at every state with a complex pair (the
     tracked eigenvalues only: nan columns of a window left out) [1 / time]."""
@@ -101,7 +92,7 @@ def branch_summary(scene: PackingScene, branch) -> dict:
             "pairs_mean": float(np.mean(branch.n_complex)),
             "sigma_median": float(np.median(sigma)) if sigma.size else None,
             "sigma_max": float(sigma.max()) if sigma.size else None,
-            "omega_c": contact_frequency(scene), "collisions": len(branch.collisions),
+            "omega_c": scene.omega_0, "collisions": len(branch.collisions),
             "plastic_events": len(branch.plastic), "max_drop": float(max(drops, default=0.0)),
             "sigma_xy_end": float(branch.stress[-1, 2]), "reason": reason}
 

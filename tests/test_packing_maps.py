@@ -84,6 +84,7 @@ BAD = [
     (["--vary", "disks.eps=0:0.01:2"], "disks.eps is no scene key of a packing"),
     (["--vary", "shear.gamma=0:0.01:2"], "shear.gamma is not a numeric scene key of a packing"),
     (["--vary", "packing.N=16:17:3"], "cell packing.N = 16.5: expected an integer"),
+    (["--vary", "shear.damping=0.1:2:3"], "shear.damping acts only where [shear] relaxation = \"damped\""),
 ]
 
 
