@@ -28,7 +28,7 @@ import contextlib
 import ctypes
 import functools
 from dataclasses import astuple, dataclass, fields
-from typing import Optional, Union
+from typing import Callable, Optional, Union
 
 import numba
 import numpy as np
@@ -418,18 +418,33 @@ def heap_kept():
     if libc is None:
         yield
         return
-    if _kept[0] == 0:
+
+    def keep() -> None:
         libc.mallopt(M_MMAP_MAX, 0)
         libc.mallopt(M_TRIM_THRESHOLD, KEPT_HEAP)
-    _kept[0] += 1
+
+    def release() -> None:
+        libc.mallopt(M_MMAP_MAX, 65536)
+        libc.mallopt(M_TRIM_THRESHOLD, 128 * 1024)
+        libc.malloc_trim(0)
+
+    with outermost(_kept, keep, release):
+        yield
+
+
+@contextlib.contextmanager
+def outermost(depth: list, enter: Callable[[], None], leave: Callable[[], None]):
+    """A context that nests: enter() on the outermost entry, leave() on the outermost exit;
+    depth[0] counts the contexts open (heap_kept, spill.files_kept)."""
+    if depth[0] == 0:
+        enter()
+    depth[0] += 1
     try:
         yield
     finally:
-        _kept[0] -= 1
-        if _kept[0] == 0:
-            libc.mallopt(M_MMAP_MAX, 65536)
-            libc.mallopt(M_TRIM_THRESHOLD, 128 * 1024)
-            libc.malloc_trim(0)
+        depth[0] -= 1
+        if depth[0] == 0:
+            leave()
 
 
 def row_norms(a: Array) -> Array:

@@ -16,12 +16,13 @@ must keep its values): they are closed when their mapping is gone, as outside fi
 """
 from __future__ import annotations
 
-import contextlib
 import os
 import tempfile
 import weakref
 
 import numpy as np
+
+from .linalg import outermost
 
 Array = np.ndarray
 
@@ -91,15 +92,12 @@ def _release(f, generation: int) -> None:
         f.close()
 
 
-@contextlib.contextmanager
 def files_kept():
     """Context in which spilled files are kept for reuse (module docstring); on leaving, the
     idle ones are closed (their space freed). Nests."""
-    _kept[0] += 1
-    try:
-        yield
-    finally:
-        _kept[0] -= 1
-        if _kept[0] == 0:
-            while _idle:
-                _idle.pop().close()
+    return outermost(_kept, lambda: None, _close_idle)
+
+
+def _close_idle() -> None:
+    while _idle:
+        _idle.pop().close()
