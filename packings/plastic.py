@@ -63,8 +63,8 @@ class RelaxationFailed(RuntimeError):
 class PlasticEvent:
     """A plastic event: the strain gamma where the branch was lost, the shear stress sigma_xy
     before and after [force / length], the mass-free displacement |q_after - q_before|
-    [length], the FIRE steps the relaxation took, and how the branch was lost (the segment's
-    Stop code, packings/shear.py: PLASTIC)."""
+    [length], the steps the relaxation took (FIRE's or the damped dynamics'), and how the
+    branch was lost (the segment's Stop code, packings/shear.py: PLASTIC)."""
 
     gamma: float
     stress_before: float
@@ -150,10 +150,10 @@ def damped_time_step(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.n
 def damped(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray, gamma: float,
            f_tol: float, mass: np.ndarray, eta: float, max_steps: int = MAX_STEPS
            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
-    """Newtonian dynamics from rest at (q, xi, rows), M q'' = F(q, xi) - eta M q' (eta [1 / time]; velocity
-    Verlet with the exact drag and the Coulomb cap, the kernels' advance), until max |F| <=
-    f_tol [force]; returns (q, xi, rows, steps), also where it ran out of steps within STALLED
-    times f_tol (the caller's Newton solve finishes it); RelaxationFailed farther away."""
+    """Newtonian dynamics from rest at (q, xi, rows), M q'' = F(q, xi) - eta M q' (eta [1 /
+    time]; velocity Verlet with the exact drag and the Coulomb cap, the kernels' advance), until
+    max |F| <= f_tol [force]; returns (q, xi, rows, steps), also where it ran out of steps within
+    STALLED times f_tol (the caller's Newton solve finishes it); RelaxationFailed farther away."""
     q, xi, v = q.copy(), xi.copy(), np.zeros(q.size)
     N, inv_mass, params = network.N, 1.0 / mass, network.params(gamma)
     dt = damped_time_step(network, q, xi, rows, gamma, mass)
@@ -185,7 +185,8 @@ def past_fold(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray,
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, int]:
     """The state after the plastic event at the fold (q, xi, rows, gamma): strained affinely by
     PAST_FOLD (x += d gamma y, the histories charged by it), then relaxed: by FIRE (eta None)
-    or by damped dynamics with the drag rate eta (drag_rate). Returns (q, xi, rows, gamma + PAST_FOLD, steps)."""
+    or by damped dynamics with the drag rate eta (drag_rate). Returns (q, xi, rows, gamma +
+    PAST_FOLD, steps)."""
     N, gamma_new = network.N, gamma + PAST_FOLD
     q_affine = q.copy()
     q_affine[:N] += PAST_FOLD * q[N:2 * N]
