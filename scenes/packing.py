@@ -10,9 +10,8 @@ pressure [force / length] (a 2D pressure). Every field is checked by its rule
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
-
-import numpy as np
 
 from diskfriction.scenes.rules import NORMAL_LAWS, PACKING_RULES
 from diskfriction.scenes.scene import Effects, SceneValueError, _check_fields
@@ -82,7 +81,7 @@ class PackingScene:
         """sqrt(k' / m), k' = dF_n / ddelta = p k_n delta_0^(p - 1): the frequency of a small disk
         on one contact at the typical overlap delta_0 [1 / time]."""
         p = float(NORMAL_LAWS[self.effects.normal])
-        return float(np.sqrt(p * self.k_n * self.delta_0 ** (p - 1.0) / self.m))
+        return math.sqrt(p * self.k_n * self.delta_0 ** (p - 1.0) / self.m)
 
     def physics_fields(self) -> dict:
         """Every field that enters physics (all but name and source), as JSON values."""
