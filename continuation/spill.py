@@ -8,9 +8,9 @@ Inside files_kept() (the continuation runs in it, arclength.continuation) a file
 is gone is kept, idle, and the next spill overwrites it in place instead of writing a new one.
 Pages the kernel hands out afresh are slow to touch where the host of a virtual machine takes
 back the memory its guest frees: on the 2-core test machine a first fill of 2 GiB ran at
-0.6 GB/s, a second at 8-9 GB/s (2026-11-29). A new file for each spill of the chain of 1000
-disks (288 MB a sample, 93 GB a sweep) put 7.8 % of the sweep's CPU samples in the kernel's
-copy into fresh page-cache pages (perf, docs/continuation.md, Stop 57). An idle file keeps its
+0.6 GB/s, the next ones at 7.1-9.5 GB/s but one at 2.8 (2026-11-29). A new file for each spill
+of the chain of 1000 disks (288 MB a sample, 93 GB a sweep) put 7.8 % of the sweep's CPU
+samples in the kernel's copy into fresh page-cache pages (perf, docs/continuation.md, Stop 57). An idle file keeps its
 pages. Files still mapped when the process forks are never reused (a child's inherited mapping
 must keep its values): they are closed when their mapping is gone, as outside files_kept.
 """
@@ -76,9 +76,10 @@ def _file(nbytes: int):
     if not _idle:
         return tempfile.TemporaryFile()
     sizes = [os.fstat(f.fileno()).st_size for f in _idle]
-    f = _idle.pop(sizes.index(nbytes) if nbytes in sizes else -1)
+    k = sizes.index(nbytes) if nbytes in sizes else -1
+    f = _idle.pop(k)
     f.seek(0)
-    if os.fstat(f.fileno()).st_size > nbytes:
+    if sizes[k] > nbytes:
         f.truncate(nbytes)
     return f
 

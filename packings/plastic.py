@@ -80,8 +80,16 @@ def time_step(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray,
     = DT_MAX_STABLE / sqrt(||J||_inf), J = -dF/dq there. ||J||_inf (the largest absolute row
     sum) bounds every |lambda| of J, so the stiffest mode's omega dt_max <= DT_MAX_STABLE,
     inside the semi-implicit Euler step's limit 2."""
+    return DT_MAX_STABLE / (DT_MAX_RATIO * omega_bound(network, q, xi, rows, gamma, 1.0))
+
+
+def omega_bound(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray, gamma: float,
+                mass) -> float:
+    """sqrt(||M^-1 J||_inf) at (q, xi, rows) [1 / time], J = -dF/dq, M = diag(mass) (1.0: unit
+    masses): the largest absolute row sum bounds every |lambda| of M^-1 J, so no mode's omega
+    exceeds it."""
     J = network.evaluate(q, xi, rows, gamma)[1]
-    return DT_MAX_STABLE / (DT_MAX_RATIO * np.sqrt(abs(J).sum(axis=1).max()))
+    return float(np.sqrt((abs(J).sum(axis=1).A1 / mass).max()))
 
 
 def relax(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray, gamma: float,
@@ -141,10 +149,9 @@ def drag_rate(scene: PackingScene) -> Optional[float]:
 
 def damped_time_step(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray,
                      gamma: float, mass: np.ndarray) -> float:
-    """DT_DAMPED / sqrt(||M^-1 J||_inf) [time]: every |lambda| of M^-1 J is at most its largest
-    absolute row sum, so the stiffest mode's omega dt <= DT_DAMPED."""
-    J = network.evaluate(q, xi, rows, gamma)[1]
-    return DT_DAMPED / np.sqrt((abs(J).sum(axis=1).A1 / mass).max())
+    """DT_DAMPED / sqrt(||M^-1 J||_inf) [time] (omega_bound): the stiffest mode's omega dt <=
+    DT_DAMPED."""
+    return DT_DAMPED / omega_bound(network, q, xi, rows, gamma, mass)
 
 
 def damped(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray, gamma: float,
