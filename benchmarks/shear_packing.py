@@ -15,13 +15,19 @@ With a window LO:HI (raw units of M^-1 J) only Re lambda in [LO, HI] is tracked,
 shift-invert (bifurcate --window): "collisions" and "complex" then count the window's, and
 "widened" how often the window crowded and was sized anew (packings/shear.py).
 
-Run: python benchmarks/shear_packing.py [--workers K] [N:SEEDS:GAMMA_END[:LO:HI] ...]
+Memory: "MB" is this process's peak resident size so far and "worker MB" the largest of its
+scan workers' (both from getrusage, so a later run's figure is never below an earlier one's:
+run one N per invocation to measure its memory; the issue asks 4 GB at N = 1024).
+
+Run: python benchmarks/shear_packing.py [--workers K] [--progress S] [N:SEEDS:GAMMA_END[:LO:HI] ...]
      (default: 32:3:0.01 64:3:0.01)
 """
 from __future__ import annotations
 
 import argparse
 import collections
+import resource
+import sys
 import time
 
 import numpy as np
@@ -44,13 +50,28 @@ def kinds(branch) -> str:
     return ", ".join(f"{kind} {n}" for kind, n in counts.most_common()) or "-"
 
 
-def run(N: int, seed: int, gamma_end: float, window=None, workers=None) -> str:
+def reporter(every: float, start: float):
+    """A progress callback that prints the strain reached and the seconds since `start` to
+    stderr, at most once every `every` seconds; None for every = 0 (no progress)."""
+    if every <= 0:
+        return None
+    last = [start]
+
+    def progress(gamma: float) -> None:
+        now = time.perf_counter()
+        if now - last[0] >= every:
+            last[0] = now
+            print(f"  gamma = {gamma:.4e} at {now - start:.0f} s", file=sys.stderr, flush=True)
+    return progress
+
+
+def run(N: int, seed: int, gamma_end: float, window=None, workers=None, every: float = 0.0) -> str:
     scene = PackingScene(N=N, seed=seed, gamma_range=(0.0, gamma_end))
     start = time.perf_counter()
     packing = prepare_scene(scene)
     prepared = time.perf_counter() - start
-    branch = shear(scene, packing, ShearParams(workers=workers), plastic_events=PLASTIC_EVENTS,
-                   window=window)
+    branch = shear(scene, packing, ShearParams(workers=workers), reporter(every, start),
+                   plastic_events=PLASTIC_EVENTS, window=window)
     sheared = time.perf_counter() - start - prepared
     fell = smallest(branch.eigenvalues[-1]) / smallest(branch.eigenvalues[0])
     end = branch.status.code.value
@@ -58,27 +79,37 @@ def run(N: int, seed: int, gamma_end: float, window=None, workers=None) -> str:
             f"{end:>12} {len(branch):>6} {branch.events:>6} {len(branch.collisions):>10} "
             f"{np.mean(branch.n_complex > 0):>8.2f} {np.mean(branch.n_complex):>7.1f} "
             f"{branch.residual.max():>9.1e} {int(branch.loose[0]):>5} {fell:>9.1e} "
-            f"{len(branch.plastic):>7} {branch.stress[-1, 2]:>9.4f} {branch.widenings:>7}  "
-            f"{kinds(branch)}")
+            f"{len(branch.plastic):>7} {branch.stress[-1, 2]:>9.4f} {branch.widenings:>7} "
+            f"{peak_mb(resource.RUSAGE_SELF):>6.0f} {peak_mb(resource.RUSAGE_CHILDREN):>9.0f}  {kinds(branch)}")
+
+
+def peak_mb(who: int) -> float:
+    """The peak resident size in MB of this process (RUSAGE_SELF) or of the largest of its
+    finished children (RUSAGE_CHILDREN: the scan workers, ended with their shear)."""
+    return resource.getrusage(who).ru_maxrss / 1024
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("runs", nargs="*", default=["32:3:0.01", "64:3:0.01"])
     ap.add_argument("--workers", type=int, default=None, help="scan workers (default: as bifurcate)")
+    ap.add_argument("--progress", type=float, default=0.0, metavar="S",
+                    help="print the strain reached to stderr at most every S seconds (default: never)")
     args = ap.parse_args()
     if args.workers is not None and args.workers < 0:
         ap.error(f"--workers: must be >= 0 (got {args.workers})")
+    if not args.progress >= 0:
+        ap.error(f"--progress: must be >= 0 seconds (got {args.progress})")
     runs = [parsed(spec, ap) for spec in args.runs]
     print(f"{time.strftime('%Y-%m-%d %H:%M')}, load average {open('/proc/loadavg').read().split()[0]}, "
           f"workers {'automatic' if args.workers is None else args.workers}")
     print(f"{'N':>5} {'seed':>4} {'prep s':>7} {'shear s':>7} {'gamma end':>10} {'ended':>12} "
           f"{'points':>6} {'events':>6} {'collisions':>10} {'complex':>8} {'pairs':>7} "
           f"{'max |F|':>9} {'loose':>5} {'min/start':>9} {'plastic':>7} {'sigma_xy':>9} "
-          f"{'widened':>7}  kinds")
+          f"{'widened':>7} {'MB':>6} {'worker MB':>9}  kinds")
     for N, seeds, gamma_end, window in runs:
         for seed in range(1, seeds + 1):
-            print(run(N, seed, gamma_end, window, args.workers), flush=True)
+            print(run(N, seed, gamma_end, window, args.workers, args.progress), flush=True)
 
 
 def parsed(spec: str, ap: argparse.ArgumentParser) -> tuple:
