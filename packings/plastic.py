@@ -98,7 +98,13 @@ def relax(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray, gam
     [force]; returns (q, xi, rows, steps) of the relaxed state, also where FIRE ran out of
     steps within STALLED times f_tol (the caller's Newton solve finishes it). Where it stops
     farther away, FIRE starts again from (q, xi, rows) with half the time step, up to ATTEMPTS
-    runs in all (steps: over all of them); RelaxationFailed after them."""
+    runs in all; then the run that ended closest (least max |F|) goes on from its end, with
+    its time step, for max_steps more; RelaxationFailed after that. steps: over all the runs.
+    A relaxation can still be settling when its steps run out: after the fold of 256 disks
+    (seed 1, window [-3, 2]) at gamma = 0.0405607, FIRE stayed near max |F| = 4e-7 for 30 000
+    steps, then went through a second rearrangement (4.7e-3 at step 61 000) and settled to
+    2e-8 to 7e-8 by step 200 000 (the band: 1e-8); the restarts from the fold state with half
+    the time step ended at up to 1.4e-5, and the shear stopped there (stop 58)."""
     reach = REACH * network.constants[0]
     state = {}
 
@@ -114,7 +120,7 @@ def relax(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray, gam
             F = network.forces(x, state["xi"], rows_new, gamma)
         return F, 0.0
 
-    dt0, steps = time_step(network, q, xi, rows, gamma), 0
+    dt0, steps, closest = time_step(network, q, xi, rows, gamma), 0, None
     for attempt in range(ATTEMPTS):
         state.update(q=q.copy(), xi=xi.copy(), delta=network.overlaps(q, rows, gamma), rows=rows,
                      searched=q.copy())
@@ -122,9 +128,18 @@ def relax(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray, gam
         steps += result.steps
         if result.max_force <= STALLED * f_tol:
             return result.x, state["xi"], state["rows"], steps
+        if closest is None or result.max_force < closest[0].max_force:
+            closest = result, {key: np.copy(value) for key, value in state.items()}, attempt
+    result, end, attempt = closest  # the attempt that came closest goes on from where it stopped
+    state.update(end)
+    result = fire(forces, result.x, dt0 / 2 ** attempt, f_tol, max_steps)
+    steps += result.steps
+    if result.max_force <= STALLED * f_tol:
+        return result.x, state["xi"], state["rows"], steps
     raise RelaxationFailed(f"the relaxation after the plastic event at gamma = {gamma:.9g} "
-                           f"stopped at max |F| = {result.max_force:.3g} after {result.steps} "
-                           f"FIRE steps ({ATTEMPTS} attempts, the time step halved each time)")
+                           f"stopped at max |F| = {result.max_force:.3g} after {steps} FIRE steps "
+                           f"({ATTEMPTS} attempts, the time step halved each time, and the closest "
+                           f"one continued)")
 
 
 DT_DAMPED = 0.5

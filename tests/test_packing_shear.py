@@ -282,6 +282,40 @@ def test_a_relaxation_that_does_not_settle_starts_again_with_half_the_time_step(
         plastic.relax(network, *fold, f_tol)
 
 
+def test_a_relaxation_still_settling_when_its_attempts_run_out_goes_on_from_the_closest(
+        passed_run, monkeypatch):
+    """Every attempt from the fold state made to run out of steps early (as FIRE still settling
+    after a second rearrangement: 256 disks, window [-3, 2], gamma = 0.0405607): the attempt
+    that ended with the least force goes on from its end with its own time step, and its end is
+    the relaxed state, in force balance; its steps count every run."""
+    from diskfriction.packings import plastic
+
+    scene, packing, branch, _ = passed_run
+    network = network_of(scene, packing)
+    k = np.flatnonzero(branch.segment == 0)[-1]
+    fold = (branch.q[k], branch.xi[k], branch.rows[k], branch.gamma[k])
+    f_tol, real_fire = ShearParams().newton_tol, plastic.fire
+    calls = []
+
+    def cut_short(forces, x0, dt, f_tol, max_steps):
+        run = real_fire(forces, x0, dt, f_tol, max_steps if len(calls) == plastic.ATTEMPTS else 40 + len(calls))
+        calls.append((x0.copy(), dt, run))
+        return run
+
+    monkeypatch.setattr(plastic, "fire", cut_short)
+    mass = mass_diagonal(network, scene.m, scene.inertia)
+    q, xi, rows, gamma, steps = plastic.past_fold(network, *fold, f_tol, mass)
+    assert len(calls) == plastic.ATTEMPTS + 1
+    tried = calls[:plastic.ATTEMPTS]
+    assert all(not run.converged for _, _, run in tried)
+    closest = min(tried, key=lambda call: call[2].max_force)
+    x0, dt, last = calls[-1]
+    assert np.array_equal(x0, closest[2].x) and dt == closest[1]
+    assert np.array_equal(q, last.x) and last.converged
+    assert steps == sum(run.steps for _, _, run in calls)
+    assert np.abs(network.forces(q, xi, rows, gamma)).max() <= f_tol
+
+
 def same(a, b) -> bool:
     """Whether two results are equal value for value: arrays (nan equal to nan), and
     dataclasses, tuples, lists and dicts of them, field by field."""
