@@ -102,9 +102,10 @@ def relax(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray, gam
     its time step, for max_steps more; RelaxationFailed after that. steps: over all the runs.
     A relaxation can still be settling when its steps run out: after the fold of 256 disks
     (seed 1, window [-3, 2]) at gamma = 0.0405607, FIRE stayed near max |F| = 4e-7 for 30 000
-    steps, then went through a second rearrangement (4.7e-3 at step 61 000) and settled to
-    2e-8 to 7e-8 by step 200 000 (the band: 1e-8); the restarts from the fold state with half
-    the time step ended at up to 1.4e-5, and the shear stopped there (stop 58)."""
+    steps, then went through a second rearrangement (4.7e-3 at step 61 000) and was at
+    2.2e-8 at step 200 000 (the band: 1e-8); the restarts from the fold state with half the
+    time step ended at 1.3e-7 and 1.4e-5, and the shear stopped there. Continued, the first
+    run ends at 1.8e-9 (stop 58)."""
     reach = REACH * network.constants[0]
     state = {}
 
