@@ -19,12 +19,17 @@ from diskfriction.scenes.scene import NEGATIVE_LOAD
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
-        "bifurcate", help="continue the equilibria in F_x and locate every eigenvalue collision",
-        description="Follow the equilibrium branch from rest through the F_x range with the "
-                    "tangential history carried along, store all eigenvalues of the stability "
-                    "matrix, and locate every birth and death of a complex pair. Writes "
-                    "DIR/branch.npz, DIR/collisions.json and DIR/diagram.png (raw units in "
-                    "files, the paper's units in the figure).")
+        "bifurcate", help="continue the equilibria (a chain in F_x, a packing in shear strain) "
+                          "and locate every eigenvalue collision",
+        description="Follow the equilibrium branch with the tangential history carried along, "
+                    "store the eigenvalues of the stability matrix, and locate every birth and "
+                    "death of a complex pair. A chain scene: from rest through the F_x range; "
+                    "writes DIR/branch.npz, DIR/collisions.json and DIR/diagram.png (raw units "
+                    "in files, the paper's units in the figure). A packing scene: prepares the "
+                    "packing without friction, then shears it quasistatically through the "
+                    "scene's [shear] gamma range, passing plastic events (relaxed with friction); "
+                    "writes DIR/branch.npz, DIR/collisions.json, DIR/diagram.png and "
+                    "DIR/packing.npz (raw units; docs/packings.md).")
     add_scene_argument(parser)
     parser.add_argument("--fx", metavar="A:B",
                         help="sweep F_x from A to B (raw units); A > B unloads after loading to A "

@@ -43,7 +43,10 @@ def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand registered."""
     parser = OneLineParser(
         prog="diskfriction",
-        description="Bifurcation analysis of frictional disks on a substrate.")
+        description="Bifurcation analysis of frictional disks: the chain on a substrate loaded by "
+                    "F_x (the paper's scene, scenes/paper.toml) or a 2D packing sheared in "
+                    "strain gamma (a scene with geometry = \"packing\", scenes/packing.toml). "
+                    "Every command takes either scene unless it says otherwise.")
     parser.add_argument("--version", action=VersionAction)
     subparsers = parser.add_subparsers(metavar="COMMAND", required=True, dest="command")
     for module in SUBCOMMANDS:

@@ -7,6 +7,12 @@ measured, max M, slid ("not resolved" where the run's energy budget did not clos
 DIR/verify.json, DIR/verify.md and DIR/verify.png (the Im lambda diagram with each window
 shaded by whether its run slid, stayed or is not resolved, over the growth rate measured
 against the predicted one per window).
+
+On a packing scene: shear over the scene's strain range, then run the dynamics from up to 8
+states with complex pairs (along the fastest pair's eigenvector) and 2 with every eigenvalue
+real (random velocities); tabulate the growth rate measured against the spectrum's, whether
+contacts slid, and what the run's end relaxes to at rest (rearranged, slipped or came back).
+Writes DIR/verify.json and DIR/verify.md (docs/packings.md).
 """
 from __future__ import annotations
 
