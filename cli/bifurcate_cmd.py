@@ -32,8 +32,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "DIR/packing.npz (raw units; docs/packings.md).")
     add_scene_argument(parser)
     parser.add_argument("--fx", metavar="A:B",
-                        help="sweep F_x from A to B (raw units); A > B unloads after loading to A "
-                             "(default: the scene's F_x range)")
+                        help="a chain scene: sweep F_x from A to B (raw units); A > B unloads "
+                             "after loading to A (default: the scene's F_x range). A packing is "
+                             "sheared over its scene's [shear] gamma instead")
     add_matrix_argument(parser, "stability matrix")
     parser.add_argument("--out", metavar="DIR", help="output directory (default: out/bifurcate/SCENE)")
     parser.add_argument("--ds-max", type=float, metavar="DS",
@@ -132,8 +133,6 @@ def _run(args: argparse.Namespace) -> int:
         from diskfriction.cli.problem_cmd import run_problem
 
         return run_problem(args)
-    if args.p is not None:
-        raise CommandError("bifurcate error: --p: only with --problem FILE.py (a scene's load is --fx)")
     if args.switch is not None:
         raise CommandError(f"bifurcate error: --switch: only with --problem FILE.py (got {args.switch!r})")
     window = parse_window(args.window) if args.window is not None else None
@@ -145,6 +144,9 @@ def _run(args: argparse.Namespace) -> int:
         from diskfriction.cli.packing_cmd import run_packing
 
         return run_packing(args, scene, window)
+    if args.p is not None:
+        raise CommandError("bifurcate error: --p: only with --problem FILE.py (a chain scene's load "
+                           f"is --fx; got {args.p!r})")
     F_from, F_to = parse_range(args.fx) if args.fx is not None else scene.F_x_range
     if args.ds_max is not None:
         number("bifurcate", "ds-max", args.ds_max)

@@ -178,10 +178,16 @@ def check_memory(command: str, scene: Scene, processes: int = 1, dense: Optional
 def run_command(args: argparse.Namespace) -> int:
     """Run the chosen subcommand. A SceneError, CommandError or OneLineError (no equilibrium,
     not enough memory, ...) becomes one line on stderr and its exit code; Ctrl-C one line
-    (interrupted_line) and 130; a MemoryError one line and exit 1."""
+    (interrupted_line) and 130, also where it surfaces as another exception raised from it or
+    while handling it (interrupted); a MemoryError one line and exit 1."""
     command = getattr(args, "command", "diskfriction")
     try:
-        return args.run(args)
+        try:
+            return args.run(args)
+        except Exception as error:
+            if interrupted(error):
+                raise KeyboardInterrupt from error
+            raise
     except SceneError as error:
         print(error, file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -201,12 +207,31 @@ def run_command(args: argparse.Namespace) -> int:
 
 RESUMES = "interrupted: the finished {what} are kept in {where}; rerun the same command to resume"
 STARTS_OVER = "interrupted: {command} does not resume; run it again to get its results"
+NONE_KEPT = ("interrupted before any of the {what} was finished: nothing is kept; rerun the same "
+             "command to start again")
+
+
+def interrupted(error: BaseException) -> bool:
+    """Whether a KeyboardInterrupt caused `error` (its __cause__ or __context__ chain): Ctrl-C
+    landing in a compiled function's first call (numba unpickling its constants) comes out as
+    a SystemError raised from the KeyboardInterrupt, and a wrapper may turn that into its own
+    error (continuation.api: "dG/du raised SystemError")."""
+    seen = set()
+    while error is not None and id(error) not in seen:
+        if isinstance(error, KeyboardInterrupt):
+            return True
+        seen.add(id(error))
+        error = error.__cause__ or error.__context__
+    return False
 
 
 def interrupted_line(args: argparse.Namespace) -> str:
     """What Ctrl-C leaves: a command that resumes says what it keeps and where (args.keeps,
-    set by the command once it knows: ("realizations", DIR)); any other that it starts over."""
+    set by the command once it knows: ("realizations", DIR)), or that it had finished none of
+    them yet (DIR None); any other that it starts over."""
     keeps = getattr(args, "keeps", None)
     if keeps is not None:
-        return RESUMES.format(what=keeps[0], where=keeps[1])
+        what, where = keeps
+        return (NONE_KEPT.format(what=what) if where is None
+                else RESUMES.format(what=what, where=where))
     return STARTS_OVER.format(command=getattr(args, "command", "the command"))

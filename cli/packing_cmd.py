@@ -5,7 +5,10 @@ every birth and death of a complex pair (issue 25, docs/packings.md#shear).
 A long shear keeps what it finished: each segment (the branch up to a plastic event passed,
 packings/segments.py) is written to DIR/segments/ as it is passed, keyed by everything its
 result depends on (resume_key); a rerun of the same command, interrupted or failed, goes on
-after them with the same result, and the directory is removed once the outputs are written."""
+after them with the same result (a segment file it cannot read is computed again), and the
+directory is removed once the outputs are written. The outputs are written together at the
+end, each naming its scene (reports/packing_outputs.py); DIR/segments/scene.json names the
+scene of the shear under way, and a DIR holding another scene's files is refused."""
 from __future__ import annotations
 
 import argparse
@@ -22,7 +25,8 @@ from diskfriction.scenes.packing import PackingScene
 from diskfriction.words import count
 
 CHAIN_ONLY = {"fx": "a packing's load is its strain: [shear] gamma in the scene",
-              "p": "only with --problem FILE.py", "ds_max": "a packing's step follows its strain"}
+              "p": "only with --problem FILE.py; a packing's load is its strain, [shear] gamma in "
+                   "the scene", "ds_max": "a packing's step follows its strain"}
 """bifurcate's options a packing scene does not take, and why."""
 
 PLASTIC_EVENTS = 1000
@@ -32,9 +36,10 @@ PLASTIC_EVENTS = 1000
 def run_packing(args: argparse.Namespace, scene: PackingScene,
                 window: tuple[float, float] | None) -> int:
     """bifurcate on a packing scene: prepare, shear (with `window`, --window as bifurcate
-    parsed and checked it), write branch.npz, collisions.json, diagram.png and packing.npz;
-    exit 1 with one line when the branch ends short of the scene's strain (a plastic event, a
-    fold in gamma), after writing what it reached."""
+    parsed and checked it), write packing.npz, branch.npz, collisions.json, plastic.json and
+    diagram.png together (reports/packing_outputs.save_packing_outputs); exit 1 with one line
+    when the branch ends short of the scene's strain (a plastic event, a fold in gamma), after
+    writing what it reached. An --out holding another scene's files is refused (exit 2)."""
     for option, why in CHAIN_ONLY.items():
         if getattr(args, option) is not None:
             flag = "--" + option.replace("_", "-")
@@ -45,32 +50,35 @@ def run_packing(args: argparse.Namespace, scene: PackingScene,
 
     matrix = matrix_from_args("bifurcate", args, scene)
     out = output_dir("bifurcate", args.out, Path("out") / "bifurcate" / scene.name)
+    scene = dataclasses.replace(scene, matrix=str(matrix))
+    refuse_other_scene("bifurcate", out, scene)
 
     from diskfriction.continuation.arclength import ContinuationError
     from diskfriction.continuation.branch import StopCode
     from diskfriction.continuation.collisions import DetectionParams
     from diskfriction.continuation.spectral_window import WindowCrowded
+    from diskfriction.files import save_json
     from diskfriction.packings.equilibria import MissedContact
     from diskfriction.packings.plastic import RelaxationFailed
-    from diskfriction.packings.prepare import save_packing
     from diskfriction.packings.prepared import prepare_scene
     from diskfriction.packings.segments import save_segment
     from diskfriction.packings.shear import ShearParams, collision_records, shear
-    from diskfriction.reports.packing_outputs import plot_packing_diagram, save_packing_branch
+    from diskfriction.reports.packing_outputs import (OUTPUTS, RUN_SCENE, save_packing_outputs,
+                                                      scene_record)
 
-    scene = dataclasses.replace(scene, matrix=str(matrix))
     g0, g1 = scene.gamma_range
+    kept = out / "segments"
+    save_json(out / RUN_SCENE, {"scene": scene_record(scene)})  # the shear under way's scene
     progress = Progress("bifurcate")
     try:
         progress.stage(f"prepare {scene.N} disks to pressure {scene.pressure:g}")
         packing = prepare_scene(scene, progress.part("relax"))
-        save_packing(out / "packing.npz", packing)
-        kept, key = out / "segments", resume_key(scene, window, args.detection)
-        done = finished_segments(kept, key)
-        args.keeps = ("segments", kept)  # what Ctrl-C leaves to resume from (cli.common)
+        key = resume_key(scene, window, args.detection)
+        done, unread = finished_segments(kept, key)
         resumed = (f" (resumed after {count(len(done), 'segment')}, at gamma = "
                    f"{done[-1].next_start[3]:.6g})" if done else "")
-        progress.stage(f"shear gamma 0 -> {g1:g}{resumed}")
+        again = f"; computed again: {unread}" if unread else ""
+        progress.stage(f"shear gamma 0 -> {g1:g}{resumed}{again}")
         params = ShearParams(detection=DetectionParams(mode=args.detection), workers=args.workers)
         try:
             branch = shear(scene, packing, params,
@@ -85,11 +93,15 @@ def run_packing(args: argparse.Namespace, scene: PackingScene,
                                EXIT_FAILED) from None
         if window is not None:
             check_window_covered(branch, args.window, matrix, 1.0)
-        progress.stage(f"writing {out}/branch.npz, collisions.json")
-        save_packing_branch(out, branch, scene)
-        progress.stage(f"plotting {out}/diagram.png")
-        plot_packing_diagram(branch, scene, out / "diagram.png")
+        progress.stage(f"writing {out}/{', '.join(OUTPUTS)}")
+        save_packing_outputs(out, kept / "writing", branch, scene, packing)
         shutil.rmtree(kept, ignore_errors=True)
+    except BaseException:
+        finished = any(kept.glob("segment-*.npz"))
+        if not finished:  # nothing to resume from: the shear's claim on DIR goes too
+            shutil.rmtree(kept, ignore_errors=True)
+        args.keeps = ("segments", kept if finished else None)  # what Ctrl-C says (cli.common)
+        raise
     finally:
         progress.close()
     records = collision_records(branch)
@@ -113,7 +125,7 @@ def run_packing(args: argparse.Namespace, scene: PackingScene,
               f"{bracketed_only(records)}; "
               f"complex pairs at {100 * (branch.n_complex > 0).mean():.0f} % of the equilibria, "
               f"at most {branch.n_complex.max()}")
-        print(f"wrote {out}/branch.npz, collisions.json, diagram.png, packing.npz")
+        print(f"wrote {out}/{', '.join(OUTPUTS)}")
     if not branch.status.reached:
         why = ("a plastic event: the quasistatic branch folds back in gamma (a saddle-node)"
                if branch.status.code is StopCode.FOLD else branch.status.sentence(len(branch)))
@@ -121,6 +133,21 @@ def run_packing(args: argparse.Namespace, scene: PackingScene,
                            f"{branch.gamma[-1]:.9g}, short of {g1:g}: {why}; what it reached "
                            f"is written", EXIT_FAILED)
     return 0
+
+
+def refuse_other_scene(command: str, out: Path, scene: PackingScene) -> None:
+    """A CommandError (one line, exit 2) when `out` holds files of a scene other than `scene`
+    (reports/packing_outputs.other_scene: finished outputs, or a shear under way), naming the
+    file, both scenes and how they differ."""
+    from diskfriction.reports.packing_outputs import other_scene
+
+    found = other_scene(out, scene)
+    if found is not None:
+        path, record, differ = found
+        raise CommandError(f"{command} error: --out: {path.relative_to(out)} there belongs to "
+                           f"scene '{record['name']}' ({record['file']}), not to '{scene.name}' "
+                           f"({scene.source}): {'; '.join(differ)}; give another --out or "
+                           f"remove that scene's files (got {str(out)!r})")
 
 
 SEGMENT_FILE = "segment-{:04d}.npz"
@@ -137,19 +164,20 @@ def resume_key(scene: PackingScene, window, detection: str) -> str:
     return task_key(scene.physics_fields(), window, detection, PLASTIC_EVENTS, code_version())
 
 
-def finished_segments(directory: Path, key: str) -> list:
-    """The segments of an earlier run with `key` in `directory`, in order from the first (none
-    if there are none, or from the first one missing, unreadable or written for another key;
-    those are left to be written again)."""
+def finished_segments(directory: Path, key: str) -> tuple[list, str]:
+    """(the segments of an earlier run with `key` in `directory`, in order from the first, up
+    to the first one missing, unreadable or written for another key; why that one is not read,
+    "" if it is missing). The run computes that segment and those after it again and writes
+    them over the files."""
     from diskfriction.packings.segments import SegmentFileError, load_segment
 
     done = []
     while (directory / SEGMENT_FILE.format(len(done))).exists():
         try:
             done.append(load_segment(directory / SEGMENT_FILE.format(len(done)), key))
-        except SegmentFileError:
-            break
-    return done
+        except SegmentFileError as error:
+            return done, str(error)
+    return done, ""
 
 
 def run_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> int:

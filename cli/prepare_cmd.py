@@ -1,15 +1,22 @@
 """``diskfriction prepare [FILE] --out DIR``: prepare a packing scene's packing (issue 25,
 docs/packings.md): packing.npz (every field of packings.prepare.Packing, loads back bit for
-bit) and packing.json (what it is: N, L, phi, the pressure reached, contacts, rattlers)."""
+bit) and packing.json (what it is: N, L, phi, the pressure reached, contacts, rattlers), both
+naming the scene (reports/packing_outputs.scene_record); a DIR holding another scene's files is
+refused."""
 from __future__ import annotations
 
 import argparse
 import time
+from importlib import resources
 from pathlib import Path
 
-from diskfriction.cli.common import CommandError, add_scene_argument, output_dir, scene_from_args
+from diskfriction.cli.common import CommandError, output_dir, scene_from_args
+from diskfriction.cli.packing_cmd import refuse_other_scene
 from diskfriction.cli.progress import Progress
 from diskfriction.scenes.packing import PackingScene
+
+PACKING_SCENE = resources.files("diskfriction.scenes") / "packing.toml"
+"""prepare's scene without FILE: the packaged packing scene."""
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -19,8 +26,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description="Place a packing scene's disks at random from its seed and relax them "
                     "without friction (FIRE) to its target pressure; write packing.npz and "
                     "packing.json. The same scene gives the same packing bit for bit.")
-    add_scene_argument(parser)
-    parser.add_argument("--out", metavar="DIR", help="output directory (default: out/prepare)")
+    parser.add_argument("scene", nargs="?", metavar="FILE", default=str(PACKING_SCENE),
+                        help="packing scene TOML file, geometry = \"packing\" (default: the "
+                             "packaged packing scene, scenes/packing.toml: 256 disks)")
+    parser.add_argument("--out", metavar="DIR",
+                        help="output directory (default: out/prepare/SCENE); one holding another "
+                             "scene's packing is refused")
     parser.set_defaults(run=run)
 
 
@@ -29,10 +40,12 @@ def run(args: argparse.Namespace) -> int:
     if not isinstance(scene, PackingScene):
         raise CommandError(f"prepare error: {scene.source}: a chain scene: prepare takes a "
                            f"packing scene (geometry = \"packing\", docs/packings.md)")
-    out = output_dir("prepare", args.out, Path("out/prepare"))
+    out = output_dir("prepare", args.out, Path("out") / "prepare" / scene.name)
+    refuse_other_scene("prepare", out, scene)
     from diskfriction.files import save_json
     from diskfriction.packings.prepare import save_packing
     from diskfriction.packings.prepared import contact_number, prepare_scene
+    from diskfriction.reports.packing_outputs import scene_arrays, scene_record
 
     progress = Progress("prepare")
     try:
@@ -44,8 +57,8 @@ def run(args: argparse.Namespace) -> int:
         progress.close()
     n_contacts, z = contact_number(packing)
     rattling = packing.rattlers
-    save_packing(out / "packing.npz", packing)
-    summary = {"scene": scene.name, "N": scene.N, "L": packing.L, "phi": packing.phi,
+    save_packing(out / "packing.npz", packing, scene_arrays(scene))
+    summary = {"scene": scene_record(scene), "N": scene.N, "L": packing.L, "phi": packing.phi,
                "pressure": packing.pressure, "target_pressure": scene.pressure,
                "max_force": packing.max_force, "contacts": n_contacts,
                "rattlers": int(rattling.sum()), "z": z, "fire_steps": packing.steps,

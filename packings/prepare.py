@@ -287,11 +287,13 @@ FIELDS = {f.name: {"float": float, "int": int, "str": str}.get(f.type) for f in 
 """Packing's fields and the Python type of the scalars among them (None: an array)."""
 
 
-def save_packing(path, packing: Packing) -> None:
+def save_packing(path, packing: Packing, record: Optional[dict] = None) -> None:
     """The packing as an uncompressed .npz, written atomically (files.save_npz): every field
-    under its name (scalars as 0-d arrays) and format = FORMAT."""
-    save_npz(path, format=np.array(FORMAT),
-             **{name: np.asarray(getattr(packing, name)) for name in FIELDS})
+    under its name (scalars as 0-d arrays), format = FORMAT, and the arrays of `record` (what
+    the packing was made for: reports/packing_outputs.scene_arrays), a Packing field among
+    them taking the packing's value."""
+    save_npz(path, **{**(record or {}), "format": np.array(FORMAT),
+                      **{name: np.asarray(getattr(packing, name)) for name in FIELDS}})
 
 
 def load_packing(path) -> Packing:

@@ -12,6 +12,7 @@ flat array with offsets.
 """
 from __future__ import annotations
 
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Optional
@@ -124,17 +125,20 @@ class SegmentFileError(ValueError):
 
 
 def load_segment(path: Path, key: str) -> ShearSegment:
-    """The segment save_segment wrote at `path` with `key`; SegmentFileError otherwise."""
+    """The segment save_segment wrote at `path` with `key`; SegmentFileError otherwise (a
+    missing, empty, truncated or damaged file included)."""
     try:
         with np.load(path, allow_pickle=False) as data:
             d = {name: data[name] for name in data.files}
-    except (OSError, ValueError) as error:
-        raise SegmentFileError(f"{path}: unreadable ({error})") from None
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as error:
+        reason = (str(error).splitlines() or [type(error).__name__])[0]
+        reason = reason if len(reason) <= 80 else reason[:77] + "..."  # a zip's message quotes its bytes
+        raise SegmentFileError(f"{path}: unreadable ({reason})") from None
     if str(d.get("key")) != key:
         raise SegmentFileError(f"{path}: written for other inputs or another code version")
     try:
         return _segment_of(d)
-    except (KeyError, IndexError, ValueError) as error:
+    except (KeyError, IndexError, ValueError, TypeError) as error:
         raise SegmentFileError(f"{path}: incomplete ({error})") from None
 
 

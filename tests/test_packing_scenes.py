@@ -129,7 +129,7 @@ def test_prepare_writes_a_packing_that_a_second_run_reproduces_bit_for_bit(tmp_p
 
 
 def test_prepare_refuses_a_chain_scene_in_one_line(tmp_path):
-    result = run_cli("prepare", "--out", str(tmp_path / "out"))
+    result = run_cli("prepare", str(PACKAGED.with_name("paper.toml")), "--out", str(tmp_path / "out"))
     assert result.returncode == 2 and "prepare takes a packing scene" in error_line(result, "prepare")
     assert not (tmp_path / "out").exists()
 
@@ -337,7 +337,7 @@ def test_an_interrupted_bifurcate_resumes_after_its_finished_segments(tmp_path, 
     assert main(command + [str(out)]) == EXIT_INTERRUPTED
     kept = out / "segments"
     assert f"the finished segments are kept in {kept}" in capsys.readouterr().err
-    assert [p.name for p in kept.iterdir()] == ["segment-0000.npz"]
+    assert sorted(p.name for p in kept.iterdir()) == ["scene.json", "segment-0000.npz"]
     monkeypatch.setattr(segments, "save_segment", save)
     assert main(command + [str(out)]) == 0
     assert "resumed after 1 segment, at gamma = " in capsys.readouterr().err
