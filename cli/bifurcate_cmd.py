@@ -28,15 +28,19 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "in files, the paper's units in the figure). A packing scene: prepares the "
                     "packing without friction, then shears it quasistatically through the "
                     "scene's [shear] gamma range, passing plastic events (relaxed with friction); "
-                    "writes DIR/branch.npz, DIR/collisions.json, DIR/diagram.png and "
-                    "DIR/packing.npz (raw units; docs/packings.md).")
+                    "writes DIR/packing.npz, branch.npz, collisions.json, plastic.json and "
+                    "diagram.png together at the end, each naming the scene (raw units; "
+                    "docs/packings.md); a rerun resumes after the segments an interrupted one "
+                    "kept in DIR/segments/.")
     add_scene_argument(parser)
     parser.add_argument("--fx", metavar="A:B",
                         help="a chain scene: sweep F_x from A to B (raw units); A > B unloads "
                              "after loading to A (default: the scene's F_x range). A packing is "
                              "sheared over its scene's [shear] gamma instead")
     add_matrix_argument(parser, "stability matrix")
-    parser.add_argument("--out", metavar="DIR", help="output directory (default: out/bifurcate/SCENE)")
+    parser.add_argument("--out", metavar="DIR",
+                        help="output directory (default: out/bifurcate/SCENE); a packing scene's "
+                             "run refuses one holding another scene's results")
     parser.add_argument("--ds-max", type=float, metavar="DS",
                         help="largest arclength step (default: a chain scene's F_x span / 60; "
                              "with --problem the file's options.ds_max, else its p span / 50)")
