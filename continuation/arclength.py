@@ -221,14 +221,16 @@ def continuation(problem: Problem, u0: Array, p0: float,
 def _continuation(problem, u0, p0, params, detection, workers, callback) -> Branch:
     start = fixed_p_newton(problem, u0, p0, params.newton_tol, params.max_newton)
     if not start.converged:
-        raise ContinuationError(f"no equilibrium found at p0={p0} (residual {start.residual:.3g})")
+        raise ContinuationError(f"no equilibrium found at the start of the branch, parameter = "
+                                f"{p0:.12g} (Newton's residual stayed at {start.residual:.3g})")
     x = start.x
     e_p = np.zeros_like(x)
     e_p[-1] = params.direction
     try:
         t = tangent(problem, x, e_p)
     except np.linalg.LinAlgError as err:
-        raise ContinuationError(f"tangent undefined at p0={p0} (fold or singular point)") from err
+        raise ContinuationError(f"the branch has no tangent at its start, parameter = {p0:.12g} "
+                                f"(a fold or a singular point there)") from err
     sample = _sorted(_sample(problem, 0.0, x, t, detection, None, side=+1))
     rec = BranchRecorder(detection.rel_tol, detection.rho, callback)
     rec.add(sample, 0.0, start, t, 0)

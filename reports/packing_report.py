@@ -169,8 +169,8 @@ def report_text(scene: PackingScene, branch: PackingBranch, sigma: np.ndarray,
                 runs: list[MsdRun]) -> str:
     lines = [f"# Packing report: {scene.name}", "",
              f"N = {scene.N}, P = {scene.pressure:g}, mu = {scene.mu:g}, seed {scene.seed}; "
-             f"sheared to gamma = {branch.gamma[-1]:.6g} ({branch.status}); {len(branch)} "
-             f"equilibria, {len(branch.collisions)} collisions, {len(branch.plastic)} plastic "
+             f"sheared to gamma = {branch.gamma[-1]:.6g} ({branch.status.sentence(len(branch))}); "
+             f"{len(branch)} equilibria, {len(branch.collisions)} collisions, {len(branch.plastic)} plastic "
              f"events; complex pairs at {100 * np.mean(branch.n_complex > 0):.0f} % of the "
              f"states (at most {branch.n_complex.max()}); fastest growth rate "
              f"{sigma.max():.4g} at gamma = {branch.gamma[int(np.argmax(sigma))]:.6g}.", "",

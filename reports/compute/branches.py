@@ -40,7 +40,8 @@ def branch(scene: Scene, matrix: str, ds_divisions: int, tol_p: float | None = N
     """The branch over the scene's F_x range with every collision located (disks.sweep,
     ds_max = span / ds_divisions). Rows: F_x, tracked eigenvalues of `matrix` [raw], n_complex,
     leg; condition: each tracked eigenvalue's condition number (nan without vectors);
-    collisions: F_x, kind, double eigenvalue [raw], resolved."""
+    collisions: F_x, kind, double eigenvalue [raw], resolved; status: how each leg ended, in
+    words (Stop.sentence: "reached", or why not)."""
     import time
 
     t0 = time.perf_counter()
@@ -53,7 +54,9 @@ def branch(scene: Scene, matrix: str, ds_divisions: int, tol_p: float | None = N
             "collision_eigenvalue": np.array([c.eigenvalue for c in b.collisions], dtype=float),
             "collision_kind": [c.kind for c in b.collisions],
             "collision_resolved": [bool(c.resolved) for c in b.collisions],
-            "status": [str(s) for s in b.status], "points": len(b), "seconds": seconds}
+            "status": [stop.sentence(int((b.leg == leg).sum()))
+                       for stop, leg in zip(b.status, np.unique(b.leg))],
+            "points": len(b), "seconds": seconds}
 
 
 @computation("spectra_at")

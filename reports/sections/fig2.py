@@ -57,7 +57,7 @@ def render(ctx):
         spans = complex_spans(leg_windows(b["F_x"], b["n_complex"], b["leg"],
                                           zip(b["collision_F_x"], b["collision_kind"])))
         win = ", ".join(f"{lo:.4f}-{hi:.4f}" for lo, hi in spans)
-        text.append(f"{matrix}: {b['points']} points, status {', '.join(b['status'])}, "
+        text.append(f"{matrix}: {b['points']} points, legs: {', '.join(b['status'])}, "
                     f"{count(len(b['collision_kind']), 'collision')}; complex windows: {win or 'none'}.\n")
         rows += [[matrix, f"{p:.6f}", kind, f"{lam / unit:.5g}", "" if ok else "unresolved"]
                  for p, kind, lam, ok in zip(b["collision_F_x"], b["collision_kind"],
