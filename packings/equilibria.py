@@ -27,6 +27,14 @@ Two kinds of exact zero modes are handled explicitly:
   caught between facing contacts with the network joins it. The forces its own slight
   overlaps would exert (below delta_hold, or of the preparation's force tolerance) are
   dropped.
+- **Rotations without tangential forces** (mu = 0, or the tangential law "none":
+  Network.frictional). No torque acts on a disk, so every theta is a zero mode: the rotations'
+  equations are gauge rows kappa (theta - theta_c) = 0, and the unknowns are the positions. J on
+  them is the Hessian of the Hertz energy, symmetric, and the tracked spectrum of M^-1 J is
+  real (similar to M^-1/2 J M^-1/2): it is computed by a symmetric eigensolver
+  (_symmetric_eigensystem), so no complex pair can arise from rounding. No history is charged
+  (Network.history_step) and no contact slides. Loose disks follow the frictional rule
+  (LOOSE_BELOW).
 
 The tracked matrix is the network's stability matrix A (J or M^-1 J) in coordinates relative to
 the reference disk, A_g: with P the map q -> (q_k - q_ref for x and y dofs, theta as it is) on
@@ -49,8 +57,10 @@ import hashlib
 from dataclasses import dataclass, replace
 
 import numpy as np
+import scipy.linalg as sla
 import scipy.sparse as sp
 
+from diskfriction.continuation.linalg import book
 from diskfriction.continuation.nearest import Deflated
 from diskfriction.continuation.problem import Problem
 from diskfriction.errors import OneLineError
@@ -65,7 +75,16 @@ REACH = 0.1
 """Pairs within this fraction of the small radius R of touching are contact rows [R]."""
 
 LOOSE_BELOW = 2
-"""A disk with fewer contacts than this is loose: with friction two contacts hold a disk."""
+"""A disk with fewer contacts than this is loose: with friction two contacts hold a disk. So
+does the frictionless rule: with one contact a disk carries no force in equilibrium, while two
+facing contacts can carry the load of a force chain, which the network's equations must not
+drop. (Three, the preparation's rattler rule, made a disk loose when the third of its contacts
+unloaded to delta_hold: 32 frictionless disks, seed 1, at gamma = 0.04056, where its two
+facing contacts carried 0.4 of a median overlap; without their forces no equilibrium was near,
+and every relaxation led back to the same state, a plastic event every 1e-7 of strain until
+the shear stopped. Held by two, the disk buckles
+out across them once the third contact's stiffness falls below their F / r, and the branch is
+lost there: a plastic event, at gamma = 0.040587 in that run.)"""
 
 LOOSE_OVERLAP = 1e-3
 """A contact counts towards holding its disks when its overlap exceeds this fraction of the
@@ -117,7 +136,16 @@ DERIVATIVE_STEP = (1e-11, 1e-7)
 
 
 class NotJammed(OneLineError):
-    """Every disk of the packing is loose: there is no contact network to shear."""
+    """Every disk of the packing is loose: there is no contact network to shear. reason: why,
+    as words; after: the strain of the plastic event whose relaxation left the packing so, or
+    None (the prepared packing)."""
+
+    def __init__(self, reason: str, after: float | None = None):
+        where = ("the packing" if after is None else f"after the plastic event at gamma = "
+                 f"{after:.9g} the packing relaxed into a state that")
+        super().__init__(f"{where} is not jammed ({reason}): there is no contact network to "
+                         "shear")
+        self.reason = reason
 
 
 class MissedContact(RuntimeError):
@@ -136,12 +164,13 @@ class Gauge:
     P: sp.csr_array  # (kept, n): q -> coordinates relative to the reference disk
 
     @classmethod
-    def of(cls, N: int, holding: np.ndarray) -> "Gauge":
+    def of(cls, N: int, holding: np.ndarray, frictional: bool = True) -> "Gauge":
         """The gauge of N disks whose contacts (i, j) in `holding` hold them (delta >
         delta_hold): loose are the disks with fewer than LOOSE_BELOW holding contacts with
         disks that are not loose, found by removing such disks until none is left (a contact
         with a loose disk carries no force, so it holds nothing); the reference disk has the
-        most holding contacts."""
+        most holding contacts. Without tangential forces (not `frictional`) every rotation is a
+        gauge row too."""
         loose = np.zeros(N, bool)
         while True:
             kept = holding[~(loose[holding[:, 0]] | loose[holding[:, 1]])]
@@ -150,11 +179,11 @@ class Gauge:
                 break
             loose |= counts < LOOSE_BELOW
         if loose.all():
-            raise NotJammed("every disk is loose (fewer than 2 contacts holding it): the packing "
-                            "is not jammed, so there is no network to shear")
+            raise NotJammed(f"every disk is loose: none has {LOOSE_BELOW} contacts holding it")
         ref = int(np.argmax(counts))
         loose_dofs = (np.arange(D)[:, None] * N + np.flatnonzero(loose)[None, :]).ravel()
-        rows = np.union1d([ref, N + ref], loose_dofs)
+        rotations = np.arange(2 * N, D * N) if not frictional else np.zeros(0, int)
+        rows = np.union1d(np.union1d([ref, N + ref], loose_dofs), rotations)
         kept = np.setdiff1d(np.arange(D * N), rows)
         coupling = np.where(kept < N, ref, np.where(kept < 2 * N, N + ref, -1))
         r = np.arange(kept.size)
@@ -237,6 +266,8 @@ class PackingEquilibria(Problem):
         self.newton_tol = newton_tol
         self.reach = REACH * network.constants[0]
         delta = network.overlaps(q, rows, gamma)
+        if not (delta > 0).any():
+            raise NotJammed("no two disks overlap")
         self.delta_hold = LOOSE_OVERLAP * float(np.median(delta[delta > 0]))
         self._kept: dict = {}
         self._fixed = None
@@ -261,11 +292,12 @@ class PackingEquilibria(Problem):
         state is all there is (a start): every row within the band of its cap."""
         self.q_c, self.xi_c, self.rows_c, self.gamma_c = q.copy(), xi.copy(), rows, float(gamma)
         delta = self.network.overlaps(q, rows, gamma)
-        self.gauge = Gauge.of(self.network.N, rows[delta > self.delta_hold, :2])
+        self.gauge = Gauge.of(self.network.N, rows[delta > self.delta_hold, :2],
+                              self.network.frictional)
         on_loose = self.gauge.loose[rows[:, 0]] | self.gauge.loose[rows[:, 1]]
         self.active = ~on_loose  # rows whose forces act; the others are watched
         t_star = self.coulomb_limit(delta)
-        near = (delta > 0) & (t_star - np.abs(xi) <= SLIP_BAND * t_star)
+        near = (delta > 0) & (t_star - np.abs(xi) <= SLIP_BAND * t_star) & self.network.frictional
         self.sliding = near if sliding is None else near & sliding
         self._band = np.where(self.sliding, SLIP_BAND * t_star, 0.0)
         scale = np.median(delta[delta > 0]) if (delta > 0).any() else self.network.constants[0]
@@ -320,13 +352,16 @@ class PackingEquilibria(Problem):
 
     def _deflation_of(self, rows, cols, fixed: "_GaugeMaps", parked: float) -> tuple:
         """The parts of deflated() fixed by the committed state: the assembly of A (J or
-        M^-1 J) with the loose disks' dofs parked on its diagonal, and a Deflated without its
-        matrix: A's null spaces without the loose disks (the x and y translations T; the total
-        x and y forces U = M T, U = T for J) and the maps from A's eigenvectors to A_g's
-        (module docstring)."""
-        loose = np.concatenate([self.gauge.loose] * D)
+        M^-1 J) with the loose disks' dofs (and without tangential forces every rotation)
+        parked on its diagonal, and a Deflated without its matrix: A's null spaces without the
+        parked dofs (the x and y translations T; the total x and y forces U = M T, U = T for J)
+        and the maps from A's eigenvectors to A_g's (module docstring)."""
+        g = self.gauge
+        gauged = np.zeros(self.network.ndof, bool)
+        gauged[g.rows] = True
+        gauged[[g.ref, self.network.N + g.ref]] = False  # the reference disk is in the network
         full = Assembly.of(rows, cols, fixed.inverse_mass, fixed.identity,
-                           sp.diags_array(np.where(loose, parked, 0.0)))
+                           sp.diags_array(np.where(gauged, parked, 0.0)))
         return full, Deflated(None, fixed.T, fixed.U, fixed.relative, fixed.left_map)
 
     def coulomb_limit(self, delta: np.ndarray) -> np.ndarray:
@@ -400,14 +435,20 @@ class PackingEquilibria(Problem):
 
     def eigensystem(self, q, gamma, vectors: bool = False) -> Eigensystem:
         """A_red's eigensystem at the kept dofs, the gauge rows' zeros excluded, without
-        vectors; or with a spectral window, the window's k eigenvalues of A_red."""
+        vectors; or with a spectral window, the window's k eigenvalues of A_red. Without
+        tangential forces the spectrum is real (module docstring): dense, by a symmetric
+        eigensolver (_symmetric_eigensystem); in a window, the shift-invert's eigenvalues
+        with their imaginary parts, rounding, dropped."""
         kept, n = self.gauge.kept, q.size
         if self.window is not None:
             if not vectors:
-                return window_eigensystem(self.reduced(q, gamma), self.window, vectors)
-            return window_eigensystem(self.stability_matrix(q, gamma), self.window, vectors,
-                                      self.deflated(q, gamma))
-        found = eigensystem(self.reduced(q, gamma).toarray(), vectors)
+                found = window_eigensystem(self.reduced(q, gamma), self.window, vectors)
+            else:
+                found = window_eigensystem(self.stability_matrix(q, gamma), self.window, vectors,
+                                           self.deflated(q, gamma))
+            return found if self.network.frictional else replace(found, values=found.values.real + 0j)
+        found = (eigensystem(self.reduced(q, gamma).toarray(), vectors) if self.network.frictional
+                 else self._symmetric_eigensystem(q, gamma, vectors))
         values, excluded = np.zeros(n, complex), np.ones(n, bool)
         values[kept], excluded[kept] = found.values, False
         if not vectors:
@@ -419,6 +460,31 @@ class PackingEquilibria(Problem):
         columns = np.full(n, -1)
         columns[kept] = np.arange(kept.size)
         return Eigensystem(values, right, left, excluded, columns=columns)
+
+    def _symmetric_eigensystem(self, q, gamma, vectors: bool) -> Eigensystem:
+        """A_red's eigensystem without tangential forces, from a symmetric matrix (one dense
+        spectrum, booked as such). On the network's positions V (the kept dofs and the
+        reference disk's x, y) J_V is symmetric and A = W^-1 J_V with W = diag(M) on V (W = I
+        for J); with Q an orthonormal basis of the complement of W^1/2 T (T: the x and y
+        translations, J_V T = 0), S = Q^T W^-1/2 J_V W^-1/2 Q is symmetric with A_red's
+        spectrum, and S's eigenvectors (columns of Y) give A's right vectors r = W^-1/2 Q Y and
+        left ones l = W^1/2 Q Y, l^T r = 1, l^T T = 0. A_red's are then P r and l at the kept
+        dofs (l^T = l_kept^T P since l^T T = 0)."""
+        book("spectra")
+        g, N, n = self.gauge, self.network.N, q.size
+        V = np.union1d(g.kept, [g.ref, N + g.ref])
+        J = sp.csr_array((self._evaluate(q, gamma)[1], self.maps.pattern), shape=(n, n))
+        w = np.ones(V.size) if self.matrix is Matrix.J else self.mass[V]
+        T = np.stack([V < N, V >= N], axis=1).astype(float)
+        Q = np.linalg.qr(np.sqrt(w)[:, None] * T, mode="complete")[0][:, 2:]
+        WQ = Q / np.sqrt(w)[:, None]  # W^-1/2 Q
+        S = WQ.T @ (J[V][:, V] @ WQ)
+        if not vectors:
+            return Eigensystem(sla.eigh(S, eigvals_only=True, check_finite=False).astype(complex))
+        values, Y = sla.eigh(S, check_finite=False)
+        right, left = np.zeros((n, Y.shape[1])), np.zeros((n, Y.shape[1]))
+        right[V], left[V] = WQ @ Y, (Q * np.sqrt(w)[:, None]) @ Y
+        return Eigensystem(values.astype(complex), g.P @ right, left[g.kept].T.copy())
 
     def derivative_step(self, x) -> float:
         delta = self.network.overlaps(x[:-1], self.rows_c[self.active], float(x[-1]))
@@ -434,7 +500,7 @@ class PackingEquilibria(Problem):
         delta > 0; where delta <= 0 the margin keeps the sign the row had at the commit
         (opening is delta's event: no second event there). 1 for the watched rows, whose
         contacts carry no force (a loose disk joins or gives way at the commit:
-        _release_pushed)."""
+        _release_pushed), and for every margin without tangential forces (no Coulomb limit)."""
         delta = self.network.overlaps(q, self.rows_c, gamma)
         xi = self.trial(q, gamma, cap=False)[0]
         t_star = self.coulomb_limit(delta)
@@ -442,7 +508,7 @@ class PackingEquilibria(Problem):
                           np.where(self.sliding, -1.0, 1.0))
         return np.concatenate([np.where(self.active, delta, 1.0),
                                np.where(self.active, delta - self.delta_hold, 1.0),
-                               np.where(self.active, margin, 1.0)])
+                               np.where(self.active & self.network.frictional, margin, 1.0)])
 
     def root_events(self) -> np.ndarray:
         """The overlaps delta among the event functions (event_functions' first block): a

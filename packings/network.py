@@ -25,12 +25,15 @@ D = 3  # x, y, theta per disk: a packing's disks rotate
 @dataclass(frozen=True)
 class Network:
     """N disks of radii `radii` in a periodic square box of side L, bound to the kernels of
-    their contact law. constants = (R, k_n, k_t, mu) in raw units (R the small radius)."""
+    their contact law. constants = (R, k_n, k_t, mu) in raw units (R the small radius).
+    frictional: whether the contacts carry tangential forces (a tangential law and mu > 0);
+    without them no torque acts on a disk and every history is 0."""
 
     kernels: ModuleType
     radii: np.ndarray
     L: float
     constants: tuple[float, float, float, float]
+    frictional: bool = True
 
     @classmethod
     def build(cls, radii: np.ndarray, L: float, k_n: float, k_t: float, mu: float,
@@ -38,7 +41,8 @@ class Network:
         """Bind the disks to the kernels of `effects` (generated and compiled on a cold cache)."""
         radii = np.ascontiguousarray(radii, dtype=float)
         return cls(load_packing_kernels(effects, progress), radii, float(L),
-                   (float(radii.min()), float(k_n), float(k_t), float(mu)))
+                   (float(radii.min()), float(k_n), float(k_t), float(mu)),
+                   effects.pair_law != "none" and mu > 0.0)
 
     @property
     def N(self) -> int:
@@ -104,8 +108,11 @@ class Network:
         """xi after the straight step (q0, gamma0) -> (q1, gamma1) over fixed contact rows: the
         midpoint increment, the chain's history rule (reset where open at the end, the part
         after first contact where closing, with `cap` the Coulomb cap |xi| <= t*). Returns
-        (xi1, slid), slid True where the cap acted."""
+        (xi1, slid), slid True where the cap acted; without tangential forces xi1 = 0 and no
+        cap acts."""
         m = contacts.shape[0]
+        if not self.frictional:
+            return np.zeros(m), np.zeros(m, dtype=np.bool_)
         dxi, xi1, slid = np.empty(m), np.empty(m), np.empty(m, dtype=np.bool_)
         self.kernels.history_increment(q0, q1, gamma0, gamma1, self.radii, contacts,
                                        self.params(gamma0), dxi)
@@ -124,7 +131,7 @@ class Network:
         F, xi1, delta1 = np.empty(self.ndof), np.empty(m), np.empty(m)
         self.kernels.carried_forces(q0, q1, xi0, delta0, self.radii, contacts, self.params(gamma),
                                     F, xi1, delta1)
-        return F, xi1, delta1
+        return F, xi1 if self.frictional else np.zeros(m), delta1
 
     def stress(self, q: np.ndarray, xi: np.ndarray, contacts: np.ndarray, gamma: float
                ) -> np.ndarray:

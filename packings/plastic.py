@@ -9,7 +9,9 @@ slide during the rearrangement) either way, the contact rows found again wheneve
 have moved a fraction of the reach. The model has no damping (docs/model.md): FIRE's quenches
 (velocities zeroed going uphill) or the drag stand for the dissipation of a real
 rearrangement, and the state found is an equilibrium with the history its path charged, which
-depends on that choice (docs/packings.md#plastic-events compares them).
+depends on that choice (docs/packings.md#plastic-events compares them). Without tangential
+forces (Network.frictional) the same relaxations act on the normal forces alone, and no
+history is charged.
 """
 from __future__ import annotations
 
@@ -200,7 +202,7 @@ def damped(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray, ga
     if largest > STALLED * f_tol:
         raise RelaxationFailed(f"the damped relaxation after the plastic event at gamma = {gamma:.9g} "
                                f"stopped at max |F| = {largest:.3g} after {steps} steps")
-    return q, xi, rows, steps
+    return q, xi if network.frictional else np.zeros_like(xi), rows, steps
 
 
 def past_fold(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray, gamma: float,

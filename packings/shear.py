@@ -15,7 +15,8 @@ from diskfriction.continuation.collisions import Collision
 from diskfriction.continuation.spectra import count_complex_pairs
 from diskfriction.continuation.spectral_window import Window, block_columns
 from diskfriction.matrices import Matrix
-from diskfriction.packings.equilibria import PackingEquilibria, largest_force, mass_diagonal, start
+from diskfriction.packings.equilibria import (NotJammed, PackingEquilibria, largest_force,
+                                              mass_diagonal, start)
 from diskfriction.packings.network import Network
 from diskfriction.packings.plastic import PlasticEvent, drag_rate, past_fold
 from diskfriction.packings.prepare import Packing
@@ -137,8 +138,13 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
     segments = list(done)
     begin = segments[-1].next_start if segments else (*start(network, packing.positions), 0.0)
     while True:
-        segment = shear_segment(network, mass, scene, options, window, begin, len(segments),
-                                sum(len(s.continued) for s in segments), progress)
+        try:
+            segment = shear_segment(network, mass, scene, options, window, begin, len(segments),
+                                    sum(len(s.continued) for s in segments), progress)
+        except NotJammed as error:
+            if not segments:
+                raise
+            raise NotJammed(error.reason, segments[-1].plastic.gamma) from None
         segments.append(segment)
         if segment.status.code not in PLASTIC or len(segments) > plastic_events:
             break
