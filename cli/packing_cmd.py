@@ -15,7 +15,9 @@ import argparse
 import collections
 import dataclasses
 import json
+import math
 import shutil
+import sys
 from pathlib import Path
 
 from diskfriction.cli.common import (EXIT_FAILED, CommandError, bracketed_only, matrix_from_args,
@@ -206,10 +208,12 @@ def run_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> int:
     import numpy as np
 
     from diskfriction.files import save_json, save_npz
-    from diskfriction.packings.dynamics import fastest_pair, time_step
-    from diskfriction.packings.runs import NoComplexPair, run_from_state
+    from diskfriction.packings.dynamics import run_steps, time_step
+    from diskfriction.packings.runs import FRAMES, NoComplexPair, linearized, run_from_state
     from diskfriction.reports.packing_outputs import plot_packing_run, plot_packing_snapshot
 
+    # a packing's strain range is positive: --gamma 0 shears one short step and runs from the
+    # branch's first state, at gamma = 0 exactly
     scene = dataclasses.replace(scene, gamma_range=(0.0, args.gamma) if args.gamma > 0 else (0.0, 1e-12))
     progress = Progress("simulate")
     try:
@@ -218,42 +222,50 @@ def run_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> int:
             raise CommandError(f"simulate error: {scene.source}: no equilibrium beyond gamma = "
                                f"{branch.gamma[-1]:.9g} (asked for {args.gamma:g}): the branch "
                                f"ends there ({branch.status.sentence(len(branch))})", EXIT_FAILED)
-        lam = branch.eigenvalues[-1]
-        limit = 2.0 / float(np.sqrt(np.abs(lam).max()))
+        k = len(branch) - 1 if args.gamma > 0 else 0
+        linear = linearized(branch, k, network, mass)
+        limit = 2.0 / float(np.sqrt(np.abs(linear.eigenvalues).max()))
         if args.dt is not None and args.dt >= limit:
             raise CommandError(f"simulate error: --dt: not below velocity Verlet's stability "
                                f"limit 2 / omega_max = {limit:.4g} of the start (got {args.dt!r})")
-        dt = args.dt or time_step(lam)
-        kind = args.perturbation or ("eigenvector" if fastest_pair(lam)[0] >= 0 else "random-velocity")
-        progress.stage(f"run to t = {args.t_end:g} ({int(round(args.t_end / dt))} steps)")
+        kind = args.perturbation or ("eigenvector" if linear.mode else "random-velocity")
+        steps = run_steps(args.t_end, args.dt or time_step(linear.eigenvalues), FRAMES)[0]
+        progress.stage(f"run to t = {args.t_end:g} ({steps} steps)")
         try:
-            done = run_from_state(branch, len(branch) - 1, network, mass, scene.matrix, kind,
-                                  amplitude, args.t_end, scene.delta_0, dt, args.seed)
+            done = run_from_state(branch, k, network, mass, kind, amplitude, args.t_end,
+                                  scene.delta_0, args.dt, args.seed, linear)
         except NoComplexPair as error:
             raise CommandError(f"simulate error: --perturbation: {error}") from None
-        run, gamma, sigma, measured = done.run, done.gamma, done.sigma_predicted, done.sigma_measured
+        run, gamma, sigma, fit = done.run, done.gamma, done.sigma_predicted, done.fit
         summary = {"scene": scene.name, "gamma": gamma, "perturbation": kind,
-                   "amplitude": amplitude, "dt": dt, "t_end": float(run.t[-1]),
-                   "sigma_predicted": sigma, "sigma_measured": measured, "maxima_fitted": done.maxima,
-                   "budget_drift": done.drift, "kinetic_max": float(run.kinetic.max()),
+                   "amplitude": amplitude, "dt": run.dt, "t_end": float(run.t[-1]),
+                   "sigma_predicted": sigma, "sigma_measured": fit.as_dict()["sigma"],
+                   "fit": fit.as_dict(), "budget_drift": done.drift,
+                   "kinetic_max": float(run.kinetic.max()),
                    "sliding_updates": int(run.capped[-1]), "complex_pairs": done.pairs}
-        save_npz(out / "run.npz", t=run.t, q=run.q, distance=done.distance, budget=run.budget,
-                 kinetic=run.kinetic, capped=run.capped)
+        save_npz(out / "run.npz", t=run.t, q=run.q, distance=done.distance,
+                 amplitude=done.mode_amplitude, budget=run.budget, kinetic=run.kinetic,
+                 capped=run.capped)
         save_json(out / "summary.json", summary)
-        plot_packing_run(run.t, done.distance, sigma, measured, scene, gamma, out / "run.png")
-        q0, rows0 = branch.q[-1], branch.rows[-1]
+        plot_packing_run(run.t, done.distance, sigma, fit.sigma, scene, gamma, out / "run.png")
+        q0, rows0 = done.q0, done.rows0
         plot_packing_snapshot(q0, network.radii, network.L, gamma, rows0,
                               network.normal_forces(q0, rows0, gamma), done.kick,
                               f"{scene.name} at gamma = {gamma:.4g}: contact forces (red, width "
                               f"~ F_n) and the perturbation ({kind}, blue)", out / "snapshot.png")
     finally:
         progress.close()
-    print(f"gamma = {gamma:g}: {count(int(branch.n_complex[-1]), 'complex pair')}, the fastest "
-          f"growing at sigma = {sigma:.6g} (|Im sqrt(lambda)| of M^-1 J)")
-    print(f"run to t = {run.t[-1]:g} ({kind}, amplitude {amplitude:g}, dt {dt:.4g}): measured "
-          f"sigma = {measured:.6g} from {done.maxima} maxima; energy budget drift {done.drift:.2e} "
-          f"(max kinetic {run.kinetic.max():.2e}); {int(run.capped[-1])} sliding updates")
+    print(f"gamma = {gamma:g}: {count(done.pairs, 'complex pair')} of M^-1 J"
+          + (f", the fastest growing at sigma = {sigma:.6g} (|Im sqrt(lambda)|)" if sigma > 0 else ""))
+    measured = (f"measured sigma = {fit.sigma:.6g} over t = {fit.t_start:.4g} .. {fit.t_end:.4g} "
+                f"({fit.frames} frames)" if fit.reason == "ok" else "no growth rate measured")
+    print(f"run to t = {run.t[-1]:g} ({kind}, amplitude {amplitude:g}, dt {run.dt:.4g}): "
+          f"{measured}; energy budget drift {done.drift:.2e} (max kinetic "
+          f"{run.kinetic.max():.2e}); {int(run.capped[-1])} sliding updates")
     print(f"wrote {out}/run.npz, summary.json, run.png, snapshot.png")
+    if fit.reason != "ok":
+        print(f"simulate {'warning' if done.unmeasured else 'note'}: no growth rate measured: "
+              f"{fit.reason}", file=sys.stderr)
     return 0
 
 
@@ -288,29 +300,35 @@ def run_packing_verify(args: argparse.Namespace, scene: PackingScene) -> int:
     import numpy as np
 
     from diskfriction.files import save_json, save_text
-    from diskfriction.packings.runs import run_from_state
+    from diskfriction.packings.runs import linearized, run_from_state
     from diskfriction.packings.shear import ShearParams
 
     progress = Progress("verify")
     try:
         branch, network, mass = sheared(scene, progress)
-        chosen = ([(k, "eigenvector") for k in spread(np.flatnonzero(branch.n_complex > 0), VERIFY_STATES[0])]
-                  + [(k, "random-velocity") for k in spread(np.flatnonzero(branch.n_complex == 0), VERIFY_STATES[1])])
-        rows = []
-        for n, (k, kind) in enumerate(sorted(chosen)):
+        chosen = sorted(spread(np.flatnonzero(branch.n_complex > 0), VERIFY_STATES[0])
+                        + spread(np.flatnonzero(branch.n_complex == 0), VERIFY_STATES[1]))
+        rows, unmeasured = [], []
+        for n, k in enumerate(chosen):
+            linear = linearized(branch, k, network, mass)
+            kind = "eigenvector" if linear.mode else "random-velocity"
             progress.stage(f"run {n + 1}/{len(chosen)} from gamma = {branch.gamma[k]:.6g} ({kind})")
-            done = run_from_state(branch, k, network, mass, scene.matrix, kind, args.amplitude,
-                                  args.t_end, scene.delta_0)
+            done = run_from_state(branch, k, network, mass, kind, args.amplitude, args.t_end,
+                                  scene.delta_0, linear=linear)
             rest = done.settled(network, ShearParams().newton_tol)
+            fit = done.fit.as_dict()
             rows.append({"gamma": done.gamma, "complex_pairs": done.pairs, "perturbation": kind,
                          "sigma_predicted": done.sigma_predicted,
-                         "sigma_measured": done.sigma_measured, "maxima_fitted": done.maxima,
+                         "sigma_measured": fit["sigma"], "fit": fit,
                          "distance_end": float(done.distance[-1]), "slid": done.slid,
                          "sliding_updates": int(done.run.capped[-1]), "budget_drift": done.drift,
                          "stress_change_at_rest": rest.stress_change, "moved_at_rest": rest.moved,
                          "contacts_opened_at_rest": rest.opened,
                          "contacts_formed_at_rest": rest.formed,
                          "outcome": rest.outcome})
+            if done.unmeasured:
+                unmeasured.append(f"verify warning: no growth rate measured from gamma = "
+                                  f"{done.gamma:.6g}: {done.fit.reason}")
         table = packing_verify_table(rows)
         save_json(out / "verify.json", {"scene": scene.name, "t_end": args.t_end,
                                         "amplitude": args.amplitude, "runs": rows})
@@ -318,6 +336,8 @@ def run_packing_verify(args: argparse.Namespace, scene: PackingScene) -> int:
     finally:
         progress.close()
     print(table, end="")
+    for line in unmeasured:
+        print(line, file=sys.stderr)
     print(f"wrote {out}/verify.json, verify.md")
     return 0
 
@@ -331,9 +351,9 @@ def packing_verify_table(rows: list[dict]) -> str:
              "at rest: contacts opened / formed | outcome |",
              "|---|---|---|---|---|---|---|---|---|---|---|"]
     lines += [f"| {r['gamma']:.6g} | {r['complex_pairs']} | {r['perturbation']} | "
-              f"{r['sigma_predicted']:.4g} | {r['sigma_measured']:.4g} | {r['distance_end']:.3g} | "
-              f"{'yes' if r['slid'] else 'no'} | {r['stress_change_at_rest']:.2e} | "
-              f"{r['moved_at_rest']:.2e} | {opened_formed(r)} | {r['outcome']} |" for r in rows]
+              f"{r['sigma_predicted']:.4g} | {shown(r['sigma_measured'], '.4g')} | {r['distance_end']:.3g} | "
+              f"{'yes' if r['slid'] else 'no'} | {shown(r['stress_change_at_rest'], '.2e')} | "
+              f"{shown(r['moved_at_rest'], '.2e')} | {opened_formed(r)} | {r['outcome']} |" for r in rows]
     lines.append("")
     for kind, label in (("eigenvector", "complex pairs"), ("random-velocity", "real states")):
         outcomes = collections.Counter(r["outcome"] for r in rows if r["perturbation"] == kind)
@@ -341,6 +361,11 @@ def packing_verify_table(rows: list[dict]) -> str:
             lines.append(f"Runs from {label}: " + ", ".join(
                 f"{n} {what}" for what, n in sorted(outcomes.items())) + ".")
     return "\n".join(lines) + "\n"
+
+
+def shown(value, spec: str) -> str:
+    """A number of the table in `spec`, '-' for none (None or nan)."""
+    return "-" if value is None or math.isnan(value) else format(value, spec)
 
 
 def opened_formed(row: dict) -> str:
