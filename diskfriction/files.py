@@ -3,6 +3,8 @@
 - Every file is written atomically (`write_atomic`): to a temporary file beside its path, then
   renamed over it, so a reader or an interrupted run never sees half a file. Files are 0644
   (mkstemp's 0600 widened): results and generated modules are ordinary readable files.
+- JSON is strict (`json_text`, `save_json`): a value that is not finite is written as null,
+  never as the NaN or Infinity that JSON does not have.
 - `source_digest` is the one code version: sha256 over the names and contents of the .py files
   of the given modules or packages. Cache keys and resumable runs carry it, so an edit of those
   sources makes them stale.
@@ -18,6 +20,7 @@ import atexit
 import hashlib
 import importlib.util
 import json
+import math
 import os
 import shutil
 import sys
@@ -50,9 +53,30 @@ def save_text(path: Path, text: str) -> None:
     write_atomic(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
 
 
+def json_values(data):
+    """`data` in JSON's values: a float that is not finite (nan, inf) becomes None (null), a
+    numpy scalar or array its Python number or list, a tuple a list, recursively through
+    dicts and lists."""
+    if isinstance(data, dict):
+        return {key: json_values(value) for key, value in data.items()}
+    if isinstance(data, (list, tuple)):
+        return [json_values(value) for value in data]
+    if hasattr(data, "tolist") and type(data).__module__ == "numpy":  # scalars and arrays
+        return json_values(data.tolist())
+    if isinstance(data, float) and not math.isfinite(data):
+        return None
+    return data
+
+
+def json_text(data, indent: int | None = 1) -> str:
+    """`data` as strict JSON text (json_values: no NaN or Infinity, which JSON does not have;
+    a value json cannot write raises TypeError)."""
+    return json.dumps(json_values(data), indent=indent, allow_nan=False)
+
+
 def save_json(path: Path, data) -> None:
-    """`data` as indented JSON, written atomically."""
-    save_text(path, json.dumps(data, indent=1) + "\n")
+    """`data` as indented strict JSON (json_text), written atomically."""
+    save_text(path, json_text(data) + "\n")
 
 
 def save_npz(path: Path, **arrays) -> None:

@@ -112,6 +112,17 @@ def test_json_keys_are_documented(outputs, section, file, parameter):
     assert_documented(section, paths(value, parameter=parameter))
 
 
+def test_every_json_file_is_strict_json(outputs):
+    """No NaN or Infinity in any JSON file written (docs/outputs.md: null instead)."""
+    from test_json_strict import strict
+
+    written = sorted(outputs.rglob("*.json"))
+    assert {p.parent.name for p in written} >= {"bifurcate", "simulate", "ensemble", "verify",
+                                                "map", "cells"}
+    for path in written:
+        strict(path.read_text(encoding="utf-8"))
+
+
 def test_ensemble_runs_are_summaries(outputs):
     run = next((outputs / "ensemble" / "runs").rglob("*.json"))
     assert_documented("summary.json (simulate)", paths(json.loads(run.read_text())))
