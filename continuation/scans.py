@@ -229,8 +229,9 @@ class WorkerError(OneLineError):
 def _serve(problem: Problem, conn) -> None:
     """A worker's loop, at WORKER_NICENESS: (ticket, job) in, (ticket, outcome or the error in
     one line) out; None ends it. Ctrl-C reaches the whole process group: the worker ignores it
-    and the parent, leaving the sweep, ends it."""
+    (it starts with SIGINT blocked: WorkerScans) and the parent, leaving the sweep, ends it."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
     os.nice(WORKER_NICENESS)
     with blas_threads():
         while True:
@@ -248,23 +249,37 @@ def _serve(problem: Problem, conn) -> None:
 
 class WorkerScans:
     """Scans on `workers` forked processes (module docstring). Use as a context manager, or
-    call close(): the workers end with it."""
+    call close(): the workers end with it.
+
+    The workers are forked with SIGINT blocked: a Ctrl-C during a fork would otherwise be
+    handled in an at-fork callback (logging's lock release), where Python prints it as an
+    ignored exception and drops it (the run goes on), or in a child before it ignores SIGINT
+    (_serve). Blocked, it waits until the workers are started, is raised here, and they are
+    ended."""
 
     def __init__(self, problem: Problem, workers: int):
         context = multiprocessing.get_context("fork")
         self._conns, self._procs = [], []
-        for _ in range(workers):
-            parent, child = context.Pipe()
-            proc = context.Process(target=_serve, args=(problem, child), daemon=True)
-            proc.start()
-            child.close()
-            self._conns.append(parent)
-            self._procs.append(proc)
-        self._idle = list(self._conns)
         self._queue: list[tuple[int, ScanJob]] = []
         self._done: dict[int, ScanOutcome] = {}
         self._dropped: set[int] = set()
         self._tickets = 0
+        mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        try:
+            for _ in range(workers):
+                parent, child = context.Pipe()
+                proc = context.Process(target=_serve, args=(problem, child), daemon=True)
+                proc.start()
+                child.close()
+                self._conns.append(parent)
+                self._procs.append(proc)
+        finally:
+            try:
+                signal.pthread_sigmask(signal.SIG_SETMASK, mask)  # a Ctrl-C meanwhile: raised here
+            except KeyboardInterrupt:
+                self.close(grace=0.0)
+                raise
+        self._idle = list(self._conns)
 
     def submit(self, job: ScanJob) -> int:
         self._tickets += 1

@@ -5,7 +5,8 @@ plastic event in about a second."""
 from __future__ import annotations
 
 import json
-import shutil
+import os
+import signal
 from pathlib import Path
 
 import numpy as np
@@ -25,8 +26,8 @@ def scene_file(directory: Path, name: str = "tiny", seed: int = 3) -> Path:
     return path
 
 
-def bifurcate(scene: Path, out: Path, *options: str) -> int:
-    return main(["bifurcate", str(scene), "--workers", "0", *options, "--out", str(out)])
+def bifurcate(scene: Path, out: Path, *options: str, workers: int = 0) -> int:
+    return main(["bifurcate", str(scene), "--workers", str(workers), *options, "--out", str(out)])
 
 
 def strict_json(path: Path):
@@ -248,3 +249,27 @@ def test_bifurcate_p_on_a_packing_names_its_strain(tmp_path, capsys):
     assert err.count("\n") == 1 and err.startswith("bifurcate error: --p: ")
     assert "[shear] gamma" in err and "--fx" not in err
     assert not out.exists()
+
+
+FORK_INTERRUPTS = []
+"""Armed: the next fork of this process sends it SIGINT from an at-fork callback (a callback
+cannot be unregistered: this one is registered once and does nothing unarmed)."""
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_parent=lambda: FORK_INTERRUPTS and (
+        FORK_INTERRUPTS.clear(), os.kill(os.getpid(), signal.SIGINT)))
+
+
+def test_ctrl_c_during_the_fork_of_a_scan_worker_ends_the_run(tmp_path, capsys):
+    """Ctrl-C while a scan worker is forked, handled in an at-fork callback, was printed as an
+    ignored exception and dropped, and the run went on to its end: it is one line and exit
+    130."""
+    out = tmp_path / "out"
+    FORK_INTERRUPTS.append(1)
+    try:
+        code = bifurcate(scene_file(tmp_path), out, workers=1)
+    finally:
+        FORK_INTERRUPTS.clear()
+    err = capsys.readouterr().err
+    assert code == EXIT_INTERRUPTED, err
+    assert "Traceback" not in err and "ignored" not in err
+    assert err.splitlines()[-1].startswith("interrupted before any of the segments was finished")
