@@ -18,6 +18,7 @@ import zipfile
 from pathlib import Path
 
 import pytest
+from extras import needs_lammps
 
 ROOT = Path(__file__).resolve().parents[1]
 NOT_SOURCES = shutil.ignore_patterns(".git", ".venv", "venv", "build", "dist", "*.egg-info",
@@ -91,8 +92,8 @@ def test_the_installed_package_is_the_wheel_not_the_checkout(installed):
      "wrote m/map.csv"),
     (["report", "tiny.toml", "--only", "fig6", "--out", "r", "--cache", "r/cache"], "wrote r/report.md"),
     (["export", "lammps", "linear.toml", "--fx", "0.01", "--out", "e"], "wrote e/scene.data, e/in.scene"),
-    (["crosscheck", "lammps", "linear.toml", "--fx", "0.01", "--t-end", "1", "--out", "c"],
-     "wrote c/crosscheck.json"),
+    pytest.param(["crosscheck", "lammps", "linear.toml", "--fx", "0.01", "--t-end", "1", "--out", "c"],
+                 "wrote c/crosscheck.json", marks=needs_lammps),
 ], ids=lambda a: a[0] if isinstance(a, list) else None)
 def test_every_subcommand_runs_from_the_wheel(installed, args, says):
     _, _, command, elsewhere, env = installed
