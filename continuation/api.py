@@ -34,7 +34,7 @@ from .branch import Branch, StopCode
 from .collisions import Collision, DetectionParams
 from .differences import (METHODS, ParameterDerivative, StateDerivative, check_complex_step,
                           warn_differences)
-from .newton import bordered_newton
+from .newton import bordered_matrix, bordered_newton, term_size
 from .problem import FunctionProblem, Problem
 from .weighting import Weighted, scale_of, unweighted
 from .segment import SegmentSolveError
@@ -47,6 +47,16 @@ STEPS_PER_SPAN = 50
 """Default largest step: the span of p over this many steps (arclength in x = (u, p))."""
 LOCATOR_TOL = 1e-2
 """Folds and Hopf points are refined on points solved to this fraction of newton_tol."""
+FOLD_TOL = 1e-9
+"""Folds are refined to |dx| <= FOLD_TOL in the run's metric (|dp| ~ p'' |dx|^2 / 2), times
+min(1, p_scale)."""
+BRANCH_POINT_TOL = 1e-12
+"""Branch points are refined to |dx| <= BRANCH_POINT_TOL in the run's metric, times
+min(1, p_scale)."""
+P_RESOLUTION = 1000 * np.finfo(float).eps
+"""The detection's tol_p is at least P_RESOLUTION max(|p_start|, |p_stop|) (2.2e-13 of it): the
+collision locator stops at |dp| <= tol_p / 100, which p resolves (it rounds to eps |p|) only
+above that; with p in units where it is 1e6, tol_p = 1e-10 ended a run ("the branch jumps")."""
 
 
 class ProblemError(OneLineError):
@@ -92,14 +102,27 @@ SPECIAL_POINTS = ("fold", "branch", "hopf")
 
 @dataclass(frozen=True)
 class Options:
-    """Options of solve_branch (steps in the arclength |dx|^2 = (theta / n) |du|^2 + dp^2 of
-    x = (u, p), n = u.size; theta None: the Euclidean |dx|^2 = |du|^2 + dp^2, weighting.py).
+    """Options of solve_branch (steps in the arclength |dx|^2 = p_scale^2 (theta / n) |du|^2 +
+    dp^2 of x = (u, p), n = u.size, in units of p; theta None: p_scale^2 |du|^2 + dp^2,
+    weighting.py).
 
     ds_max: largest step (None: |p_stop - p_start| / 50); ds: first step (None: ds_max / 4);
-    ds_min: the run stops when the step must shrink below it (None: 1e-8 ds_max);
-    newton_tol: max|G| at every stored point [units of G]; max_newton: corrector iterations;
-    max_steps: accepted points at most; detection: the collision detector's parameters
-    (collisions.DetectionParams: collisions located to |dp| <= tol_p = 1e-10); workers:
+    ds_min: the run stops when the step must shrink below it (None: 1e-8 ds_max) [units of p];
+    p_scale: the unit of p that u is weighed against in the arclength [units of p] (None: the
+    span |p_stop - p_start|, so that p in other units takes the same steps; 1: the problem's
+    own units, as the disk sweeps and packing shears take them); the tolerances in p (the
+    detection's tol_p for collisions and Hopf points, 1e-9 in x for folds, 1e-12 for branch
+    points) are taken times min(1, p_scale): absolute in units of p where p_scale >= 1,
+    relative to p_scale where it is smaller, so that p in small units is located as finely,
+    and tol_p at least P_RESOLUTION max|p|, what p in large units resolves;
+    residual_scale: the size of G that newton_tol is relative to [units of G] (None: the size
+    of G at the start, residual_scale_at, but at most 1: newton_tol tightens with G in small
+    units and is never looser than in the units of G; 1: newton_tol in the units of G, the
+    disk sweeps' and packing shears');
+    newton_tol: max|G| / residual_scale at every stored point; max_newton: corrector
+    iterations; max_steps: accepted points at most; detection: the collision detector's
+    parameters (collisions.DetectionParams: collisions located to |dp| <= tol_p = 1e-10, as
+    above); workers:
     processes scanning steps while the branch goes on (None: automatic; 0: inline;
     arclength.continuation);
     special_points: what to locate after the run (bifurcations.py): "fold", "branch" (simple
@@ -122,9 +145,11 @@ class Options:
     special_points: tuple[str, ...] = ("fold", "branch", "hopf")
     stop_at_fold: bool = False
     theta: Optional[float] = 1.0
+    p_scale: Optional[float] = None
+    residual_scale: Optional[float] = None
 
     def __post_init__(self):
-        for name in ("ds_max", "ds", "ds_min", "newton_tol"):
+        for name in ("ds_max", "ds", "ds_min", "newton_tol", "p_scale", "residual_scale"):
             value = getattr(self, name)
             if value is not None and not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
@@ -136,12 +161,14 @@ class Options:
             raise ValueError(f"special_points may hold {', '.join(map(repr, SPECIAL_POINTS))}, "
                              f"got {self.special_points!r}")
 
-    def params(self, p_start: float, p_stop: float) -> ContinuationParams:
-        """The core's ContinuationParams for the span p_start -> p_stop."""
+    def params(self, p_start: float, p_stop: float, residual_scale: float) -> ContinuationParams:
+        """The core's ContinuationParams for the span p_start -> p_stop, its newton_tol
+        absolute: newton_tol times residual_scale [units of G]."""
         ds_max = self.ds_max or abs(p_stop - p_start) / STEPS_PER_SPAN
         ds = self.ds or ds_max / 4
         ds_min = self.ds_min or min(1e-8 * ds_max, ds)
-        return ContinuationParams(ds=ds, ds_min=ds_min, ds_max=ds_max, newton_tol=self.newton_tol,
+        return ContinuationParams(ds=ds, ds_min=ds_min, ds_max=ds_max,
+                                  newton_tol=self.newton_tol * residual_scale,
                                   max_newton=self.max_newton, p_min=min(p_start, p_stop),
                                   p_max=max(p_start, p_stop), max_steps=self.max_steps,
                                   direction=1 if p_stop > p_start else -1,
@@ -157,7 +184,8 @@ class BranchResult:
     n_complex (m,), residual (m,), tangent, status (branch.Stop), and the located collisions;
     folds, hopf, branch_points: bifurcations.SpecialPoint (p, u, bracket, step, value) in
     branch order;
-    warnings: the detector's and the locators'.
+    warnings: the detector's and the locators';
+    p_scale [units of p], residual_scale [units of G]: those the run took (Options).
     Shortcuts: p, u, eigenvalues, collisions (collisions.Collision: p, kind Kind.BIRTH | Kind.DEATH,
     the double eigenvalue, its Jordan chain, bracket), success (the branch reached the end
     of the span) and message (why it stopped)."""
@@ -167,6 +195,8 @@ class BranchResult:
     hopf: tuple[SpecialPoint, ...] = ()
     warnings: tuple[str, ...] = ()
     branch_points: tuple[SpecialPoint, ...] = ()
+    p_scale: float = 1.0
+    residual_scale: float = 1.0
 
     @property
     def p(self) -> Array:
@@ -259,22 +289,26 @@ def _stateless(problem: Problem) -> bool:
     return type(problem).commit is Problem.commit
 
 
-def special_points(problem: Problem, branch: Branch, options: Options, stateless: bool):
-    """(folds, hopf, warnings, branch_points) of a finished branch of a stateless problem, as
-    options.special_points asks (bifurcations.py): folds to |dx| <= 1e-9 and branch points to
-    1e-12 in the run's metric (a step over a branch point is none of its folds), Hopf points
-    to |dp| <= detection.tol_p, their points solved to max|G| <= newton_tol / 100 (with the
-    branch's own tolerance a fold's p would be off by up to ~newton_tol / |dG/dp|); where no
-    Hopf point was found on a conservative spectrum, a warning says why."""
-    tol = LOCATOR_TOL * options.newton_tol
-    asked = options.special_points if stateless else ()
-    crossings = branch_point_brackets(problem, branch, tol, rel_tol=options.detection.rel_tol) \
+def special_points(problem: Problem, branch: Branch, asked: tuple[str, ...],
+                   params: ContinuationParams, detection: DetectionParams, in_p: float):
+    """(folds, hopf, warnings, branch_points) of a finished branch, the kinds `asked`
+    (bifurcations.py): folds to |dx| <= FOLD_TOL in_p and branch points to BRANCH_POINT_TOL
+    in_p in the run's metric (in_p = min(1, p_scale); a step over a branch point is none of
+    its folds), Hopf points to |dp| <= detection.tol_p (the run's, already times in_p), their
+    points solved to max|G| <= params.newton_tol / 100 (with the branch's own tolerance a
+    fold's p would be off by up to ~newton_tol / |dG/dp|); where no Hopf point was found on a
+    conservative spectrum, a warning says why."""
+    tol = LOCATOR_TOL * params.newton_tol
+    crossings = branch_point_brackets(problem, branch, tol, rel_tol=detection.rel_tol) \
         if "branch" in asked else []
     steps = tuple(sorted({k for k, _, _ in crossings}))
-    locators = {"fold": lambda: locate_folds(problem, branch, newton_tol=tol, skip=steps),
-                "branch": lambda: locate_branch_points(problem, branch, crossings, newton_tol=tol),
-                "hopf": lambda: locate_hopf(problem, branch, tol_p=options.detection.tol_p,
-                                            rel_tol=options.detection.rel_tol, newton_tol=tol)}
+    locators = {"fold": lambda: locate_folds(problem, branch, tol_x=FOLD_TOL * in_p,
+                                             newton_tol=tol, skip=steps),
+                "branch": lambda: locate_branch_points(problem, branch, crossings,
+                                                       tol_x=BRANCH_POINT_TOL * in_p,
+                                                       newton_tol=tol),
+                "hopf": lambda: locate_hopf(problem, branch, tol_p=detection.tol_p,
+                                            rel_tol=detection.rel_tol, newton_tol=tol)}
     found, warnings = dict.fromkeys(SPECIAL_POINTS, ()), []
     for kind in asked:
         try:
@@ -286,6 +320,34 @@ def special_points(problem: Problem, branch: Branch, options: Options, stateless
     return found["fold"], found["hopf"], tuple(warnings), found["branch"]
 
 
+def residual_scale_at(problem: Problem, u: Array, p: float) -> float:
+    """The size of G at (u, p), that newton_tol is relative to [units of G]: the size of the
+    terms that cancel in G, max_i sum_j |dG_i/dx_j| |x_j| over x = (u, p) (newton.term_size);
+    where those are all 0 (u = 0 and p = 0, or a trivial branch u = 0 of a G linear in u), the
+    size of its change with a unit change of each, max_i sum_j |dG_i/dx_j|. Either scales with
+    G and neither changes with the units of p. A ProblemError (one line, naming the option to
+    set) where both are 0: dG/du and dG/dp vanish there."""
+    x = np.append(u, p)
+    M = bordered_matrix(problem, x, np.zeros_like(x))
+    scale = term_size(M, x) or term_size(M, np.ones_like(x))
+    if not (math.isfinite(scale) and scale > 0):
+        raise ProblemError(f"G has no size to measure newton_tol against at p = {p:g} (dG/du and "
+                           f"dG/dp are 0 there): give its size as Options(residual_scale=...)")
+    return scale
+
+
+def _units(options: Options, problem: Problem, u0: Array, p_start: float, p_stop: float):
+    """(p_scale, residual_scale) of a run: the options', or their defaults (Options)."""
+    p_scale = options.p_scale or abs(p_stop - p_start)
+    return p_scale, options.residual_scale or min(1.0, residual_scale_at(problem, u0, p_start))
+
+
+def _tol_p(tol_p: float, in_p: float, p_start: float, p_stop: float) -> float:
+    """The detection's tol_p in units of p: times in_p = min(1, p_scale), and at least
+    P_RESOLUTION max(|p_start|, |p_stop|)."""
+    return max(tol_p * in_p, P_RESOLUTION * max(abs(p_start), abs(p_stop)))
+
+
 def solve_branch(problem: Problem, u0, p_span, options: Options = Options(), *,
                  callback: Optional[Callback] = None) -> BranchResult:
     """Continue G(u, p) = 0 from p_span[0] to p_span[1] and locate what happens on the way.
@@ -294,24 +356,33 @@ def solve_branch(problem: Problem, u0, p_span, options: Options = Options(), *,
     does not converge). The branch is followed by pseudo-arclength continuation through folds
     (arclength.py) until p leaves the span; at every accepted point the spectrum of the
     tracked matrix is stored, and every birth and death of a complex pair is located to
-    |dp| <= options.detection.tol_p (collisions.py); folds and Hopf points are located after
-    the run (bifurcations.py). callback(k, p, u, eigenvalues) is called at every accepted
-    point. Bad input (span, options, a problem whose functions fail or return wrong shapes at
-    the start) raises ValueError or ProblemError before anything is computed."""
+    |dp| <= the detection's tol_p (in units of p as Options says: _tol_p) (collisions.py);
+    folds and Hopf points are located after the run (bifurcations.py). The core runs in y = (p_scale sqrt(theta / n) u,
+    p), whose Euclidean length is the Options' arclength (weighting.py), with newton_tol times
+    residual_scale: the same problem with G or p in other units takes the same steps.
+    callback(k, p, u, eigenvalues) is called at every accepted point. Bad input (span,
+    options, a problem whose functions fail or return wrong shapes at the start) raises
+    ValueError or ProblemError before anything is computed."""
     p_start, p_stop = _span(p_span)
-    params = options.params(p_start, p_stop)
     u0 = check_problem(problem, u0, p_start)
-    s = scale_of(options.theta, u0.size)
-    core = problem if s == 1.0 else Weighted(problem, s)  # the metric of options.theta
+    p_scale, residual_scale = _units(options, problem, u0, p_start, p_stop)
+    params = options.params(p_start, p_stop, residual_scale)
+    in_p = min(1.0, p_scale)  # the tolerances in p: absolute, or relative to a smaller p_scale
+    tol_p = _tol_p(options.detection.tol_p, in_p, p_start, p_stop)
+    detection = options.detection if tol_p == options.detection.tol_p else \
+        replace(options.detection, tol_p=tol_p)
+    s = scale_of(options.theta, u0.size) * p_scale
+    core = problem if s == 1.0 else Weighted(problem, s, p_scale)  # the metric of the Options
     told = None if callback is None else (lambda k, p, y, ev: callback(k, p, y / s, ev))
-    branch = continuation(core, u0 * s, p_start, params, options.detection,
+    branch = continuation(core, u0 * s, p_start, params, detection,
                           workers=options.workers, callback=told)
-    folds, hopf, warnings, branch_points = special_points(core, branch, options,
-                                                          _stateless(problem))
+    asked = options.special_points if _stateless(problem) else ()
+    folds, hopf, warnings, branch_points = special_points(core, branch, asked, params, detection,
+                                                          in_p)
     folds, hopf, branch_points = ([replace(point, u=point.u / s) for point in points]
                                   for points in (folds, hopf, branch_points))
     return BranchResult(unweighted(branch, s), tuple(folds), tuple(hopf),
-                        branch.warnings + warnings, tuple(branch_points))
+                        branch.warnings + warnings, tuple(branch_points), p_scale, residual_scale)
 
 
 def solve_in_runs(problem: Problem, u0, p_span, options: Options,
@@ -365,8 +436,10 @@ def switch_branch(problem: Problem, result: BranchResult, k: int, p_stop: float,
     branch that moves p toward p_stop; where neither half does (a pitchfork: the second branch
     leaves with dp = 0 and both halves bend the same way), the half toward the direction's
     largest component, and with `side` = -1 the other. The branch is continued from that
-    point by solve_branch (the same options). ValueError for a k that names no branch point or
-    a side other than +-1; ContinuationError if no first point converges."""
+    point by solve_branch (the same options; p_scale and residual_scale, where they leave
+    them None, the first run's: result.p_scale, result.residual_scale). ValueError for a k
+    that names no branch point or a side other than +-1; ContinuationError if no first point
+    converges."""
     if not 0 <= k < len(result.branch_points):
         raise ValueError(f"branch point {k} asked for; the branch has "
                          f"{len(result.branch_points)} (numbered from 0)")
@@ -377,7 +450,9 @@ def switch_branch(problem: Problem, result: BranchResult, k: int, p_stop: float,
     along = x[point.step + 1] - x[point.step]
     phi = other_direction(problem, point, along / np.linalg.norm(along))
     phi = side * (phi if phi[np.argmax(np.abs(phi))] > 0 else -phi)
-    params = options.params(point.p, p_stop)
+    options = replace(options, p_scale=options.p_scale or result.p_scale,
+                      residual_scale=options.residual_scale or result.residual_scale)
+    params = options.params(point.p, p_stop, options.residual_scale)
     x_star = np.append(point.u, point.p)
     halves = [bordered_newton(problem, x_star + params.ds * d, d, params.newton_tol,
                               params.max_newton) for d in (phi, -phi)]

@@ -1,10 +1,11 @@
-"""The arclength metric of solve_branch: |dx|^2 = w |du|^2 + dp^2, w = theta / n (AUTO's and
-BifurcationKit's theta), so that the step count does not grow like sqrt(n) with the mesh of a
-discretised problem (docs/api.md, Step length).
+"""The arclength metric of solve_branch: |dx|^2 = p_scale^2 w |du|^2 + dp^2 [units of p],
+w = theta / n (AUTO's and BifurcationKit's theta), so that the step count does not grow like
+sqrt(n) with the mesh of a discretised problem (docs/api.md, Step length), and p_scale the
+unit of p that u is weighed against, so that p in other units takes the same steps.
 
 The core measures steps in the Euclidean length of its unknowns. Continuing the problem in
-y = (s u, p), s = sqrt(w), makes that length the weighted one: Weighted is the problem in y,
-and unweighted() maps what the core found back to u. The tracked matrix, its spectrum and
+y = (s u, p), s = p_scale sqrt(w), makes that length the weighted one: Weighted is the problem
+in y, and unweighted() maps what the core found back to u. The tracked matrix, its spectrum and
 eigenvectors are the problem's own (A(u, p) at u = y_u / s): nothing about them is scaled.
 """
 from __future__ import annotations
@@ -22,10 +23,11 @@ Array = np.ndarray
 @dataclass(frozen=True)
 class Weighted(Problem):
     """`inner` continued in y = (s u, p): G(y_u / s, p), dG/dy_u = G_u / s; every hook is the
-    inner problem's at u = y_u / s."""
+    inner problem's at u = y_u / s. p_scale: the unit of p in s (derivative_step)."""
 
     inner: Problem
     s: float
+    p_scale: float = 1.0
 
     def u(self, y: Array) -> Array:
         return np.asarray(y) / self.s
@@ -68,12 +70,14 @@ class Weighted(Problem):
         return self.inner.stability_blocks(self.u(y), p)
 
     def derivative_step(self, x: Array) -> float:
-        """The inner step, times s: a unit direction in y moves u by up to 1 / s."""
-        return self.inner.derivative_step(np.append(self.u(x[:-1]), x[-1])) * self.s
+        """The inner step at (u, p / p_scale), times s: a unit direction in y moves u by up to
+        1 / s; p is passed in units of p_scale, so that the step in y scales with the units of
+        p (with p_scale = 1 it is the inner step at (u, p))."""
+        return self.inner.derivative_step(np.append(self.u(x[:-1]), x[-1] / self.p_scale)) * self.s
 
 
 def scale_of(theta: float | None, n: int) -> float:
-    """s = sqrt(theta / n), 1 for theta None (plain Euclidean arclength)."""
+    """sqrt(theta / n), 1 for theta None (plain Euclidean arclength): s for p_scale = 1."""
     return 1.0 if theta is None else float(np.sqrt(theta / n))
 
 

@@ -49,7 +49,9 @@ class SweepParams(Options):
     max_steps 20 000 (N = 1000 takes up to 6000 points), and no special points (the disk
     problem carries history: its folds cannot be located after the run), theta None: steps in
     the Euclidean arclength of (q, F_x), as before the weighted metric (Options: theta = 1, the
-    mesh-independent metric of a discretised problem). workers (Options):
+    mesh-independent metric of a discretised problem), p_scale and residual_scale 1: steps,
+    tolerances in F_x and newton_tol in raw units (Options: relative to the span and to the
+    size of F at the start). workers (Options):
     processes scanning steps while the sweep goes on (None: automatic; 0: inline). window:
     (lo, hi) of Re lambda [the matrix's raw units] to track instead of the whole spectrum
     (spectral_window.py); None: every eigenvalue.
@@ -60,6 +62,8 @@ class SweepParams(Options):
     max_steps: int = 20_000
     special_points: tuple[str, ...] = ()
     theta: Optional[float] = None
+    p_scale: Optional[float] = 1.0
+    residual_scale: Optional[float] = 1.0
     window: Optional[tuple[float, float]] = None
 
 

@@ -20,7 +20,7 @@ def disk_chain(scene_file=default_scene_path(), F_max: float = 0.12) -> Bifurcat
     F_1 = START_FRACTION * scene.F_y
     q, xi = relax(system, *system.rest_state(), F_1)
     options = Options(ds_max=F_max / 60, ds=F_1, ds_min=1e-10, newton_tol=1e-11, max_steps=20_000,
-                      theta=None)  # bifurcate's plain arclength
+                      theta=None, p_scale=1.0, residual_scale=1.0)  # bifurcate's raw units
     return BifurcationProblem(DiskEquilibria(system, q, xi, F_1), u0=q, p_span=(F_1, F_max),
                               parameter="F_x", units="raw force", matrix=scene.matrix, options=options)
 

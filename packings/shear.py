@@ -41,7 +41,8 @@ class ShearParams(Options):
     """solve_branch's Options with the packing's defaults: ds_max from STEP_IN_STRAIN (None),
     newton_tol 1e-11 [force] (of a contact's force P 2R = 0.1 at the default pressure),
     max_steps 20 000, no special points (the problem carries history), steps in the Euclidean
-    arclength of (q, gamma) (theta None: ds_max is set from the affine shear), and the run ends at a
+    arclength of (q, gamma) (theta None, p_scale 1: ds_max is set from the affine shear),
+    newton_tol in force units (residual_scale 1), and the run ends at a
     fold in gamma (stop_at_fold): the saddle-node where quasistatic shear loses the branch is a
     plastic event; beyond it the branch of unstable states it would follow back is no state
     the packing passes through."""
@@ -51,6 +52,8 @@ class ShearParams(Options):
     special_points: tuple[str, ...] = ()
     stop_at_fold: bool = True
     theta: Optional[float] = None
+    p_scale: Optional[float] = 1.0
+    residual_scale: Optional[float] = 1.0
 
 
 @dataclass(frozen=True)

@@ -3,12 +3,15 @@
 rounding of G's terms converged (Bratu's u'' + lambda e^u, entries 1/h^2)."""
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 import scipy.sparse as sp
 from scipy.optimize import fsolve
 
 from diskfriction.continuation import Options, problem_from_functions, solve_branch
+from diskfriction.continuation.branch import StopCode
 from gallery import load_example
 
 
@@ -49,8 +52,11 @@ def test_bratu_fold_is_located_though_g_rounds_above_the_tolerance():
 
 
 def test_a_problem_without_rounding_says_when_its_tolerance_is_below_g_s_rounding():
-    """The same Bratu problem with rounding 0 (a Problem subclass's default): the fold's
-    locator stalls, and its warning says the residual is at G's rounding."""
+    """The same Bratu problem with rounding 0 (a Problem subclass's default): newton_tol is
+    relative to G's size at the start (lambda = 0.01: max|G| <= 1e-12), which G's terms of 3e3
+    |u| near the fold round above; the corrector stalls there, and the run's status says the
+    residual is at G's rounding. With newton_tol absolute (residual_scale 1) the branch passes
+    the fold and the fold's locator (1e-12) stalls instead, and its warning says so."""
     from diskfriction.continuation.problem import FunctionProblem
 
     class Absolute(FunctionProblem):
@@ -59,5 +65,9 @@ def test_a_problem_without_rounding_says_when_its_tolerance_is_below_g_s_roundin
     spec = load_example("bratu").bratu(50)
     f = spec.problem
     result = solve_branch(Absolute(f.G, f.G_u, f.G_p), spec.u0, spec.p_span, spec.options)
+    assert result.folds == () and result.branch.status.code is StopCode.DS_MIN
+    assert "at the rounding of G's terms there" in result.message
+    absolute = replace(spec.options, residual_scale=1.0, p_scale=1.0)
+    result = solve_branch(Absolute(f.G, f.G_u, f.G_p), spec.u0, spec.p_span, absolute)
     assert result.folds == () and len(result.warnings) == 1
     assert "at the rounding of G's terms there" in result.warnings[0]
