@@ -247,12 +247,14 @@ def run_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> int:
                  amplitude=done.mode_amplitude, budget=run.budget, kinetic=run.kinetic,
                  capped=run.capped)
         save_json(out / "summary.json", summary)
-        plot_packing_run(run.t, done.distance, sigma, fit.sigma, scene, gamma, out / "run.png")
+        plot_packing_run(run.t, done.distance, sigma, fit.sigma, scene, gamma, out / "run.png",
+                         (fit.t_start, fit.t_end), done.mode_amplitude)
         q0, rows0 = done.q0, done.rows0
         plot_packing_snapshot(q0, network.radii, network.L, gamma, rows0,
                               network.normal_forces(q0, rows0, gamma), done.kick,
                               f"{scene.name} at gamma = {gamma:.4g}: contact forces (red, width "
-                              f"~ F_n) and the perturbation ({kind}, blue)", out / "snapshot.png")
+                              f"~ F_n) and the perturbation ({kind}, blue)", out / "snapshot.png",
+                              "length / time" if kind == "random-velocity" else "length")
     finally:
         progress.close()
     print(f"gamma = {gamma:g}: {count(done.pairs, 'complex pair')} of M^-1 J"

@@ -3,8 +3,9 @@ chain's are (reports/maps.py, with PACKING_COLUMNS).
 
     one key:  against the varied key, three panels: the fraction of accepted states with a
               complex pair (and the mean number of pairs per state); the fastest pair's growth
-              rate sigma / omega_c, median and largest over the states; the plastic events and
-              collisions per 1e-3 of strain. An ended cell is drawn with open markers (its
+              rate sigma / omega_c, median and largest over the states; the collisions (left
+              axis) and plastic events (right axis) per 1e-3 of strain, both linear from 0.
+              An ended cell is drawn with open markers (its
               figures cover the strain it reached); a failed cell has no point, its reason
               is written under the panels.
     two keys: the fraction of states with a complex pair in the plane of the two keys.
@@ -60,11 +61,15 @@ def plot_packing_bands(axis: Axis, cells: list[Cell], records: list[dict], path:
              rf"{label} $\sigma / \omega_c$ of the fastest pair", color)
     rate.set(yscale="log", ylabel=r"$\sigma / \omega_c$, $\sigma = |\mathrm{Im}\sqrt{\lambda}|$")
     rate.legend(fontsize=7)
-    for column, color, label in (("plastic_events", "C2", "plastic events"),
-                                 ("collisions", "C4", "collisions located")):
-        draw(counts, [per_strain(s, column) for s in summaries], f"{label} per 1e-3 strain", color)
-    counts.set(yscale="symlog", ylabel="per 1e-3 of strain")
-    counts.legend(fontsize=7)
+    draw(counts, [per_strain(s, "collisions") for s in summaries],
+         "collisions located per 1e-3 of strain", "C4")
+    events = counts.twinx()
+    draw(events, [per_strain(s, "plastic_events") for s in summaries],
+         "plastic events per 1e-3 of strain (right)", "C2", "s")
+    for ax, what in ((counts, "collisions"), (events, "plastic events")):
+        top = max(ax.get_ylim()[1], 1e-3)
+        ax.set(ylim=(-0.04 * top, top), ylabel=f"{what} per 1e-3 of strain")
+    counts.legend(handles=counts.lines[:1] + events.lines[:1], fontsize=7, loc="center left")
     for ax in (frac, rate, counts):
         ax.set_xlabel(key_label(axis, "packing"))
         if axis.log:

@@ -145,92 +145,225 @@ def save_packing_outputs(out: Path, staging: Path, branch: PackingBranch, scene:
         os.replace(staging / name, out / name)
 
 
+PLASTIC_STYLE = dict(colors="k", linestyles=[(0, (4, 2))], linewidths=1.3, zorder=5)
+"""Plastic events in every packing figure against the strain: black dashed lines drawn over
+everything else (zorder), so that no number of collision lines hides them."""
+
+
+def eigenvalue_unit(matrix) -> str:
+    """The unit of the eigenvalues of `matrix` on an axis: those of M^-1 J are omega^2
+    [1 / time^2]; J's mix the disks' translations and rotations (raw units)."""
+    return r"[time$^{-2}$]" if str(matrix) == str(Matrix.M_INV_J) else "[raw units]"
+
+
+def strain_lines(ax, strains, **style):
+    """One LineCollection of vertical lines across `ax` (its full height) at `strains`."""
+    from matplotlib.collections import LineCollection
+
+    strains = np.asarray(strains, dtype=float)
+    segments = np.zeros((strains.size, 2, 2))
+    segments[:, :, 0], segments[:, 1, 1] = strains[:, None], 1.0
+    return ax.add_collection(LineCollection(segments, transform=ax.get_xaxis_transform(), **style),
+                             autolim=False)
+
+
 def plot_packing_diagram(branch: PackingBranch, scene: PackingScene, path: Path) -> None:
-    """Three panels against the strain: the shear stress sigma_xy with the collisions marked,
-    the number of complex pairs, and Im lambda of every complex eigenvalue (raw units of the
-    matrix; a point per eigenvalue with Im lambda > 0)."""
-    fig, (stress, pairs, im) = new_figure(3, 1, figsize=(7, 8), sharex=True)
-    gamma = branch.gamma
-    for segment in np.unique(branch.segment):
-        on = branch.segment == segment
-        stress.plot(gamma[on], branch.stress[on, 2], color="k", lw=1)
-    for event in branch.plastic:
-        for ax in (stress, pairs, im):
-            ax.axvline(event.gamma, color="k", ls="--", lw=0.8)
-    stress.set_ylabel("sigma_xy [force / length]")
-    for c in branch.collisions:
-        stress.axvline(c.p, color="tab:red" if str(c.kind) == "birth" else "tab:blue", lw=0.3,
-                       alpha=0.5)
+    """Three panels against the shear strain gamma: the shear stress sigma_xy [force / length]
+    with every collision as a thin line (red: a complex pair born, blue: one dying), the number
+    of complex pairs, and Im lambda > 0 of every complex eigenvalue of the branch's matrix
+    (eigenvalue_unit; for M^-1 J also in units of omega_0^2, omega_0 = PackingScene.omega_0, on
+    the right). With a spectral window only what lies in it, lo <= Re lambda <= hi: the guard
+    bands' eigenvalues are tracked, not counted (the window is named in the title). Plastic
+    events: black dashed lines over everything in every panel, a triangle above the stress."""
+    from matplotlib.collections import LineCollection
+    from matplotlib.lines import Line2D
+
+    from diskfriction.words import count
+
+    fig, (stress, pairs, im) = new_figure(3, 1, figsize=(7, 8.4), sharex=True)
+    gamma, window = branch.gamma, branch.window
+    strain = r"shear strain $\gamma$"
+    stress.add_collection(LineCollection(
+        [np.column_stack([gamma[on], branch.stress[on, 2]])
+         for on in (branch.segment == s for s in np.unique(branch.segment))],
+        colors="k", linewidths=1, zorder=3))
+    stress.autoscale_view()
+    colors = ["tab:red" if str(c.kind) == "birth" else "tab:blue" for c in branch.collisions]
+    strain_lines(stress, [c.p for c in branch.collisions], colors=colors, linewidths=0.4,
+                 alpha=0.45, zorder=1)
+    folds = [e.gamma for e in branch.plastic]
+    for ax in (stress, pairs, im):
+        strain_lines(ax, folds, **PLASTIC_STYLE)
+    stress.plot(folds, np.ones(len(folds)), "v", color="k", ms=6, zorder=6, clip_on=False,
+                transform=stress.get_xaxis_transform())
+    stress.set_ylabel(r"$\sigma_{xy}$ [force / length]")
+    stress.legend(handles=[Line2D([], [], color="tab:red", lw=1, label="birth of a complex pair"),
+                           Line2D([], [], color="tab:blue", lw=1, label="death of a complex pair"),
+                           Line2D([], [], color="k", ls=(0, (4, 2)), lw=1.3, marker="v",
+                                  label="plastic event (fold)")],
+                  fontsize=7, loc="upper left", framealpha=0.9).set_zorder(7)
     pairs.step(gamma, branch.n_complex, where="post", color="k", lw=1)
-    pairs.set_ylabel("complex pairs")
+    pairs.set_ylabel("complex pairs" + (" in the window" if window is not None else ""))
     lam = branch.eigenvalues
-    g, values = np.broadcast_to(gamma[:, None], lam.shape), lam.imag
-    shown = values > 1e-12 * np.nanmax(np.abs(lam))  # nan: a window column not tracked there
-    im.plot(g[shown], values[shown], ".", ms=1.5, color="tab:purple")
-    im.set_ylabel(f"Im lambda of {branch.matrix} (raw)")
-    im.set_xlabel("shear strain gamma")
-    stress.set_title(f"{scene.name}: N = {scene.N}, P = {scene.pressure:g}, mu = {scene.mu:g}; "
-                     f"{len(branch.collisions)} collisions (red: birth, blue: death), "
-                     f"{len(branch.plastic)} plastic events (dashed)", fontsize=9)
+    shown = np.isfinite(lam) & (lam.imag > 1e-12 * np.nanmax(np.abs(lam)))  # one per pair
+    if window is not None:  # nan: a window column not tracked at that state
+        shown &= Window(*window).inside(np.nan_to_num(lam, nan=np.inf))
+    g = np.broadcast_to(gamma[:, None], lam.shape)
+    im.plot(g[shown], lam.imag[shown], ".", ms=1.5, color="tab:purple", zorder=6)
+    unit = eigenvalue_unit(branch.matrix)
+    inside = "" if window is None else r", Re $\lambda$ in the window"
+    im.set_ylabel(rf"Im $\lambda$ of {branch.matrix}{inside} {unit}")
+    if str(branch.matrix) == str(Matrix.M_INV_J):
+        w2 = scene.omega_0 ** 2
+        im.secondary_yaxis("right", functions=(lambda v: v / w2, lambda v: v * w2)).set_ylabel(
+            r"Im $\lambda / \omega_0^2$")
+    im.set_xlabel(strain)
+    title = (f"{scene.name}: N = {scene.N}, P = {scene.pressure:g}, mu = {scene.mu:g}; "
+             f"{count(len(branch.collisions), 'collision')}, "
+             f"{count(len(branch.plastic), 'plastic event')}")
+    if window is not None:
+        title += (f"\nwindow {window[0]:g} <= Re lambda <= {window[1]:g} {unit}: its complex "
+                  f"pairs and collisions only")
+    stress.set_title(title, fontsize=9, pad=10)
     fig.tight_layout()
     save_figure(fig, path)
+
+
+def growth_line(t: np.ndarray, y: np.ndarray, rate: float, span: np.ndarray) -> np.ndarray:
+    """y0 e^(rate t) through the frames `span` (bool) of y > 0 in the least-squares sense,
+    log y0 = mean(log y - rate t) over them; through y[0] when `span` holds none."""
+    if not span.any():
+        return y[0] * np.exp(rate * t)
+    return np.exp(np.mean(np.log(y[span]) - rate * t[span]) + rate * t)
 
 
 def plot_packing_run(t: np.ndarray, d: np.ndarray, sigma: float, measured: float,
-                     scene: PackingScene, gamma: float, path: Path) -> None:
-    """The mass-weighted distance from the equilibrium against time (log), with e^(sigma t) of
-    the spectrum's fastest complex pair and the measured slope."""
-    fig, ax = new_figure(figsize=(7, 4))
-    ax.semilogy(t, np.maximum(d, 1e-300), color="k", lw=0.6, label="|q - q_eq| (mass-weighted)")
+                     scene: PackingScene, gamma: float, path: Path,
+                     window: Optional[tuple[float, float]] = None,
+                     amplitude: Optional[np.ndarray] = None) -> None:
+    """A run from the state at gamma against time t [time] (log scale): the mass-weighted
+    distance d = sqrt(sum m (q - q_eq)^2) from the state [mass^(1/2) length], the fastest
+    pair's amplitude |c| where given (the growth fitted), the measured growth e^(measured t)
+    over the fitted `window` (t_start, t_end) and the spectrum's e^(sigma t) over the whole run,
+    both through the fitted frames (growth_line), so that their slopes compare. Without a
+    window the lines go through the growth between ten times the start and a tenth of the
+    largest value. A second time axis counts omega_0 t (PackingScene.omega_0)."""
+    fig, ax = new_figure(figsize=(7, 4.3))
+    ax.semilogy(t, np.maximum(d, 1e-300), color="k", lw=0.6,
+                label=r"distance from the state, $\sqrt{\sum m\,(q - q_\mathrm{eq})^2}$")
+    fitted = d
+    if amplitude is not None and np.isfinite(amplitude).any():
+        fitted = amplitude
+        ax.semilogy(t, amplitude, color="tab:purple", lw=0.8,
+                    label="amplitude |c| of the fastest pair")
+    if window is not None and np.all(np.isfinite(window)):
+        span = (t >= window[0]) & (t <= window[1]) & (fitted > 0)
+    else:
+        first = np.flatnonzero(fitted > 10 * fitted[0])
+        last = np.flatnonzero(fitted >= 0.1 * np.nanmax(fitted))
+        span = np.zeros(t.size, bool)
+        if first.size and last.size:
+            span[first[0]:last[0]] = True
     if sigma > 0:
-        ax.semilogy(t, d[0] * np.exp(sigma * t), "--", color="tab:red", lw=1,
-                    label=f"spectrum: sigma = {sigma:.4g}")
-    if np.isfinite(measured):
-        ax.plot([], [], " ", label=f"measured: sigma = {measured:.4g}")
-    ax.set_ylim(max(d.min(), 1e-16) / 2, d.max() * 5)
-    ax.set_xlabel("t (raw time)")
-    ax.set_ylabel("distance [length x mass^(1/2)]")
+        ax.semilogy(t, growth_line(t, fitted, sigma, span), "--", color="tab:red", lw=1,
+                    label=r"spectrum: $e^{\sigma t}$, $\sigma = |\mathrm{Im}\sqrt{\lambda}|$ = "
+                          f"{sigma:.4g}")
+    if np.isfinite(measured) and span.any():
+        ax.semilogy(t[span], growth_line(t, fitted, measured, span)[span], color="tab:orange",
+                    lw=2.2, alpha=0.8, label=rf"measured: $\sigma$ = {measured:.4g} (fit)")
+    shown = np.concatenate([d[d > 0], fitted[np.isfinite(fitted) & (fitted > 0)]])
+    ax.set_ylim(max(shown.min(), 1e-16) / 2, shown.max() * 5)
+    ax.set_xlabel("t [time]")
+    omega_0 = scene.omega_0
+    ax.secondary_xaxis("top", functions=(lambda x: x * omega_0, lambda x: x / omega_0)
+                       ).set_xlabel(r"$\omega_0 t$")
+    ax.set_ylabel(("distance, |c|" if fitted is not d else "distance") + r" [mass$^{1/2}$ length]")
     ax.set_title(f"{scene.name}: N = {scene.N}, gamma = {gamma:.4g}", fontsize=9)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=7, loc="lower right")
     fig.tight_layout()
     save_figure(fig, path)
+
+
+def key_value(largest: float) -> float:
+    """A round arrow length for a quiver key: 1, 2 or 5 times a power of ten, at most `largest`."""
+    power = 10.0 ** np.floor(np.log10(largest))
+    return float(max(f for f in (1.0, 2.0, 5.0) if f * power <= largest * (1 + 1e-12)) * power)
 
 
 def plot_packing_snapshot(q: np.ndarray, radii: np.ndarray, L: float, gamma: float,
                           rows: np.ndarray, force: np.ndarray, mode: np.ndarray,
-                          title: str, path: Path) -> None:
-    """The packing at strain gamma in its sheared periodic box: disks as circles (positions
-    wrapped into the box through the Lees-Edwards images), every contact row with a normal force
-    as a line between the centres of width proportional to it, and the (x, y) part of `mode`
-    (a displacement, e.g. an unstable eigenvector's real part) as arrows at the centres."""
+                          title: str, path: Path, unit: str = "") -> None:
+    """The packing at strain gamma in its sheared periodic box (the dashed parallelogram of the
+    Lees-Edwards images): every disk with its images that reach into the box, clipped to it;
+    every contact row with a normal force as a red line between the centres of width
+    proportional to F_n (the legend names the widths in force units); and the (x, y) part of
+    `mode` as arrows at the centres (the rotations are not drawn), scaled so that the longest
+    is 0.8 of the smallest radius, with a key arrow of a round length in `unit`. A complex
+    `mode` (an eigenvector V) is drawn as Re V (blue) and Im V (orange), the displacements a
+    quarter period apart of the oscillation it carries; a zero `mode` draws no arrows. Lengths
+    in the raw unit: the small disks' radius is R."""
+    import textwrap
+
     from matplotlib.collections import LineCollection, PatchCollection
+    from matplotlib.lines import Line2D
     from matplotlib.patches import Circle, Polygon
 
     N = radii.size
-    x, y = q[:N].copy(), q[N:2 * N].copy()
+    x, y = q[:N], q[N:2 * N]
     k = np.floor(y / L)
     y, x = y - k * L, x - k * gamma * L
-    x -= np.floor(x / L) * L
-    fig, ax = new_figure(figsize=(6.5, 6.5))
-    ax.add_collection(PatchCollection([Circle((a, b), r) for a, b, r in zip(x, y, radii)],
-                                      facecolor="0.92", edgecolor="0.55", lw=0.5))
-    i, j, cx, cy = rows.T
+    x = x - np.floor((x - gamma * y) / L) * L  # the centre inside the parallelogram
+    shifts = np.array([(a * L + b * gamma * L, b * L) for a in (-1, 0, 1) for b in (-1, 0, 1)])
+    fig, ax = new_figure(figsize=(6.6, 7.4))
+    box = ax.add_patch(Polygon([(0, 0), (L, 0), (L + gamma * L, L), (gamma * L, L)], closed=True,
+                               fill=False, ls="--", lw=0.6, color="k", zorder=4))
+    cx, cy = x[None, :] + shifts[:, :1], y[None, :] + shifts[:, 1:]
+    reach = np.broadcast_to(radii, cx.shape)
+    near = ((cy > -reach) & (cy < L + reach) & (cx - gamma * cy > -reach)
+            & (cx - gamma * cy < L + reach))
+    disks = PatchCollection([Circle((a, b), r) for a, b, r in zip(cx[near], cy[near], reach[near])],
+                            facecolor="0.92", edgecolor="0.55", lw=0.5)
+    ax.add_collection(disks)
+    disks.set_clip_path(box)
+    i, j, ix, iy = rows.T
     carries = force > 0
-    dx = q[i] - q[j] - cx * L - cy * gamma * L  # r_i - r_j of the row's image
-    dy = q[N + i] - q[N + j] - cy * L
-    segments = np.stack([np.stack([x[i], y[i]], 1), np.stack([x[i] - dx, y[i] - dy], 1)], 1)
-    width = 4.0 * force / force.max() if carries.any() else force
-    ax.add_collection(LineCollection(segments[carries], linewidths=width[carries],
-                                     colors="tab:red"))
-    xy = np.stack([mode[:N], mode[N:2 * N]], 1)
-    scale = 0.8 * radii.min() / max(np.abs(xy).max(), 1e-300)
-    ax.quiver(x, y, scale * xy[:, 0], scale * xy[:, 1], angles="xy", scale_units="xy", scale=1,
-              color="tab:blue", width=0.003)
-    ax.add_patch(Polygon([(0, 0), (L, 0), (L + gamma * L, L), (gamma * L, L)], closed=True,
-                         fill=False, ls="--", lw=0.6, color="k"))
-    ax.set_xlim(-radii.max(), L + gamma * L + radii.max())
-    ax.set_ylim(-radii.max(), L + radii.max())
+    handles = []
+    if carries.any():
+        i, j, ix, iy, f = i[carries], j[carries], ix[carries], iy[carries], force[carries]
+        dx = q[i] - q[j] - ix * L - iy * gamma * L  # r_i - r_j of the row's image
+        dy = q[N + i] - q[N + j] - iy * L
+        start = np.stack([x[i], y[i]], 1)
+        segments = np.stack([start, start - np.stack([dx, dy], 1)], 1)
+        segments = (segments[None] + shifts[:, None, None, :]).reshape(-1, 2, 2)
+        width = 4.0 * f / f.max()
+        lines = ax.add_collection(LineCollection(segments, linewidths=np.tile(width, len(shifts)),
+                                                 colors="tab:red", zorder=2))
+        lines.set_clip_path(box)
+        handles = [Line2D([], [], color="tab:red", lw=w, label=f"$F_n$ = {v:.3g} [force]")
+                   for w, v in ((4.0, f.max()), (1.0, f.max() / 4))]
+    parts = ([("Re V", mode.real, "tab:blue"), ("Im V", mode.imag, "tab:orange")]
+             if np.iscomplexobj(mode) else [("", mode, "tab:blue")])
+    largest = max(float(np.hypot(p[:N], p[N:2 * N]).max()) for _, p, _ in parts)
+    if largest > 0:
+        scale = 0.8 * radii.min() / largest
+        value = key_value(largest)
+        for n, (name, part, color) in enumerate(parts):
+            arrows = ax.quiver(x, y, scale * part[:N], scale * part[N:2 * N], angles="xy",
+                               scale_units="xy", scale=1, color=color, width=0.003, zorder=3)
+            ax.quiverkey(arrows, 0.03 + 0.3 * n, -0.1, scale * value,
+                         " ".join(filter(None, (name + ":" if name else "", f"{value:g}", unit))),
+                         labelpos="E",
+                         coordinates="axes", fontproperties={"size": 8})
+    pad = radii.max()
+    ax.set_xlim(-pad, L + gamma * L + pad)
+    ax.set_ylim(-pad, L + pad)
     ax.set_aspect("equal")
-    ax.set_title(title, fontsize=9)
+    R = radii.min()
+    ax.set_xlabel(f"x [length; small disks' radius R = {R:g}]")
+    ax.set_ylabel(f"y [length; R = {R:g}]")
+    if handles:
+        ax.legend(handles=handles, fontsize=8, loc="upper right", bbox_to_anchor=(1.0, -0.07),
+                  frameon=False, title="contact force (line width)", title_fontsize=8)
+    ax.set_title("\n".join(textwrap.fill(line, 100) for line in title.split("\n")), fontsize=8)
     fig.tight_layout()
     save_figure(fig, path)
