@@ -256,12 +256,3 @@ def run_from_state(branch: PackingBranch, k: int, network: Network, mass: np.nda
     return StateRun(k, gamma, q0, xi0, rows0, linear.pairs, kind, amplitude, dq, v, run.dt,
                     0.0 if mode is None else mode.sigma, run, d, c, fit,
                     float(np.abs(run.budget - run.budget[0]).max()))
-
-
-def fastest_mode(branch: PackingBranch, k: int, network: Network, mass: np.ndarray,
-                 matrix: str) -> np.ndarray:
-    """Re V of the growing solution of state k's fastest complex pair of M^-1 J (GrowingMode:
-    |Re V|_M = 1, at its largest excursion), zeros when every eigenvalue is real, for the
-    report's snapshot; `matrix`, the branch's, does not enter: the dynamics are M^-1 J's."""
-    mode = linearized(branch, k, network, mass).mode
-    return np.zeros(branch.q[k].size) if mode is None else mode.right.real
