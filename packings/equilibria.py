@@ -13,7 +13,7 @@ image and its history while it lasts, and the rows are found again at every comm
 carried over by (i, j, cx, cy)); a pair that was not a row cannot close within one step
 (commit checks that it did not).
 
-Two kinds of exact zero modes are handled explicitly:
+Three kinds of exact zero modes are handled explicitly:
 - **Translations.** A uniform shift of every disk changes no force: J T = 0 for T = the x and y
   translations, and the forces sum to zero (Newton's third law), so two equations are
   redundant. The reference disk (the one with most contacts) has its x and y equations
@@ -38,9 +38,10 @@ Two kinds of exact zero modes are handled explicitly:
 
 The tracked matrix is the network's stability matrix A (J or M^-1 J) in coordinates relative to
 the reference disk, A_g: with P the map q -> (q_k - q_ref for x and y dofs, theta as it is) on
-the kept dofs (not the reference's x, y, not a loose disk's) and E the kept columns,
-A_red = P A E has exactly the spectrum of A without its two translation zeros (A T = 0 makes A
-block triangular in the basis (T, E)); A_g (stability_matrix, sparse) is A_red at the kept dofs
+the kept dofs (not the reference's x, y, not a loose disk's, and without tangential forces no
+rotation) and E the kept columns, A_red = P A E has exactly the spectrum of A without its two
+translation zeros (and the rotations' zeros) (A T = 0 makes A block triangular in the basis
+(T, E)); A_g (stability_matrix, sparse) is A_red at the kept dofs
 and a constant far below A_red's spectrum on the gauge rows' diagonal (PARKED), so that every
 sample has n eigenvalues; those of the gauge rows are reported as 0 and excluded from detection.
 With a spectral window (continuation/spectral_window.py) only the k eigenvalues of A_red nearest
