@@ -6,12 +6,15 @@ compilation included), and a second run on the same cache the warm one. Each run
 installed `diskfriction` command in a new process, timed from start to exit; its stderr is a
 pipe, so the command prints one line per stage, and the time between those lines splits the
 run into start-up (interpreter and imports, until the first stage), kernels, sweep, writing
-and plotting. Prints medians over the repeats, measured in this run.
+and plotting (the diagram, the printed summary and the interpreter's exit). Prints medians over
+the repeats, measured in this run, of the wall time, of the command's CPU time (user + system:
+on a machine others share it moves less than the wall time) and of each stage's wall time.
 """
 from __future__ import annotations
 
 import argparse
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -29,9 +32,16 @@ def stage_name(line: str) -> str:
     return stage if stage.startswith("kernels") else stage.split()[0]
 
 
-def timed_run(cache: str, out: str) -> tuple[float, dict[str, float]]:
-    """(wall seconds, seconds per stage) of one `diskfriction bifurcate` run."""
+def child_cpu() -> float:
+    """CPU seconds (user + system) of this process's children that have ended."""
+    used = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return used.ru_utime + used.ru_stime
+
+
+def timed_run(cache: str, out: str) -> tuple[float, float, dict[str, float]]:
+    """(wall seconds, CPU seconds, wall seconds per stage) of one `diskfriction bifurcate` run."""
     env = {**os.environ, "DISKFRICTION_CACHE": cache}
+    cpu = child_cpu()
     t0 = time.perf_counter()
     proc = subprocess.Popen([str(COMMAND), "bifurcate", str(ROOT / "scenes" / "paper.toml"),
                              "--out", out], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
@@ -45,7 +55,7 @@ def timed_run(cache: str, out: str) -> tuple[float, dict[str, float]]:
         raise SystemExit(f"diskfriction bifurcate failed (exit {proc.returncode})")
     end = time.perf_counter()
     stages[current] = stages.get(current, 0.0) + end - since
-    return end - t0, stages
+    return end - t0, child_cpu() - cpu, stages
 
 
 def main() -> None:
@@ -62,11 +72,12 @@ def main() -> None:
     print(f"diskfriction bifurcate scenes/paper.toml: medians of {args.repeat} repeats "
           f"({os.cpu_count()} cores)")
     for kind, results in runs.items():
-        wall = statistics.median(t for t, _ in results)
-        names = list(dict.fromkeys(name for _, stages in results for name in stages))
-        parts = ", ".join(f"{name} {statistics.median(s.get(name, 0.0) for _, s in results):.2f}"
+        wall = statistics.median(t for t, _, _ in results)
+        cpu = statistics.median(c for _, c, _ in results)
+        names = list(dict.fromkeys(name for _, _, stages in results for name in stages))
+        parts = ", ".join(f"{name} {statistics.median(s.get(name, 0.0) for _, _, s in results):.2f}"
                           for name in names)
-        print(f"  {kind}: {wall:.2f} s  ({parts})")
+        print(f"  {kind}: {wall:.2f} s, CPU {cpu:.2f} s  ({parts})")
 
 
 if __name__ == "__main__":

@@ -168,19 +168,21 @@ def draw_spectrum(top, bottom, F_x: np.ndarray, lam: np.ndarray, leg: np.ndarray
         handles.append(Patch(color="C1", alpha=0.25, label="a complex pair (located windows)"))
     bubbles = narrow_bubbles(collisions, pixel)
     in_bubble = {i for b in bubbles for i in (b, b + 1)}
+    marks = {BIRTH: [], DEATH: [], BUBBLE: []}  # (F_x, Im on top, Re below) of each marker
     for i, (p, kind, value) in enumerate(collisions):
         if i not in in_bubble:
-            marker, color = BIRTH if kind == Kind.BIRTH else DEATH
-            top.plot(p, 0.0, marker, color=color, ms=5)
-            if bottom is not None:
-                bottom.plot(p, re_values(value, scale), marker, color=color, ms=5)
+            marks[BIRTH if kind == Kind.BIRTH else DEATH].append((p, 0.0, value))
     for i in bubbles:
         (a, _, value), (b, _, _) = collisions[i], collisions[i + 1]
         inside = (F_x >= min(a, b)) & (F_x <= max(a, b)) & (leg == 1)
         height = float(np.max(np.where(upper[inside], lam.imag[inside], 0.0), initial=0.0))
-        top.plot(0.5 * (a + b), height, BUBBLE[0], color=BUBBLE[1], ms=5)
-        if bottom is not None:
-            bottom.plot(0.5 * (a + b), re_values(value, scale), BUBBLE[0], color=BUBBLE[1], ms=5)
+        marks[BUBBLE].append((0.5 * (a + b), height, value))
+    for (marker, color), points in marks.items():  # one line of markers per kind and panel
+        if points:
+            F, im, value = (np.array(column) for column in zip(*points))
+            top.plot(F, im, marker, color=color, ms=5)
+            if bottom is not None:
+                bottom.plot(F, re_values(value, scale), marker, color=color, ms=5)
     counts = {kind: sum(c[1] == kind for c in collisions) for kind in Kind}
     handles += [Line2D([], [], ls="", marker=BIRTH[0], color=BIRTH[1],
                        label=f"birth of a pair ({counts[Kind.BIRTH]})"),

@@ -1,4 +1,4 @@
-"""What every figure shares: the Agg backend, saving, legends, the Re-axis scale, event marks
+"""What every figure shares: an Agg canvas, saving, legends, the Re-axis scale, event marks
 and the three outcomes of a run (slid, stayed, not resolved).
 
 Plots only: no physics.
@@ -38,22 +38,23 @@ def outcome_word(slid: Optional[bool]) -> str:
     return {True: "slid", False: "stayed", None: "not resolved"}[None if slid is None else bool(slid)]
 
 
-def new_figure(*args, **kwargs):
-    """matplotlib.pyplot.subplots on the Agg backend, at DPI: the one place a figure starts."""
-    import matplotlib
+def new_figure(nrows: int = 1, ncols: int = 1, *, figsize=None, **kwargs):
+    """(figure, axes) as matplotlib.pyplot.subplots(nrows, ncols, figsize=..., **kwargs) gives
+    them, at DPI, on an Agg canvas of its own: the one place a figure starts. pyplot is not
+    imported (its figure registry and backend selection are of no use to a file written once:
+    0.03-0.06 s of a command's start)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt.subplots(*args, dpi=DPI, **kwargs)
+    fig = Figure(figsize=figsize, dpi=DPI)
+    FigureCanvasAgg(fig)
+    return fig, fig.subplots(nrows, ncols, **kwargs)
 
 
 def save_figure(fig, path: Path) -> None:
-    """Write `fig` atomically as PNG at DPI and close it: the one place a figure is saved."""
-    import matplotlib.pyplot as plt
-
+    """Write `fig` atomically as PNG at DPI: the one place a figure is saved (nothing to close:
+    no pyplot registry holds it)."""
     write_atomic(Path(path), lambda tmp: fig.savefig(tmp, dpi=DPI, format="png"))
-    plt.close(fig)
 
 
 def legend(ax, handles: list, **kwargs):
