@@ -199,7 +199,9 @@ def _packing_values(scene: PackingScene) -> dict[str, Any]:
 
 
 def _packing_scene(values: dict[str, Any], given: dict[str, Any], origin: str) -> PackingScene:
-    """The PackingScene of the checked dotted ``values``; as _scene for derived problems."""
+    """The PackingScene of the checked dotted ``values``; as _scene, a value that breaks a rule
+    of several keys (the typical overlap of pressure, k_n and R) names the first of them that
+    ``given`` sets."""
     try:
         effects = Effects(**{field: values[key] for field, key in PACKING_EFFECTS.items()},
                           pair_friction="disk-disk" in values["effects.friction"],
@@ -207,8 +209,11 @@ def _packing_scene(values: dict[str, Any], given: dict[str, Any], origin: str) -
         return PackingScene(**{field: values[key] for field, key in PACKING_FIELDS.items()},
                             effects=effects, source=origin)
     except SceneValueError as error:
-        key = PACKING_KEYS.get(error.fields[0], "effects.friction")
-        raise SceneError(origin, key, error.what, values.get(key)) from None
+        keys = [PACKING_KEYS.get(field, "effects.friction") for field in error.fields]
+        key = next((each for each in given if each in keys), keys[0])
+        made_of = ", ".join(f"{each} = {_show(values[each])}" for each in keys)
+        what = error.what if len(keys) == 1 else f"{error.what}, from {made_of}"
+        raise SceneError(origin, key, what, values.get(key)) from None
 
 
 def load_scene(path: str | os.PathLike[str]) -> Scene | PackingScene:

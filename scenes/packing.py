@@ -13,7 +13,7 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
-from diskfriction.scenes.rules import NORMAL_LAWS, PACKING_RULES
+from diskfriction.scenes.rules import MAX_OVERLAP, NORMAL_LAWS, PACKING_RULES
 from diskfriction.scenes.scene import Effects, SceneValueError, _check_fields
 
 
@@ -21,8 +21,9 @@ from diskfriction.scenes.scene import Effects, SceneValueError, _check_fields
 class PackingScene:
     """A packing of N disks: round(N fraction_small) of radius R, the rest of radius
     R size_ratio, placed from `seed` and minimised without friction to the 2D pressure
-    `pressure`; then friction is switched on (every history zero) and the box sheared from
-    gamma_range[0] to gamma_range[1]. Contacts obey the chain's laws (Hertz normal force
+    `pressure` (its typical overlap delta_0 at most MAX_OVERLAP R, scenes/rules.py); then
+    friction is switched on (every history zero) and the box sheared from gamma_range[0] to
+    gamma_range[1]. Contacts obey the chain's laws (Hertz normal force
     k_n delta^p with one k_n for every pair, smoothed Mindlin with k_t and mu; Effects) with
     lever arms R_i, R_j; the disks rotate. After a plastic event the packing relaxes by
     `relaxation` (packings/plastic.py): FIRE, or Newtonian dynamics with a drag of rate
@@ -58,6 +59,18 @@ class PackingScene:
         if self.effects.conventions != "model":
             raise SceneValueError("PackingScene", ("effects",), (self.effects,),
                                   'a packing takes conventions "model" only')
+        try:
+            overlap = self.delta_0 / self.R
+        except OverflowError:
+            overlap = math.inf
+        if not overlap <= MAX_OVERLAP:
+            p = float(NORMAL_LAWS[self.effects.normal])
+            largest = self.k_n * (MAX_OVERLAP * self.R) ** p / (2.0 * self.R)
+            raise SceneValueError(
+                "PackingScene", ("pressure", "k_n", "R"), (self.pressure, self.k_n, self.R),
+                f"the typical overlap at this pressure, delta_0 = (2 R P / k_n)^(1/p), is "
+                f"{overlap:.3g} R, more than {MAX_OVERLAP:g} R: the contact laws are laws of "
+                f"small overlaps; the largest pressure with this k_n and R is {largest:.3g}")
 
     @property
     def resolved_effects(self) -> Effects:

@@ -102,6 +102,29 @@ def _count(value: Any) -> int:
     return count
 
 
+PACKING_MIN_N = 16
+"""The fewest disks a packing scene takes. A periodic box jams a bidisperse packing only with
+enough disks: isostaticity asks 2 (N' - 1) + 1 contacts of the N' disks that are not rattlers,
+each with at least 3, and with nearest-image contacts a pair touches once, so the box must also
+be wider than twice the largest contact distance. Measured with the default mixture (radius
+ratio 1.4, half small) at P = 0.1 (docs/packings.md, Preparation): N = 4 and 5 never jam (5
+seeds each; FIRE stalls at max |F| = 15 to 190 in a box L = 2.3 to 2.7 narrower than 4 R_max =
+2.8); N = 6 to 12 jam, but seeds repeat the same few packings (N = 10: 4 of 10 seeds give
+phi = 0.8361, 3 give 0.8021), exactly isostatic (z = 4 - 2/N), and the shear to gamma = 0.005
+raised in 4 of 10 seeds at N = 10; from N = 14 on 10 seeds gave 10 distinct packings at or
+above isostaticity, and N = 12 to 24 sheared to gamma = 0.005 in every one of 10 seeds. 16
+leaves a margin over 14."""
+
+
+def _packing_count(value: Any) -> int:
+    """A packing's N: an integer of at least PACKING_MIN_N (its docstring says why)."""
+    count = int(expect(value, numbers.Integral, "an integer"))
+    if count < PACKING_MIN_N:
+        raise Invalid(f"must be >= {PACKING_MIN_N}: fewer disks in a periodic box jam into "
+                      f"the same few packings or not at all (docs/packings.md, Preparation)")
+    return count
+
+
 def _load_range(value: Any) -> tuple[float, float]:
     """F_x: an array [start, stop] of two finite numbers with 0 <= start < stop (NEGATIVE_LOAD
     says why not below 0)."""
@@ -117,9 +140,27 @@ def _load_range(value: Any) -> tuple[float, float]:
     return (start, stop)
 
 
+GAMMA_MAX = 1.0
+"""The largest shear strain a packing scene asks for. Quasistatic shear to order-one strain
+already takes a jammed packing through its transient to steady plastic flow, and past it the
+analysis is hours to days: 32 disks cost 20 to 40 minutes of full spectra per unit strain, 64
+disks two hours, 256 disks with a window [-3, 8] about 1.7 hours (docs/packings.md, Shear);
+the longest shear the tool was checked on is 256 disks to gamma = 0.05, and the 1000 plastic
+events a command passes last 32 disks at mu = 10 a strain of 0.4 (P = 0.01) to 5 (P = 0.1)."""
+
+
+MAX_OVERLAP = 0.1
+"""The largest typical overlap of a packing scene, delta_0 = (2 R P / k_n)^(1/p) at most this
+times R (PackingScene checks it): Hertz's law and the linear spring are laws of small overlaps
+(Hertz's contact radius sqrt(R_eff delta) is already 0.2 R at delta = 0.1 R), and the
+preparation finds no jammed state above phi = 0.95, which an affine compression of phi_J = 0.84
+by overlaps of 0.1 R nearly reaches (0.84 / (1 - 0.05)^2 = 0.93)."""
+
+
 def _strain_range(value: Any) -> tuple[float, float]:
-    """gamma: an array [start, stop] of two finite numbers with 0 <= start < stop (a negative
-    strain is the mirror image x -> -x of a positive one)."""
+    """gamma: an array [start, stop] of two finite numbers with 0 <= start < stop <= GAMMA_MAX
+    (a negative strain is the mirror image x -> -x of a positive one; GAMMA_MAX says why no
+    further)."""
     if len(expect(value, (list, tuple), "an array [start, stop]")) != 2:
         raise Invalid(f"expected exactly two numbers [start, stop], not {len(value)}")
     start, stop = map(number, value)
@@ -127,6 +168,10 @@ def _strain_range(value: Any) -> tuple[float, float]:
         raise Invalid("must be >= 0: a negative strain is the mirror image x -> -x of a positive one")
     if start >= stop:
         raise Invalid("empty range: start == stop" if start == stop else "reversed range: start > stop")
+    if stop > GAMMA_MAX:
+        raise Invalid(f"must be <= {GAMMA_MAX:g}: quasistatic shear to order-one strain already "
+                      f"reaches steady plastic flow, and beyond it takes hours to days "
+                      f"(docs/packings.md, Shear)")
     return (start, stop)
 
 
@@ -179,7 +224,7 @@ GEOMETRIES = ("chain", "packing")
 default), or a 2D packing in a sheared periodic box (scenes/packing.py, docs/packings.md)."""
 
 PACKING_RULES: dict[str, Rule] = {
-    "N": Rule(_count, "an integer >= 2"),
+    "N": Rule(_packing_count, f"an integer >= {PACKING_MIN_N}"),
     "size_ratio": _number_rule(lambda x: x >= 1.0, ">= 1"),
     "fraction_small": _number_rule(lambda x: 0.0 <= x <= 1.0, "in [0, 1]"),
     "pressure": POSITIVE,
@@ -190,7 +235,7 @@ PACKING_RULES: dict[str, Rule] = {
     "k_n": POSITIVE,
     "k_t": POSITIVE,
     "mu": _number_rule(lambda x: x >= 0.0, ">= 0"),
-    "gamma_range": Rule(_strain_range, "0 <= start < stop"),
+    "gamma_range": Rule(_strain_range, f"0 <= start < stop <= {GAMMA_MAX:g}"),
     "relaxation": _one_of(RELAXATIONS, "relaxation"),
     "damping": POSITIVE,
     "matrix": _one_of(MATRICES, "stability matrix"),

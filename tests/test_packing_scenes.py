@@ -39,7 +39,8 @@ def test_a_packing_scene_round_trips_through_format_scene(tmp_path):
     assert dataclasses.replace(load_scene(path), source=scene.source) == scene
 
 
-BAD = [("packing.N", "1", "must be >= 2"),
+BAD = [("packing.N", "1", "must be >= 16"),
+       ("packing.N", "15", "must be >= 16"),
        ("packing.size_ratio", "0.9", "must be >= 1"),
        ("packing.fraction_small", "1.5", "must be in [0, 1]"),
        ("packing.pressure", "-0.1", "must be > 0"),
@@ -49,6 +50,9 @@ BAD = [("packing.N", "1", "must be >= 2"),
        ("contacts.mu", "-1", "must be >= 0"),
        ("shear.gamma", "[0.1, 0.0]", "reversed range"),
        ("shear.gamma", "[-0.1, 0.1]", "must be >= 0"),
+       ("shear.gamma", "[0.0, 1e6]", "must be <= 1"),
+       ("packing.pressure", "1e6", "the typical overlap at this pressure"),
+       ("contacts.k_n", "1e-3", "the typical overlap at this pressure"),
        ("shear.relaxation", '"quench"', "unknown effect"),
        ("shear.damping", "0", "must be > 0"),
        ("effects.friction", '["substrate"]', "a packing has no substrate"),
