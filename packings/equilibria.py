@@ -138,15 +138,13 @@ DERIVATIVE_STEP = (1e-11, 1e-7)
 
 class NotJammed(OneLineError):
     """Every disk of the packing is loose: there is no contact network to shear. reason: why,
-    as words; after: the strain of the plastic event whose relaxation left the packing so, or
-    None (the prepared packing)."""
+    as words; where: the state, as the sentence's subject (the state a problem starts from:
+    "the packing")."""
 
-    def __init__(self, reason: str, after: float | None = None):
-        where = ("the packing" if after is None else f"after the plastic event at gamma = "
-                 f"{after:.9g} the packing relaxed into a state that")
+    def __init__(self, reason: str, where: str = "the packing"):
         super().__init__(f"{where} is not jammed ({reason}): there is no contact network to "
                          "shear")
-        self.reason = reason
+        self.reason, self.where = reason, where
 
 
 class MissedContact(RuntimeError):
@@ -539,7 +537,8 @@ class PackingEquilibria(Problem):
         """Commit at (q_new, gamma_new): the rows found again (histories carried by row), the
         loose disks pushed into given way (_release_pushed), then the gauge. True (re-solve
         there) when the cap acted, a loose disk moved or the loose disks changed.
-        MissedContact if a pair that was no row overlaps."""
+        MissedContact if a pair that was no row overlaps; NotJammed where every disk turned
+        loose (a packing near jamming can unjam under shear at fixed area)."""
         xi, slid = self.trial(q_new, gamma_new)
         rows = self.network.contacts(q_new, gamma_new, self.reach)
         xi_rows = carried(self.rows_c, xi, rows)
@@ -552,7 +551,10 @@ class PackingEquilibria(Problem):
         xi_rows[loose[rows[:, 0]] | loose[rows[:, 1]]] = 0.0  # nor any history: a disk joins afresh
         moved = self._release_pushed(q_new, rows, gamma_new)
         sliding = carried(self.rows_c, (slid | self.sliding) & self.active, rows) > 0
-        self._set_committed(q_new if moved is None else moved, xi_rows, rows, gamma_new, sliding)
+        try:
+            self._set_committed(q_new if moved is None else moved, xi_rows, rows, gamma_new, sliding)
+        except NotJammed as error:  # the shear unloaded every contact: the packing unjammed
+            raise NotJammed(error.reason, f"sheared to gamma = {gamma_new:.9g}, the packing") from None
         return capped or moved is not None or not np.array_equal(loose, self.gauge.loose)
 
     def resolve_start(self, u_new: np.ndarray) -> np.ndarray:

@@ -131,23 +131,32 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
     spectral_window.widened), or None: every eigenvalue, a dense spectrum per sample.
     done: the finished segments of an interrupted run with the same inputs (packings/segments.py):
     the run goes on where the next one starts, with the same result as a run never
-    interrupted; on_segment(segment) is told each segment finished here once it is passed."""
+    interrupted; on_segment(segment) is told each segment finished here once it is passed.
+    Without tangential forces (mu = 0, or the tangential law "none") the spectrum is real and
+    no collision is looked for (with a window the scans stay on: they certify its columns);
+    NotJammed where the packing unjams (under shear, or in a relaxation)."""
     network = network_of(scene, packing)
     mass = mass_diagonal(network, scene.m, scene.inertia)
     affine = float(np.linalg.norm(packing.positions[:, 1]))
     ds_max = params.ds_max or STEP_IN_STRAIN * affine
     options = replace(params, ds_max=ds_max, ds=params.ds or ds_max / 4,
                       ds_min=params.ds_min or 1e-8 * ds_max)
+    if not network.frictional and window is None:
+        # a real spectrum (J symmetric): no collision to look for (a window's label continuity
+        # is certified by the detection's scans, so they stay on there)
+        options = replace(options, detection=replace(options.detection, enabled=False))
     segments = list(done)
     begin = segments[-1].next_start if segments else (*start(network, packing.positions), 0.0)
     while True:
         try:
             segment = shear_segment(network, mass, scene, options, window, begin, len(segments),
                                     sum(len(s.continued) for s in segments), progress)
-        except NotJammed as error:
-            if not segments:
+        except NotJammed as error:  # at the start of a segment after a plastic event
+            if not segments or error.where != "the packing":
                 raise
-            raise NotJammed(error.reason, segments[-1].plastic.gamma) from None
+            raise NotJammed(error.reason, f"after the plastic event at gamma = "
+                                          f"{segments[-1].plastic.gamma:.9g} the packing relaxed "
+                                          f"into a state that") from None
         segments.append(segment)
         if segment.status.code not in PLASTIC or len(segments) > plastic_events:
             break

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from diskfriction.packings.equilibria import PackingEquilibria, mass_diagonal, start
+from diskfriction.packings.equilibria import NotJammed, PackingEquilibria, mass_diagonal, start
 from diskfriction.packings.prepared import prepare_scene
 from diskfriction.packings.shear import ShearParams, network_of, shear
 from diskfriction.scenes import Effects
@@ -61,6 +61,18 @@ def test_no_complex_pair_is_ever_found_and_j_is_symmetric_at_every_point(branch,
         assert abs(J - J.T).max() <= 1e-12 * abs(J).max()
     assert not branch.n_complex.any() and not branch.collisions
     assert not branch.eigenvalues.imag.any()
+
+
+def test_a_spectral_window_tracks_the_dense_spectrums_real_eigenvalues(branch, packing):
+    """With a window (sparse shift-invert of the non-symmetric tracked matrix) the eigenvalues
+    in it are the dense run's, real, at the same points; no collision is found."""
+    windowed = shear(SCENE, packing, ShearParams(workers=0), plastic_events=20, window=(-3.0, 8.0))
+    assert np.array_equal(windowed.gamma, branch.gamma) and not windowed.collisions
+    assert not windowed.n_complex.any() and not np.nan_to_num(windowed.eigenvalues.imag).any()
+    for dense, window in zip(branch.eigenvalues, windowed.eigenvalues):
+        inside = np.sort(dense[(dense != 0) & (dense.real >= -3) & (dense.real <= 8)].real)
+        seen = np.sort(window[~np.isnan(window) & (window.real >= -3) & (window.real <= 8)].real)
+        assert inside.size == seen.size and np.allclose(inside, seen, rtol=0, atol=1e-9)
 
 
 def test_the_unknowns_are_the_positions_and_the_spectrum_is_the_networks(packing):
@@ -147,3 +159,21 @@ def test_a_branch_that_cannot_start_says_where_in_words():
         continuation(singular, np.array([0.0]), 0.0, workers=0)
     assert str(flat.value).startswith("the branch has no tangent at its start, parameter = 0 (")
     assert "p0" not in str(none.value) + str(flat.value)
+
+
+def test_a_packing_that_unjams_under_shear_ends_there_in_one_line():
+    """64 frictionless disks, seed 1, prepared at P = 0.1: at fixed area the shear unloads the
+    packing across its plastic events until every contact is below delta_hold and no disk is
+    held by two. The shear ends there with one line naming the strain, the pressure of the last
+    segment passed fallen over a thousandfold."""
+    scene = PackingScene(N=64, seed=1, mu=0.0, gamma_range=(0.0, 0.0087))
+    passed = []
+    with pytest.raises(NotJammed) as unjammed:
+        shear(scene, prepare_scene(scene), ShearParams(workers=0), plastic_events=50,
+              on_segment=passed.append)
+    message = str(unjammed.value)
+    assert message.startswith("sheared to gamma = ") and "not jammed" in message and "\n" not in message
+    strain = float(message.split("sheared to gamma = ")[1].split(",")[0])
+    assert passed and passed[-1].points[-1].gamma < strain <= scene.gamma_range[1]
+    pressure = [-(p.stress[0] + p.stress[1]) / 2 for p in (passed[0].points[0], passed[-1].points[-1])]
+    assert pressure[1] < 1e-3 * pressure[0]
