@@ -232,7 +232,7 @@ class _GaugeMaps:
         n, N = network.ndof, network.N
         keep, gauge = np.ones(n), np.zeros(n)
         keep[g.rows], gauge[g.rows] = 0.0, 1.0
-        inverse_mass = sp.diags_array(1.0 if matrix is Matrix.J else 1.0 / mass, shape=(n, n))
+        inverse_mass = sp.diags_array(np.ones(n) if matrix is Matrix.J else 1.0 / mass)
         E = sp.eye_array(n, format="csr")[:, g.kept]
         embed = sp.csr_array((np.ones(g.kept.size), (g.kept, np.arange(g.kept.size))),
                              shape=(n, g.kept.size))
