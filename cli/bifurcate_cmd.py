@@ -4,7 +4,6 @@ for any problem (cli/problem_cmd.py)."""
 from __future__ import annotations
 
 import argparse
-import json
 import math
 from pathlib import Path
 
@@ -12,6 +11,7 @@ from diskfriction.cli.common import (EXIT_FAILED, CommandError, add_matrix_argum
                                      add_scene_argument, bracketed_only, check_memory,
                                      matrix_from_args, number, output_dir, path, scene_from_args)
 from diskfriction.cli.progress import Progress
+from diskfriction.files import json_text
 from diskfriction.words import count
 from diskfriction.scenes.packing import PackingScene
 from diskfriction.scenes.scene import NEGATIVE_LOAD
@@ -206,8 +206,8 @@ def _run(args: argparse.Namespace) -> int:
         progress.close()
     records = collision_records(branch)
     if args.json:
-        print(json.dumps([{k: r[k] for k in ("F_x", "kind", "lambda_re", "lambda_im", "matrix")}
-                          for r in records], indent=1))
+        print(json_text([{k: r[k] for k in ("F_x", "kind", "lambda_re", "lambda_im", "matrix")}
+                         for r in records]))
     else:
         print(f"{count(len(branch), 'equilibrium', 'equilibria')}, max residual {branch.residual.max():.1e}, "
               f"{branch.events} contact events split")

@@ -158,7 +158,7 @@ def _continue(spec, label: str, span, options, out: Path, as_json: bool,
               switch: tuple[int, int] | None = None) -> int:
     """Check the problem at the start, continue it (with `switch`, (k, side): then the second
     branch through its branch point k, switch_branch), write and print the results."""
-    import json
+    from diskfriction.files import json_text
 
     from diskfriction.continuation.api import ProblemError, check_problem, solve_branch
     from diskfriction.continuation.arclength import ContinuationError
@@ -201,8 +201,8 @@ def _continue(spec, label: str, span, options, out: Path, as_json: bool,
         progress.close()
     records = collision_json(result, spec)
     if as_json:
-        print(json.dumps([{k: r[k] for k in (spec.parameter, "kind", "lambda_re", "lambda_im", "matrix")}
-                          for r in records], indent=1))
+        print(json_text([{k: r[k] for k in (spec.parameter, "kind", "lambda_re", "lambda_im", "matrix")}
+                         for r in records]))
     else:
         if switch is not None:
             print(f"the second branch through branch point {switch[0] + 1}"

@@ -77,8 +77,10 @@ def simulate(network: Network, q: np.ndarray, v: np.ndarray, xi: np.ndarray, row
     while done < steps:
         speed = float(np.abs(v).max())
         between = max(1, min(every - done % every, int(0.5 * reach / (speed * dt + 1e-300))))
-        capped += network.kernels.advance(q, v, xi, network.radii, rows, params, inv_mass, dt,
-                                          between, F, work, 0.0)
+        slides = network.kernels.advance(q, v, xi, network.radii, rows, params, inv_mass, dt,
+                                         between, F, work, 0.0)
+        if network.frictional:  # without tangential forces no contact slides: no history to cap
+            capped += slides
         done += between
         new_rows = network.contacts(q, gamma, reach)
         xi = carried(rows, xi, new_rows)

@@ -316,7 +316,7 @@ def plot_spectrum(branch: PackingBranch, sigma: np.ndarray, runs: list[MsdRun],
                                                  lambda v: v * omega_0)).set_ylabel(
             r"$\sigma / \omega_0$")
     else:
-        rate.set_ylabel(rf"largest |Im $\sqrt{{\lambda}}$| of J [raw units]")
+        rate.set_ylabel(r"largest |Im $\sqrt{\lambda}$| of J [raw units]")
     for ax in (low, rate):
         strain_lines(ax, [e.gamma for e in branch.plastic], **PLASTIC_STYLE)
         handles = state_marks(ax, runs)  # the same handles in both panels

@@ -177,3 +177,20 @@ def test_a_packing_that_unjams_under_shear_ends_there_in_one_line():
     assert passed and passed[-1].points[-1].gamma < strain <= scene.gamma_range[1]
     pressure = [-(p.stress[0] + p.stress[1]) / 2 for p in (passed[0].points[0], passed[-1].points[-1])]
     assert pressure[1] < 1e-3 * pressure[0]
+
+
+def test_a_frictionless_run_counts_no_sliding_update(branch, packing):
+    """Dynamics of the frictionless packing from its sheared state with random velocities: no
+    contact carries a tangential force, so none slides (the Coulomb cap at t* = 0 acted at
+    every step and was counted, about 1e5 updates in 100 time units), and the energy budget
+    E_k + U_n closes."""
+    from diskfriction.packings.dynamics import simulate, time_step
+
+    network = network_of(SCENE, packing)
+    mass = mass_diagonal(network, SCENE.m, SCENE.inertia)
+    k = len(branch) - 1
+    v = np.random.default_rng(1).normal(size=network.ndof) * 1e-6
+    run = simulate(network, branch.q[k], v, branch.xi[k], branch.rows[k], branch.gamma[k], mass,
+                   time_step(branch.eigenvalues[k]), 100.0)
+    assert not run.capped.any()
+    assert np.ptp(run.budget) <= 1e-3 * run.kinetic.max()
