@@ -42,6 +42,8 @@ def run_packing(args: argparse.Namespace, scene: PackingScene,
     diagram.png together (reports/packing_outputs.save_packing_outputs); exit 1 with one line
     when the branch ends short of the scene's strain (a plastic event, a fold in gamma), after
     writing what it reached. An --out holding another scene's files is refused (exit 2)."""
+    from diskfriction.cli.common import check_packing_bifurcate
+    check_packing_bifurcate(args, scene, window)
     for option, why in CHAIN_ONLY.items():
         if getattr(args, option) is not None:
             flag = "--" + option.replace("_", "-")
@@ -188,6 +190,8 @@ def run_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> int:
     fastest-growing complex pair, else random velocities), integrate, and compare the measured
     growth rate with the spectrum's. Writes run.npz, summary.json, run.png and snapshot.png
     (the packing at G, its contact forces and the perturbation)."""
+    from diskfriction.cli.common import check_packing_simulate
+    check_packing_simulate(args, scene)
     from diskfriction.cli.common import number, run_length
 
     for option, why in {"fx": "a packing's load is its strain: --gamma G",
@@ -290,6 +294,9 @@ def run_packing_verify(args: argparse.Namespace, scene: PackingScene) -> int:
     VERIFY_STATES states: along the fastest complex pair's eigenvector from states with complex
     pairs, random velocities from states with every eigenvalue real; tabulate the growth rate
     measured against the spectrum's and whether contacts slid. Writes verify.json, verify.md."""
+    from diskfriction.cli.common import check_packing
+    check_packing("verify", scene, strain=scene.gamma_range[1], runs=sum(VERIFY_STATES),
+                  t_end=args.t_end)
     from diskfriction.cli.common import number
 
     number("verify", "t-end", args.t_end)

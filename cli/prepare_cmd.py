@@ -10,7 +10,7 @@ import time
 from importlib import resources
 from pathlib import Path
 
-from diskfriction.cli.common import CommandError, output_dir, scene_from_args
+from diskfriction.cli.common import CommandError, check_packing, output_dir, scene_from_args
 from diskfriction.cli.packing_cmd import refuse_other_scene
 from diskfriction.cli.progress import Progress
 from diskfriction.scenes.packing import PackingScene
@@ -40,6 +40,7 @@ def run(args: argparse.Namespace) -> int:
     if not isinstance(scene, PackingScene):
         raise CommandError(f"prepare error: {scene.source}: a chain scene: prepare takes a "
                            f"packing scene (geometry = \"packing\", docs/packings.md)")
+    check_packing("prepare", scene)
     out = output_dir("prepare", args.out, Path("out") / "prepare" / scene.name)
     refuse_other_scene("prepare", out, scene)
     from diskfriction.files import save_json

@@ -4,7 +4,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from diskfriction.cli.common import CommandError, chain_scene, check_memory, output_dir
+from diskfriction.cli.common import (CommandError, chain_scene, check_memory, check_packing,
+                                     output_dir)
 from diskfriction.scenes.load import default_scene_path, load_scene
 from diskfriction.scenes.packing import PackingScene
 
@@ -87,6 +88,7 @@ def run_packing_report(args: argparse.Namespace, files: list, scenes: list) -> i
     from diskfriction.reports.packing_report import build_packing_report
 
     scene = scenes[0]
+    check_packing("report", scene, strain=scene.gamma_range[1])
     out = output_dir("report", args.out, Path("out/report") / scene.name)
     progress = Progress("report")
     try:

@@ -154,7 +154,8 @@ MAX_OVERLAP = 0.1
 times R (PackingScene checks it): Hertz's law and the linear spring are laws of small overlaps
 (Hertz's contact radius sqrt(R_eff delta) is already 0.2 R at delta = 0.1 R), and the
 preparation finds no jammed state above phi = 0.95, which an affine compression of phi_J = 0.84
-by overlaps of 0.1 R nearly reaches (0.84 / (1 - 0.05)^2 = 0.93)."""
+by overlaps of 0.1 R nearly reaches (0.84 / (1 - 0.05)^2 = 0.93; measured: 32 disks at
+delta_0 = 0.1 R, P = 22.4 with the default k_n, jam at phi = 0.925 and 0.927 for seeds 1, 2)."""
 
 
 def _strain_range(value: Any) -> tuple[float, float]:
