@@ -107,10 +107,10 @@ PACKING_MIN_N = 16
 enough disks: isostaticity asks 2 (N' - 1) + 1 contacts of the N' disks that are not rattlers,
 each with at least 3, and with nearest-image contacts a pair touches once, so the box must also
 be wider than twice the largest contact distance. Measured with the default mixture (radius
-ratio 1.4, half small) at P = 0.1 (docs/packings.md, Preparation): N = 4 and 5 never jam (5
-seeds each; FIRE stalls at max |F| = 15 to 190 in a box L = 2.3 to 2.7 narrower than 4 R_max =
-2.8); N = 6 to 12 jam, but seeds repeat the same few packings (N = 10: 4 of 10 seeds give
-phi = 0.8361, 3 give 0.8021), exactly isostatic (z = 4 - 2/N), and the shear to gamma = 0.005
+ratio 1.4, half small) at P = 0.1: N = 4 and 5 never jam (5 seeds each; FIRE stalls at max
+|F| = 15 to 190, the box at phi = 0.88, L = 2.3 and 2.65, narrower than 4 R_max = 2.8); N = 6
+to 12 jam, but seeds repeat the same few packings (N = 10: 4 of 10 seeds give phi = 0.8361, 3
+give 0.8021), most of them exactly isostatic (z = 4 - 2/N'), and the shear to gamma = 0.005
 raised in 4 of 10 seeds at N = 10; from N = 14 on 10 seeds gave 10 distinct packings at or
 above isostaticity, and N = 12 to 24 sheared to gamma = 0.005 in every one of 10 seeds. 16
 leaves a margin over 14."""
