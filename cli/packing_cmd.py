@@ -14,7 +14,6 @@ from __future__ import annotations
 import argparse
 import collections
 import dataclasses
-import json
 import math
 import shutil
 import sys
@@ -23,6 +22,7 @@ from pathlib import Path
 from diskfriction.cli.common import (EXIT_FAILED, CommandError, bracketed_only, matrix_from_args,
                                      output_dir)
 from diskfriction.cli.progress import Progress
+from diskfriction.files import json_text
 from diskfriction.scenes.packing import PackingScene
 from diskfriction.words import count
 
@@ -62,7 +62,7 @@ def run_packing(args: argparse.Namespace, scene: PackingScene,
     from diskfriction.continuation.collisions import DetectionParams
     from diskfriction.continuation.spectral_window import WindowCrowded
     from diskfriction.files import save_json
-    from diskfriction.packings.equilibria import MissedContact
+    from diskfriction.packings.equilibria import MissedContact, NotJammed
     from diskfriction.packings.plastic import RelaxationFailed
     from diskfriction.packings.prepared import prepare_scene
     from diskfriction.packings.segments import save_segment
@@ -90,7 +90,8 @@ def run_packing(args: argparse.Namespace, scene: PackingScene,
                            plastic_events=PLASTIC_EVENTS, window=window, done=done,
                            on_segment=lambda segment: save_segment(
                                kept / SEGMENT_FILE.format(segment.points[-1].segment), segment, key))
-        except (ContinuationError, MissedContact, RelaxationFailed, WindowCrowded) as error:
+        except (ContinuationError, MissedContact, NotJammed, RelaxationFailed,
+                WindowCrowded) as error:
             kept_line = (f" (the segments finished before it are kept in {kept}: a rerun resumes "
                          "after them)" if any(kept.glob("segment-*.npz")) else "")
             raise CommandError(f"bifurcate error: {scene.source}: {error}{kept_line}",
@@ -110,14 +111,15 @@ def run_packing(args: argparse.Namespace, scene: PackingScene,
         progress.close()
     records = collision_records(branch)
     if args.json:
-        print(json.dumps(records, indent=1))
+        print(json_text(records))
     else:
         print(f"{count(len(branch), 'equilibrium', 'equilibria')} from gamma = 0 to "
               f"{branch.gamma[-1]:.6g}, max residual {branch.residual.max():.1e}, "
               f"{branch.events} contact events split; {branch.contacts[0]} -> "
               f"{branch.contacts[-1]} contacts, {branch.loose[-1]} loose disks")
         print(f"{count(len(branch.plastic), 'plastic event')} passed (branch lost, relaxed "
-              f"with friction):")
+              f"{'with' if scene.resolved_effects.pair_friction else 'without'} friction)"
+              f"{':' if branch.plastic else ''}")
         for e in branch.plastic:
             print(f"  gamma = {e.gamma:.9f} ({e.kind}): sigma_xy {e.stress_before:.6g} -> "
                   f"{e.stress_after:.6g}")

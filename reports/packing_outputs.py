@@ -194,8 +194,9 @@ def plot_packing_diagram(branch: PackingBranch, scene: PackingScene, path: Path)
     folds = [e.gamma for e in branch.plastic]
     for ax in (stress, pairs, im):
         strain_lines(ax, folds, **PLASTIC_STYLE)
-    stress.plot(folds, np.ones(len(folds)), "v", color="k", ms=6, zorder=6, clip_on=False,
-                transform=stress.get_xaxis_transform())
+    if folds:  # (an empty line in axis coordinates breaks tight_layout)
+        stress.plot(folds, np.ones(len(folds)), "v", color="k", ms=6, zorder=6, clip_on=False,
+                    transform=stress.get_xaxis_transform())
     stress.set_ylabel(r"$\sigma_{xy}$ [force / length]")
     stress.legend(handles=[Line2D([], [], color="tab:red", lw=1, label="birth of a complex pair"),
                            Line2D([], [], color="tab:blue", lw=1, label="death of a complex pair"),
@@ -203,20 +204,30 @@ def plot_packing_diagram(branch: PackingBranch, scene: PackingScene, path: Path)
                                   label="plastic event (fold)")],
                   fontsize=7, loc="upper left", framealpha=0.9).set_zorder(7)
     pairs.step(gamma, branch.n_complex, where="post", color="k", lw=1)
+    pairs.set_ylim(-0.05 * max(1, branch.n_complex.max()), 1.05 * max(1, branch.n_complex.max()))
     pairs.set_ylabel("complex pairs" + (" in the window" if window is not None else ""))
     lam = branch.eigenvalues
-    shown = np.isfinite(lam) & (lam.imag > 1e-12 * np.nanmax(np.abs(lam)))  # one per pair
+    tracked = np.isfinite(lam)
     if window is not None:  # nan: a window column not tracked at that state
-        shown &= Window(*window).inside(np.nan_to_num(lam, nan=np.inf))
+        tracked &= Window(*window).inside(np.nan_to_num(lam, nan=np.inf))
+    shown = tracked & (lam.imag > 1e-12 * np.nanmax(np.abs(lam)))  # one per pair
     g = np.broadcast_to(gamma[:, None], lam.shape)
-    im.plot(g[shown], lam.imag[shown], ".", ms=1.5, color="tab:purple", zorder=6)
     unit = eigenvalue_unit(branch.matrix)
     inside = "" if window is None else r", Re $\lambda$ in the window"
-    im.set_ylabel(rf"Im $\lambda$ of {branch.matrix}{inside} {unit}")
+    if shown.any():
+        im.plot(g[shown], lam.imag[shown], ".", ms=1.5, color="tab:purple", zorder=6)
+        part = "Im"
+    else:  # a real spectrum (a frictionless packing): its softest mode, which vanishes at a fold
+        positive = np.where(tracked & (lam.real > 1e-12 * np.nanmax(np.abs(lam))), lam.real, np.inf)
+        im.semilogy(gamma, positive.min(axis=1), color="tab:green", lw=1, zorder=6)
+        im.text(0.02, 0.92, "no complex eigenvalue on this branch: the softest mode",
+                transform=im.transAxes, fontsize=8, va="top")
+        part = "lowest Re"
+    im.set_ylabel(rf"{part} $\lambda$ of {branch.matrix}{inside} {unit}")
     if str(branch.matrix) == str(Matrix.M_INV_J):
         w2 = scene.omega_0 ** 2
         im.secondary_yaxis("right", functions=(lambda v: v / w2, lambda v: v * w2)).set_ylabel(
-            r"Im $\lambda / \omega_0^2$")
+            rf"{part} $\lambda / \omega_0^2$")
     im.set_xlabel(strain)
     title = (f"{scene.name}: N = {scene.N}, P = {scene.pressure:g}, mu = {scene.mu:g}; "
              f"{count(len(branch.collisions), 'collision')}, "

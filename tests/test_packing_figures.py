@@ -70,6 +70,26 @@ def test_the_diagrams_plastic_events_lie_over_its_many_collisions(figures):
     assert plastic.get_linewidth()[0] > collisions.get_linewidth()[0]
 
 
+def test_a_real_spectrum_draws_its_softest_mode_and_lays_out(figures):
+    """A frictionless branch (every eigenvalue real, exact zeros for its gauge modes) with no
+    plastic event: the lower panel draws the lowest positive eigenvalue at every state (the
+    Im panel was empty) and says why, and the layout applies (an empty marker line in axis
+    coordinates made tight_layout give up with a warning)."""
+    import warnings
+
+    branch = shear_branch(collisions=0)
+    lam = np.abs(branch.eigenvalues.real) + 1.0
+    lam[:, :3] = 0.0  # the gauge rows' zeros
+    branch.eigenvalues, branch.n_complex, branch.plastic = lam + 0j, np.zeros(40, int), []
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        packing_outputs.plot_packing_diagram(branch, PackingScene(), Path("diagram.png"))
+    im = figures[-1].axes[2]
+    (line,) = im.lines
+    assert np.array_equal(line.get_ydata(), lam[:, 3:].min(axis=1))
+    assert "lowest Re" in im.get_ylabel() and "no complex eigenvalue" in im.texts[0].get_text()
+
+
 def plastic_line(ax):
     """The collection of the single vertical line at gamma = 0.5 in `ax`."""
     found = [c for c in ax.collections if hasattr(c, "get_segments")
