@@ -139,8 +139,10 @@ def test_a_relaxation_that_unjams_the_packing_ends_the_shear_in_one_line(tmp_pat
                      "[shear]\ngamma = [0.0, 0.021]\n")
     assert main(["bifurcate", str(scene), "--out", str(tmp_path / "out")]) == 1
     line = capsys.readouterr().err.strip().splitlines()[-1]
-    assert line.startswith("bifurcate error: after the plastic event at gamma = 0.0203")
+    assert line.startswith(f"bifurcate error: {scene}: after the plastic event at gamma = 0.0203")
     assert "not jammed" in line and "p0" not in line
+    assert line.endswith(f"(the segments finished before it are kept in {tmp_path / 'out' / 'segments'}: "
+                         "a rerun resumes after them)")
 
 
 def test_a_branch_that_cannot_start_says_where_in_words():
