@@ -216,7 +216,8 @@ def run_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> int:
     from diskfriction.files import save_json, save_npz
     from diskfriction.packings.dynamics import run_steps, time_step
     from diskfriction.packings.runs import FRAMES, NoComplexPair, linearized, run_from_state
-    from diskfriction.reports.packing_outputs import plot_packing_run, plot_packing_snapshot
+    from diskfriction.reports.packing_outputs import (plot_packing_run, plot_packing_snapshot,
+                                                      scene_arrays, scene_record)
 
     # a packing's strain range is positive: --gamma 0 shears one short step and runs from the
     # branch's first state, at gamma = 0 exactly
@@ -243,7 +244,7 @@ def run_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> int:
         except NoComplexPair as error:
             raise CommandError(f"simulate error: --perturbation: {error}") from None
         run, gamma, sigma, fit = done.run, done.gamma, done.sigma_predicted, done.fit
-        summary = {"scene": scene.name, "gamma": gamma, "perturbation": kind,
+        summary = {"scene": scene_record(scene), "gamma": gamma, "perturbation": kind,
                    "amplitude": amplitude, "dt": run.dt, "t_end": float(run.t[-1]),
                    "sigma_predicted": sigma, "sigma_measured": fit.as_dict()["sigma"],
                    "fit": fit.as_dict(), "budget_drift": done.drift,
@@ -251,7 +252,7 @@ def run_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> int:
                    "sliding_updates": int(run.capped[-1]), "complex_pairs": done.pairs}
         save_npz(out / "run.npz", t=run.t, q=run.q, distance=done.distance,
                  amplitude=done.mode_amplitude, budget=run.budget, kinetic=run.kinetic,
-                 capped=run.capped)
+                 capped=run.capped, **scene_arrays(scene))
         save_json(out / "summary.json", summary)
         plot_packing_run(run.t, done.distance, sigma, fit.sigma, scene, gamma, out / "run.png",
                          (fit.t_start, fit.t_end), done.mode_amplitude)
@@ -313,6 +314,7 @@ def run_packing_verify(args: argparse.Namespace, scene: PackingScene) -> int:
     from diskfriction.files import save_json, save_text
     from diskfriction.packings.runs import linearized, run_from_state
     from diskfriction.packings.shear import ShearParams
+    from diskfriction.reports.packing_outputs import scene_record
 
     progress = Progress("verify")
     try:
@@ -341,7 +343,7 @@ def run_packing_verify(args: argparse.Namespace, scene: PackingScene) -> int:
                 unmeasured.append(f"verify warning: no growth rate measured from gamma = "
                                   f"{done.gamma:.6g}: {done.fit.reason}")
         table = packing_verify_table(rows)
-        save_json(out / "verify.json", {"scene": scene.name, "t_end": args.t_end,
+        save_json(out / "verify.json", {"scene": scene_record(scene), "t_end": args.t_end,
                                         "amplitude": args.amplitude, "runs": rows})
         save_text(out / "verify.md", table)
     finally:

@@ -125,7 +125,7 @@ def save_packing_branch(out: Path, branch: PackingBranch, scene: PackingScene) -
              segment=branch.segment, plastic_gamma=np.array([e.gamma for e in branch.plastic]),
              n_complex=branch.n_complex, residual=branch.residual, contacts=branch.contacts,
              loose=branch.loose, stress=branch.stress, matrix=np.array(str(branch.matrix)),
-             status=np.array(str(branch.status)), **scene_arrays(scene))
+             status=np.array(branch.status.sentence(len(branch))), **scene_arrays(scene))
     record = scene_record(scene)
     save_json(out / "collisions.json", {"scene": record, "matrix": str(branch.matrix),
                                         "collisions": collision_records(branch)})

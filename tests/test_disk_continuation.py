@@ -124,8 +124,8 @@ def test_bad_sweep_ranges_are_refused(paper_system, F_from, F_to):
 
 def test_a_sweeps_parameters_are_the_apis_options_with_the_disk_problems_defaults():
     """One set of continuation parameters (issue 24 item 5): SweepParams is an Options, and
-    differs from its defaults only where its docstring says why (steps, their metric and the
-    tolerance of the disk problem, no special points) and by the spectral window; Options takes the core's
+    differs from its defaults only where its docstring says why (steps, their metric, raw units
+    and the tolerance of the disk problem, no special points) and by the spectral window; Options takes the core's
     Newton defaults rather than copies."""
     from dataclasses import fields
 
@@ -135,6 +135,7 @@ def test_a_sweeps_parameters_are_the_apis_options_with_the_disk_problems_default
     sweep, api = SweepParams(), Options()
     assert isinstance(sweep, Options)
     differ = {f.name for f in fields(SweepParams) if getattr(sweep, f.name) != getattr(api, f.name, None)}
-    assert differ == {"ds_min", "newton_tol", "max_steps", "special_points", "theta"}  # window: None in both
+    assert differ == {"ds_min", "newton_tol", "max_steps", "special_points", "theta", "p_scale",
+                      "residual_scale"}  # window: None in both; the chain's raw units (scales 1)
     core = ContinuationParams()
     assert (api.newton_tol, api.max_newton, api.max_steps) == (core.newton_tol, core.max_newton, core.max_steps)

@@ -123,6 +123,59 @@ def test_every_json_file_is_strict_json(outputs):
         strict(path.read_text(encoding="utf-8"))
 
 
+PACKING = ('geometry = "packing"\nname = "tiny-packing"\n[packing]\nN = 16\nseed = 3\n'
+           "[shear]\ngamma = [0.0, 0.002]\n")
+
+
+@pytest.fixture(scope="module")
+def packing_outputs(tmp_path_factory) -> Path:
+    """A folder with the packing commands' outputs for a 16-disk packing sheared to 0.002 (one
+    plastic event, complex pairs)."""
+    root = tmp_path_factory.mktemp("packing_outputs")
+    scene = root / "tiny.toml"
+    scene.write_text(PACKING, encoding="utf-8")
+    for argv in (["prepare", str(scene), "--out", str(root / "prepare")],
+                 ["bifurcate", str(scene), "--out", str(root / "bifurcate")],
+                 ["simulate", str(scene), "--gamma", "0.001", "--t-end", "20",
+                  "--out", str(root / "simulate")],
+                 ["verify", str(scene), "--t-end", "5", "--out", str(root / "verify")]):
+        assert main(argv) == 0, argv
+    return root
+
+
+@pytest.mark.parametrize(("section", "file"), [
+    ("branch.npz (bifurcate PACKING_SCENE)", "bifurcate/branch.npz"),
+    ("packing.npz (prepare, bifurcate PACKING_SCENE)", "bifurcate/packing.npz"),
+    ("packing.npz (prepare, bifurcate PACKING_SCENE)", "prepare/packing.npz"),
+    ("run.npz (simulate PACKING_SCENE)", "simulate/run.npz"),
+])
+def test_packing_npz_keys_are_documented(packing_outputs, section, file):
+    with np.load(packing_outputs / file, allow_pickle=False) as arrays:
+        assert_documented(section, set(arrays.files))
+        assert str(arrays["scene"]) == "tiny-packing" and int(arrays["N"]) == 16
+
+
+@pytest.mark.parametrize(("section", "file", "items"), [
+    ("packing.json (prepare)", "prepare/packing.json", None),
+    ("summary.json (simulate PACKING_SCENE)", "simulate/summary.json", None),
+    ("collisions.json (bifurcate PACKING_SCENE)", "bifurcate/collisions.json", "collisions"),
+    ("plastic.json (bifurcate PACKING_SCENE)", "bifurcate/plastic.json", "events"),
+    ("verify.json (verify PACKING_SCENE)", "verify/verify.json", "runs"),
+])
+def test_packing_json_keys_and_scene_record_are_documented(packing_outputs, section, file, items):
+    """Each file's keys (of each object of its array `items`, where the page's table lists
+    those) as the page lists them, and its scene record's keys as 'The scene record' lists."""
+    from test_json_strict import strict
+
+    value = strict((packing_outputs / file).read_text(encoding="utf-8"))
+    listed = value if items is None else value[items]
+    assert listed, f"{file}: nothing to compare"
+    assert_documented(section, paths(listed))
+    record = value["scene"]
+    assert_documented("The scene record (every packing output)", set(record))
+    assert record["name"] == "tiny-packing" and record["physics"]["N"] == 16
+
+
 def test_ensemble_runs_are_summaries(outputs):
     run = next((outputs / "ensemble" / "runs").rglob("*.json"))
     assert_documented("summary.json (simulate)", paths(json.loads(run.read_text())))
