@@ -224,7 +224,7 @@ def run_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> int:
     scene = dataclasses.replace(scene, gamma_range=(0.0, args.gamma) if args.gamma > 0 else (0.0, 1e-12))
     progress = Progress("simulate")
     try:
-        branch, network, mass = sheared(scene, progress)
+        branch, network, mass = sheared(scene, progress, args.gamma)
         if not branch.status.reached:
             raise CommandError(f"simulate error: {scene.source}: no equilibrium beyond gamma = "
                                f"{branch.gamma[-1]:.9g} (asked for {args.gamma:g}): the branch "
@@ -388,10 +388,16 @@ def opened_formed(row: dict) -> str:
     return f"{row['contacts_opened_at_rest']} / {row['contacts_formed_at_rest']}"
 
 
-def sheared(scene: PackingScene, progress: Progress):
-    """packings/shear.shear_scene with this command's progress lines."""
+def sheared(scene: PackingScene, progress: Progress, asked: float | None = None):
+    """packings/shear.shear_scene with this command's progress lines; `asked`, the strain the
+    user asked for, is the one the shear's line names (simulate --gamma 0 shears one step to
+    take the branch's first state, at gamma = 0)."""
     from diskfriction.packings.shear import shear_scene
 
     g1 = scene.gamma_range[1]
-    return shear_scene(scene, PLASTIC_EVENTS, progress.stage, progress.part("relax"),
+    shown = g1 if asked is None else asked
+    return shear_scene(scene, PLASTIC_EVENTS,
+                       lambda line: progress.stage(f"shear gamma 0 -> {shown:g}"
+                                                   if line.startswith("shear gamma") else line),
+                       progress.part("relax"),
                        lambda g: progress(g / max(g1, 1e-300), f"gamma = {g:.3e}"))

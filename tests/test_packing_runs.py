@@ -131,7 +131,7 @@ def test_a_run_ends_at_exactly_its_t_end(setting):
 
 def test_simulate_at_gamma_0_runs_from_0_to_t_end_and_says_why_no_rate(tmp_path, capsys):
     """`simulate PACKING --gamma 0 --t-end 10` (16 disks): the run is at gamma = 0 exactly,
-    printed as 0, ends at t = 10 exactly; every eigenvalue is real there, so no rate: null in
+    printed as 0 (in the progress lines too), ends at t = 10 exactly; every eigenvalue is real there, so no rate: null in
     summary.json and one stderr line saying why. With --amplitude 1e-6, beyond the linear
     range, at a state with a complex pair: one warning line naming --amplitude."""
     scene = tmp_path / "p16.toml"
@@ -142,7 +142,8 @@ def test_simulate_at_gamma_0_runs_from_0_to_t_end_and_says_why_no_rate(tmp_path,
     out, err = capsys.readouterr()
     summary = json.loads((tmp_path / "at0" / "summary.json").read_text())
     assert summary["gamma"] == 0.0 and summary["t_end"] == 10.0 and summary["dt"] <= 10.0
-    assert out.startswith("gamma = 0: 0 complex pairs") and "1e-12" not in out
+    assert out.startswith("gamma = 0: 0 complex pairs") and "1e-12" not in out + err
+    assert "simulate: shear gamma 0 -> 0\n" in err
     assert summary["sigma_measured"] is None and summary["fit"]["sigma"] is None
     notes = [line for line in err.splitlines() if "no growth rate measured" in line]
     assert len(notes) == 1 and "every eigenvalue of M^-1 J is real" in notes[0]
