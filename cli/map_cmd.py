@@ -135,16 +135,22 @@ def run(args: argparse.Namespace) -> int:
         if args.scheduler is not None:
             raise CommandError(f"map error: --workers: sizes the local cluster; the scheduler "
                                f"has its own workers (got {args.workers!r})")
-    out = output_dir("map", args.out, Path("out") / "map" / scene.name)
-    args.keeps = ("cells", out / "cells")  # what Ctrl-C leaves to resume from (cli.common)
     from diskfriction.studies.cluster import code_version, local_workers
 
     at_once = 1 if args.scheduler is not None else min(len(cells), local_workers(args.workers))
+    from diskfriction.packings.limits import preparation_problem
+
     for cell in cells:
         if packing:
             check_memory("map", cell.scene, at_once, dense=params.window is None)
+            problem = preparation_problem(cell.scene)  # packings/limits.py: what FIRE cannot make
+            if problem is not None:
+                values = ", ".join(f"{key} = {value!r}" for key, value in cell.values)
+                raise CommandError(f"map error: --vary: cell {values}: {problem[0]}: {problem[1]}")
         else:
             check_memory("map", cell.scene, at_once, spectra=at_once if args.slide else 0)
+    out = output_dir("map", args.out, Path("out") / "map" / scene.name)
+    args.keeps = ("cells", out / "cells")  # what Ctrl-C leaves to resume from (cli.common)
 
     from diskfriction.reports.maps import plot_map, save_map
     from diskfriction.reports.packing_maps import plot_packing_map

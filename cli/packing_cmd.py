@@ -19,8 +19,9 @@ import shutil
 import sys
 from pathlib import Path
 
-from diskfriction.cli.common import (EXIT_FAILED, CommandError, bracketed_only, matrix_from_args,
-                                     output_dir)
+from diskfriction.cli.common import (EXIT_FAILED, CommandError, bracketed_only, check_packing,
+                                     check_packing_bifurcate, check_packing_simulate,
+                                     matrix_from_args, number, output_dir, run_length)
 from diskfriction.cli.progress import Progress
 from diskfriction.files import json_text
 from diskfriction.scenes.packing import PackingScene
@@ -42,8 +43,6 @@ def run_packing(args: argparse.Namespace, scene: PackingScene,
     diagram.png together (reports/packing_outputs.save_packing_outputs); exit 1 with one line
     when the branch ends short of the scene's strain (a plastic event, a fold in gamma), after
     writing what it reached. An --out holding another scene's files is refused (exit 2)."""
-    from diskfriction.cli.common import check_packing_bifurcate
-    check_packing_bifurcate(args, scene, window)
     for option, why in CHAIN_ONLY.items():
         if getattr(args, option) is not None:
             flag = "--" + option.replace("_", "-")
@@ -53,6 +52,7 @@ def run_packing(args: argparse.Namespace, scene: PackingScene,
     from diskfriction.cli.bifurcate_cmd import check_window_covered
 
     matrix = matrix_from_args("bifurcate", args, scene)
+    check_packing_bifurcate(args, scene, window)
     out = output_dir("bifurcate", args.out, Path("out") / "bifurcate" / scene.name)
     scene = dataclasses.replace(scene, matrix=str(matrix))
     refuse_other_scene("bifurcate", out, scene)
@@ -192,10 +192,6 @@ def run_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> int:
     fastest-growing complex pair, else random velocities), integrate, and compare the measured
     growth rate with the spectrum's. Writes run.npz, summary.json, run.png and snapshot.png
     (the packing at G, its contact forces and the perturbation)."""
-    from diskfriction.cli.common import check_packing_simulate
-    check_packing_simulate(args, scene)
-    from diskfriction.cli.common import number, run_length
-
     for option, why in {"fx": "a packing's load is its strain: --gamma G",
                         "realizations": "ensembles are not yet offered for packings",
                         "scheduler": "ensembles are not yet offered for packings"}.items():
@@ -209,6 +205,7 @@ def run_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> int:
     number("simulate", "seed", args.seed, zero=True, integer=True)
     amplitude = 1e-10 if args.amplitude is None else number("simulate", "amplitude", args.amplitude,
                                                             zero=True)
+    check_packing_simulate(args, scene)
     out = output_dir("simulate", args.out, Path("out") / "simulate" / scene.name)
 
     import numpy as np
@@ -297,16 +294,13 @@ def run_packing_verify(args: argparse.Namespace, scene: PackingScene) -> int:
     VERIFY_STATES states: along the fastest complex pair's eigenvector from states with complex
     pairs, random velocities from states with every eigenvalue real; tabulate the growth rate
     measured against the spectrum's and whether contacts slid. Writes verify.json, verify.md."""
-    from diskfriction.cli.common import check_packing
-    check_packing("verify", scene, strain=scene.gamma_range[1], runs=sum(VERIFY_STATES),
-                  t_end=args.t_end)
-    from diskfriction.cli.common import number
-
     number("verify", "t-end", args.t_end)
     number("verify", "amplitude", args.amplitude, zero=True)
     if args.matrix is not None:
         raise CommandError(f"verify error: --matrix: a packing's growth rates are those of M^-1 J "
                            f"(got {args.matrix!r})")
+    check_packing("verify", scene, strain=scene.gamma_range[1], runs=sum(VERIFY_STATES),
+                  t_end=args.t_end)
     out = output_dir("verify", args.out, Path("out") / "verify" / scene.name)
 
     import numpy as np

@@ -167,3 +167,24 @@ def test_prepare_says_how_long_it_will_take(tmp_path, capsys):
     first = capsys.readouterr().err.splitlines()[0]
     assert first.startswith("prepare: about ") and first.endswith(
         "s (a rough estimate) to prepare 16 disks")
+
+
+@pytest.mark.parametrize(("command", "args", "option"), [
+    ("bifurcate", ["--workers", "-1"], "--workers"),
+    ("bifurcate", ["--matrix", "K"], "--matrix"),
+    ("bifurcate", ["--fx", "0:1"], "--fx"),
+    ("bifurcate", ["--p", "0:1"], "--p"),
+    ("simulate", ["--gamma", "0.001", "--t-end", "10", "--amplitude", "-1"], "--amplitude"),
+    ("simulate", ["--gamma", "0.001", "--t-end", "10", "--seed", "-1"], "--seed"),
+    ("verify", ["--matrix", "J"], "--matrix"),
+    ("verify", ["--amplitude", "-1"], "--amplitude"),
+])
+def test_a_bad_option_is_the_only_line_no_estimate_before_it(tmp_path, capsys, command, args,
+                                                             option):
+    """An option a packing command refuses is refused before it estimates its work: stderr is
+    that one line (the estimate line came first)."""
+    path = scene(tmp_path, "[packing]\nN = 16\n[shear]\ngamma = [0.0, 0.002]\n")
+    out = tmp_path / "out"
+    assert main([command, str(path), *args, "--out", str(out)]) == 2
+    lines = capsys.readouterr().err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"{command} error: {option}: "), lines

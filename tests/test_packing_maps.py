@@ -85,6 +85,8 @@ BAD = [
     (["--vary", "shear.gamma=0:0.01:2"], "shear.gamma is not a numeric scene key of a packing"),
     (["--vary", "packing.N=16:17:3"], "cell packing.N = 16.5: expected an integer"),
     (["--vary", "shear.damping=0.1:2:3"], "shear.damping acts only where [shear] relaxation = \"damped\""),
+    (["--vary", "packing.pressure=1e-300:1e-299:2"],
+     "cell packing.pressure = 1e-300: packing.pressure: the preparation relaxes first"),
 ]
 
 
