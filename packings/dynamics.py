@@ -10,10 +10,11 @@ by the exact dynamics whether or not contacts slide; its drift measures the inte
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from diskfriction.files import json_values
 from diskfriction.packings.equilibria import REACH, carried
 from diskfriction.packings.network import Network
 
@@ -126,11 +127,7 @@ class GrowthFit:
 
     def as_dict(self) -> dict:
         """The fit as JSON values (None for nan)."""
-        def num(value):
-            return float(value) if np.isfinite(value) else None
-        return {"sigma": num(self.sigma), "stderr": num(self.stderr),
-                "t_start": num(self.t_start), "t_end": num(self.t_end), "frames": self.frames,
-                "reason": self.reason}
+        return json_values(asdict(self))
 
 
 def no_fit(reason: str, frames: int = 0) -> GrowthFit:
