@@ -52,10 +52,10 @@ def run_packing(args: argparse.Namespace, scene: PackingScene,
     from diskfriction.cli.bifurcate_cmd import check_window_covered
 
     matrix = matrix_from_args("bifurcate", args, scene)
-    check_packing_bifurcate(args, scene, window)
     out = output_dir("bifurcate", args.out, Path("out") / "bifurcate" / scene.name)
     scene = dataclasses.replace(scene, matrix=str(matrix))
     refuse_other_scene("bifurcate", out, scene)
+    check_packing_bifurcate(args, scene, window)
 
     from diskfriction.continuation.arclength import ContinuationError
     from diskfriction.continuation.branch import StopCode
@@ -205,8 +205,10 @@ def run_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> int:
     number("simulate", "seed", args.seed, zero=True, integer=True)
     amplitude = 1e-10 if args.amplitude is None else number("simulate", "amplitude", args.amplitude,
                                                             zero=True)
-    check_packing_simulate(args, scene)
     out = output_dir("simulate", args.out, Path("out") / "simulate" / scene.name)
+    refuse_other_scene("simulate", out, scene)
+    check_packing_simulate(args, scene)
+    given = scene  # what the outputs name (the shear below stops at --gamma)
 
     import numpy as np
 
@@ -241,7 +243,7 @@ def run_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> int:
         except NoComplexPair as error:
             raise CommandError(f"simulate error: --perturbation: {error}") from None
         run, gamma, sigma, fit = done.run, done.gamma, done.sigma_predicted, done.fit
-        summary = {"scene": scene_record(scene), "gamma": gamma, "perturbation": kind,
+        summary = {"scene": scene_record(given), "gamma": gamma, "perturbation": kind,
                    "amplitude": amplitude, "dt": run.dt, "t_end": float(run.t[-1]),
                    "sigma_predicted": sigma, "sigma_measured": fit.as_dict()["sigma"],
                    "fit": fit.as_dict(), "budget_drift": done.drift,
@@ -249,7 +251,7 @@ def run_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> int:
                    "sliding_updates": int(run.capped[-1]), "complex_pairs": done.pairs}
         save_npz(out / "run.npz", t=run.t, q=run.q, distance=done.distance,
                  amplitude=done.mode_amplitude, budget=run.budget, kinetic=run.kinetic,
-                 capped=run.capped, **scene_arrays(scene))
+                 capped=run.capped, **scene_arrays(given))
         save_json(out / "summary.json", summary)
         plot_packing_run(run.t, done.distance, sigma, fit.sigma, scene, gamma, out / "run.png",
                          (fit.t_start, fit.t_end), done.mode_amplitude)
@@ -299,9 +301,10 @@ def run_packing_verify(args: argparse.Namespace, scene: PackingScene) -> int:
     if args.matrix is not None:
         raise CommandError(f"verify error: --matrix: a packing's growth rates are those of M^-1 J "
                            f"(got {args.matrix!r})")
+    out = output_dir("verify", args.out, Path("out") / "verify" / scene.name)
+    refuse_other_scene("verify", out, scene)
     check_packing("verify", scene, strain=scene.gamma_range[1], runs=sum(VERIFY_STATES),
                   t_end=args.t_end)
-    out = output_dir("verify", args.out, Path("out") / "verify" / scene.name)
 
     import numpy as np
 

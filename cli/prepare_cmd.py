@@ -40,9 +40,9 @@ def run(args: argparse.Namespace) -> int:
     if not isinstance(scene, PackingScene):
         raise CommandError(f"prepare error: {scene.source}: a chain scene: prepare takes a "
                            f"packing scene (geometry = \"packing\", docs/packings.md)")
-    check_packing("prepare", scene)
     out = output_dir("prepare", args.out, Path("out") / "prepare" / scene.name)
     refuse_other_scene("prepare", out, scene)
+    check_packing("prepare", scene)
     from diskfriction.files import save_json
     from diskfriction.packings.prepare import save_packing
     from diskfriction.packings.prepared import contact_number, prepare_scene

@@ -29,9 +29,9 @@ RUN_SCENE = Path("segments") / "scene.json"
 segments."""
 
 RECORDED = ("packing.npz", "packing.json", "branch.npz", "collisions.json", "plastic.json",
-            RUN_SCENE)
+            RUN_SCENE, "summary.json", "run.npz", "verify.json")
 """The files of a packing scene in a directory that name their scene: bifurcate's, prepare's
-(packing.npz, packing.json) and a shear under way's."""
+(packing.npz, packing.json), a shear under way's, simulate's and verify's."""
 
 
 def scene_record(scene: PackingScene) -> dict:

@@ -273,3 +273,26 @@ def test_ctrl_c_during_the_fork_of_a_scan_worker_ends_the_run(tmp_path, capsys):
     assert code == EXIT_INTERRUPTED, err
     assert "Traceback" not in err and "ignored" not in err
     assert err.splitlines()[-1].startswith("interrupted before any of the segments was finished")
+
+
+def test_simulate_and_verify_refuse_another_scenes_out_and_keep_their_own(tmp_path, capsys):
+    """simulate's and verify's outputs name the scene as given (not the shear to --gamma that
+    simulate runs): a rerun with another --gamma writes over its own files, another scene's
+    run into the same --out is refused in one line, exit 2."""
+    from diskfriction.cli.main import main
+
+    mine, other = tmp_path / "mine.toml", tmp_path / "other.toml"
+    text = 'geometry = "packing"\nname = "{}"\n[packing]\nN = 16\nseed = {}\n[shear]\ngamma = [0.0, 0.002]\n'
+    mine.write_text(text.format("mine", 3))
+    other.write_text(text.format("other", 4))
+    out = tmp_path / "out"
+    for gamma in ("0.001", "0.002"):
+        assert main(["simulate", str(mine), "--gamma", gamma, "--t-end", "5", "--out", str(out)]) == 0
+    summary = strict_json(out / "summary.json")
+    assert summary["gamma"] == 0.002 and summary["scene"]["physics"]["gamma_range"] == [0.0, 0.002]
+    capsys.readouterr()
+    for argv in (["simulate", str(other), "--gamma", "0.001", "--t-end", "5"],
+                 ["verify", str(other), "--t-end", "5"]):
+        assert main([*argv, "--out", str(out)]) == 2
+        lines = capsys.readouterr().err.splitlines()
+        assert len(lines) == 1 and "belongs to scene 'mine'" in lines[0], lines
