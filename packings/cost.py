@@ -44,10 +44,11 @@ SECONDS_PER_DISK_STEP = 6e-7
 7.3e-7 s at 24, 128 and 256 disks (4e5, 1e5 and 5e4 steps, 2000 frames, the machine busy)."""
 
 GROWTH_STEPS = 2e4
-"""The time steps a growth rate takes to measure: it is fitted where the distance from the
-state grows from 10 times the perturbation (1e-10) to 1e-3 delta_0, 10 to 14 e-foldings, which
-the slowest median growth measured (sigma = 0.018 omega_0 at mu = 0.3, docs/packings.md, Maps)
-takes in about 800 / omega_0, 2e4 steps of the default dt."""
+"""The time steps a run takes to show a complex pair's growth into sliding: from 10 times the
+perturbation (1e-10) to 1e-3 delta_0, 10 to 14 e-foldings (the rate itself is fitted over the
+first few, below packings/dynamics.LINEAR_RANGE), which the slowest median growth measured
+(sigma = 0.018 omega_0 at mu = 0.3, docs/packings.md, Maps) takes in about 800 / omega_0, 2e4
+steps of the default dt."""
 
 MAX_RUN_STEPS = 5000 * GROWTH_STEPS
 """The most time steps a run may take, 1e8 (a 24-disk run of 1e8 steps takes 25 minutes, a
