@@ -1,4 +1,5 @@
-"""Session fixtures: computations that several test modules check, done once per session."""
+"""Session fixtures: computations that several test modules check, done once per session; and
+the tiers: `-m "not slow and not subprocess"` is the fast tier (README, Tests)."""
 from __future__ import annotations
 
 import dataclasses
@@ -76,3 +77,17 @@ def chain_sweep():
         return done[key]
 
     return run
+
+
+FRESH_INTERPRETER = {"run_cli", "subprocess"}
+"""Names a test function calls to run in a fresh interpreter: commandline.run_cli (the
+diskfriction command) or the subprocess module."""
+
+
+def pytest_collection_modifyitems(config, items):
+    """Mark `subprocess` every test whose function calls a FRESH_INTERPRETER name directly (its
+    code's global names): a second or more of start-up each, left out of the fast tier."""
+    for item in items:
+        function = getattr(item, "function", None)
+        if function is not None and FRESH_INTERPRETER & set(function.__code__.co_names):
+            item.add_marker(pytest.mark.subprocess)

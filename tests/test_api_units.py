@@ -62,6 +62,7 @@ def reference():
 @pytest.mark.parametrize("g_unit, p_unit", [(1e-10, 1.0), (1.0, 1e4), (1.0, 1e6), (1.0, 1e-6),
                                             (1e8, 1e-6)],
                          ids=["G 1e-10", "p 1e4", "p 1e6", "p 1e-6", "G 1e8, p 1e-6"])
+@pytest.mark.slow
 def test_bratu_in_other_units_takes_the_same_steps_to_the_same_fold(reference, g_unit, p_unit):
     """G scaled by 1e-10 put the fold 1.7e-3 off; p in units 1e4 and 1e6 times larger stopped
     at the fold (ds_min) with none reported; 1e-6 times ran out of steps before it."""

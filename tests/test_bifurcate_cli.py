@@ -11,6 +11,8 @@ import pytest
 from commandline import error_line
 from invariants import unaccounted_pair_changes
 
+pytestmark = pytest.mark.slow  # whole runs of commands or examples: the slow tier (README, Tests)
+
 ROOT = Path(__file__).resolve().parents[1]
 
 

@@ -15,6 +15,8 @@ from pathlib import Path
 import pytest
 from commandline import ROOT, error_line, run_cli
 
+pytestmark = pytest.mark.slow  # whole runs of commands or examples: the slow tier (README, Tests)
+
 FOUR = "[disks]\nN = 4\n[load]\nF_x = [0.0, 0.05]\n"
 """A small scene: every command on it takes a second or two."""
 

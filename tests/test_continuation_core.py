@@ -199,6 +199,7 @@ def bubble_problem(p1, p2):
 
 
 @pytest.mark.parametrize("ds", [1e-2, 3.7e-2])
+@pytest.mark.slow
 def test_bubble_narrower_than_the_step_is_found(ds):
     """Birth at p1, death at p2 = p1 + 1e-3, with steps of 10x and 37x the bubble width."""
     p1 = 0.41 + 1e-4 / np.e
@@ -213,6 +214,7 @@ def test_bubble_narrower_than_the_step_is_found(ds):
 
 
 @pytest.mark.parametrize("a2, k", [(0.5, 2.0), (0.0, 1.0)], ids=["distinct", "identical-blocks"])
+@pytest.mark.slow
 def test_two_pairs_born_at_the_same_p_are_both_reported(a2, k):
     """blockdiag([[0, 1], [p0 - p, 0]], [[a2, 1], [k (p0 - p), a2]]): two births at p0. The
     distinct case also has real eigenvalues of the two blocks crossing before p0 (no collision);

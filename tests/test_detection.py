@@ -32,6 +32,7 @@ def assert_same_collisions(fast, exhaustive):
 @pytest.mark.parametrize("scene, matrix, count", [(Scene(), "J", 22), (Scene(), "M^-1 J", 17),
                                                   (Scene(N=20, eps=1e-4), "J", 50)],
                          ids=["paper-J", "paper-M^-1J", "N20-eps1e-4"])
+@pytest.mark.slow
 def test_fast_detection_finds_the_exhaustive_collisions(scene, matrix, count, chain_sweep):
     """Same kinds in the same order, locations within 1e-9, on one branch (the detection does
     not change the steps); the counts are the version 0.1 lists (docs/continuation.md)."""
@@ -182,6 +183,7 @@ def test_eps_zero_runs_to_the_end_with_free_rolling_modes_excluded(chain_sweep):
     assert branch.residual.max() <= 1e-10 and len(branch.collisions) > 0
 
 
+@pytest.mark.slow
 def test_eps_zero_long_sparse_chain_finds_the_collisions_of_the_short_one(chain_sweep):
     """At eps = 0 the load reaches about 29 disks by F_x = 0.12, so N = 100 (sparse J, 70 and
     more disks free throughout) and N = 20 (dense J) find the same collisions, kind by kind,
@@ -337,6 +339,7 @@ def linalg_parity(permutation):
 
 
 @pytest.mark.parametrize("partial_from", [None, 0], ids=["default", "partial-splits"])
+@pytest.mark.slow
 def test_a_spectral_window_lists_the_full_detection_s_collisions_in_it(partial_from, chain_sweep):
     """N = 40, eps = 1e-4: tracking only 0.0553 <= Re lambda / k_n <= 0.0562 by shift-invert
     gives the collisions of the full detection whose eigenvalue lies in the window, within
@@ -442,6 +445,7 @@ def test_pair_certifier_covers_conjugate_and_complex_real_pairs():
 @pytest.mark.parametrize("scene, matrix, k_max", [(Scene(), "J", 16), (Scene(), "M^-1 J", 16),
                                                   (Scene(), "J", 8), (Scene(N=20, eps=1e-4), "J", 16)],
                          ids=["paper-J", "paper-M^-1J", "paper-J-k8", "N20-eps1e-4"])
+@pytest.mark.slow
 def test_partial_split_samples_find_the_collisions_of_full_ones(scene, matrix, k_max):
     """Split samples as partial spectra (forced at every size: partial_from = 0) give the same
     collisions as full ones, to 1e-9, on the same branch, with fewer full spectra; k_max = 8
@@ -579,6 +583,7 @@ def test_a_partial_sample_matches_the_full_one_on_its_labels_or_declines():
     assert partial_sample_at(problem, 1.0, x1, left, [(labels, 5.5, 2)], t) is None
 
 
+@pytest.mark.slow
 def test_settled_samples_drop_their_vectors_and_the_scan_finds_the_same(monkeypatch):
     """A scan drops the eigenvectors of inner samples whose two intervals are settled (clean,
     narrow or with every event located; full neighbours): at the end of every scan of the
@@ -613,6 +618,7 @@ def test_settled_samples_drop_their_vectors_and_the_scan_finds_the_same(monkeypa
     assert [(c.p, c.kind, c.pair) for c in lean.collisions] == [(c.p, c.kind, c.pair) for c in kept.collisions]
 
 
+@pytest.mark.slow
 def test_samples_spilled_to_disk_leave_the_scan_unchanged(monkeypatch):
     """With no memory for inner samples' vectors (SCAN_MEMORY = 0) a scan keeps in memory only
     the ends of the interval it works on and maps the others from disk (Sample.spilled): the
@@ -655,6 +661,7 @@ def test_samples_spilled_to_disk_leave_the_scan_unchanged(monkeypatch):
     assert np.array_equal(refused.eigenvalues, kept.eigenvalues) and len(refused.collisions) == len(kept.collisions)
 
 
+@pytest.mark.slow
 def test_a_failing_locator_costs_partial_samples_and_finds_the_same_collisions(monkeypatch):
     """Where the locator fails, the event's interval is split by a partial sample of the event
     pairs' labels (with partial samples forced, partial_from = 0): with every locator call
@@ -749,6 +756,7 @@ def test_a_crossing_through_a_narrow_complex_bubble_is_not_taken_for_decoupled()
     assert [p for _, p in kinds] == pytest.approx([p0 - e, p0 + e], abs=1e-10)
 
 
+@pytest.mark.slow
 def test_a_chain_window_that_crowds_is_widened_and_finds_the_same_collisions(monkeypatch):
     """N = 20, eps = 1e-4, window [0, 0.02] k_n sized with one eigenvalue to spare: it crowds
     along the sweep, is sized anew, wider, at the last certified point and the sweep goes on
@@ -775,6 +783,7 @@ def test_a_chain_window_that_crowds_is_widened_and_finds_the_same_collisions(mon
                   - [c.p for c in generous.collisions]).max() <= 1e-9
 
 
+@pytest.mark.slow
 def test_pairs_beyond_their_reaches_pass_the_pair_test():
     """certify.reaches: any two eigenvalues whose real parts lie r_i + r_j apart at the start
     pass the pair test (certify._pair_margin, the full test uncertified_pairs skips for them),
@@ -800,6 +809,7 @@ def test_pairs_beyond_their_reaches_pass_the_pair_test():
     assert tested == 20000
 
 
+@pytest.mark.slow
 def test_uncertified_pairs_skip_only_pairs_that_pass():
     """uncertified_pairs with its far-pair skips (certify._uncertified_real_pairs, and
     _uncertified_mixed_pairs for an upper complex label with a real one) returns what the plain

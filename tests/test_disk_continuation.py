@@ -78,6 +78,7 @@ def test_complex_pair_count_changes_across_every_collision_and_nowhere_else(pape
     assert all(c.resolved and c.bracket[1] - c.bracket[0] <= 1e-10 for c in paper_branch.collisions)
 
 
+@pytest.mark.slow
 def test_collision_locations_converge_as_the_step_shrinks(paper_system):
     """The history is integrated per step, so the branch itself depends on the step; the located
     collisions must converge: successive halvings change them by less and less, below 1e-8.

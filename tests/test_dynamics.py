@@ -280,6 +280,7 @@ def test_the_last_frame_is_the_end_of_the_run(paper, branch_point):
     assert summarize(traj)["t_end"] == pytest.approx(300.0, rel=1e-12)
 
 
+@pytest.mark.slow
 def test_compiled_stepper_is_reused_from_the_cache_by_a_new_process(paper):
     """numba's cache=True keeps the loop compiled against the generated kernel module."""
     Stepper(paper, *paper.rest_state()[:1], np.zeros(paper.ndof), paper.rest_state()[1],

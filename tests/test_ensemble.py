@@ -15,6 +15,8 @@ from diskfriction.studies.ensemble import (EnsembleMismatch, RunSpec, pending, a
                                            parameters, run_ensemble, sliding_speed)
 from diskfriction.scenes import Scene
 
+pytestmark = pytest.mark.slow  # whole runs of commands or examples: the slow tier (README, Tests)
+
 ROOT = Path(__file__).resolve().parents[1]
 
 

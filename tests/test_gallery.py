@@ -10,6 +10,8 @@ import sympy as sp
 from gallery import EXAMPLES, load_example
 from invariants import unaccounted_pair_changes
 
+pytestmark = pytest.mark.slow  # whole runs of commands or examples: the slow tier (README, Tests)
+
 TOL_P = 1e-10  # DetectionParams.tol_p: every collision and Hopf point is located to this
 
 

@@ -152,6 +152,7 @@ def test_asking_for_gpu_spectra_without_a_gpu_says_why_in_one_line():
 
 
 @pytest.mark.skipif(WHY_NO_GPU is None, reason="a GPU is present: bifurcate --spectra gpu runs")
+@pytest.mark.slow
 def test_bifurcate_asked_for_gpu_spectra_without_a_gpu_says_why_in_one_line(tmp_path):
     result = run_cli("bifurcate", "--spectra", "gpu", "--out", str(tmp_path / "out"))
     assert result.returncode == 2 and result.stderr.count("\n") == 1, result.stderr

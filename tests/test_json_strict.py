@@ -17,6 +17,8 @@ from extras import needs_lammps
 from diskfriction.cli.main import main
 from diskfriction.files import json_text, save_json
 
+pytestmark = pytest.mark.slow  # whole runs of commands or examples: the slow tier (README, Tests)
+
 REPO = Path(__file__).resolve().parents[1]
 CHAIN = 'name = "tiny"\n[disks]\nN = 3\n[load]\nF_x = [0.0, 0.05]\n'
 PACKING = ('geometry = "packing"\nname = "p16"\n[packing]\nN = 16\nseed = 1\n'

@@ -14,6 +14,8 @@ from diskfriction import files
 from diskfriction.scenes import Effects, Scene
 from diskfriction.symbolic import generated, kernels
 
+pytestmark = pytest.mark.slow  # whole runs of commands or examples: the slow tier (README, Tests)
+
 
 def forget(effects: Effects) -> None:
     sys.modules.pop(f"diskfriction_kernels_{kernels.module_hash(effects)}", None)

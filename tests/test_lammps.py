@@ -23,6 +23,8 @@ from diskfriction.scenes.load import format_scene
 from diskfriction.symbolic import System
 from diskfriction.dynamics import Stepper
 
+pytestmark = pytest.mark.slow  # whole runs of commands or examples: the slow tier (README, Tests)
+
 LINEAR = Effects("mindlin-linear", conventions="lammps")
 PAPER_LINEAR = Scene(effects=LINEAR, name="linear", source="<test>")
 """The paper's scene with the law LAMMPS has and its conventions."""

@@ -6,6 +6,8 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 LAYERS = [
     {"diskfriction"},            # errors, files, memory, words: what every layer may use
@@ -103,6 +105,7 @@ def test_the_code_version_of_resumable_runs_covers_every_folder_they_run():
     assert reached <= set(RUN_SOURCES), reached - set(RUN_SOURCES)
 
 
+@pytest.mark.slow
 def test_the_code_version_of_cached_report_results_covers_every_folder_they_run():
     """A report computation's cached result is reused while its code version is the same
     (reports/registry.py): its depends must hold every folder it reaches (its own imports, its

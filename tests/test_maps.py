@@ -17,6 +17,8 @@ from diskfriction.reports.maps import csv_text, save_map, table_rows
 from diskfriction.scenes import Scene
 from diskfriction.scenes.load import SceneError
 
+pytestmark = pytest.mark.slow  # whole runs of commands or examples: the slow tier (README, Tests)
+
 TINY = Scene(N=3, F_x_range=(0.0, 0.05), name="tiny")
 """Three disks to F_x = 0.05: 4 collisions of J, five windows, about a second a cell."""
 AXES = [Axis("contacts.mu", grid_values(2.0, 10.0, 2)), Axis("disks.inertia", grid_values(0.5, 2.0, 2))]

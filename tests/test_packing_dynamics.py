@@ -22,6 +22,7 @@ def setting(sheared):
     return branch, network, mass_diagonal(network, SCENE.m, SCENE.inertia)
 
 
+@pytest.mark.slow
 def test_the_energy_budget_closes_as_dt_squared(setting):
     """From the equilibrium at gamma = 0 kicked with small random velocities: the drift of
     E_k + U_n - W_t stays below 1e-3 of the kinetic energy and falls 3.5 to 4.5 times when dt
@@ -38,6 +39,7 @@ def test_the_energy_budget_closes_as_dt_squared(setting):
     assert 3.5 <= drift[0] / drift[1] <= 4.5
 
 
+@pytest.mark.slow
 def test_a_complex_pair_grows_at_the_rate_of_the_spectrum(setting):
     """At the end of the branch one complex pair lambda of M^-1 J: the equilibrium started on
     its growing solution at 1e-12 grows as e^(sigma t), sigma = |Im sqrt(lambda)|; the fit of

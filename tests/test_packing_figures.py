@@ -190,6 +190,7 @@ def report_of(monkeypatch, tmp_path, text):
     return seen["branch"], seen["runs"], (tmp_path / "report.md").read_text()
 
 
+@pytest.mark.slow
 def test_the_reports_states_lie_away_from_folds_and_its_msd_starts_at_t_0(monkeypatch, tmp_path,
                                                                            figures):
     """16 disks to gamma = 0.002, a plastic event at 1.55e-3 on the way: the complex state lies
@@ -221,6 +222,7 @@ def test_the_reports_states_lie_away_from_folds_and_its_msd_starts_at_t_0(monkey
     assert "time" in spectrum.axes[0].get_ylabel() and "time" in spectrum.axes[1].get_ylabel()
 
 
+@pytest.mark.slow
 def test_a_report_without_complex_pairs_runs_no_complex_state_and_says_so(monkeypatch, tmp_path,
                                                                           figures):
     """Frictionless disks (mu = 0): every eigenvalue real; one run, labelled real, and report.md

@@ -63,6 +63,7 @@ def test_no_complex_pair_is_ever_found_and_j_is_symmetric_at_every_point(branch,
     assert not branch.eigenvalues.imag.any()
 
 
+@pytest.mark.slow
 def test_a_spectral_window_tracks_the_dense_spectrums_real_eigenvalues(branch, packing):
     """With a window (sparse shift-invert of the non-symmetric tracked matrix) the eigenvalues
     in it are the dense run's, real, at the same points; no collision is found."""
@@ -109,6 +110,7 @@ def test_mu_above_zero_without_a_tangential_law_is_the_same_branch(branch, packi
     assert [e.gamma for e in other.plastic] == [e.gamma for e in branch.plastic]
 
 
+@pytest.mark.slow
 def test_bifurcate_shears_the_frictionless_copy_of_the_packing_scene(tmp_path, capsys):
     """The packaged scene with N = 32, mu = 0 and gamma = [0, 0.01] (it stopped at the start,
     "no equilibrium found"): exit 0, the whole range written, every eigenvalue real."""
@@ -128,6 +130,7 @@ def test_bifurcate_shears_the_frictionless_copy_of_the_packing_scene(tmp_path, c
     assert "0 collisions" in capsys.readouterr().out
 
 
+@pytest.mark.slow
 def test_a_relaxation_that_unjams_the_packing_ends_the_shear_in_one_line(tmp_path, capsys):
     """32 frictionless disks, seed 2 (prepared at phi = 0.8406): the relaxation after the plastic
     event near gamma = 0.0204 leaves no disk held by two contacts, an unjammed packing at that
@@ -163,6 +166,7 @@ def test_a_branch_that_cannot_start_says_where_in_words():
     assert "p0" not in str(none.value) + str(flat.value)
 
 
+@pytest.mark.slow
 def test_a_packing_that_unjams_under_shear_ends_there_in_one_line():
     """64 frictionless disks, seed 1, prepared at P = 0.1: at fixed area the shear unloads the
     packing across its plastic events until every contact is below delta_hold and no disk is

@@ -13,6 +13,8 @@ from diskfriction.scenes.load import SceneError, number_keys, with_values
 from diskfriction.scenes.packing import PackingScene
 from diskfriction.studies.packing_maps import PACKING_COLUMNS, PackingMapParams, packing_cell
 
+pytestmark = pytest.mark.slow  # whole runs of commands or examples: the slow tier (README, Tests)
+
 SMALL = 'geometry = "packing"\nname = "small"\n[packing]\nN = 16\n[shear]\ngamma = [0.0, 0.002]\n'
 """16 disks to gamma = 0.002: some 30 states, complex pairs, one plastic event at mu = 10."""
 

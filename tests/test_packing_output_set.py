@@ -15,6 +15,8 @@ import pytest
 from diskfriction.cli.common import EXIT_BAD_INPUT, EXIT_INTERRUPTED
 from diskfriction.cli.main import main
 
+pytestmark = pytest.mark.slow  # whole runs of commands or examples: the slow tier (README, Tests)
+
 SCENE = 'geometry = "packing"\nname = "{name}"\n[packing]\nN = 16\nseed = {seed}\n' \
         '[shear]\ngamma = [0.0, 0.004]\n'
 OUTPUTS = ["branch.npz", "collisions.json", "diagram.png", "packing.npz", "plastic.json"]

@@ -70,6 +70,7 @@ def test_the_run_follows_the_growing_solution_from_its_start(setting):
     assert abs(done.sigma_measured / done.sigma_predicted - 1) <= 5e-4, done.fit
 
 
+@pytest.mark.slow
 def test_a_fast_pair_in_a_long_run_is_told_what_to_change_and_then_measured(setting):
     """The state of the fastest pair (sigma / omega about 0.3), from a = 1e-9: a run to 1000
     records a frame every 0.5, and the growth through the linear range lasts about 3: too few
@@ -129,6 +130,7 @@ def test_a_run_ends_at_exactly_its_t_end(setting):
     assert np.allclose(np.diff(run.t), run.t[1], rtol=1e-9)
 
 
+@pytest.mark.slow
 def test_simulate_at_gamma_0_runs_from_0_to_t_end_and_says_why_no_rate(tmp_path, capsys):
     """`simulate PACKING --gamma 0 --t-end 10` (16 disks): the run is at gamma = 0 exactly,
     printed as 0 (in the progress lines too), ends at t = 10 exactly; every eigenvalue is real there, so no rate: null in

@@ -13,6 +13,8 @@ from diskfriction.scenes.load import PACKING_SCHEMA
 from diskfriction.scenes.packing import PackingScene
 from diskfriction.scenes.scene import SceneValueError
 
+pytestmark = pytest.mark.slow  # whole runs of commands or examples: the slow tier (README, Tests)
+
 PACKAGED = Path(__file__).resolve().parents[1] / "scenes" / "packing.toml"
 
 

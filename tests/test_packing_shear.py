@@ -118,6 +118,7 @@ def test_contact_events_are_located_on_the_branch_to_1e_12(recorded):
     assert max(ends) <= 1e-12, ends
 
 
+@pytest.mark.slow
 def test_a_contact_sliding_through_steps_fires_no_event_at_their_start():
     """mu = 0.3, 24 disks, to gamma = 0.0015: contacts slide over many steps. At every commit,
     no contact that slid into the committed state crosses its Coulomb margin from inside to
@@ -173,6 +174,7 @@ def passed_run():
     return scene, packing, branch, finished
 
 
+@pytest.mark.slow
 def test_a_plastic_event_is_passed_by_relaxing_with_friction(passed_run):
     """32 disks, seed 2, sheared to gamma = 0.0021: the first segment ends at a fold (its
     smallest eigenvalue near 0: a saddle-node); the packing is relaxed past it and the shear goes
@@ -189,6 +191,7 @@ def test_a_plastic_event_is_passed_by_relaxing_with_friction(passed_run):
     assert np.all(np.diff(passed.gamma) > 0)
 
 
+@pytest.mark.slow
 def test_a_damped_relaxation_passes_the_same_fold_to_force_balance(passed_run):
     """The same shear with relaxation = "damped" (Newtonian dynamics with a drag after each
     plastic event, packings/plastic.damped): the first segment and its fold are the FIRE run's
@@ -226,6 +229,7 @@ def test_the_damped_steps_drag_is_exact_and_its_drift_second_order(passed_run):
     assert 0 < errors[1] < errors[0] / 3.5
 
 
+@pytest.mark.slow
 def test_a_relaxation_that_stalls_near_its_tolerance_is_finished_by_newton(passed_run, monkeypatch):
     """FIRE after a plastic event made to stop short, within 50 times the tolerance (as 256
     disks stalled at 2.5e-11 against 1e-11): the next segment's first Newton solve finishes it
@@ -334,6 +338,7 @@ def same(a, b) -> bool:
 
 
 @pytest.mark.parametrize("window", [None, (0.0, 50.0)])
+@pytest.mark.slow
 def test_a_run_resumed_after_its_finished_segments_equals_one_never_interrupted(passed_run, window,
                                                                                 tmp_path):
     """The segments a run passed, each written to a file and read back (packings/segments.py),
@@ -365,6 +370,7 @@ def test_a_run_resumed_after_its_finished_segments_equals_one_never_interrupted(
     assert resumed.gamma.size == whole.gamma.size and len(resumed.collisions) == len(whole.collisions) > 0
 
 
+@pytest.mark.slow
 def test_detection_at_64_disks_agrees_with_dense_spectra_inside_every_step(monkeypatch):
     """Issue 25: 64 disks (seed 1) sheared to gamma = 5e-4, every eigenvalue tracked. At 97
     points across every step (its segment, in the state committed at its start), the dense
@@ -444,6 +450,7 @@ def test_a_disk_held_only_against_loose_disks_is_loose():
 
 
 @pytest.mark.parametrize("mu, gamma_end", [(0.3, 0.004), (1.0, 0.005)])
+@pytest.mark.slow
 def test_a_loose_disk_caught_against_a_loose_disk_ends_no_segment(mu, gamma_end):
     """24 disks, seed 3. At mu = 0.3, gamma = 3.43e-3, a loose disk pushed by the network was
     caught between its pusher and another loose disk. Counted as held by both, it joined the
@@ -491,6 +498,7 @@ def test_a_spectral_window_finds_the_full_spectrums_collisions_in_it(branch, win
     assert windowed.window == window and windowed.eigenvalues.shape[1] < 3 * SCENE.N
 
 
+@pytest.mark.slow
 def test_a_window_that_crowds_is_widened_and_finds_the_same_collisions(packing, monkeypatch):
     """A window [0, 40] sized with k = the eigenvalues within reach + 1 crowds as the shear
     softens the packing: the run is not lost (256 disks lost 205 s so), the window is sized
@@ -544,6 +552,7 @@ def test_a_window_that_crowds_at_its_first_point_is_widened_there(packing, windo
                   - [c.p for c in windowed.collisions]).max() <= 1e-12
 
 
+@pytest.mark.slow
 def test_a_commit_that_leaves_the_matrix_the_same_keeps_the_spectrum(packing, windowed, monkeypatch):
     """Commits where loose disks gave way or histories were capped change the state but not
     A_red: the re-solve from the committed q (PackingEquilibria.resolve_start) takes no update,
@@ -707,6 +716,7 @@ def test_a_restored_state_is_the_state_set_afresh(packing):
     assert assembled
 
 
+@pytest.mark.slow
 def test_the_locator_starts_from_the_predicted_branch_point(monkeypatch):
     """256 disks (seed 1), window [-3, 8], to gamma = 1.27e-4: every located collision is found
     by the locator's first run. It starts from the point the segment predicts from the solved

@@ -141,6 +141,7 @@ def test_prepare_is_deterministic_per_seed(at_pressure):
     assert not np.array_equal(other.positions, at_pressure.positions)
 
 
+@pytest.mark.slow
 def test_packing_fraction_at_a_small_pressure_is_near_jamming():
     """2D bidisperse (1.4, 50:50) disks jam near phi = 0.84; at P = 1e-2 (overlaps ~5e-4 of a
     diameter) a packing of 64 lies within 0.80 .. 0.90."""

@@ -13,6 +13,8 @@ from diskfriction.cli.main import main
 
 from gallery import EXAMPLES
 
+pytestmark = pytest.mark.slow  # whole runs of commands or examples: the slow tier (README, Tests)
+
 HEADER = """
 import numpy as np
 from diskfriction.continuation import BifurcationProblem, problem_from_functions

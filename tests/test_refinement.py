@@ -452,6 +452,7 @@ def test_the_certificate_refuses_a_duplicate_and_a_wrong_eigenvalue():
 
 
 @pytest.mark.parametrize("N", [10, 20, 40])
+@pytest.mark.slow
 def test_sweeps_with_refined_spectra_find_the_same_collisions(N, chain_sweep, monkeypatch):
     """The paper's scene with N disks from rest to 0.12, every full spectrum refined where
     certified (REFINE_FROM = 0): the same collisions as with every spectrum decomposed, within

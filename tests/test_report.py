@@ -17,6 +17,8 @@ from diskfriction.reports.sections import SECTIONS
 from diskfriction.reports.settings import SettingError, Settings, with_setting
 from diskfriction.scenes import Scene
 
+pytestmark = pytest.mark.slow  # whole runs of commands or examples: the slow tier (README, Tests)
+
 ROOT = Path(__file__).resolve().parents[1]
 TINY = Scene(N=3, name="tiny")
 # Short runs and small grids: the whole report in well under a minute.

@@ -40,6 +40,7 @@ def assert_same_branch(a, b, tol_p=1e-12):
 
 
 @pytest.mark.parametrize("eps", [1e-4, 0.0], ids=["eps1e-4", "eps0"])
+@pytest.mark.slow
 def test_two_workers_give_the_inline_branch(eps):
     """N = 20, 50 collisions (eps = 1e-4) or 24 with free disks (eps = 0): the workers' scans
     give the inline branch, and the work they did is booked in this process."""
@@ -72,6 +73,7 @@ class Deferred(InlineScans):
         return self.is_ready
 
 
+@pytest.mark.slow
 def test_a_failed_scan_rejects_its_step_after_the_branch_went_on(monkeypatch, chain_sweep):
     """Step 20's scan fails. Inline, the step is retried at once with half the arclength; with
     the scans deferred, the continuation has reached the end by then and returns to step 20's

@@ -21,6 +21,7 @@ def line(n: int):
                                   dG_dp=lambda u, p: -np.ones(n))
 
 
+@pytest.mark.slow
 def test_a_straight_branch_takes_as_many_steps_on_any_mesh():
     # n = 10 and 40 suffice (a mesh 4x finer, as 20 and 80 were): 74 weighted steps on both,
     # 169 and 324 Euclidean ones (ratio 1.92; 233 and 453 at 20, 80), and n = 80 alone took 2.3 s
@@ -31,6 +32,7 @@ def test_a_straight_branch_takes_as_many_steps_on_any_mesh():
     assert euclidean[1] > 1.8 * euclidean[0]  # ~ sqrt(n)
 
 
+@pytest.mark.slow
 def test_bratu_fold_is_located_though_g_rounds_above_the_tolerance():
     """examples/bratu.py, n = 50: terms of G up to 3e3 |u| round to ~1e-12, where the fold's
     locator asks 1e-12; the fold against an independent solve of G = 0, J v = 0, |v| = 1."""
@@ -51,6 +53,7 @@ def test_bratu_fold_is_located_though_g_rounds_above_the_tolerance():
     assert fold.p == pytest.approx(z[-1], abs=1e-10)
 
 
+@pytest.mark.slow
 def test_a_problem_without_rounding_says_when_its_tolerance_is_below_g_s_rounding():
     """The same Bratu problem with rounding 0 (a Problem subclass's default): newton_tol is
     relative to G's size at the start (lambda = 0.01: max|G| <= 1e-12), which G's terms of 3e3

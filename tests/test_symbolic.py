@@ -28,6 +28,7 @@ TOL = 1e-6
 
 
 @pytest.mark.parametrize("effects", all_effects(), ids=effects_id)
+@pytest.mark.slow
 def test_jacobian_matches_finite_differences(effects: Effects):
     """Per contact block and assembled: relative error <= 1e-6 at 50 random admissible states,
     half of them with a contact at delta ~ 1e-10, histories |xi|/t* in {0, 1e-8, 0.5, 1-1e-8}."""

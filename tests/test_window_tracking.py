@@ -70,6 +70,7 @@ def jumps(window, full, rows: np.ndarray) -> list:
 
 @pytest.mark.parametrize("name, lo, hi", [("paper", 0.05, 0.08), ("paper", 0.055, 0.06),
                                           ("N20-eps1e-4", 0.05, 0.08), ("paper", 0.0, 0.02)])
+@pytest.mark.slow
 def test_windowed_columns_follow_the_full_spectrum(name, lo, hi, chain_sweep):
     """Where a column lies inside the window, from one point to the next it holds one
     eigenvalue of the full sweep (same F_x), or passes through a collision located between
@@ -101,6 +102,7 @@ def test_a_window_holding_all_but_two_eigenvalues_locates_the_full_sweeps_collis
     assert np.max(np.abs(np.subtract([p for _, p in found], [p for _, p in expected]))) <= 1e-10
 
 
+@pytest.mark.slow
 def test_windowed_columns_continue_across_the_legs(chain_sweep):
     """Loading to 0.06 and unloading to 0.03: the unloading leg starts with its labels in order
     of value; its columns continue the loading leg's (each moves to the nearest value at the
@@ -186,6 +188,7 @@ def _located_collisions(monkeypatch, certified: float) -> tuple[list, list]:
     return found, window.collisions
 
 
+@pytest.mark.slow
 def test_collisions_beyond_the_certified_band_are_not_located(monkeypatch):
     """With the whole guard band certified (CERTIFIED = 1, before) the paper's window
     0.06:0.07 locates a collision beyond the band's inner half, outside W, which is then not
