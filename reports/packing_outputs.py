@@ -14,7 +14,7 @@ from typing import Optional
 import numpy as np
 
 from diskfriction.continuation.spectral_window import Window
-from diskfriction.files import save_json, save_npz
+from diskfriction.files import json_values, save_json, save_npz
 from diskfriction.matrices import Matrix
 from diskfriction.packings.prepare import Packing, save_packing
 from diskfriction.packings.shear import PackingBranch, collision_records
@@ -39,7 +39,7 @@ def scene_record(scene: PackingScene) -> dict:
     its file, N, k_n [force / length^p], seed, and physics: every field that enters the
     physics (PackingScene.physics_fields: the matrix analysed included)."""
     return {"name": scene.name, "file": scene.source, "N": scene.N, "k_n": scene.k_n,
-            "seed": scene.seed, "physics": json.loads(json.dumps(scene.physics_fields()))}
+            "seed": scene.seed, "physics": json_values(scene.physics_fields())}
 
 
 def scene_arrays(scene: PackingScene) -> dict[str, np.ndarray]:
