@@ -17,7 +17,7 @@ import time
 
 import numpy as np
 
-from diskfriction.disks.equilibrium import equilibrium_at
+from diskfriction.models.chain.equilibrium import equilibrium_at
 from diskfriction.dynamics.simulate import UnstableStep, simulate, stability_limit, summarize
 from diskfriction.dynamics.start import Perturbation, spectrum
 from diskfriction.dynamics.trajectory import BUDGET_BOUND

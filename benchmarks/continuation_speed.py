@@ -12,10 +12,10 @@ import time
 
 import numpy as np
 
-from diskfriction.continuation.collisions import DetectionParams
-from diskfriction.continuation.linalg import blas_threads, measured
-from diskfriction.continuation.spectra import eigensystem
-from diskfriction.disks.sweep import SweepParams, sweep
+from diskfriction.continuation.detection.collisions import DetectionParams
+from diskfriction.continuation.linalg.solves import blas_threads, measured
+from diskfriction.continuation.spectra.tracking import eigensystem
+from diskfriction.models.chain.sweep import SweepParams, sweep
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
 

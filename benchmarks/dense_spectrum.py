@@ -19,9 +19,9 @@ import time
 import numpy as np
 import scipy.linalg as sla
 
-from diskfriction.continuation.linalg import blas_threads, dense
-from diskfriction.continuation.spectra import eigensystem, spectra_on, track
-from diskfriction.disks.equilibria import DiskEquilibria, relax
+from diskfriction.continuation.linalg.solves import blas_threads, dense
+from diskfriction.continuation.spectra.tracking import eigensystem, spectra_on, track
+from diskfriction.models.chain.equilibria import DiskEquilibria, relax
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
 

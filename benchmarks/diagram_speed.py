@@ -17,7 +17,7 @@ import sys
 CHILD = """
 import json, time, tempfile
 from pathlib import Path
-from diskfriction.disks.sweep import SweepParams, sweep
+from diskfriction.models.chain.sweep import SweepParams, sweep
 from diskfriction.matrices import Matrix
 from diskfriction.scenes.load import default_scene_path, load_scene
 from diskfriction.symbolic import System

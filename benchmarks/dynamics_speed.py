@@ -66,7 +66,7 @@ def ring_stepper(N: int, repeat: int):
 
 
 def paper_stepper(repeat: int):
-    from diskfriction.disks.sweep import sweep
+    from diskfriction.models.chain.sweep import sweep
     from diskfriction.dynamics import Perturbation, Stepper, choose_dt, spectrum
     from diskfriction.dynamics.start import perturb
     from diskfriction.scenes import Scene

@@ -6,10 +6,10 @@ its eigensystem by LAPACK (spectra.eigensystem, one BLAS thread; the time is the
 --repeat); then one quasistatic step to 0.002 + dF and every eigenpair of the new J refined
 from the old ones (eigenvalues predicted to first order, lambda + l^H dA r, as the slopes do;
 vectors the old ones) by two-sided Rayleigh quotient iteration on the periodic block-tridiagonal
-matrix (continuation/block_tridiagonal.py; one core, the median of --repeat). Printed: the times,
+matrix (continuation/linalg/block_tridiagonal.py; one core, the median of --repeat). Printed: the times,
 the largest eigenvalue error against LAPACK's at the new point over the spectral radius, the
 largest residual |A r - lambda r| over it, and whether the result passes the refinement's
-certificate (continuation/refinement.py: residuals, error discs, trace identities). Run:
+certificate (continuation/spectra/refinement.py: residuals, error discs, trace identities). Run:
 python benchmarks/eigenpair_refinement.py [--N 100,300,1000] [--dF 1e-4,5e-4] [--iterations 2]
 """
 from __future__ import annotations
@@ -19,11 +19,11 @@ import time
 
 import numpy as np
 
-from diskfriction.continuation.block_tridiagonal import PeriodicBlocks, disk_major, refine_eigenpairs
-from diskfriction.continuation.refinement import TOLERANCE, certified
-from diskfriction.continuation.linalg import blas_threads, dense
-from diskfriction.continuation.spectra import eigensystem, eigenvalue_slopes, spectra_on, track
-from diskfriction.disks.equilibria import DiskEquilibria, relax
+from diskfriction.continuation.linalg.block_tridiagonal import PeriodicBlocks, disk_major, refine_eigenpairs
+from diskfriction.continuation.spectra.refinement import TOLERANCE, certified
+from diskfriction.continuation.linalg.solves import blas_threads, dense
+from diskfriction.continuation.spectra.tracking import eigensystem, eigenvalue_slopes, spectra_on, track
+from diskfriction.models.chain.equilibria import DiskEquilibria, relax
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
 

@@ -23,9 +23,9 @@ import time
 
 import numpy as np
 
-from diskfriction.packings.dynamics import fastest_pair
-from diskfriction.packings.prepared import prepare_scene
-from diskfriction.packings.shear import ShearParams, shear
+from diskfriction.models.packing.dynamics import fastest_pair
+from diskfriction.models.packing.prepared import prepare_scene
+from diskfriction.models.packing.shear import ShearParams, shear
 from diskfriction.scenes.packing import PackingScene
 
 MUS = (0.3, 1.0, 10.0)

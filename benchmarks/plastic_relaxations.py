@@ -1,4 +1,4 @@
-"""The relaxations after plastic events (issue 25, packings/plastic.py): a packing is sheared
+"""The relaxations after plastic events (issue 25, models/packing/plastic.py): a packing is sheared
 (window LO:HI, as `bifurcate --window`, scans inline) until it has passed EVENTS plastic events,
 and the state at each fold is relaxed again here with each rule:
 - "fire": FIRE with plastic.time_step (dt_max from the state's ||J||_inf, the default);
@@ -21,11 +21,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from diskfriction.packings import plastic
-from diskfriction.packings.equilibria import mass_diagonal
-from diskfriction.packings.prepare import first_time_step
-from diskfriction.packings.prepared import prepare_scene
-from diskfriction.packings.shear import ShearParams, network_of, shear
+from diskfriction.models.packing import plastic
+from diskfriction.models.packing.equilibria import mass_diagonal
+from diskfriction.models.packing.prepare import first_time_step
+from diskfriction.models.packing.prepared import prepare_scene
+from diskfriction.models.packing.shear import ShearParams, network_of, shear
 from diskfriction.scenes.packing import PackingScene
 from diskfriction.scenes.scene import SceneValueError
 from packing_cases import read_case

@@ -1,5 +1,5 @@
 """Packing preparation benchmark (issue 25): seconds to prepare the default packing scene's
-packing at N disks with the generated kernels (packings/prepared.py), the FIRE steps and
+packing at N disks with the generated kernels (models/packing/prepared.py), the FIRE steps and
 relaxations it took, phi and z. One line per N, measured in this run; the kernels are compiled
 (or loaded) before the clock starts.
 
@@ -10,7 +10,7 @@ from __future__ import annotations
 import sys
 import time
 
-from diskfriction.packings.prepared import contact_number, prepare_scene
+from diskfriction.models.packing.prepared import contact_number, prepare_scene
 from diskfriction.scenes.packing import PackingScene
 from diskfriction.symbolic.kernels import load_packing_kernels
 

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from diskfriction.continuation import Options, solve_branch
-from diskfriction.continuation.linalg import measured
+from diskfriction.continuation.linalg.solves import measured
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "brusselator_chain.py"
 

@@ -1,4 +1,4 @@
-"""Square-root ends (continuation/root_ends.py): a packing sheared from its preparation to
+"""Square-root ends (continuation/detection/root_ends.py): a packing sheared from its preparation to
 GAMMA (window LO:HI, as `bifurcate --window`, scans inline, every plastic event passed), once
 with the steps that end where a contact opens or forms treated apart ("root ends", the code in
 use) and once without ("plain": PackingEquilibria.root_events gives none). The continuation's
@@ -16,10 +16,10 @@ import time
 
 import numpy as np
 
-from diskfriction.continuation.linalg import measured
-from diskfriction.packings.equilibria import PackingEquilibria
-from diskfriction.packings.prepared import prepare_scene
-from diskfriction.packings.shear import ShearParams, shear
+from diskfriction.continuation.linalg.solves import measured
+from diskfriction.models.packing.equilibria import PackingEquilibria
+from diskfriction.models.packing.prepared import prepare_scene
+from diskfriction.models.packing.shear import ShearParams, shear
 from diskfriction.scenes.packing import PackingScene
 from diskfriction.scenes.scene import SceneValueError
 from packing_cases import read_case

@@ -1,9 +1,9 @@
 """Continuation cost against N (issue 8): the paper's scene with N disks, F_x 0 -> 0.12, J.
 
 For every N: wall time of the sweep (warm kernels), full spectra computed and partial ones (the
-shift-inverts of split samples: continuation/nearest.py), LU factorizations and solves,
+shift-inverts of split samples: continuation/spectra/nearest.py), LU factorizations and solves,
 collisions located, peak memory of the sweep's process and of its largest scan worker
-(continuation/scans.py); eps = 1e-4 and eps = 0; the fitted exponent of time against N; the
+(continuation/detection/scans.py); eps = 1e-4 and eps = 0; the fitted exponent of time against N; the
 fast detection against the exhaustive one (same collisions?) up to --exhaustive-up-to. The
 fast detection scans on --workers processes (default: the sweep's own choice, 2 from N = 20 on
 a machine with 2 cores); the exhaustive one always inline. Each run is a subprocess with a time budget: a run that would exceed
@@ -18,7 +18,7 @@ Run: python benchmarks/scaling.py [--N 10,20,40,100,200,400,1000] [--budget 600]
 With --window-N, also a run tracking only that spectral window (bifurcate --window; lambda / k_n)
 at each of those N. --spectra: where the dense spectra run (bifurcate --spectra; default auto);
 with several, each fast run is repeated for each and compared with the first. --refine-from:
-the n from which full spectra are refined from the previous sample's (continuation/refinement.py;
+the n from which full spectra are refined from the previous sample's (continuation/spectra/refinement.py;
 inf: never), several compared the same way; "refined (repaired) + declined" counts the full
 spectra so refined, of them those certified only after their failing pairs were repaired by
 shift-invert, and the refinements whose certificate failed (a dense spectrum was taken instead).
@@ -41,13 +41,13 @@ try:  # end with the benchmark: a signal that stops it leaves no sweep running (
     ctypes.CDLL(None).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
 except (OSError, AttributeError):
     pass
-from diskfriction.continuation.collisions import DetectionParams
-from diskfriction.disks.equilibria import DiskEquilibria
-from diskfriction.continuation import refinement
-from diskfriction.continuation.linalg import measured
-from diskfriction.continuation.scans import default_workers
-from diskfriction.continuation.spectra import spectra_on
-from diskfriction.disks.sweep import SweepParams, sweep
+from diskfriction.continuation.detection.collisions import DetectionParams
+from diskfriction.models.chain.equilibria import DiskEquilibria
+from diskfriction.continuation.spectra import refinement
+from diskfriction.continuation.linalg.solves import measured
+from diskfriction.continuation.detection.scans import default_workers
+from diskfriction.continuation.spectra.tracking import spectra_on
+from diskfriction.models.chain.sweep import SweepParams, sweep
 from diskfriction.reports.units import PaperUnits
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
@@ -112,7 +112,7 @@ print(json.dumps(out))
 
 def run(N: int, eps: float, mode: str, budget: float, window: str = "-", workers: str = "auto",
         spectra: str = "auto", refine_from: str = "default", progress: float = 0.0) -> dict:
-    from diskfriction.continuation.refinement import REFINE_FROM
+    from diskfriction.continuation.spectra.refinement import REFINE_FROM
 
     refine = str(REFINE_FROM) if refine_from == "default" else refine_from
     proc = subprocess.run([sys.executable, "-c", CHILD, str(N), str(eps), mode, str(budget), window, workers,

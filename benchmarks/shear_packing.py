@@ -8,12 +8,12 @@ real part of the tracked spectrum at the end over its value at the start (a fold
 `diskfriction bifurcate` (two on a machine with two cores or more, from n = PARALLEL_FROM), or
 on --workers K (0: inline, every step's scan in this process, bit-for-bit reproducible).
 
-Plastic events (folds) are passed up to PLASTIC_EVENTS times (packings/plastic.py); the column
+Plastic events (folds) are passed up to PLASTIC_EVENTS times (models/packing/plastic.py); the column
 "plastic" counts them and "ended" says how the last segment ended.
 
 With a window LO:HI (raw units of M^-1 J) only Re lambda in [LO, HI] is tracked, by sparse
 shift-invert (bifurcate --window): "collisions" and "complex" then count the window's, and
-"widened" how often the window crowded and was sized anew (packings/shear.py).
+"widened" how often the window crowded and was sized anew (models/packing/shear.py).
 
 Memory: "MB" is this process's peak resident size so far and "worker MB" the largest of its
 scan workers' (both from getrusage, so a later run's figure is never below an earlier one's:
@@ -32,8 +32,8 @@ import time
 
 import numpy as np
 
-from diskfriction.packings.prepared import prepare_scene
-from diskfriction.packings.shear import ShearParams, shear
+from diskfriction.models.packing.prepared import prepare_scene
+from diskfriction.models.packing.shear import ShearParams, shear
 from diskfriction.scenes.packing import PackingScene
 
 PLASTIC_EVENTS = 1000

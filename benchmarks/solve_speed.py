@@ -1,9 +1,9 @@
 """Sparse solves of the chain: SuperLU's own solve against compiled substitution over its
-factors (continuation/triangular.py), what copying the factors costs, and the factorization
+factors (continuation/linalg/triangular.py), what copying the factors costs, and the factorization
 with the collision locator's borders as unit vectors and as it scales them
 (locate.BORDER_SCALE: fill and time); then SuperLU's ordering as the shift-invert takes it
 (nearest.SHIFT_INVERT_ORDERING) against its default (COLAMD, partial pivoting), each also with
-its ordering kept for a repeated pattern (continuation/orderings.py), on the chain's matrix and
+its ordering kept for a repeated pattern (continuation/linalg/orderings.py), on the chain's matrix and
 on a sheared packing's A - sigma I (the spectral window's shift-invert, --packing N
 disks, window [-3, 8]; 0: none); last, the packing's bordered corrector matrix with its
 factor_options (PackingEquilibria: minimum degree on A + A^T, partial pivoting) against
@@ -22,14 +22,14 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from diskfriction.disks.equilibria import DiskEquilibria, relax
-from diskfriction.continuation import orderings as reuse
-from diskfriction.continuation.linalg import bordered, blas_threads
-from diskfriction.continuation.nearest import SHIFT_INVERT_ORDERING
-from diskfriction.continuation.locate import BORDER_SCALE
-from diskfriction.continuation.newton import bordered_matrix, tangent
-from diskfriction.packings.equilibria import PackingEquilibria
-from diskfriction.continuation.triangular import TriangularFactors
+from diskfriction.models.chain.equilibria import DiskEquilibria, relax
+from diskfriction.continuation.linalg import orderings as reuse
+from diskfriction.continuation.linalg.solves import bordered, blas_threads
+from diskfriction.continuation.spectra.nearest import SHIFT_INVERT_ORDERING
+from diskfriction.continuation.detection.locate import BORDER_SCALE
+from diskfriction.continuation.stepping.newton import bordered_matrix, tangent
+from diskfriction.models.packing.equilibria import PackingEquilibria
+from diskfriction.continuation.linalg.triangular import TriangularFactors
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
 from kernels import per_call  # benchmarks/kernels.py: this script's folder is on sys.path
@@ -106,7 +106,7 @@ def compare_orderings(label: str, M, r, calls: int, repeat: int,
                       orderings=(("shift-invert's (MMD, A + A^T)", SHIFT_INVERT_ORDERING), DEFAULT)) -> None:
     """Factorization, nnz(L + U), substitution and backward error with each of `orderings`
     (name, splu's keywords; default: the shift-invert's and SuperLU's default); the
-    factorization again with the ordering kept for the pattern (continuation/orderings.py: what
+    factorization again with the ordering kept for the pattern (continuation/linalg/orderings.py: what
     the core does from the second matrix of a pattern on)."""
     print(f"{label} (n = {M.shape[0]}):")
     for name, options in orderings:
@@ -127,8 +127,8 @@ def packing_matrices(N: int):
     """(A_red - sigma I, the corrector's bordered matrix [[G_u, G_p], [t^T]]) (CSC) of N disks
     (seed 1) at the start of their shear, sigma the centre of the window [-3, 8], t the branch's
     tangent there."""
-    from diskfriction.packings.prepared import prepare_scene
-    from diskfriction.packings.shear import mass_diagonal, network_of, start
+    from diskfriction.models.packing.prepared import prepare_scene
+    from diskfriction.models.packing.shear import mass_diagonal, network_of, start
     from diskfriction.scenes.packing import PackingScene
     scene = PackingScene(N=N, seed=1)
     packing = prepare_scene(scene)

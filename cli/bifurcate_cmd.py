@@ -109,8 +109,8 @@ def parse_window(text: str, command: str = "bifurcate") -> tuple[float, float]:
 
 
 def run(args: argparse.Namespace) -> int:
-    """bifurcate with its dense spectra where --spectra says (continuation/spectra.py)."""
-    from diskfriction.continuation.spectra import NoGpu, SpectraDevice, spectra_on
+    """bifurcate with its dense spectra where --spectra says (continuation/spectra/tracking.py)."""
+    from diskfriction.continuation.spectra.tracking import NoGpu, SpectraDevice, spectra_on
 
     names = [device.value for device in SpectraDevice]
     if args.spectra not in names:
@@ -124,7 +124,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from diskfriction.continuation.detectors import DETECTORS
+    from diskfriction.continuation.detection.detectors import DETECTORS
 
     if args.detection not in DETECTORS:
         raise CommandError(f"bifurcate error: --detection: must be {' or '.join(DETECTORS)} "
@@ -159,12 +159,12 @@ def _run(args: argparse.Namespace) -> int:
     matrix = matrix_from_args("bifurcate", args, scene)
     out = output_dir("bifurcate", args.out, Path("out") / "bifurcate" / scene.name)
 
-    from diskfriction.continuation.arclength import ContinuationError
-    from diskfriction.continuation.collisions import DetectionParams
-    from diskfriction.disks.equilibria import EquilibriumError
-    from diskfriction.continuation.scans import planned_workers
-    from diskfriction.continuation.spectral_window import WindowCrowded
-    from diskfriction.disks.sweep import SweepParams, sweep
+    from diskfriction.continuation.stepping.arclength import ContinuationError
+    from diskfriction.continuation.detection.collisions import DetectionParams
+    from diskfriction.models.chain.equilibria import EquilibriumError
+    from diskfriction.continuation.detection.scans import planned_workers
+    from diskfriction.continuation.spectra.window import WindowCrowded
+    from diskfriction.models.chain.sweep import SweepParams, sweep
     from diskfriction.reports.bifurcation import collision_records, plot_diagram, save_branch
     from diskfriction.symbolic import System
 
@@ -230,7 +230,7 @@ def _run(args: argparse.Namespace) -> int:
                   f"(lambda/k_n = {r['lambda_re'] / scene.k_n:.5g}){unlocated}")
         print(f"wrote {out}/branch.npz, collisions.json, diagram.png")
     if not branch.status[-1].reached:
-        from diskfriction.disks.equilibrium import contact_states
+        from diskfriction.models.chain.equilibrium import contact_states
 
         raise CommandError(f"bifurcate error: {scene.source}: the sweep ended at F_x = "
                            f"{branch.F_x[-1]:.6g}, short of {F_to:g}: "

@@ -154,9 +154,9 @@ def check_memory(command: str, scene: Scene, processes: int = 1, dense: Optional
     naming what it counted: the larger of a sweep, dense in n = ndof (unless `dense` is False: a
     spectral window, a sweep without spectra, or eps = 0, the default None meaning eps > 0) in
     each of the `processes` that take spectra at once (a sweep's and its scan workers, or a
-    map's cells on this machine), with its stored points (disks/memory.py), and the dense
+    map's cells on this machine), with its stored points (models/chain/memory.py), and the dense
     spectrum of M^-1 J at a run's start in each of the `spectra` processes that take one at once."""
-    from diskfriction.disks.memory import spectrum_bytes, sweep_bytes
+    from diskfriction.models.chain.memory import spectrum_bytes, sweep_bytes
     from diskfriction.memory import NotEnoughMemory, require_memory
 
     n = scene.ndof
@@ -180,18 +180,18 @@ def check_packing(command: str, scene: PackingScene, strain: Optional[float] = N
                   t_end: Optional[float] = None, dt: Optional[float] = None) -> None:
     """Before any work on a packing scene, refuse in one line (exit 2) what `command` cannot
     compute, and print on stderr the rough wall time of what it will do. Refused, in this order:
-    - more memory than this machine has (packings/memory.py), naming N and what it counted: the
+    - more memory than this machine has (models/packing/memory.py), naming N and what it counted: the
       preparation, and with `strain` a shear from gamma = 0 to it, dense 3N x 3N spectra in
       each of `processes` processes (the shear's and its scan workers') or with `window` only
       the points it stores;
-    - a scene the preparation cannot make (packings/limits.py: a box too narrow for its
+    - a scene the preparation cannot make (models/packing/limits.py: a box too narrow for its
       contacts, a pressure below what double precision resolves), naming the key and value;
-    - with `runs` dynamics runs to t_end (step dt, default packings/cost.time_step), --t-end
+    - with `runs` dynamics runs to t_end (step dt, default models/packing/cost.time_step), --t-end
       and --dt as run_length takes them, and a run of more than MAX_RUN_STEPS time steps.
-    The estimate (packings/cost.py) is one line, ``COMMAND: about T (a rough estimate) to
+    The estimate (models/packing/cost.py) is one line, ``COMMAND: about T (a rough estimate) to
     prepare N disks, shear ...``, as the chain's long commands print theirs."""
     from diskfriction.memory import NotEnoughMemory, require_memory
-    from diskfriction.packings import cost, limits, memory
+    from diskfriction.models.packing import cost, limits, memory
     from diskfriction.words import duration
 
     N, n = scene.N, scene.ndof
@@ -247,8 +247,8 @@ def check_packing_bifurcate(args: argparse.Namespace, scene: PackingScene,
     """check_packing for bifurcate on a packing: a shear over the scene's strain, its dense
     spectra in the main process and the scan workers it will start (planned_workers, from
     --workers and --detection), or with --window its points."""
-    from diskfriction.continuation.collisions import DetectionParams
-    from diskfriction.continuation.scans import planned_workers
+    from diskfriction.continuation.detection.collisions import DetectionParams
+    from diskfriction.continuation.detection.scans import planned_workers
 
     asked = None if args.workers is None else max(args.workers, 0)  # < 0: bifurcate refuses it
     workers = planned_workers(scene.ndof, DetectionParams(mode=args.detection), asked,

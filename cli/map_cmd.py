@@ -138,12 +138,12 @@ def run(args: argparse.Namespace) -> int:
     from diskfriction.studies.cluster import code_version, local_workers
 
     at_once = 1 if args.scheduler is not None else min(len(cells), local_workers(args.workers))
-    from diskfriction.packings.limits import preparation_problem
+    from diskfriction.models.packing.limits import preparation_problem
 
     for cell in cells:
         if packing:
             check_memory("map", cell.scene, at_once, dense=params.window is None)
-            problem = preparation_problem(cell.scene)  # packings/limits.py: what FIRE cannot make
+            problem = preparation_problem(cell.scene)  # models/packing/limits.py: what FIRE cannot make
             if problem is not None:
                 values = ", ".join(f"{key} = {value!r}" for key, value in cell.values)
                 raise CommandError(f"map error: --vary: cell {values}: {problem[0]}: {problem[1]}")

@@ -3,7 +3,7 @@
 every birth and death of a complex pair (issue 25, docs/packings.md#shear).
 
 A long shear keeps what it finished: each segment (the branch up to a plastic event passed,
-packings/segments.py) is written to DIR/segments/ as it is passed, keyed by everything its
+models/packing/segments.py) is written to DIR/segments/ as it is passed, keyed by everything its
 result depends on (resume_key); a rerun of the same command, interrupted or failed, goes on
 after them with the same result (a segment file it cannot read is computed again), and the
 directory is removed once the outputs are written. The outputs are written together at the
@@ -33,7 +33,7 @@ CHAIN_ONLY = {"fx": "a packing's load is its strain: [shear] gamma in the scene"
 """bifurcate's options a packing scene does not take, and why."""
 
 PLASTIC_EVENTS = 1000
-"""The plastic events a command passes (packings/plastic.py) before it stops at the next."""
+"""The plastic events a command passes (models/packing/plastic.py) before it stops at the next."""
 
 
 def run_packing(args: argparse.Namespace, scene: PackingScene,
@@ -57,16 +57,16 @@ def run_packing(args: argparse.Namespace, scene: PackingScene,
     refuse_other_scene("bifurcate", out, scene)
     check_packing_bifurcate(args, scene, window)
 
-    from diskfriction.continuation.arclength import ContinuationError
+    from diskfriction.continuation.stepping.arclength import ContinuationError
     from diskfriction.continuation.branch import StopCode
-    from diskfriction.continuation.collisions import DetectionParams
-    from diskfriction.continuation.spectral_window import WindowCrowded
+    from diskfriction.continuation.detection.collisions import DetectionParams
+    from diskfriction.continuation.spectra.window import WindowCrowded
     from diskfriction.files import save_json
-    from diskfriction.packings.equilibria import MissedContact, NotJammed
-    from diskfriction.packings.plastic import RelaxationFailed
-    from diskfriction.packings.prepared import prepare_scene
-    from diskfriction.packings.segments import save_segment
-    from diskfriction.packings.shear import ShearParams, collision_records, shear
+    from diskfriction.models.packing.equilibria import MissedContact, NotJammed
+    from diskfriction.models.packing.plastic import RelaxationFailed
+    from diskfriction.models.packing.prepared import prepare_scene
+    from diskfriction.models.packing.segments import save_segment
+    from diskfriction.models.packing.shear import ShearParams, collision_records, shear
     from diskfriction.reports.packing_outputs import (OUTPUTS, RUN_SCENE, save_packing_outputs,
                                                       scene_record)
 
@@ -175,7 +175,7 @@ def finished_segments(directory: Path, key: str) -> tuple[list, str]:
     to the first one missing, unreadable or written for another key; why that one is not read,
     "" if it is missing). The run computes that segment and those after it again and writes
     them over the files."""
-    from diskfriction.packings.segments import SegmentFileError, load_segment
+    from diskfriction.models.packing.segments import SegmentFileError, load_segment
 
     done = []
     while (directory / SEGMENT_FILE.format(len(done))).exists():
@@ -213,8 +213,8 @@ def run_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> int:
     import numpy as np
 
     from diskfriction.files import save_json, save_npz
-    from diskfriction.packings.dynamics import run_steps, time_step
-    from diskfriction.packings.runs import FRAMES, NoComplexPair, linearized, run_from_state
+    from diskfriction.models.packing.dynamics import run_steps, time_step
+    from diskfriction.models.packing.runs import FRAMES, NoComplexPair, linearized, run_from_state
     from diskfriction.reports.packing_outputs import (plot_packing_run, plot_packing_snapshot,
                                                       scene_arrays, scene_record)
 
@@ -309,8 +309,8 @@ def run_packing_verify(args: argparse.Namespace, scene: PackingScene) -> int:
     import numpy as np
 
     from diskfriction.files import save_json, save_text
-    from diskfriction.packings.runs import linearized, run_from_state
-    from diskfriction.packings.shear import ShearParams
+    from diskfriction.models.packing.runs import linearized, run_from_state
+    from diskfriction.models.packing.shear import ShearParams
     from diskfriction.reports.packing_outputs import scene_record
 
     progress = Progress("verify")
@@ -386,10 +386,10 @@ def opened_formed(row: dict) -> str:
 
 
 def sheared(scene: PackingScene, progress: Progress, asked: float | None = None):
-    """packings/shear.shear_scene with this command's progress lines; `asked`, the strain the
+    """models/packing/shear.shear_scene with this command's progress lines; `asked`, the strain the
     user asked for, is the one the shear's line names (simulate --gamma 0 shears one step to
     take the branch's first state, at gamma = 0)."""
-    from diskfriction.packings.shear import shear_scene
+    from diskfriction.models.packing.shear import shear_scene
 
     g1 = scene.gamma_range[1]
     shown = g1 if asked is None else asked

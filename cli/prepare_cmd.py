@@ -44,8 +44,8 @@ def run(args: argparse.Namespace) -> int:
     refuse_other_scene("prepare", out, scene)
     check_packing("prepare", scene)
     from diskfriction.files import save_json
-    from diskfriction.packings.prepare import save_packing
-    from diskfriction.packings.prepared import contact_number, prepare_scene
+    from diskfriction.models.packing.prepare import save_packing
+    from diskfriction.models.packing.prepared import contact_number, prepare_scene
     from diskfriction.reports.packing_outputs import scene_arrays, scene_record
 
     progress = Progress("prepare")

@@ -78,7 +78,7 @@ def import_file(path: Path):
         raise _fail(path, f"failed to import: {_error_line(path, error)}") from None
     finally:
         sys.path.remove(str(path.resolve().parent))
-    from diskfriction.continuation.differences import DerivativeWarning
+    from diskfriction.continuation.stepping.differences import DerivativeWarning
 
     for w in caught:  # a problem's derivative warning is said for the one that runs (run_problem)
         if not issubclass(w.category, DerivativeWarning):
@@ -121,7 +121,7 @@ def run_problem(args: argparse.Namespace) -> int:
         number("bifurcate", "ds-max", args.ds_max)
     path, name, spec = load_problem(args.problem)
     label = f"{path}:{name}"
-    from diskfriction.continuation.differences import differenced
+    from diskfriction.continuation.stepping.differences import differenced
 
     if (line := differenced(spec.problem)) is not None:
         warn(f"{label}: {line}")
@@ -161,8 +161,8 @@ def _continue(spec, label: str, span, options, out: Path, as_json: bool,
     from diskfriction.files import json_text
 
     from diskfriction.continuation.api import ProblemError, check_problem, solve_branch
-    from diskfriction.continuation.arclength import ContinuationError
-    from diskfriction.disks.memory import sweep_bytes
+    from diskfriction.continuation.stepping.arclength import ContinuationError
+    from diskfriction.models.chain.memory import sweep_bytes
     from diskfriction.memory import NotEnoughMemory, require_memory
     from diskfriction.reports.problem import collision_json, plot_problem_diagram, save_outputs
 

@@ -118,7 +118,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def single_run(scene, F_x: float, args, out: Path, progress: Progress) -> int:
-    from diskfriction.disks.equilibrium import equilibrium_at
+    from diskfriction.models.chain.equilibrium import equilibrium_at
     from diskfriction.dynamics.simulate import UnstableStep, inaccuracy, plan_run, simulate, summarize
     from diskfriction.dynamics.start import Perturbation, spectrum
     from diskfriction.dynamics.stepper import load_stepper

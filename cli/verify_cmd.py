@@ -50,13 +50,13 @@ def run(args: argparse.Namespace) -> int:
     number("verify", "amplitude", args.amplitude, zero=True)
     matrix = matrix_from_args("verify", args, scene)
     out = output_dir("verify", args.out, Path("out") / "verify" / scene.name)
-    from diskfriction.continuation.collisions import DetectionParams
-    from diskfriction.continuation.scans import planned_workers
+    from diskfriction.continuation.detection.collisions import DetectionParams
+    from diskfriction.continuation.detection.scans import planned_workers
 
     check_memory("verify", scene, 1 + planned_workers(scene.ndof, DetectionParams()), spectra=1)
 
-    from diskfriction.continuation.arclength import ContinuationError
-    from diskfriction.disks.equilibria import EquilibriumError
+    from diskfriction.continuation.stepping.arclength import ContinuationError
+    from diskfriction.models.chain.equilibria import EquilibriumError
     from diskfriction.dynamics.stepper import load_stepper
     from diskfriction.studies.verify import verify_windows
     from diskfriction.files import save_json, save_text

@@ -11,15 +11,15 @@ The core underneath:
 
     branch = continuation(problem, u0, p0, ContinuationParams(...), DetectionParams(...))
 """
-from .api import (BifurcationProblem, BranchResult, Options, ProblemError, check_problem,
+from diskfriction.continuation.api import (BifurcationProblem, BranchResult, Options, ProblemError, check_problem,
                   problem_from_functions, problem_from_sympy, solve_branch, switch_branch)
-from .arclength import ContinuationError, ContinuationParams, continuation
-from .bifurcations import SpecialPoint
-from .branch import Branch, Stop, StopCode
-from .collisions import Collision, DetectionParams
-from .differences import DerivativeWarning
-from .problem import FunctionProblem, Problem
-from .spectra import (NoGpu, SpectraDevice, count_complex_pairs, eigen_status, match_eigenvalues,
+from diskfriction.continuation.stepping.arclength import ContinuationError, ContinuationParams, continuation
+from diskfriction.continuation.detection.bifurcations import SpecialPoint
+from diskfriction.continuation.branch import Branch, Stop, StopCode
+from diskfriction.continuation.detection.collisions import Collision, DetectionParams
+from diskfriction.continuation.stepping.differences import DerivativeWarning
+from diskfriction.continuation.problem import FunctionProblem, Problem
+from diskfriction.continuation.spectra.tracking import (NoGpu, SpectraDevice, count_complex_pairs, eigen_status, match_eigenvalues,
                       spectra_on, track)
 
 __all__ = [

@@ -27,18 +27,18 @@ import scipy.sparse as sp
 
 from diskfriction.errors import OneLineError
 
-from .arclength import Callback, ContinuationError, ContinuationParams, continuation
-from .bifurcations import (CONSERVATIVE, SpecialPoint, branch_point_brackets, conservative,
+from diskfriction.continuation.stepping.arclength import Callback, ContinuationError, ContinuationParams, continuation
+from diskfriction.continuation.detection.bifurcations import (CONSERVATIVE, SpecialPoint, branch_point_brackets, conservative,
                            locate_branch_points, locate_folds, locate_hopf, other_direction)
-from .branch import Branch, StopCode
-from .collisions import Collision, DetectionParams
-from .differences import (METHODS, ParameterDerivative, StateDerivative, check_complex_step,
+from diskfriction.continuation.branch import Branch, StopCode
+from diskfriction.continuation.detection.collisions import Collision, DetectionParams
+from diskfriction.continuation.stepping.differences import (METHODS, ParameterDerivative, StateDerivative, check_complex_step,
                           warn_differences)
-from .newton import bordered_matrix, bordered_newton, term_size
-from .problem import FunctionProblem, Problem
-from .weighting import Weighted, scale_of, unweighted
-from .segment import SegmentSolveError
-from .spectral_window import WIDENINGS, WindowCrowded
+from diskfriction.continuation.stepping.newton import bordered_matrix, bordered_newton, term_size
+from diskfriction.continuation.problem import FunctionProblem, Problem
+from diskfriction.continuation.stepping.weighting import Weighted, scale_of, unweighted
+from diskfriction.continuation.stepping.segment import SegmentSolveError
+from diskfriction.continuation.spectra.window import WIDENINGS, WindowCrowded
 
 Array = np.ndarray
 Function = Callable[[Array, float], Array]
@@ -73,7 +73,7 @@ def problem_from_functions(G: Function, *, dG_du: Optional[Function] = None,
 
     G -> (n,); dG_du -> (n, n); dG_dp -> (n,); A -> (m, m), the matrix whose spectrum is
     tracked (e.g. M^-1 K(p) for M u'' + K(p) u = 0; default dG/du). A missing dG_du or dG_dp
-    is computed by `differences` ("central" or "complex-step", continuation/differences.py)
+    is computed by `differences` ("central" or "complex-step", continuation/stepping/differences.py)
     and a DerivativeWarning states its accuracy."""
     if differences not in METHODS:
         raise ValueError(f"differences must be one of {METHODS}, got {differences!r}")

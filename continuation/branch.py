@@ -7,10 +7,10 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from .detectors import Collision
-from .newton import NewtonResult
-from .samples import Sample, continued_labels
-from .spectra import condition_numbers, count_complex_pairs
+from diskfriction.continuation.detection.detectors import Collision
+from diskfriction.continuation.stepping.newton import NewtonResult
+from diskfriction.continuation.detection.samples import Sample, continued_labels
+from diskfriction.continuation.spectra.tracking import condition_numbers, count_complex_pairs
 
 Array = np.ndarray
 

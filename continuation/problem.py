@@ -54,8 +54,8 @@ from typing import Callable, ClassVar, Optional
 import numpy as np
 import scipy.sparse as sp
 
-from .linalg import dense
-from .spectra import Eigensystem, eigensystem
+from diskfriction.continuation.linalg.solves import dense
+from diskfriction.continuation.spectra.tracking import Eigensystem, eigensystem
 
 Array = np.ndarray
 

@@ -1,5 +1,5 @@
 """The stability matrices whose spectra are followed, by name: one definition for the scene's
-`matrix`, the commands' `--matrix` and the disk problem (disks/equilibria.py)."""
+`matrix`, the commands' `--matrix` and the disk problem (models/chain/equilibria.py)."""
 from __future__ import annotations
 
 from enum import StrEnum

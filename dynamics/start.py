@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from diskfriction.continuation.spectra import DEFAULT_REL_TOL, eigen_status
+from diskfriction.continuation.spectra.tracking import DEFAULT_REL_TOL, eigen_status
 from diskfriction.symbolic import System
 
 KINDS = ("none", "random-velocity", "random-position", "eigenvector")

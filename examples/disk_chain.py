@@ -1,14 +1,14 @@
 """The disk chain of Charan et al. (PRL 124, 030602) through the public API, as `bifurcate` runs it.
 
-The chain is a Problem subclass (disks/equilibria.py) that carries the contacts' tangential
+The chain is a Problem subclass (models/chain/equilibria.py) that carries the contacts' tangential
 history in its commit hook; the branch starts at F_1 = 1e-4 F_y, reached from rest by
-relaxation (disks/sweep.py explains why F_x = 0 itself is singular).
+relaxation (models/chain/sweep.py explains why F_x = 0 itself is singular).
 
     diskfriction bifurcate --problem examples/disk_chain.py
 """
 from diskfriction.continuation import BifurcationProblem, Options
-from diskfriction.disks.equilibria import DiskEquilibria, relax
-from diskfriction.disks.sweep import START_FRACTION
+from diskfriction.models.chain.equilibria import DiskEquilibria, relax
+from diskfriction.models.chain.sweep import START_FRACTION
 from diskfriction.scenes.load import default_scene_path, load_scene
 from diskfriction.symbolic import System
 

@@ -143,7 +143,7 @@ def start_state(system: System, F_x: float, kind: str) -> Start:
         q, _ = system.rest_state()
         return Start("rest", F_x, q, f"the rest state (F_x = 0 equilibrium, docs/model.md), at rest, "
                                     f"with the load F_x = {F_x:g} switched on at t = 0")
-    from diskfriction.disks.equilibrium import equilibrium_at
+    from diskfriction.models.chain.equilibrium import equilibrium_at
 
     eq = equilibrium_at(system, F_x)
     return Start("branch", F_x, eq.q, f"the equilibrium on the branch from rest at F_x = {F_x:g}, "

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from diskfriction.continuation.spectra import Kind, eigen_status
+from diskfriction.continuation.spectra.tracking import Kind, eigen_status
 
 # The paper's numbers (docs/model.md#targets), paper units.
 PAPER_COMPLEX_LOADS = (0.03, 0.04)

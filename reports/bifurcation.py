@@ -10,9 +10,9 @@ from typing import Optional
 
 import numpy as np
 
-from diskfriction.continuation.spectra import Kind
-from diskfriction.disks.records import collision_records
-from diskfriction.disks.sweep import DiskBranch
+from diskfriction.continuation.spectra.tracking import Kind
+from diskfriction.models.chain.records import collision_records
+from diskfriction.models.chain.sweep import DiskBranch
 from diskfriction.files import save_json, save_npz
 from diskfriction.reports.figures import (legend, line_key, new_figure, re_scale, re_values,
                                           save_figure, set_re_axis)
@@ -132,7 +132,7 @@ def draw_spectrum(top, bottom, F_x: np.ndarray, lam: np.ndarray, leg: np.ndarray
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    from diskfriction.disks.windows import complex_spans, leg_windows
+    from diskfriction.models.chain.windows import complex_spans, leg_windows
     from diskfriction.reports.analysis import eigen_status_rows
 
     upper = eigen_status_rows(lam) == 1

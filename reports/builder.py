@@ -133,7 +133,7 @@ class _Runner:
         """Run it; a function with a `workdir` parameter gets a directory of its own beside
         the cache (not part of the key: it is derived from it). ComputationFailed and
         NoEquilibrium (a load beyond the branch from rest) are physics failures, cached."""
-        from diskfriction.disks.equilibrium import NoEquilibrium
+        from diskfriction.models.chain.equilibrium import NoEquilibrium
 
         params = dict(need.params)
         if "workdir" in inspect.signature(comp.function).parameters:

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from diskfriction.studies.maps import COLUMNS, Axis, Cell, MapParams
-from diskfriction.disks.windows import Window, complex_spans
+from diskfriction.models.chain.windows import Window, complex_spans
 from diskfriction.files import save_json, save_text
 from diskfriction.reports.figures import OUTCOME_STYLE, new_figure, save_figure
 from diskfriction.reports.units import F_X_LABEL, PaperUnits

@@ -13,11 +13,11 @@ from typing import Optional
 
 import numpy as np
 
-from diskfriction.continuation.spectral_window import Window
+from diskfriction.continuation.spectra.window import Window
 from diskfriction.files import json_values, save_json, save_npz
 from diskfriction.matrices import Matrix
-from diskfriction.packings.prepare import Packing, save_packing
-from diskfriction.packings.shear import PackingBranch, collision_records
+from diskfriction.models.packing.prepare import Packing, save_packing
+from diskfriction.models.packing.shear import PackingBranch, collision_records
 from diskfriction.reports.figures import new_figure, save_figure
 from diskfriction.scenes.packing import PackingScene
 
@@ -91,13 +91,13 @@ def other_scene(out: Path, scene: PackingScene) -> Optional[tuple[Path, dict, li
 
 def plastic_records(branch: PackingBranch) -> list[dict]:
     """One record per plastic event passed, in order: its strain gamma, kind (how the branch was
-    lost: packings/shear.py PLASTIC), the shear stress sigma_xy before and after and the drop
+    lost: models/packing/shear.py PLASTIC), the shear stress sigma_xy before and after and the drop
     before - after [force / length], the displacement |q_after - q_before| [length] and the
     relaxation's steps; and the complex pairs at the last equilibrium before it (the fold, at
     gamma; in the window, with one): their count (n_complex there) and the fastest growth rate
-    sigma = |Im sqrt(lambda)| among them [1 / time] (packings/dynamics.fastest_pair; of M^-1
+    sigma = |Im sqrt(lambda)| among them [1 / time] (models/packing/dynamics.fastest_pair; of M^-1
     J only, None with J, and None without a pair)."""
-    from diskfriction.packings.dynamics import fastest_pair
+    from diskfriction.models.packing.dynamics import fastest_pair
 
     records = []
     for k, event in enumerate(branch.plastic):

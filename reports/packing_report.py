@@ -33,11 +33,11 @@ import numpy as np
 
 from diskfriction.files import save_text
 from diskfriction.matrices import Matrix
-from diskfriction.packings.dynamics import (fastest_pair, mean_squared_displacement, simulate,
+from diskfriction.models.packing.dynamics import (fastest_pair, mean_squared_displacement, simulate,
                                             time_step)
-from diskfriction.packings.equilibria import PackingEquilibria
-from diskfriction.packings.runs import linearized
-from diskfriction.packings.shear import PackingBranch, shear_scene
+from diskfriction.models.packing.equilibria import PackingEquilibria
+from diskfriction.models.packing.runs import linearized
+from diskfriction.models.packing.shear import PackingBranch, shear_scene
 from diskfriction.reports.figures import new_figure, save_figure
 from diskfriction.reports.packing_outputs import (PLASTIC_STYLE, eigenvalue_unit,
                                                   plot_packing_snapshot, strain_lines)

@@ -14,9 +14,9 @@ from pathlib import Path
 import numpy as np
 
 from diskfriction.continuation.api import BifurcationProblem, BranchResult
-from diskfriction.continuation.bifurcations import SpecialPoint
+from diskfriction.continuation.detection.bifurcations import SpecialPoint
 from diskfriction.files import save_json, save_npz
-from diskfriction.disks.records import RECORD_KEYS, collision_record, pair_condition
+from diskfriction.models.chain.records import RECORD_KEYS, collision_record, pair_condition
 from diskfriction.reports.bifurcation import diagram_axes, draw_spectrum, save_diagram
 from diskfriction.reports.figures import relabel
 

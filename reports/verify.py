@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from diskfriction.disks.sweep import DiskBranch
+from diskfriction.models.chain.sweep import DiskBranch
 from diskfriction.reports.bifurcation import draw_spectrum
 from diskfriction.reports.figures import (OUTCOME_STYLE, legend, new_figure, outcome_patches,
                                           save_figure)

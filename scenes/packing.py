@@ -26,7 +26,7 @@ class PackingScene:
     gamma_range[1]. Contacts obey the chain's laws (Hertz normal force
     k_n delta^p with one k_n for every pair, smoothed Mindlin with k_t and mu; Effects) with
     lever arms R_i, R_j; the disks rotate. After a plastic event the packing relaxes by
-    `relaxation` (packings/plastic.py): FIRE, or Newtonian dynamics with a drag of rate
+    `relaxation` (models/packing/plastic.py): FIRE, or Newtonian dynamics with a drag of rate
     damping omega_0 (omega_0: PackingScene.omega_0; `damping` is read only then)."""
 
     N: int = 256

@@ -217,7 +217,7 @@ SCENE_RULES: dict[str, Rule] = {
 """Scene field -> its rule (``effects`` is an Effects, which checks its own fields)."""
 
 RELAXATIONS = ("fire", "damped")
-"""How a packing relaxes after a plastic event (packings/plastic.py): FIRE, or Newtonian dynamics
+"""How a packing relaxes after a plastic event (models/packing/plastic.py): FIRE, or Newtonian dynamics
 with a viscous drag of rate `damping` omega_0."""
 
 GEOMETRIES = ("chain", "packing")

@@ -26,12 +26,11 @@ from diskfriction.errors import OneLineError
 from diskfriction.files import source_digest
 
 RUN_SOURCES = ("diskfriction", "diskfriction.scenes", "diskfriction.symbolic",
-               "diskfriction.continuation", "diskfriction.dynamics", "diskfriction.disks",
-               "diskfriction.packings", "diskfriction.studies")
-"""The packages a task's result depends on: its code version digests their sources. Every
-folder the studies reach (tests/test_layers.py); until stop 42 the chain's and the packings'
-own folders (disks/, packings/) and the studies' were missing, so an edit there left map
-cells on disk that a rerun took as current."""
+               "diskfriction.continuation", "diskfriction.dynamics", "diskfriction.models",
+               "diskfriction.studies")
+"""The packages a task's result depends on: its code version digests their sources (each
+with its sub-packages). Every folder the studies reach (tests/test_layers.py): a folder left
+out would leave map cells on disk that a rerun takes as current after an edit there."""
 
 HTTP_ANY_PORT = {"dashboard_address": "127.0.0.1:0"}
 """The scheduler serves HTTP (health, metrics) even without a dashboard, by default on port

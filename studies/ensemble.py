@@ -253,7 +253,7 @@ def _run_tasks(scene, todo, summaries, scheduler, tick) -> None:
     """Connect (a scheduler that cannot be reached fails before any sweep), get the equilibrium
     at every load of `todo`, submit the missing realizations, and write each one the moment it
     finishes (studies/cluster.py)."""
-    from diskfriction.disks.equilibrium import equilibrium_at
+    from diskfriction.models.chain.equilibrium import equilibrium_at
     from diskfriction.symbolic import System
 
     with dask_client(scheduler) as client:

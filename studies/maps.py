@@ -110,7 +110,7 @@ def cell_seconds(scene: Scene, params: MapParams) -> float:
     slide runs, per window the sweep to its midpoint and the run's steps (dynamics.simulate:
     SECONDS_PER_DISK_STEP, dt = DT_FRACTION 2 / omega_max). Within a factor of 2 of the cells
     of N = 10 .. 40 timed for docs/maps.md; for the estimate `map` prints before it starts."""
-    from diskfriction.disks.cost import sweep_seconds
+    from diskfriction.models.chain.cost import sweep_seconds
     from diskfriction.dynamics.simulate import run_seconds
 
     dense = scene.eps > 0
@@ -180,7 +180,7 @@ def growth_rate_max(system, branch, rows: np.ndarray) -> float:
 def slide_runs(system, todo, slide: SlideParams) -> list[dict]:
     """One run per window (studies.verify.window_run); a window whose midpoint the branch
     from rest does not reach gets slid = None and the reason."""
-    from diskfriction.disks.equilibrium import NoEquilibrium
+    from diskfriction.models.chain.equilibrium import NoEquilibrium
     from diskfriction.studies.verify import window_run
 
     runs = []
@@ -208,8 +208,8 @@ def sliding_load(runs: list[dict]) -> tuple[Optional[float], Optional[float]]:
 def branch_summary(system, branch) -> dict:
     """status, F_end, reason, collisions, windows, complex_windows, F_complex and sigma_max of
     a swept branch (module docstring)."""
-    from diskfriction.disks.equilibrium import contact_states
-    from diskfriction.disks.windows import complex_spans
+    from diskfriction.models.chain.equilibrium import contact_states
+    from diskfriction.models.chain.windows import complex_spans
     from diskfriction.studies.verify import windows
 
     todo = windows(branch)
@@ -230,10 +230,10 @@ def map_cell(scene: Scene, params: MapParams) -> dict:
     """The record of one cell (raw units): its scene (physics fields), summary (COLUMNS), the
     located collisions (as bifurcate's collisions.json), windows [start, stop, pairs] and,
     with slide runs, one row per window (studies.verify.window_run)."""
-    from diskfriction.continuation.arclength import ContinuationError
-    from diskfriction.disks.equilibria import EquilibriumError
-    from diskfriction.disks.records import collision_records
-    from diskfriction.disks.sweep import SweepParams, sweep
+    from diskfriction.continuation.stepping.arclength import ContinuationError
+    from diskfriction.models.chain.equilibria import EquilibriumError
+    from diskfriction.models.chain.records import collision_records
+    from diskfriction.models.chain.sweep import SweepParams, sweep
     from diskfriction.studies.verify import windows
     from diskfriction.symbolic import System
 

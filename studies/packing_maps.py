@@ -4,7 +4,7 @@ as docs/packings.md#what-the-tool-finds tabulates it (benchmarks/packing_physics
 
 A cell (packing_cell, a dask task as studies/maps.py runs it, raw units) prepares the cell's
 packing, shears it over the scene's strain range passing up to `plastic_events` plastic events
-(packings/shear.py; with `window` only the eigenvalues with Re lambda in it, by sparse
+(models/packing/shear.py; with `window` only the eigenvalues with Re lambda in it, by sparse
 shift-invert) and summarises the branch (PACKING_COLUMNS):
   * status: "ok" (the shear reached the range's end), "ended" (it stopped before, at a
     plastic event it may not pass or where the branch ended: `reason` says where and why) or
@@ -69,7 +69,7 @@ def packing_cell_seconds(scene: PackingScene, params: PackingMapParams) -> float
 def growth_rates(branch) -> np.ndarray:
     """The fastest pair's sigma = |Im sqrt(lambda)| at every state with a complex pair (the
     tracked eigenvalues only: nan columns of a window left out) [1 / time]."""
-    from diskfriction.packings.dynamics import fastest_pair
+    from diskfriction.models.packing.dynamics import fastest_pair
 
     return np.array([fastest_pair(e[np.isfinite(e)])[1]
                      for e, n in zip(branch.eigenvalues, branch.n_complex) if n > 0])
@@ -103,13 +103,13 @@ def packing_cell(scene: PackingScene, params: PackingMapParams) -> dict:
     events [gamma, sigma_xy before, after]."""
     from dataclasses import replace
 
-    from diskfriction.continuation.arclength import ContinuationError
-    from diskfriction.continuation.spectral_window import WindowCrowded
+    from diskfriction.continuation.stepping.arclength import ContinuationError
+    from diskfriction.continuation.spectra.window import WindowCrowded
     from diskfriction.errors import OneLineError
-    from diskfriction.packings.equilibria import MissedContact
-    from diskfriction.packings.plastic import RelaxationFailed
-    from diskfriction.packings.prepared import prepare_scene
-    from diskfriction.packings.shear import ShearParams, collision_records, shear
+    from diskfriction.models.packing.equilibria import MissedContact
+    from diskfriction.models.packing.plastic import RelaxationFailed
+    from diskfriction.models.packing.prepared import prepare_scene
+    from diskfriction.models.packing.shear import ShearParams, collision_records, shear
 
     start = time.perf_counter()
     summary = dict.fromkeys(PACKING_COLUMNS)

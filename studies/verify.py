@@ -9,9 +9,9 @@ from __future__ import annotations
 
 from typing import Callable, Optional
 
-from diskfriction.disks.equilibrium import check_reached, equilibrium_at
-from diskfriction.disks.sweep import DiskBranch, sweep
-from diskfriction.disks.windows import Window, leg_windows
+from diskfriction.models.chain.equilibrium import check_reached, equilibrium_at
+from diskfriction.models.chain.sweep import DiskBranch, sweep
+from diskfriction.models.chain.windows import Window, leg_windows
 from diskfriction.dynamics.simulate import inaccuracy, simulate, summarize
 from diskfriction.dynamics.start import Perturbation, spectrum
 from diskfriction.scenes import Scene

@@ -339,7 +339,7 @@ def three_grains():
 
 
 def warm_up(progress=None):
-    """Call each compiled entry point once with the argument types packings/ passes, so that
+    """Call each compiled entry point once with the argument types models/packing/ passes, so that
     numba compiles it now or loads it from its cache (symbolic/generated.py)."""
     q, radii, params = three_grains()
     contacts = near_pairs(q, radii, params[5], params[6], 0.1)

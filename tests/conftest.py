@@ -17,9 +17,9 @@ def sheared():
     zero (|g| over its mean slope across the step), recorded by wrapping
     PackingEquilibria.commit; the wrapper only evaluates the event functions, and the branch is
     a plain run's bit for bit. Read them, never change them."""
-    from diskfriction.packings import equilibria
-    from diskfriction.packings.prepared import prepare_scene
-    from diskfriction.packings.shear import ShearParams, shear
+    from diskfriction.models.packing import equilibria
+    from diskfriction.models.packing.prepared import prepare_scene
+    from diskfriction.models.packing.shear import ShearParams, shear
 
     done = {}
 
@@ -56,8 +56,8 @@ def chain_sweep():
     (linalg.measured), once per session and arguments: the paper's sweep of J alone was run by
     six tests in five modules (0.3 s each; N = 20 and 40 ones up to 1.5 s). Its arrays are
     made read-only, so that a test changing a shared branch fails instead of passing on others."""
-    from diskfriction.continuation.linalg import measured
-    from diskfriction.disks.sweep import SweepParams, sweep
+    from diskfriction.continuation.linalg.solves import measured
+    from diskfriction.models.chain.sweep import SweepParams, sweep
     from diskfriction.matrices import Matrix
     from diskfriction.symbolic import System
 

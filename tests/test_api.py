@@ -10,7 +10,7 @@ import sympy as sp
 
 from diskfriction.continuation import (DerivativeWarning, Options, ProblemError, check_problem,
                                        problem_from_functions, problem_from_sympy, solve_branch)
-from diskfriction.continuation.differences import ParameterDerivative, StateDerivative
+from diskfriction.continuation.stepping.differences import ParameterDerivative, StateDerivative
 
 from gallery import load_example
 

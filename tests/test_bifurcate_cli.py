@@ -172,7 +172,7 @@ def test_collisions_only_bracketed_are_counted_and_marked(tmp_path, monkeypatch,
     some collisions bracketed but not located: the summary says how many, and each such line
     gives its bracket instead of passing for a located collision."""
     from diskfriction.cli.main import main
-    from diskfriction.continuation import collisions
+    from diskfriction.continuation.detection import collisions
 
     budget = collisions.DetectionParams  # what bifurcate imports when it runs
     monkeypatch.setattr(collisions, "DetectionParams", lambda **kw: budget(max_solves=1, **kw))

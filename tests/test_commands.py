@@ -88,9 +88,9 @@ def test_the_memory_guard_counts_the_scan_workers(tmp_path):
     matrices (eps = 0); `bifurcate` with its default workers refuses the pre-compressed
     scene, exit 2."""
     from diskfriction.cli.common import CommandError, check_memory
-    from diskfriction.disks.memory import sweep_bytes
-    from diskfriction.continuation.collisions import DetectionParams
-    from diskfriction.continuation.scans import planned_workers
+    from diskfriction.models.chain.memory import sweep_bytes
+    from diskfriction.continuation.detection.collisions import DetectionParams
+    from diskfriction.continuation.detection.scans import planned_workers
     from diskfriction.memory import physical_memory
     from diskfriction.scenes import Scene
 
@@ -229,7 +229,7 @@ def test_verify_of_a_branch_ending_short_of_the_scenes_range_says_where_and_why(
 
 
 def test_equilibrium_at_ends_exactly_on_the_load_or_raises():
-    from diskfriction.disks.equilibrium import NoEquilibrium, equilibrium_at
+    from diskfriction.models.chain.equilibrium import NoEquilibrium, equilibrium_at
     from diskfriction.scenes import Scene
     from diskfriction.symbolic import System
 
@@ -251,7 +251,7 @@ def test_equilibrium_at_ends_exactly_on_the_load_or_raises():
 def test_the_last_point_names_contacts_at_the_coulomb_limit_and_open_ones():
     """At rest every pair touches at delta = 0 (open: inactive); put the substrate histories
     of disks 1 and 2 exactly at their Coulomb limit t* = mu k_n delta_w / k_t."""
-    from diskfriction.disks.equilibrium import contact_states
+    from diskfriction.models.chain.equilibrium import contact_states
     from diskfriction.scenes import Scene
     from diskfriction.symbolic import System
 
@@ -268,7 +268,7 @@ def test_the_last_point_names_contacts_at_the_coulomb_limit_and_open_ones():
 
 
 def test_disk_lists_shorten_runs():
-    from diskfriction.disks.equilibrium import disk_list
+    from diskfriction.models.chain.equilibrium import disk_list
 
     assert disk_list([1, 2, 3, 4, 5, 6, 7, 9]) == "1..7, 9"
     assert disk_list([2, 3, 7]) == "2, 3, 7"
@@ -331,7 +331,7 @@ def test_interrupting_an_ensemble_prints_one_line_and_exits_130(tmp_path):
 
 
 def test_interrupting_a_sweep_with_scan_workers_prints_one_line_and_exits_130(tmp_path):
-    """N = 100 scans its steps on 2 forked workers (continuation/scans.py): they ignore SIGINT,
+    """N = 100 scans its steps on 2 forked workers (continuation/detection/scans.py): they ignore SIGINT,
     the command ends them and says one line."""
     import psutil
 

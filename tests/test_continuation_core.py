@@ -12,12 +12,12 @@ from scipy.optimize import brentq
 
 from diskfriction.continuation import (ContinuationParams, DetectionParams, FunctionProblem, continuation,
                           count_complex_pairs)
-from diskfriction.continuation.bifurcations import locate_folds, locate_hopf
+from diskfriction.continuation.detection.bifurcations import locate_folds, locate_hopf
 from diskfriction.continuation.branch import Stop, StopCode
-from diskfriction.continuation.segment import refine_sign_change
-from diskfriction.continuation.detectors import DETECTORS, Kind
-from diskfriction.continuation.detectors.fast import Fast
-from diskfriction.continuation.spectra import sort_spectrum
+from diskfriction.continuation.stepping.segment import refine_sign_change
+from diskfriction.continuation.detection.detectors import DETECTORS, Kind
+from diskfriction.continuation.detection.detectors.fast import Fast
+from diskfriction.continuation.spectra.tracking import sort_spectrum
 
 TOL_P = 1e-10
 
@@ -429,7 +429,7 @@ def test_a_crowded_spectral_window_ends_the_run_at_its_last_certified_point():
     kept, not an exception that loses the run."""
     from diskfriction.continuation import Options, problem_from_functions, solve_branch
     from diskfriction.continuation.branch import StopCode
-    from diskfriction.continuation.spectral_window import WindowCrowded
+    from diskfriction.continuation.spectra.window import WindowCrowded
 
     p1 = 0.21
 
@@ -452,7 +452,7 @@ def test_sparse_factorization_names_an_empty_row_or_column():
     """A sparse matrix with a row or column of no nonzero value (an explicitly stored zero
     included) is refused before SuperLU sees it, saying which; a full one factorizes."""
     import scipy.sparse as sp
-    from diskfriction.continuation.linalg import SingularMatrix, factorize
+    from diskfriction.continuation.linalg.solves import SingularMatrix, factorize
 
     full = np.array([[2.0, 1.0, 0.0], [0.0, 3.0, 1.0], [1.0, 0.0, 4.0]])
     assert np.allclose(factorize(sp.csc_array(full)).solve(np.ones(3)), np.linalg.solve(full, np.ones(3)))
@@ -471,7 +471,7 @@ def test_same_matrix_compares_values_whatever_the_pattern_stores():
     without it; one value off by a rounding unit, another shape, or dense against sparse is
     not the same matrix."""
     import scipy.sparse as sp
-    from diskfriction.continuation.linalg import same_matrix
+    from diskfriction.continuation.linalg.solves import same_matrix
 
     full = np.array([[2.0, 1.0, 0.0], [0.0, 3.0, 1.0], [1.0, 0.0, 4.0]])
     stored = sp.csr_array((np.array([2.0, 1.0, 0.0, 3.0, 1.0, 1.0, 4.0]),
@@ -488,8 +488,8 @@ def test_segment_points_start_from_the_hermite_prediction():
     tangents to O(h^4) (the straight line: O(h^2)), lies on the hyperplane at s, and the
     corrected point is the branch point there (to rounding); a point solved later is predicted
     from the nearest solved points, so it starts closer still."""
-    from diskfriction.continuation.newton import tangent
-    from diskfriction.continuation.segment import Segment
+    from diskfriction.continuation.stepping.newton import tangent
+    from diskfriction.continuation.stepping.segment import Segment
 
     problem = FunctionProblem(G=lambda u, p: np.array([u[0] ** 2 + p ** 2 - 1.0]),
                               G_u=lambda u, p: np.array([[2.0 * u[0]]]), G_p=lambda u, p: np.array([2.0 * p]))
@@ -571,9 +571,9 @@ def test_segment_points_by_the_chord_method_match_newtons():
     first (newton.chord_newton, no new LU), to the same points as Newton's within the
     tolerance; chord_newton gives up (None) with a factorization from too far away, where
     the Segment falls back to Newton."""
-    from diskfriction.continuation.linalg import factorize
-    from diskfriction.continuation.newton import bordered_matrix, chord_newton
-    from diskfriction.continuation.segment import Segment
+    from diskfriction.continuation.linalg.solves import factorize
+    from diskfriction.continuation.stepping.newton import bordered_matrix, chord_newton
+    from diskfriction.continuation.stepping.segment import Segment
 
     # G(u, p) = (u0^3 + u0 - p, u1 - sin(u0)): a curved branch u0(p)
     problem = FunctionProblem(G=lambda u, p: np.array([u[0] ** 3 + u[0] - p, u[1] - np.sin(u[0])]),
@@ -587,7 +587,7 @@ def test_segment_points_by_the_chord_method_match_newtons():
     factorized = []
     original = factorize
     with pytest.MonkeyPatch.context() as mp:
-        import diskfriction.continuation.newton as newton
+        import diskfriction.continuation.stepping.newton as newton
         mp.setattr(newton, "factorize", lambda *a: factorized.append(1) or original(*a))
         chord = Segment(problem, x_a, x_b, 1e-12, 20, chord=True)
         plain = Segment(problem, x_a, x_b, 1e-12, 20)
@@ -613,8 +613,8 @@ def test_tangents_refined_on_a_nearby_factorization_match_fresh_ones(monkeypatch
     Sherman-Morrison, without a factorization, and equals a fresh one's to 1e-14; an LU from
     far away (or a dense one) falls back to a factorization, with the same tangent."""
     import scipy.sparse as sp
-    from diskfriction.continuation import linalg
-    from diskfriction.continuation.newton import bordered_matrix, tangent
+    from diskfriction.continuation.linalg import solves as linalg
+    from diskfriction.continuation.stepping.newton import bordered_matrix, tangent
 
     problem = FunctionProblem(G=lambda u, p: np.array([u[0] ** 3 + u[0] - p, u[1] - np.sin(u[0])]),
                               G_u=lambda u, p: sp.csr_array([[3 * u[0] ** 2 + 1, 0.0], [-np.cos(u[0]), 1.0]]),
@@ -644,7 +644,7 @@ def test_solve_near_refines_to_a_fresh_solve_or_gives_up():
     """linalg.solve_near on the LU of a matrix 1e-8 away reaches the fresh solve to 1e-13 in
     a few corrections, for M and for M^T; on one 10 % away it gives up (None) after one."""
     import scipy.sparse as sp
-    from diskfriction.continuation.linalg import factorize, solve_near
+    from diskfriction.continuation.linalg.solves import factorize, solve_near
 
     rng = np.random.default_rng(7)
     M = sp.random_array((60, 60), density=0.1, random_state=rng) + 4.0 * sp.eye_array(60)
@@ -664,7 +664,7 @@ def test_bordered_sparse_matrix_is_canonical_and_keeps_stored_zeros():
     [[K, c], [b^T, d]] in CSC with sorted row indices, duplicates summed, the stored zero and
     every border entry kept (the pattern depends on K's pattern alone)."""
     import scipy.sparse as sp
-    from diskfriction.continuation.linalg import bordered
+    from diskfriction.continuation.linalg.solves import bordered
 
     rows, cols = np.array([0, 2, 2, 1, 0, 3, 1]), np.array([1, 0, 0, 3, 1, 2, 1])
     values = np.array([1.0, 2.0, 3.0, 0.0, 4.0, 5.0, 6.0])
@@ -692,7 +692,7 @@ def test_heap_kept_reuses_freed_memory():
     outermost exit."""
     import resource
 
-    from diskfriction.continuation import linalg
+    from diskfriction.continuation.linalg import solves as linalg
 
     if linalg._glibc() is None:
         pytest.skip("the C library is not glibc: heap_kept changes nothing")
@@ -722,7 +722,7 @@ def test_spilled_files_are_reused_in_place_but_never_under_a_live_mapping():
     leaving the context closes the idle files, and outside it nothing is kept."""
     import os
 
-    from diskfriction.continuation import spill
+    from diskfriction.continuation.detection import spill
 
     if not hasattr(os, "fork"):
         pytest.skip("no fork on this platform")

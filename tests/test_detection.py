@@ -7,12 +7,12 @@ import pytest
 
 from diskfriction.continuation import ContinuationParams, DetectionParams, FunctionProblem, continuation
 from diskfriction.continuation.branch import Stop, StopCode
-from diskfriction.disks.equilibria import DiskEquilibria, relax
-from diskfriction.continuation.linalg import measured
-from diskfriction.continuation.locate import locate_double_eigenvalue
-from diskfriction.continuation.newton import bordered_newton, tangent
-from diskfriction.continuation.spectra import eigenvalue_slopes
-from diskfriction.disks.sweep import SweepParams, sweep
+from diskfriction.models.chain.equilibria import DiskEquilibria, relax
+from diskfriction.continuation.linalg.solves import measured
+from diskfriction.continuation.detection.locate import locate_double_eigenvalue
+from diskfriction.continuation.stepping.newton import bordered_newton, tangent
+from diskfriction.continuation.spectra.tracking import eigenvalue_slopes
+from diskfriction.models.chain.sweep import SweepParams, sweep
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
 
@@ -116,7 +116,7 @@ def test_jordan_chain_near_a_double_eigenvalue_dense_or_sparse(sparse, offset, m
     minutes in a dense SVD for such collisions."""
     import scipy.sparse as sps
 
-    from diskfriction.continuation.locate import jordan_chain_near
+    from diskfriction.continuation.detection.locate import jordan_chain_near
 
     a, n = -0.7, 400
     rng = np.random.default_rng(3)
@@ -143,8 +143,8 @@ def test_jordan_chain_refined_on_the_locators_last_factorization(monkeypatch):
     the same v, w and overlap as with a factorization of its own, to 1e-12, without one."""
     import scipy.sparse as sps
 
-    from diskfriction.continuation import linalg
-    from diskfriction.continuation.locate import _identity, jordan_chain
+    from diskfriction.continuation.linalg import solves as linalg
+    from diskfriction.continuation.detection.locate import _identity, jordan_chain
 
     a, n = -0.7, 400
     rng = np.random.default_rng(3)
@@ -253,7 +253,7 @@ def test_compiled_substitution_solves_like_superlu():
     and for the columns of a matrix."""
     import scipy.sparse as sp
     import scipy.sparse.linalg as spla
-    from diskfriction.continuation.linalg import COPY_FACTORS_AT, bordered, factorize
+    from diskfriction.continuation.linalg.solves import COPY_FACTORS_AT, bordered, factorize
 
     system = System.from_scene(Scene(N=40, eps=1e-4))
     q, xi = relax(system, *system.rest_state(), 0.01)
@@ -289,9 +289,9 @@ def test_a_repeated_pattern_reuses_its_ordering_and_solves_alike(symmetric):
     before)."""
     import scipy.sparse as sp
     import scipy.sparse.linalg as spla
-    from diskfriction.continuation import orderings
-    from diskfriction.continuation.linalg import COPY_FACTORS_AT, bordered, factorize
-    from diskfriction.continuation.nearest import SHIFT_INVERT_ORDERING
+    from diskfriction.continuation.linalg import orderings
+    from diskfriction.continuation.linalg.solves import COPY_FACTORS_AT, bordered, factorize
+    from diskfriction.continuation.spectra.nearest import SHIFT_INVERT_ORDERING
 
     options = SHIFT_INVERT_ORDERING if symmetric else None
     system = System.from_scene(Scene(N=40, eps=1e-4))
@@ -333,7 +333,7 @@ def test_a_repeated_pattern_reuses_its_ordering_and_solves_alike(symmetric):
 
 
 def linalg_parity(permutation):
-    from diskfriction.continuation.linalg import _parity
+    from diskfriction.continuation.linalg.solves import _parity
 
     return _parity(permutation)
 
@@ -366,7 +366,7 @@ def test_pair_certifier_flags_exactly_the_pairs_whose_model_dips():
     the margin rho min(y_a, y_b) - floor after a quarter of the cubic term; a flagged pair that
     crosses transversally (the signed gap's cubic monotone, slope >= rho |g_b - g_a|) is split
     where that cubic crosses zero, any other at the minimum."""
-    from diskfriction.continuation import certify
+    from diskfriction.continuation.detection import certify
     rng = np.random.default_rng(3)
     t = np.linspace(0.0, 1.0, 200001)
     flagged = crossings = 0
@@ -405,7 +405,7 @@ def test_two_real_eigenvalues_crossing_are_split_at_the_crossing_then_certified(
     """lambda = (t, 1 - t) over [0, 1]: they cross at 0.5 (modes that do not interact), so the
     split goes there, not 1/8 off an end; over [0, 0.5], whose end has them equal to within the
     resolution sqrt(floor), the pair is certified; a pair that turns back is not a crossing."""
-    from diskfriction.continuation import certify
+    from diskfriction.continuation.detection import certify
     none, real, d = np.zeros(0, np.int64), np.arange(2), np.array([1.0, -1.0], complex)
     crossing = certify.worst_uncertified_pair(np.array([0.0, 1.0], complex), np.array([1.0, 0.0], complex),
                                               d, d, real, none, none, 0.5, 1e-12)
@@ -422,7 +422,7 @@ def test_two_real_eigenvalues_crossing_are_split_at_the_crossing_then_certified(
 def test_pair_certifier_covers_conjugate_and_complex_real_pairs():
     """A conjugate pair whose imaginary part closes, and a complex eigenvalue that sweeps over a
     real one, are flagged; the same eigenvalues moving apart are certified."""
-    from diskfriction.continuation import certify
+    from diskfriction.continuation.detection import certify
     none = np.zeros(0, np.int64)
     # conjugate pair 1 +- 0.5 i -> 1 +- 0.5 i with Im slopes -1 then +1: Im dips to ~0.25
     lam = np.array([1 + 0.5j, 1 - 0.5j])
@@ -470,7 +470,7 @@ def test_arpacks_tolerance_leaves_the_projected_eigenvalues_exact():
     largest (a dense decomposition's), and both vectors' residuals within 1e-10 of it."""
     import scipy.sparse as sp
 
-    from diskfriction.continuation.nearest import ARPACK_TOL, nearest_eigensystem
+    from diskfriction.continuation.spectra.nearest import ARPACK_TOL, nearest_eigensystem
 
     assert ARPACK_TOL > 0.0
     rng = np.random.default_rng(7)
@@ -494,7 +494,7 @@ def test_nearest_eigensystem_gives_the_k_nearest_with_normalised_vectors(sparse,
     the Krylov space is cut to k + KRYLOV_EXTRA (krylov_size)."""
     import scipy.sparse as sp
 
-    from diskfriction.continuation.nearest import KRYLOV_EXTRA, krylov_size, nearest_eigensystem
+    from diskfriction.continuation.spectra.nearest import KRYLOV_EXTRA, krylov_size, nearest_eigensystem
 
     rng = np.random.default_rng(7)
     n, sigma = 240, 20.3
@@ -525,7 +525,7 @@ def test_the_two_sided_projection_solves_the_pencil_or_hands_it_to_qz():
     conditioned, and the pencil then goes to QZ (the values of scipy's eig of the pencil)."""
     import scipy.linalg as sla
 
-    from diskfriction.continuation.nearest import B_RCOND, _two_sided
+    from diskfriction.continuation.spectra.nearest import B_RCOND, _two_sided
 
     rng = np.random.default_rng(11)
     n, k = 60, 8
@@ -558,7 +558,7 @@ def test_a_partial_sample_matches_the_full_one_on_its_labels_or_declines():
     """partial_sample_at on a problem with a known spectrum: the labels asked for carry the
     full sample's eigenvalues, slopes and status, the others nan; gaps never exceed the true
     ones; a disc that cannot cover the labels (k too small) gives None."""
-    from diskfriction.continuation.samples import partial_sample_at, sample_at
+    from diskfriction.continuation.detection.samples import partial_sample_at, sample_at
 
     n = 12
     base = np.diag(np.arange(1.0, n + 1.0))
@@ -590,7 +590,7 @@ def test_settled_samples_drop_their_vectors_and_the_scan_finds_the_same(monkeypa
     N = 20 sweep no inner sample between two full ones holds vectors (an interval with a
     located collision kept them to the scan's end until stop 40), and without the release
     (monkeypatched away) the branch and its collisions are exactly the same."""
-    from diskfriction.continuation.collisions import StepScan
+    from diskfriction.continuation.detection.collisions import StepScan
 
     system = System.from_scene(Scene(N=20, eps=1e-4))
     released, inner, held = [], [], []
@@ -626,9 +626,9 @@ def test_samples_spilled_to_disk_leave_the_scan_unchanged(monkeypatch):
     exactly those of the sweep that keeps them all in memory, and so are they where the disk
     refuses (OSError: the samples stay in memory). on_disk keeps values and memory order,
     read-only."""
-    from diskfriction.continuation import collisions
-    from diskfriction.continuation.samples import Sample
-    from diskfriction.continuation.spill import is_on_disk, on_disk
+    from diskfriction.continuation.detection import collisions
+    from diskfriction.continuation.detection.samples import Sample
+    from diskfriction.continuation.detection.spill import is_on_disk, on_disk
 
     a = np.asfortranarray(np.arange(12.0).reshape(3, 4) * (1 + 2j))
     for x in (a, np.ascontiguousarray(a)):
@@ -673,8 +673,8 @@ def test_a_failing_locator_costs_partial_samples_and_finds_the_same_collisions(m
     the bound was 1.5 times the working sweep's spectra, 135 against 91; a split's labels then
     became the union of every refusing test's (verdicts.hermite_split), which took the working
     sweep to 84 and the failing one to 138, 2.6 more per collision for 21.)"""
-    from diskfriction.continuation.detectors import fast
-    from diskfriction.continuation.locate import LocatorFailed
+    from diskfriction.continuation.detection.detectors import fast
+    from diskfriction.continuation.detection.locate import LocatorFailed
 
     system = System.from_scene(Scene(N=10, eps=1e-4))
     params = SweepParams(detection=DetectionParams(partial_from=0), workers=0)
@@ -717,7 +717,7 @@ def test_decoupled_bounds_the_imaginary_part_of_the_pairs_two_by_two_model():
     tau: where it says decoupled, the largest |Im| stays within thr; where the model's largest
     |Im| exceeds thr, it says coupled (the bound |g| sqrt|c| / sqrt(g'^2 - 4|c|) is exact for
     the linear model, c = m_12 m_21, g' = m_11 - m_22)."""
-    from diskfriction.continuation import certify
+    from diskfriction.continuation.detection import certify
     rng = np.random.default_rng(5)
     tau = np.linspace(-40.0, 40.0, 400001)
     thr, said = 1e-3, {True: 0, False: 0}
@@ -765,9 +765,9 @@ def test_a_chain_window_that_crowds_is_widened_and_finds_the_same_collisions(mon
     branch depend on its steps by up to 5.9e-10 (docs/continuation.md). (Until stop 42 the
     window [0, 0.01] k_n crowded so with guard bands of 0.25; with the reach at the corner of
     its rectangle, Window.reach, it does not.)"""
-    from diskfriction.continuation import spectral_window
-    from diskfriction.disks import equilibria
-    from diskfriction.disks.sweep import SweepParams, sweep
+    from diskfriction.continuation.spectra import window as spectral_window
+    from diskfriction.models.chain import equilibria
+    from diskfriction.models.chain.sweep import SweepParams, sweep
 
     system = System.from_scene(Scene(N=20, eps=1e-4))
     window = SweepParams(window=(0.0, 40.0))
@@ -789,7 +789,7 @@ def test_pairs_beyond_their_reaches_pass_the_pair_test():
     pass the pair test (certify._pair_margin, the full test uncertified_pairs skips for them),
     however they move and turn within their bounds; drawn at the bound itself, where the skip
     is tightest, with every end datum at its extreme."""
-    from diskfriction.continuation import certify
+    from diskfriction.continuation.detection import certify
     rng = np.random.default_rng(11)
     rho, doubt, tested = 0.5, 0.25, 0
     for _ in range(20000):
@@ -816,7 +816,7 @@ def test_uncertified_pairs_skip_only_pairs_that_pass():
     double loops over every pair return, in the same order: a crowded spectrum with crossings,
     near misses and a fast eigenvalue sweeping through it, a few complex ones, and one label
     that is not finite (then every pair is tested)."""
-    from diskfriction.continuation import certify
+    from diskfriction.continuation.detection import certify
     rng = np.random.default_rng(5)
     mixed = 0
     for case in range(60):

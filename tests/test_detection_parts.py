@@ -11,14 +11,14 @@ import pytest
 from scipy.optimize import linear_sum_assignment
 
 from diskfriction.continuation import FunctionProblem
-from diskfriction.continuation.newton import tangent
-from diskfriction.continuation.partial_splits import (PARTIAL_CLUSTERS, PARTIAL_EXTRA, ROWS_PER_CLUSTER,
+from diskfriction.continuation.stepping.newton import tangent
+from diskfriction.continuation.detection.partial_splits import (PARTIAL_CLUSTERS, PARTIAL_EXTRA, ROWS_PER_CLUSTER,
                                                       certificates_survive, clusters, most_clusters,
                                                       partial_allowed)
-from diskfriction.continuation.samples import (Sample, claimed_outside, continuation_perm, label_gaps, nearest_predicted,
+from diskfriction.continuation.detection.samples import (Sample, claimed_outside, continuation_perm, label_gaps, nearest_predicted,
                                                predicted_match, prediction_cost, sample_at)
-from diskfriction.continuation.segment import Segment
-from diskfriction.continuation.verdicts import Verdict, judge_exhaustive, judge_fast
+from diskfriction.continuation.stepping.segment import Segment
+from diskfriction.continuation.detection.verdicts import Verdict, judge_exhaustive, judge_fast
 
 RHO, DOUBT, REL_TOL = 0.5, 0.25, 1e-9
 V, C = 10.0, 1e-3
@@ -198,7 +198,7 @@ def test_certificates_survive_only_within_the_labels_the_new_sample_knows():
 def partial_scan():
     """A fast StepScan on the n = 40 bubble problem over p = 0.03 .. 0.07, with two partial
     samples (the labels near 1 and 2) at s = 0.5 and 0.75: [a, P1, P2, b]."""
-    from diskfriction.continuation.collisions import DetectionParams, StepScan
+    from diskfriction.continuation.detection.collisions import DetectionParams, StepScan
 
     problem = bubble_problem(tuple(float(k) for k in range(1, 40)))
     a, b, segment = interval(problem, 40, 0.03, 0.07)
@@ -265,7 +265,7 @@ def test_free_modes_are_matched_among_themselves_and_give_no_gaps_to_the_chain()
 def test_order_match_leaves_out_the_surplus_of_the_longer_list():
     """Sorted lists whose sizes differ: the pairs keep the order and minimise the total
     distance; the values the other list lacks (1.5), or one of each tie, are left out."""
-    from diskfriction.continuation.samples import order_match
+    from diskfriction.continuation.detection.samples import order_match
 
     a, b = np.array([1.0, 1.0, 1.0, 2.0, 2.0, 2.0, 5.0]), np.array([1.0, 1.0, 2.0, 2.0, 5.0])
     i_a, i_b = order_match(a, b)
@@ -305,7 +305,7 @@ def test_a_disk_joining_the_chain_takes_its_free_modes_into_the_chain_s_match():
 def test_nearest_gaps_equal_all_pairs_on_spectra_with_ties_and_pairs():
     """The gaps from neighbours in order of real part are those of all pairs, to the bit, on
     random spectra with equal values, equal real parts and conjugate pairs."""
-    from diskfriction.continuation.certify import nearest_gaps
+    from diskfriction.continuation.detection.certify import nearest_gaps
 
     rng = np.random.default_rng(0)
     for _ in range(200):
@@ -326,8 +326,8 @@ def test_a_samples_cache_token_changes_with_its_data_and_survives_releasing_its_
     pickled sample keeps one token for its copies within one message."""
     import pickle
 
-    from diskfriction.continuation.samples import Sample
-    from diskfriction.continuation.spectra import Eigensystem
+    from diskfriction.continuation.detection.samples import Sample
+    from diskfriction.continuation.spectra.tracking import Eigensystem
 
     values = np.array([1.0 + 0j, 2.0 + 0j])
     a = Sample(0.0, np.zeros(3), values, np.zeros(2, int), 1e-12, np.zeros(2, bool),
@@ -344,8 +344,8 @@ def test_measured_work_is_what_the_block_spent_and_nests():
     """linalg.measured: the core's spending inside a block, read without resetting anything
     (an outer measurement keeps what an inner one saw); workers' counts booked with
     book_counts count in the block that books them."""
-    from diskfriction.continuation.linalg import book_counts, measured
-    from diskfriction.continuation.spectra import eigensystem
+    from diskfriction.continuation.linalg.solves import book_counts, measured
+    from diskfriction.continuation.spectra.tracking import eigensystem
 
     A = np.diag([1.0, 2.0, 3.0])
     with measured() as outer:
@@ -361,11 +361,11 @@ def test_a_located_double_eigenvalue_must_be_the_pairs_own():
     """belongs_to_pair: over an interval where labels 0, 1 meet near lambda = 1 and labels 2, 3
     near lambda = 3, a double eigenvalue found at 3 is not the collision of (0, 1) (the locator
     started from one pair's model and converged on the other's), one found at 1 is."""
-    from diskfriction.continuation.detectors.fast import belongs_to_pair
-    from diskfriction.continuation.samples import make_sample
-    from diskfriction.continuation.segment import Segment
-    from diskfriction.continuation.spectra import Eigensystem
-    from diskfriction.continuation.verdicts import scaled_slopes
+    from diskfriction.continuation.detection.detectors.fast import belongs_to_pair
+    from diskfriction.continuation.detection.samples import make_sample
+    from diskfriction.continuation.stepping.segment import Segment
+    from diskfriction.continuation.spectra.tracking import Eigensystem
+    from diskfriction.continuation.detection.verdicts import scaled_slopes
 
     x_a, x_b, t = np.array([0.0, 0.0]), np.array([0.0, 1.0]), np.array([0.0, 1.0])
     segment = Segment(None, x_a, x_b, 1e-12, 8)
@@ -388,8 +388,8 @@ def test_a_branch_that_jumps_within_a_step_fails_its_scan_instead_of_giving_a_co
     ends lie JUMP_RATIO times farther apart than their tangents allow."""
     from dataclasses import dataclass
 
-    from diskfriction.continuation.collisions import BranchJump, DetectionParams, scan_step
-    from diskfriction.continuation.segment import SegmentSolveError
+    from diskfriction.continuation.detection.collisions import BranchJump, DetectionParams, scan_step
+    from diskfriction.continuation.stepping.segment import SegmentSolveError
 
     @dataclass(frozen=True)
     class Jumping(Segment):
@@ -495,8 +495,8 @@ def test_a_split_holds_every_label_a_later_test_refuses():
     pair's clearance refuses it), the split's labels hold that eigenvalue too. A partial split
     computes only those labels and rests on every other being certified; with the first test's
     labels alone, the chain of 400 disks lost a short-lived pair (docs/continuation.md, Stop 54)."""
-    from diskfriction.continuation.spectra import Kind
-    from diskfriction.continuation.verdicts import hermite_split
+    from diskfriction.continuation.spectra.tracking import Kind
+    from diskfriction.continuation.detection.verdicts import hermite_split
 
     def sample(s, values, status):
         values = np.array(values, complex)

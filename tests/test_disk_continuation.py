@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from diskfriction.continuation.branch import Stop, StopCode
-from diskfriction.disks.equilibria import DiskEquilibria, relax
-from diskfriction.disks.sweep import SweepParams, sweep
+from diskfriction.models.chain.equilibria import DiskEquilibria, relax
+from diskfriction.models.chain.sweep import SweepParams, sweep
 from diskfriction.matrices import Matrix
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
@@ -131,7 +131,7 @@ def test_a_sweeps_parameters_are_the_apis_options_with_the_disk_problems_default
     from dataclasses import fields
 
     from diskfriction.continuation import ContinuationParams, Options
-    from diskfriction.disks.sweep import SweepParams
+    from diskfriction.models.chain.sweep import SweepParams
 
     sweep, api = SweepParams(), Options()
     assert isinstance(sweep, Options)

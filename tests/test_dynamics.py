@@ -10,7 +10,7 @@ import sys
 import numpy as np
 import pytest
 
-from diskfriction.disks.sweep import sweep
+from diskfriction.models.chain.sweep import sweep
 from diskfriction.dynamics import (OnsetParams, Perturbation, Stepper, choose_dt, simulate, sliding_onset,
                       spectrum, summarize)
 from diskfriction.dynamics.onset import trailing_mean

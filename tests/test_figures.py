@@ -235,7 +235,7 @@ def test_the_diagram_shades_the_windows_of_the_requested_leg_from_its_start(axes
     point, after the death, and shaded nothing."""
     from matplotlib.patches import Polygon, Rectangle
 
-    from diskfriction.disks.windows import leg_windows
+    from diskfriction.models.chain.windows import leg_windows
     from diskfriction.reports.bifurcation import draw_spectrum
 
     F = np.array([0.0, 0.25, 0.5, 0.45, 0.4])

@@ -187,7 +187,7 @@ def test_brusselator_chain_finds_every_closed_form_point_at_about_one_spectrum_e
     modes' real eigenvalues cross each other hundreds of times; splitting at each crossing
     cost 2.9 spectra per point at N = 100, the older rule 8.7)."""
     from diskfriction.continuation import Options, solve_branch
-    from diskfriction.continuation.linalg import measured
+    from diskfriction.continuation.linalg.solves import measured
 
     chain = load_example("brusselator_chain")
     spec = chain.brusselator_chain(20)
@@ -218,7 +218,7 @@ def test_bratu_discrete_folds_converge_at_second_order_to_the_continuous_one():
 def test_disk_chain_through_the_public_api_is_bifurcate_in_fewer_than_30_lines():
     """The example's branch and its 22 collisions are bit-identical to the sweep that
     `diskfriction bifurcate` runs on the paper's scene."""
-    from diskfriction.disks.sweep import sweep
+    from diskfriction.models.chain.sweep import sweep
 
     assert len((EXAMPLES / "disk_chain.py").read_text().splitlines()) < 30
     spec = load_example("disk_chain").problem

@@ -6,10 +6,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from diskfriction.continuation import gpu_spectra, scans, spectra
-from diskfriction.continuation.collisions import DetectionParams
+from diskfriction.continuation.spectra import gpu as gpu_spectra
+
+from diskfriction.continuation.detection import scans
+
+from diskfriction.continuation.spectra import tracking as spectra
+from diskfriction.continuation.detection.collisions import DetectionParams
 from diskfriction.continuation.problem import FunctionProblem
-from diskfriction.continuation.spectra import NoGpu, eigensystem, spectra_on
+from diskfriction.continuation.spectra.tracking import NoGpu, eigensystem, spectra_on
 from commandline import error_line, run_cli
 
 WHY_NO_GPU = gpu_spectra.unavailable()
@@ -18,8 +22,8 @@ WHY_NO_GPU = gpu_spectra.unavailable()
 def relaxed_jacobian(N: int, F_x: float = 0.002):
     """The stability matrix J of the paper's scene with N disks and eps = 1e-4, relaxed from
     rest to F_x (benchmarks/dense_spectrum.py's matrix)."""
-    from diskfriction.continuation.linalg import dense
-    from diskfriction.disks.equilibria import DiskEquilibria, relax
+    from diskfriction.continuation.linalg.solves import dense
+    from diskfriction.models.chain.equilibria import DiskEquilibria, relax
     from diskfriction.scenes import Scene
     from diskfriction.symbolic import System
 
@@ -130,9 +134,9 @@ class Windowed(FunctionProblem):
 
 def test_windowed_chains_take_no_dense_spectra():
     """DiskEquilibria takes dense spectra unless given a window; Weighted asks its inner problem."""
-    from diskfriction.continuation.weighting import Weighted
-    from diskfriction.disks.equilibria import DiskEquilibria
-    from diskfriction.continuation.spectral_window import Window
+    from diskfriction.continuation.stepping.weighting import Weighted
+    from diskfriction.models.chain.equilibria import DiskEquilibria
+    from diskfriction.continuation.spectra.window import Window
     from diskfriction.scenes import Scene
     from diskfriction.symbolic import System
 

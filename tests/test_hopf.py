@@ -10,7 +10,7 @@ import pytest
 from scipy.optimize import brentq
 
 from diskfriction.continuation import Options, problem_from_functions, solve_branch
-from diskfriction.continuation.bifurcations import CONSERVATIVE, conservative, hopf_steps
+from diskfriction.continuation.detection.bifurcations import CONSERVATIVE, conservative, hopf_steps
 
 M_INV = np.linalg.inv(np.array([[3.0, 1.0], [1.0, 1.0]]))
 SPAN = (0.0, 6.0)

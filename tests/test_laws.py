@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import reference_model as ref
-from diskfriction.disks.sweep import sweep
+from diskfriction.models.chain.sweep import sweep
 from diskfriction.dynamics import Perturbation, simulate
 from diskfriction.scenes import NORMAL_LAWS, Effects, Scene
 from diskfriction.symbolic import System, load_kernels

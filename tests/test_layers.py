@@ -14,7 +14,8 @@ LAYERS = [
     {"scenes"},
     {"symbolic"},
     {"continuation"},            # the generic core: knows nothing of disks
-    {"disks", "packings", "dynamics"},  # the chain and the packing problems; the dynamics (siblings)
+    {"dynamics"},                # Newtonian dynamics from a state, on a scene's kernels
+    {"models"},                  # the geometries (models/chain, models/packing) and their registry
     {"studies", "peers"},        # verify, ensembles, maps; the LAMMPS cross-check
     {"reports"},
     {"cli"},
@@ -96,7 +97,7 @@ def imported_closure(folder: str) -> set[str]:
 def test_the_code_version_of_resumable_runs_covers_every_folder_they_run():
     """A map cell or ensemble realization on disk is reused while the code version
     (studies.cluster.code_version) is the same: it must digest every folder the studies'
-    code reaches, or an edit of that folder (packings/shear.py, say) would leave stale cells
+    code reaches, or an edit of that folder (models/packing/shear.py, say) would leave stale cells
     that a rerun takes as current."""
     from diskfriction.studies.cluster import RUN_SOURCES
 
@@ -110,7 +111,7 @@ def test_the_code_version_of_cached_report_results_covers_every_folder_they_run(
     """A report computation's cached result is reused while its code version is the same
     (reports/registry.py): its depends must hold every folder it reaches (its own imports, its
     module's, and those of the computations' modules it imports), or an edit there (the
-    chain's sweep in disks/, say) would leave a stale result that the report shows."""
+    chain's sweep in models/chain/, say) would leave a stale result that the report shows."""
     import inspect
     import textwrap
 

@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from diskfriction.packings.dynamics import fastest_pair, simulate, time_step
-from diskfriction.packings.equilibria import mass_diagonal
-from diskfriction.packings.runs import run_from_state
-from diskfriction.packings.shear import network_of
+from diskfriction.models.packing.dynamics import fastest_pair, simulate, time_step
+from diskfriction.models.packing.equilibria import mass_diagonal
+from diskfriction.models.packing.runs import run_from_state
+from diskfriction.models.packing.shear import network_of
 from diskfriction.scenes.packing import PackingScene
 
 SCENE = PackingScene(N=24, seed=3, gamma_range=(0.0, 0.002))
@@ -54,7 +54,7 @@ def test_a_complex_pair_grows_at_the_rate_of_the_spectrum(setting):
 
 
 def test_a_run_at_rest_is_told_by_its_contacts_then_by_its_stress():
-    from diskfriction.packings.runs import NOT_RELAXED, SLIPPED, AtRest
+    from diskfriction.models.packing.runs import NOT_RELAXED, SLIPPED, AtRest
 
     assert AtRest(0.0, 0.0, 1, 0).outcome == AtRest(0.0, 0.0, 0, 2).outcome == "rearranged"
     assert AtRest(-2 * SLIPPED, 1e-3, 0, 0).outcome == "slipped"

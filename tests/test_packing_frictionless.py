@@ -11,9 +11,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from diskfriction.packings.equilibria import NotJammed, PackingEquilibria, mass_diagonal, start
-from diskfriction.packings.prepared import prepare_scene
-from diskfriction.packings.shear import ShearParams, network_of, shear
+from diskfriction.models.packing.equilibria import NotJammed, PackingEquilibria, mass_diagonal, start
+from diskfriction.models.packing.prepared import prepare_scene
+from diskfriction.models.packing.shear import ShearParams, network_of, shear
 from diskfriction.scenes import Effects
 from diskfriction.scenes.packing import PackingScene
 
@@ -151,7 +151,7 @@ def test_a_relaxation_that_unjams_the_packing_ends_the_shear_in_one_line(tmp_pat
 def test_a_branch_that_cannot_start_says_where_in_words():
     """The core's start failures name the parameter's value in words, never an internal name:
     no equilibrium (u^2 + 1 = 0 has no root), and no tangent (u^2 = 0 at u = 0, G_p = 0)."""
-    from diskfriction.continuation.arclength import ContinuationError, continuation
+    from diskfriction.continuation.stepping.arclength import ContinuationError, continuation
     from diskfriction.continuation.problem import FunctionProblem
 
     rootless = FunctionProblem(lambda u, p: u**2 + 1, lambda u, p: np.diag(2 * u),
@@ -190,7 +190,7 @@ def test_a_frictionless_run_counts_no_sliding_update(branch, packing):
     contact carries a tangential force, so none slides (the Coulomb cap at t* = 0 acted at
     every step and was counted, about 1e5 updates in 100 time units), and the energy budget
     E_k + U_n closes."""
-    from diskfriction.packings.dynamics import simulate, time_step
+    from diskfriction.models.packing.dynamics import simulate, time_step
 
     network = network_of(SCENE, packing)
     mass = mass_diagonal(network, SCENE.m, SCENE.inertia)

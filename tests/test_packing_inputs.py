@@ -65,7 +65,7 @@ def test_a_windowed_shear_counts_the_points_it_stores(tmp_path, capsys):
 
 
 def test_a_preparation_too_large_for_the_memory_is_refused(tmp_path, capsys, monkeypatch):
-    """The preparation's own bytes (packings/memory.py) against a machine of 10 MB."""
+    """The preparation's own bytes (models/packing/memory.py) against a machine of 10 MB."""
     monkeypatch.setattr("diskfriction.memory.physical_memory", lambda: 10_000_000)
     path = scene(tmp_path, "[packing]\nN = 100000\n")
     line = refused(capsys, tmp_path, "prepare", str(path))
@@ -83,7 +83,7 @@ def test_too_few_disks_to_jam_are_refused_by_the_scene(tmp_path, capsys, command
 @pytest.mark.parametrize("command", COMMANDS)
 @pytest.mark.parametrize("pressure", ["1e-300", "3e-4"])
 def test_a_pressure_the_preparation_cannot_resolve_is_refused(tmp_path, capsys, command, pressure):
-    """32 disks: FIRE stalls at phi = 0.88 below P = 5e-4 (packings/limits.py): the line names
+    """32 disks: FIRE stalls at phi = 0.88 below P = 5e-4 (models/packing/limits.py): the line names
     the pressure, N and the smallest pressure that prepares."""
     path = scene(tmp_path, f"[packing]\nN = 32\npressure = {pressure}\n")
     line = refused(capsys, tmp_path, command, str(path), *COMMANDS[command])
@@ -141,13 +141,13 @@ def test_every_packing_command_says_how_long_it_will_take_before_it_starts(
         tmp_path, capsys, monkeypatch, command):
     """The estimate is the first line on stderr, before any work: the work itself is stopped
     at its start (the preparation), so that the test takes no time."""
-    from diskfriction.packings import prepared
+    from diskfriction.models.packing import prepared
 
     def stop(*args, **kwargs):
         raise KeyboardInterrupt
 
     monkeypatch.setattr(prepared, "prepare_scene", stop)
-    for module in ("diskfriction.cli.packing_cmd", "diskfriction.packings.shear",
+    for module in ("diskfriction.cli.packing_cmd", "diskfriction.models.packing.shear",
                    "diskfriction.reports.packing_report"):
         monkeypatch.setattr(f"{module}.prepare_scene", stop, raising=False)
     path = scene(tmp_path, "[packing]\nN = 256\n[shear]\ngamma = [0.0, 0.05]\n")

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import reference_model as ref
-from diskfriction.packings.network import Network
+from diskfriction.models.packing.network import Network
 from diskfriction.scenes import Scene
 from diskfriction.symbolic.system import System
 

@@ -56,7 +56,7 @@ def whole(tmp_path_factory):
 
 def interrupt_after_first_segment(monkeypatch):
     """Ctrl-C right after the first segment file is written."""
-    from diskfriction.packings import segments
+    from diskfriction.models.packing import segments
 
     save = segments.save_segment
 
@@ -116,8 +116,8 @@ def test_plastic_records_give_no_growth_rate_for_j_or_without_a_pair(whole):
     import dataclasses
 
     from diskfriction.matrices import Matrix
-    from diskfriction.packings.prepared import prepare_scene
-    from diskfriction.packings.shear import ShearParams, shear
+    from diskfriction.models.packing.prepared import prepare_scene
+    from diskfriction.models.packing.shear import ShearParams, shear
     from diskfriction.reports.packing_outputs import plastic_records
     from diskfriction.scenes.load import load_scene
 
@@ -201,7 +201,7 @@ def test_ctrl_c_landing_in_a_compiled_functions_first_call_is_one_line_and_130(
     line, exit 130, and before the first segment it says that nothing is kept."""
     import traceback
 
-    from diskfriction.packings import assembly
+    from diskfriction.models.packing import assembly
 
     linear_map, calls = assembly._linear_map, []
 

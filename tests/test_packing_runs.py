@@ -1,4 +1,4 @@
-"""Runs from states of a packing's shear branch (packings/runs.py, docs/packings.md#dynamics):
+"""Runs from states of a packing's shear branch (models/packing/runs.py, docs/packings.md#dynamics):
 the eigenvector start is the fastest pair's growing solution in the full state, the growth
 rate is fitted from the pair's complex amplitude (no maxima needed), or one line says why not
 and what to change, and a run ends at exactly its t_end."""
@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 from diskfriction.cli.main import main
-from diskfriction.packings.dynamics import fastest_pair, simulate, time_step
-from diskfriction.packings.equilibria import mass_diagonal
-from diskfriction.packings.runs import GrowingMode, linearized, run_from_state
-from diskfriction.packings.shear import network_of
+from diskfriction.models.packing.dynamics import fastest_pair, simulate, time_step
+from diskfriction.models.packing.equilibria import mass_diagonal
+from diskfriction.models.packing.runs import GrowingMode, linearized, run_from_state
+from diskfriction.models.packing.shear import network_of
 from diskfriction.scenes.packing import PackingScene
 
 SCENE = PackingScene(N=24, seed=3, gamma_range=(0.0, 0.002))

@@ -118,8 +118,8 @@ def test_prepare_writes_a_packing_that_a_second_run_reproduces_bit_for_bit(tmp_p
 
     import numpy as np
 
-    from diskfriction.packings.prepare import load_packing
-    from diskfriction.packings.prepared import F_TOL
+    from diskfriction.models.packing.prepare import load_packing
+    from diskfriction.models.packing.prepared import F_TOL
 
     scene = write(tmp_path, "[packing]\nN = 32\npressure = 0.05\n")
     first = run_cli("prepare", str(scene), "--out", str(tmp_path / "a"))
@@ -168,7 +168,7 @@ def test_bifurcate_says_how_many_collisions_are_only_bracketed(tmp_path, monkeyp
     import json
 
     from diskfriction.cli.main import main
-    from diskfriction.continuation import collisions
+    from diskfriction.continuation.detection import collisions
 
     budget = collisions.DetectionParams  # what bifurcate imports when it runs
     monkeypatch.setattr(collisions, "DetectionParams", lambda **kw: budget(max_solves=1, **kw))
@@ -326,7 +326,7 @@ def test_an_interrupted_bifurcate_resumes_after_its_finished_segments(tmp_path, 
 
     from diskfriction.cli.common import EXIT_INTERRUPTED
     from diskfriction.cli.main import main
-    from diskfriction.packings import segments
+    from diskfriction.models.packing import segments
 
     scene = write(tmp_path, "[packing]\nN = 32\nseed = 2\n[shear]\ngamma = [0.0, 0.0021]\n")
     command = ["bifurcate", str(scene), "--workers", "0", "--window", "0:50", "--out"]

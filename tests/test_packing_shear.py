@@ -12,11 +12,11 @@ import pytest
 import scipy.sparse as sp
 from invariants import unaccounted_pair_changes
 
-from diskfriction.continuation.detectors import fast
-from diskfriction.packings.assembly import Assembly
-from diskfriction.packings.equilibria import Gauge, PackingEquilibria, mass_diagonal, start
-from diskfriction.packings.prepared import prepare_scene
-from diskfriction.packings.shear import ShearParams, network_of, shear
+from diskfriction.continuation.detection.detectors import fast
+from diskfriction.models.packing.assembly import Assembly
+from diskfriction.models.packing.equilibria import Gauge, PackingEquilibria, mass_diagonal, start
+from diskfriction.models.packing.prepared import prepare_scene
+from diskfriction.models.packing.shear import ShearParams, network_of, shear
 from diskfriction.scenes.packing import PackingScene
 
 SCENE = PackingScene(N=24, seed=3, gamma_range=(0.0, 0.002))
@@ -67,7 +67,8 @@ def test_the_bordered_systems_factorized_by_minimum_degree_solve_as_superlus_def
     """PackingEquilibria.factor_options (minimum degree on A + A^T, partial pivoting): the
     corrector's and the tangent's factorizations take them, with less fill than SuperLU's
     default (COLAMD), and the bordered solves agree with the default's to 1e-12."""
-    from diskfriction.continuation import linalg, newton
+    from diskfriction.continuation.linalg import solves as linalg
+    from diskfriction.continuation.stepping import newton
     problem = problem_at_start(packing)
     x = np.append(problem.q_c, 0.0)
     e_p = np.zeros(x.size)
@@ -126,7 +127,7 @@ def test_a_contact_sliding_through_steps_fires_no_event_at_their_start():
     it inside the cap, and the step was cut within 1e-9 of its start, 63 times in 80 points);
     the shear ends and no two points are closer than 1e-12 in strain. A problem started at the
     end state flags the contacts on their cap as sliding."""
-    import diskfriction.packings.equilibria as equilibria
+    import diskfriction.models.packing.equilibria as equilibria
 
     scene = PackingScene(N=24, seed=1, gamma_range=(0.0, 0.0015), mu=0.3)
     slips = []
@@ -194,7 +195,7 @@ def test_a_plastic_event_is_passed_by_relaxing_with_friction(passed_run):
 @pytest.mark.slow
 def test_a_damped_relaxation_passes_the_same_fold_to_force_balance(passed_run):
     """The same shear with relaxation = "damped" (Newtonian dynamics with a drag after each
-    plastic event, packings/plastic.damped): the first segment and its fold are the FIRE run's
+    plastic event, models/packing/plastic.damped): the first segment and its fold are the FIRE run's
     to the bit (the relaxation acts only past a fold), the relaxed state takes dynamics steps,
     and the shear goes on to the end with every point in force balance."""
     scene, packing, fire_run, _ = passed_run
@@ -235,7 +236,7 @@ def test_a_relaxation_that_stalls_near_its_tolerance_is_finished_by_newton(passe
     disks stalled at 2.5e-11 against 1e-11): the next segment's first Newton solve finishes it
     and the shear goes on to the end, every point in force balance, the first plastic event
     where it was; one that stops 1e4 times above the tolerance still fails in one line."""
-    from diskfriction.packings import plastic
+    from diskfriction.models.packing import plastic
 
     scene, packing, whole, _ = passed_run
     real = plastic.fire
@@ -261,7 +262,7 @@ def test_a_relaxation_that_does_not_settle_starts_again_with_half_the_time_step(
     relaxation starts again from the fold state with half the step, and gives bit for bit the
     state of a relaxation whose first step is that half; its steps count both runs. Failing at
     every attempt raises RelaxationFailed in one line."""
-    from diskfriction.packings import plastic
+    from diskfriction.models.packing import plastic
 
     scene, packing, branch, _ = passed_run
     network = network_of(scene, packing)
@@ -294,7 +295,7 @@ def test_a_relaxation_still_settling_when_its_attempts_run_out_goes_on_from_the_
     after a second rearrangement: 256 disks, window [-3, 2], gamma = 0.0405607): the attempt
     that ended with the least force goes on from its end with its own time step, and its end is
     the relaxed state, in force balance; its steps count every run."""
-    from diskfriction.packings import plastic
+    from diskfriction.models.packing import plastic
 
     scene, packing, branch, _ = passed_run
     network = network_of(scene, packing)
@@ -341,13 +342,13 @@ def same(a, b) -> bool:
 @pytest.mark.slow
 def test_a_run_resumed_after_its_finished_segments_equals_one_never_interrupted(passed_run, window,
                                                                                 tmp_path):
-    """The segments a run passed, each written to a file and read back (packings/segments.py),
+    """The segments a run passed, each written to a file and read back (models/packing/segments.py),
     and the run resumed after the first of them: its branch equals the uninterrupted run's
     value for value (points, spectra, collisions with their Jordan chains, plastic events),
     every eigenvalue tracked or a window (its blocks numbered across the segments); a segment
     file is refused for another key, or missing arrays (one line, no traceback)."""
     from diskfriction.files import save_npz
-    from diskfriction.packings.segments import SegmentFileError, load_segment, save_segment
+    from diskfriction.models.packing.segments import SegmentFileError, load_segment, save_segment
 
     scene, packing, whole, finished = passed_run
     if window is not None:
@@ -379,8 +380,8 @@ def test_detection_at_64_disks_agrees_with_dense_spectra_inside_every_step(monke
     collision are left out (there the pair's Im is still near the status threshold). The
     steps ending at a contact reaching its Coulomb limit hold up to a dozen collisions within
     1e-5 of strain (docs/packings.md, Accuracy measured)."""
-    from diskfriction.continuation import scans
-    from diskfriction.continuation.spectra import count_complex_pairs
+    from diskfriction.continuation.detection import scans
+    from diskfriction.continuation.spectra.tracking import count_complex_pairs
 
     scene = PackingScene(N=64, seed=1, gamma_range=(0.0, 5e-4))
     packing = prepare_scene(scene)
@@ -508,7 +509,7 @@ def test_a_window_that_crowds_is_widened_and_finds_the_same_collisions(packing, 
     depend on its steps (measured 1.2e-10; the chain's 5.9e-10, tests/test_detection.py).
     ([0, 50], the window of the tests above, crowded after its collisions, found 1e-12 apart,
     until the reach became the rectangle's corner in stop 42; now it does not crowd.)"""
-    from diskfriction.packings import equilibria
+    from diskfriction.models.packing import equilibria
 
     window = (0.0, 40.0)
     generous = shear(SCENE, packing, ShearParams(workers=0), window=window)
@@ -530,8 +531,8 @@ def test_a_window_that_crowds_at_its_first_point_is_widened_there(packing, windo
     at gamma = 0.0102, a pair with |Im| = 12.7 in its band, where the exception lost 334 s of
     shear): it is sized anew, wider, there and the shear goes on; the same collisions as a
     generous window within 1e-12."""
-    from diskfriction.continuation import spectral_window
-    from diskfriction.packings import equilibria
+    from diskfriction.continuation.spectra import window as spectral_window
+    from diskfriction.models.packing import equilibria
 
     sized, decompose = spectral_window.sized, equilibria.window_eigensystem
     points, crowded_at = [], []
@@ -559,7 +560,7 @@ def test_a_commit_that_leaves_the_matrix_the_same_keeps_the_spectrum(packing, wi
     and the end sample's spectrum is kept at the new point (arclength._moved) instead of a
     second decomposition of the same matrix. With that second decomposition forced, the branch
     is the same point for point and the collisions within 1e-12 in strain."""
-    from diskfriction.continuation import arclength
+    from diskfriction.continuation.stepping import arclength
 
     kept, updates, same_matrix = [], {}, arclength.same_matrix
     real_newton = arclength.factored_fixed_p
@@ -599,7 +600,7 @@ def test_the_condition_numbers_follow_the_eigenvalues_columns(branch, windowed):
 
 
 def test_assembly_is_the_product_it_replaces_on_one_pattern():
-    """Assembly (packings/assembly.py): L J(v) R + C for a pattern with repeated entries, the
+    """Assembly (models/packing/assembly.py): L J(v) R + C for a pattern with repeated entries, the
     same CSR pattern (sorted) at every v, an entry that is zero at some v kept."""
     rng = np.random.default_rng(2)
     n, m, k = 12, 9, 7
@@ -647,8 +648,8 @@ def test_the_deflated_shift_invert_finds_the_tracked_matrix_eigensystem(branch, 
     with complex pairs and with sigma next to 0, where A's translation zeros would be the
     nearest: the same k eigenvalues to 1e-12 of the largest, eigenvectors of A_g (residuals
     1e-9), and the LU of A sparser than A_g's."""
-    from diskfriction.continuation.linalg import factorize
-    from diskfriction.continuation.nearest import SHIFT_INVERT_ORDERING, nearest_eigensystem
+    from diskfriction.continuation.linalg.solves import factorize
+    from diskfriction.continuation.spectra.nearest import SHIFT_INVERT_ORDERING, nearest_eigensystem
 
     problem = problem_at_start(packing)
     point = int(np.argmax(branch.n_complex[branch.segment == 0]))
@@ -680,7 +681,7 @@ def test_a_restored_state_is_the_state_set_afresh(packing):
     assembling again; an unknown snapshot is set afresh, its matrices assembled at their first
     use only (a restore to record a point assembles nothing); only the last KEPT_STATES are
     kept."""
-    from diskfriction.packings import equilibria
+    from diskfriction.models.packing import equilibria
 
     problem = problem_at_start(packing)
     first = problem.state()
@@ -746,7 +747,7 @@ def test_the_relaxations_time_step_is_stable_for_the_stiffest_mode():
     packing = prepare_scene(scene)
     network = network_of(scene, packing)
     q, xi, rows = start(network, packing.positions)[:3]
-    from diskfriction.packings import plastic
+    from diskfriction.models.packing import plastic
 
     dt_max = 10 * plastic.time_step(network, q, xi, rows, 0.0)
     omega = np.sqrt(np.abs(np.linalg.eigvals(network.evaluate(q, xi, rows, 0.0)[1].toarray())).max())

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from diskfriction.errors import OneLineError
-from diskfriction.packings.fire import fire, max_row_force
-from diskfriction.packings.prepare import (PackingFileError, PreparationError, bidisperse_radii,
+from diskfriction.models.packing.fire import fire, max_row_force
+from diskfriction.models.packing.prepare import (PackingFileError, PreparationError, bidisperse_radii,
                                            box_side, contacts, load_packing, prepare, rattlers,
                                            save_packing)
 from packing_reference import K_N, hertz_pair_forces

@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from diskfriction.continuation import block_tridiagonal as bt
-from diskfriction.continuation import refinement
-from diskfriction.continuation.linalg import dense, measured
-from diskfriction.continuation.spectra import Eigensystem, eigensystem, track
-from diskfriction.disks.equilibria import DiskEquilibria, relax
+from diskfriction.continuation.linalg import block_tridiagonal as bt
+from diskfriction.continuation.spectra import refinement
+from diskfriction.continuation.linalg.solves import dense, measured
+from diskfriction.continuation.spectra.tracking import Eigensystem, eigensystem, track
+from diskfriction.models.chain.equilibria import DiskEquilibria, relax
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
 
@@ -427,7 +427,7 @@ def test_the_groups_refined_again_are_meeting_discs_and_pairs_left_above_tol():
 def test_row_norms_are_numpys():
     """linalg.row_norms against np.linalg.norm(axis=1): complex in C and Fortran order (the
     column norms of right vectors: row_norms(right.T)), and real."""
-    from diskfriction.continuation.linalg import row_norms
+    from diskfriction.continuation.linalg.solves import row_norms
 
     rng = np.random.default_rng(7)
     a = rng.standard_normal((40, 30)) + 1j * rng.standard_normal((40, 30))
@@ -460,7 +460,7 @@ def test_sweeps_with_refined_spectra_find_the_same_collisions(N, chain_sweep, mo
     scene = Scene(N=N, eps=1e-4)
     decomposed = chain_sweep(scene)[0]
     monkeypatch.setattr(refinement, "REFINE_FROM", 0)
-    from diskfriction.disks.sweep import sweep
+    from diskfriction.models.chain.sweep import sweep
 
     with measured() as work:
         refined = sweep(System.from_scene(scene), 0.0, 0.12)
@@ -474,8 +474,8 @@ def test_sweeps_with_refined_spectra_find_the_same_collisions(N, chain_sweep, mo
 def test_refinement_applies_only_where_the_whole_spectrum_is_refined(monkeypatch):
     """No periodic blocks with a spectral window or a free disk; not below REFINE_FROM, nor
     where the dense spectra run on a GPU."""
-    from diskfriction.continuation.samples import sample_at
-    from diskfriction.continuation.spectral_window import Window
+    from diskfriction.continuation.detection.samples import sample_at
+    from diskfriction.continuation.spectra.window import Window
 
     system = System.from_scene(Scene(N=6, eps=1e-4))
     q, xi = relax(system, *system.rest_state(), 0.01)

@@ -10,14 +10,14 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pytest
 
-from diskfriction.continuation import collisions
-from diskfriction.continuation.arclength import ContinuationParams, continuation
-from diskfriction.continuation.collisions import DetectionParams
+from diskfriction.continuation.detection import collisions
+from diskfriction.continuation.stepping.arclength import ContinuationParams, continuation
+from diskfriction.continuation.detection.collisions import DetectionParams
 from diskfriction.continuation.problem import FunctionProblem
-from diskfriction.continuation.root_ends import root_slopes, scan_ends
-from diskfriction.continuation.samples import sample_at
-from diskfriction.continuation.segment import Segment
-from diskfriction.continuation.spectra import DEFAULT_REL_TOL
+from diskfriction.continuation.detection.root_ends import root_slopes, scan_ends
+from diskfriction.continuation.detection.samples import sample_at
+from diskfriction.continuation.stepping.segment import Segment
+from diskfriction.continuation.spectra.tracking import DEFAULT_REL_TOL
 
 C, M, ALPHA, BETA = 0.5, 1.0, 1e-3, 1.0
 P_DEATH = C - (ALPHA / BETA) ** 2

@@ -1,4 +1,4 @@
-"""Scans of accepted steps on worker processes (continuation/scans.py): the same branch and
+"""Scans of accepted steps on worker processes (continuation/detection/scans.py): the same branch and
 collisions as inline scans, a failed scan's step rejected after the continuation went on, and
 workers' errors and lifetimes."""
 from __future__ import annotations
@@ -8,13 +8,13 @@ import multiprocessing
 import numpy as np
 import pytest
 
-from diskfriction.continuation import arclength
-from diskfriction.continuation.collisions import DetectionParams
-from diskfriction.continuation.linalg import measured
+from diskfriction.continuation.stepping import arclength
+from diskfriction.continuation.detection.collisions import DetectionParams
+from diskfriction.continuation.linalg.solves import measured
 from diskfriction.continuation.problem import FunctionProblem, Problem
-from diskfriction.continuation.scans import (InlineScans, ScanJob, ScanOutcome, WorkerError, WorkerScans,
+from diskfriction.continuation.detection.scans import (InlineScans, ScanJob, ScanOutcome, WorkerError, WorkerScans,
                                              default_workers, has_snapshots)
-from diskfriction.disks.sweep import SweepParams, sweep
+from diskfriction.models.chain.sweep import SweepParams, sweep
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
 from invariants import unaccounted_pair_changes

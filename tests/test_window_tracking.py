@@ -6,13 +6,13 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from diskfriction.continuation import spectral_window
-from diskfriction.continuation.collisions import certified_tracked
-from diskfriction.continuation.detectors import fast
-from diskfriction.continuation.samples import Sample, continuation_perm
-from diskfriction.continuation.spectral_window import Window, window_columns
-from diskfriction.continuation.verdicts import beyond_band
-from diskfriction.disks.sweep import SweepParams, sweep
+from diskfriction.continuation.spectra import window as spectral_window
+from diskfriction.continuation.detection.collisions import certified_tracked
+from diskfriction.continuation.detection.detectors import fast
+from diskfriction.continuation.detection.samples import Sample, continuation_perm
+from diskfriction.continuation.spectra.window import Window, window_columns
+from diskfriction.continuation.detection.verdicts import beyond_band
+from diskfriction.models.chain.sweep import SweepParams, sweep
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
 

@@ -79,7 +79,7 @@ def row_relative_error(J: np.ndarray, J_ref: np.ndarray) -> float:
 def jacobian_accuracy(scene: Scene, F_x: float, steps: list[float]) -> dict:
     """Finite-difference Jacobians (central, 2nd and 4th order, step h) of the generated F at
     the branch point at F_x, against the generated exact J; wall time of one Jacobian each."""
-    from diskfriction.disks.equilibrium import equilibrium_at
+    from diskfriction.models.chain.equilibrium import equilibrium_at
 
     system = _system(scene)
     eq = equilibrium_at(system, F_x)
@@ -111,7 +111,7 @@ def dynamics_accuracy(scene: Scene, F_x: float, fractions: list[float], referenc
     (reference: the spectrum's |Im sqrt(lambda)|, and the finest dt), energy-budget drift
     max|budget - budget(0)| (reference: exact conservation), V_cm over the last half (reference:
     the finest dt)."""
-    from diskfriction.disks.equilibrium import equilibrium_at
+    from diskfriction.models.chain.equilibrium import equilibrium_at
     from diskfriction.dynamics import Perturbation, simulate, spectrum, summarize
 
     system = _system(scene)

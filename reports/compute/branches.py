@@ -17,10 +17,10 @@ def _system(scene: Scene):
 def _sweep(scene: Scene, F_from: float, F_to: float, matrix: str, ds_max=None, detection=True,
            tol_p=None):
     """disks.sweep with the report's failures turned into ComputationFailed."""
-    from diskfriction.continuation.arclength import ContinuationError
-    from diskfriction.continuation.collisions import DetectionParams
-    from diskfriction.disks.equilibria import EquilibriumError
-    from diskfriction.disks.sweep import SweepParams, sweep
+    from diskfriction.continuation.stepping.arclength import ContinuationError
+    from diskfriction.continuation.detection.collisions import DetectionParams
+    from diskfriction.models.chain.equilibria import EquilibriumError
+    from diskfriction.models.chain.sweep import SweepParams, sweep
 
     det = DetectionParams(enabled=detection, **({"tol_p": tol_p} if tol_p else {}))
     try:
@@ -64,8 +64,8 @@ def spectra_at(scene: Scene, matrix: str, loads: list[float]) -> dict:
     """Eigenvalues of `matrix` [raw] at exactly each load (one sweep from rest per load), the
     number of complex pairs, the state (q, xi). A load the branch from rest does not reach has
     nan rows and its message in `failed`."""
-    from diskfriction.disks.equilibrium import NoEquilibrium, equilibrium_at
-    from diskfriction.continuation.spectra import count_complex_pairs
+    from diskfriction.models.chain.equilibrium import NoEquilibrium, equilibrium_at
+    from diskfriction.continuation.spectra.tracking import count_complex_pairs
 
     system = _system(scene)
     n, k = system.ndof, len(loads)
@@ -106,7 +106,7 @@ def shear_mode(scene: Scene, F_x: float) -> dict:
     the shear wave: wavelength L / n [length], k = 2 pi n / L, omega = sqrt(eigenvalue of
     M^-1 J whose eigenvector overlaps it most) [1 / time], V2 = omega / k [length / time].
     """
-    from diskfriction.disks.equilibrium import equilibrium_at
+    from diskfriction.models.chain.equilibrium import equilibrium_at
 
     system = _system(scene)
     N = scene.N

@@ -34,7 +34,7 @@ def trajectory(scene: Scene, F_x: float, t_end: float, kick: float, seed: int, d
     `kick` [length / time] (dynamics.simulate, default dt and recording), to t_end [time].
     Keeps t, M [length^2], C_x, C_y [length] (thinned to MAX_FRAMES), x, y of `disk` (1-based)
     at every frame until 10 % past its first breach or onset of sliding, and the summary."""
-    from diskfriction.disks.equilibrium import equilibrium_at
+    from diskfriction.models.chain.equilibrium import equilibrium_at
     from diskfriction.dynamics import Perturbation, simulate, summarize
 
     if not 1 <= disk <= scene.N:

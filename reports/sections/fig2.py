@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 
-from diskfriction.disks.windows import complex_spans, leg_windows
+from diskfriction.models.chain.windows import complex_spans, leg_windows
 from diskfriction.reports.bifurcation import draw_spectrum
 from diskfriction.reports.figures import legend, new_figure
 from diskfriction.reports.registry import Section

@@ -1,0 +1,196 @@
+"""Quasistatic sweeps of F_x: the branch of equilibria from the rest state, with history.
+
+A sweep A -> B always starts at the rest state (F_x = 0, xi = 0), because the history makes the
+equilibrium at A depend on how A was reached. If A != 0 a preparation leg loads 0 -> A first
+(leg 0), then the requested leg runs A -> B (leg 1): `--fx 0.12:0` is loading to 0.12 and
+unloading back to 0, so both legs together show the hysteresis.
+
+The rest state with eps = 0 is a singular point (pairs touching at delta = 0, N free rolling
+modes: J is singular, no tangent exists). The branch therefore starts at F_1 = START_FRACTION
+times F_y (the scene's force scale; at most half the first target), reached from the rest state
+in one quasistatic step by pseudo-transient relaxation (disks.relax); an unloading leg to 0 ends
+at F_1 too. Collisions between 0 and F_1 are not resolved; complex pairs present at F_1 are
+counted in the branch's first row. On the paper's scene the collisions above F_x = 0.006 agree
+to all printed digits for F_1 = 1e-5, 1e-4 and 1e-3 (docs/continuation.md); below ~1e-7 the
+branch is still numerically singular.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Callable, Optional
+
+import numpy as np
+
+from diskfriction.continuation.api import Options, solve_in_runs
+from diskfriction.continuation.detection.collisions import Collision
+from diskfriction.models.chain.equilibria import DiskEquilibria, relax
+from diskfriction.continuation.branch import Branch, Stop
+from diskfriction.continuation.spectra.window import Window, block_columns
+from diskfriction.continuation.spectra.tracking import count_complex_pairs, match_eigenvalues
+from diskfriction.matrices import Matrix
+from diskfriction.symbolic import System
+
+START_FRACTION = 1e-4
+SWEEP_STEPS_PER_SPAN = 60
+"""A sweep's largest step is its span over this (api.STEPS_PER_SPAN is 50 for other problems):
+version 0.1's choice, kept so that every disk sweep and its timings stay as documented."""
+
+
+@dataclass(frozen=True)
+class SweepParams(Options):
+    """The options of a disk sweep: solve_branch's Options (api.py), one set of parameters for
+    every continuation, plus a spectral window. Steps in the arclength of x = (q, F_x), raw
+    units. Where the disk problem takes other defaults than Options', they are set here:
+    ds_max = None takes span / SWEEP_STEPS_PER_SPAN (60) of the whole sweep (not of a leg;
+    Options: span / 50 of its span), the first step ds_max / 2 (graded from rest on the first
+    leg; Options: ds_max / 4), ds_min 1e-10 raw force units (Options: 1e-8 ds_max), newton_tol
+    1e-11: max|F| at every stored point [force], a tenth of Options' (the history follows q, so
+    the corrector must hold the contacts' forces well below the Coulomb limit's resolution),
+    max_steps 20 000 (N = 1000 takes up to 6000 points), and no special points (the disk
+    problem carries history: its folds cannot be located after the run), theta None: steps in
+    the Euclidean arclength of (q, F_x), as before the weighted metric (Options: theta = 1, the
+    mesh-independent metric of a discretised problem), p_scale and residual_scale 1: steps,
+    tolerances in F_x and newton_tol in raw units (Options: relative to the span and to the
+    size of F at the start). workers (Options):
+    processes scanning steps while the sweep goes on (None: automatic; 0: inline). window:
+    (lo, hi) of Re lambda [the matrix's raw units] to track instead of the whole spectrum
+    (spectral_window.py); None: every eigenvalue.
+    """
+
+    ds_min: Optional[float] = 1e-10
+    newton_tol: float = 1e-11
+    max_steps: int = 20_000
+    special_points: tuple[str, ...] = ()
+    theta: Optional[float] = None
+    p_scale: Optional[float] = 1.0
+    residual_scale: Optional[float] = 1.0
+    window: Optional[tuple[float, float]] = None
+
+
+@dataclass(frozen=True)
+class DiskBranch:
+    """Accepted equilibria of a sweep, one row per point (raw units).
+
+    F_x (m,); q (m, n); xi (m, 2N) committed history; eigenvalues (m, n) tracked spectrum of
+    `matrix`; n_complex (m,); residual (m,) max|F|; leg (m,) 0 = preparation from rest,
+    1 = the requested sweep; free (m,) free rolling modes (disks touching only the substrate,
+    models/chain/equilibria.py), excluded from the collisions; collisions of the requested leg, in
+    branch order; status per leg run (a leg that did not reach its end is the last run);
+    events: contact events (opening, closing, Coulomb cap, a free disk joining) the steps were
+    cut at; window: (lo, hi) of Re lambda tracked, or None (then every eigenvalue); with a
+    window, eigenvalues holds one column per eigenvalue that passed through the window or its
+    guard bands (spectral_window.window_columns: its value where lo - g <= Re lambda <= hi + g,
+    nan elsewhere and before and after it is this column's), of which those with Re lambda in
+    [lo, hi] are certified, n_complex counts the pairs there and only collisions there are
+    listed. condition (m, n), as eigenvalues: each eigenvalue's condition number |l| |r| /
+    |l^H r| (spectra.condition_numbers: 1 for a normal matrix, diverging like
+    |F_x - F_c|^(-1/2) at a collision F_c; nan where no vectors were computed: the exhaustive
+    detection, a free disk's mode). widenings: how often the window crowded and was sized
+    anew, wider, at the last point (its eigenvalues start new columns there).
+    """
+
+    F_x: np.ndarray
+    q: np.ndarray
+    xi: np.ndarray
+    eigenvalues: np.ndarray
+    n_complex: np.ndarray
+    residual: np.ndarray
+    leg: np.ndarray
+    free: np.ndarray
+    collisions: tuple[Collision, ...]
+    matrix: Matrix
+    status: tuple[Stop, ...]
+    events: int
+    window: Optional[tuple[float, float]] = None
+    condition: Optional[np.ndarray] = None
+    widenings: int = 0
+
+    def __len__(self) -> int:
+        return self.F_x.size
+
+
+Progress = Callable[[float], None]
+
+
+def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = None,
+          params: SweepParams = SweepParams(), progress: Optional[Progress] = None) -> DiskBranch:
+    """Follow the equilibria from rest to F_from (leg 0, if F_from != 0), then to F_to (leg 1)."""
+    if F_from == F_to:
+        raise ValueError(f"empty sweep {F_from}:{F_to}")
+    if F_from < 0 or F_to < 0:
+        raise ValueError(f"F_x must be >= 0 (got {F_from}:{F_to}); the load pushes disk 1 along +x")
+    matrix = Matrix(matrix or system.scene.matrix)
+    legs = [(0, 0.0, F_from), (1, F_from, F_to)] if F_from != 0 else [(1, 0.0, F_to)]
+    span = max(abs(F_to - F_from), F_from)
+    ds_max = params.ds_max or span / SWEEP_STEPS_PER_SPAN
+    F_1 = min(START_FRACTION * system.scene.F_y, 0.5 * legs[0][2])
+    q, xi = relax(system, *system.rest_state(), F_1)
+    window = None if params.window is None else Window(*params.window)
+    problem = DiskEquilibria(system, q, xi, F_1, matrix, params.newton_tol, window=window)
+    rows, collisions, status, events, widenings = [], [], [], 0, 0
+    continued, condition, blocks_used = {}, [], 0
+    F_start = F_1
+    for leg, _, b in legs:
+        b = max(b, F_1)  # unloading ends where loading started: F_x = 0 is the singular rest state
+        ds = min(F_1, ds_max) if leg == legs[0][0] else ds_max / 2  # graded away from rest
+        options = replace(params, ds_max=ds_max, ds=ds, ds_min=min(params.ds_min, ds))
+        first, base = len(rows), max(blocks_used - 1, 0)  # a leg continues the last block
+
+        def record_of(run, leg=leg, base=base):
+            def record(k, F_x, q_k, eigvals):
+                if k == 0 and rows:
+                    return  # the leg starts at the last point of the one before
+                xi_k = problem.trial(q_k)[0]
+                res = np.abs(system.forces(q_k, xi_k, F_x)).max()
+                rows.append((F_x, q_k.copy(), xi_k, eigvals, res, leg, problem.free_count, base + run))
+                if progress is not None:
+                    progress(F_x)
+            return record
+
+        runs, widened = solve_in_runs(problem, problem.q_c, (F_start, b), options, record_of)
+        for run, branch in enumerate(runs):  # a run after the first follows a widened window
+            skipped = run > 0 or first > 0  # its first point was recorded before
+            if run == 0 and first > 0:
+                branch = _continue_leg(rows, first, branch)
+            condition += list(branch.condition[1:] if skipped else branch.condition)
+            if window is not None:
+                continued.setdefault(base + run, []).extend(
+                    branch.continued[1:] if skipped else branch.continued)
+            events += branch.events
+            if leg == 1:
+                collisions += branch.collisions
+        blocks_used, widenings = base + len(runs), widenings + widened
+        status.append(runs[-1].status)
+        F_start = float(runs[-1].p[-1])
+        if not runs[-1].status.reached:
+            break  # a leg that ended short: the next would start from a load never asked for
+    F_x, q, xi, eig, res, leg, free, blocks = (list(c) for c in zip(*rows))
+    F_x, q, xi, res, leg, free, blocks = (np.array(c) for c in (F_x, q, xi, res, leg, free, blocks))
+    rel_tol = params.detection.rel_tol
+    if window is None:
+        eig, condition = np.array(eig), np.array(condition)
+        n_complex = np.array([count_complex_pairs(e, rel_tol) for e in eig])
+    else:  # the pairs in the window; collisions with their double eigenvalue there
+        n_complex = np.array([count_complex_pairs(e[window.inside(e)], rel_tol) for e in eig])
+        collisions = [c for c in collisions if window.lo <= c.eigenvalue <= window.hi]
+        eig, condition = block_columns(eig, blocks, continued, window, condition)
+    return DiskBranch(F_x, q, xi, eig, n_complex, res, leg, free, tuple(collisions), matrix,
+                      tuple(status), events, params.window, condition, widenings)
+
+
+def _continue_leg(rows: list, first: int, branch: Branch) -> Branch:
+    """A leg after another starts at that one's last point with its labels in order of value
+    (arclength._sorted), and its first point is not recorded again: its rows (from rows[first])
+    are relabelled (in place) to continue the last point's labels, the same eigenvalues at the same
+    point matched by value (spectra.match_eigenvalues), and the branch's collision pairs and
+    window columns (Branch.continued) with them. The first leg is returned as it is."""
+    if first == 0:
+        return branch
+    perm = match_eigenvalues(rows[first - 1][3], branch.eigenvalues[0])  # new label i holds old perm[i]
+    of_label = np.argsort(perm)
+    for r in range(first, first + len(branch) - 1):  # this branch's rows, not a later run's
+        rows[r] = rows[r][:3] + (rows[r][3][perm],) + rows[r][4:]
+    pairs = tuple(replace(c, pair=(int(of_label[c.pair[0]]), int(of_label[c.pair[1]])))
+                  for c in branch.collisions)
+    continued = None if branch.continued is None else branch.continued[:, perm]
+    return replace(branch, collisions=pairs, continued=continued, condition=branch.condition[:, perm])

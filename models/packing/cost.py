@@ -1,0 +1,83 @@
+"""Rough wall time of a packing command's parts, for the estimate each prints before it starts
+(cli/common.check_packing), and a run's time steps, known before any work.
+
+From the shared 2-core machine (docs/packings.md), good to a factor of 2 to 3: enough to tell
+minutes from days.
+- The preparation: 1.04 s at 256 disks, 11.6 s at 1024 (docs/packings.md, Preparation), its
+  FIRE steps growing as N^0.75 and each step as N: PREPARE_SECONDS_N1024 (N / 1024)^1.75 (4096
+  disks took 326 s on the machine busy, the rule says 131 s).
+- The shear with every eigenvalue (dense spectra; two scan workers, as bifurcate runs it):
+  DENSE_SECONDS_PER_STRAIN N^2.5 per unit strain. 32 disks to gamma = 0.01 took 12 to 25 s, 64
+  disks 74 to 86 s (docs/packings.md, Shear), 128 disks to 0.005 541 s with the machine busy
+  (about twice its quiet time); the rule gives 17, 98 and 278 s. The first 2e-3 of strain from
+  the isotropic start costs less: 256 disks took 48 s, the rule says 629 s.
+- With a spectral window, WINDOW_SECONDS_PER_STRAIN N^2.5: 256 disks to 0.05 with the window
+  [-3, 8] in about 5 minutes, 1024 disks at 4.7e5 to 5.9e5 s per unit strain ([-3, 2] to
+  0.0085, [-3, 8] to 8.4e-4); the rule gives 525 s and 3.4e5 s per unit strain. A window costs
+  more the more eigenvalues it holds.
+- A dynamics run from a state (models/packing/dynamics.py): SECONDS_PER_DISK_STEP per disk and step,
+  with dt = STABLE_FRACTION 2 / omega_max and omega_max = OMEGA_MAX_OVER_OMEGA_0 omega_0
+  (PackingScene.omega_0: one small disk on one contact at the typical overlap).
+"""
+from __future__ import annotations
+
+from typing import Optional
+
+from diskfriction.models.packing.dynamics import STABLE_FRACTION
+from diskfriction.scenes.packing import PackingScene
+
+PREPARE_SECONDS_N1024 = 11.6
+PREPARE_EXPONENT = 1.75
+SHEAR_EXPONENT = 2.5
+DENSE_SECONDS_PER_STRAIN = 0.3
+WINDOW_SECONDS_PER_STRAIN = 0.01
+SHEAR_START_SECONDS = 4.0
+"""What a shear costs besides its strain: the kernels loaded, the first spectra (16 disks to
+gamma = 0.002: 4 to 9 s in a fresh map worker)."""
+
+OMEGA_MAX_OVER_OMEGA_0 = 2.4
+"""sqrt(max |lambda|) of M^-1 J over omega_0: 2.25 to 2.48 over the states of 24 to 256 disks
+sheared to gamma = 1e-4 to 0.002 (seeds 3, 1, 1, 1)."""
+
+SECONDS_PER_DISK_STEP = 6e-7
+"""A run's cost per disk and time step, frames and contact searches included: 5.4e-7, 5.9e-7 and
+7.3e-7 s at 24, 128 and 256 disks (4e5, 1e5 and 5e4 steps, 2000 frames, the machine busy)."""
+
+GROWTH_STEPS = 2e4
+"""The time steps a run takes to show a complex pair's growth into sliding: from 10 times the
+perturbation (1e-10) to 1e-3 delta_0, 10 to 14 e-foldings (the rate itself is fitted over the
+first few, below models/packing/dynamics.LINEAR_RANGE), which the slowest median growth measured
+(sigma = 0.018 omega_0 at mu = 0.3, docs/packings.md, Maps) takes in about 800 / omega_0, 2e4
+steps of the default dt."""
+
+MAX_RUN_STEPS = 5000 * GROWTH_STEPS
+"""The most time steps a run may take, 1e8 (a 24-disk run of 1e8 steps takes 25 minutes, a
+256-disk run 4 hours)."""
+
+
+def prepare_seconds(N: int) -> float:
+    """Estimated wall time of the preparation of N disks [s]."""
+    return PREPARE_SECONDS_N1024 * (N / 1024) ** PREPARE_EXPONENT
+
+
+def shear_seconds(N: int, gamma: float, window: bool) -> float:
+    """Estimated wall time of a shear of N disks from gamma = 0 to `gamma`, with every
+    eigenvalue tracked or with a spectral window [s]."""
+    rate = WINDOW_SECONDS_PER_STRAIN if window else DENSE_SECONDS_PER_STRAIN
+    return SHEAR_START_SECONDS + rate * float(N) ** SHEAR_EXPONENT * gamma
+
+
+def time_step(scene: PackingScene) -> float:
+    """The default step of a run, STABLE_FRACTION 2 / omega_max, before any spectrum is known
+    (omega_max = OMEGA_MAX_OVER_OMEGA_0 omega_0) [time]."""
+    return STABLE_FRACTION * 2.0 / (OMEGA_MAX_OVER_OMEGA_0 * scene.omega_0)
+
+
+def run_steps(scene: PackingScene, t_end: float, dt: Optional[float] = None) -> float:
+    """The time steps of a run to t_end with the step dt, or the default step (time_step)."""
+    return t_end / (dt or time_step(scene))
+
+
+def run_seconds(scene: PackingScene, steps: float) -> float:
+    """Estimated wall time of a run of `steps` time steps on the scene's N disks [s]."""
+    return SECONDS_PER_DISK_STEP * scene.N * steps
