@@ -3,6 +3,7 @@ computed (the output directory, the memory a sweep needs), and bad input as one 
 from __future__ import annotations
 
 import argparse
+import importlib
 import math
 import sys
 from pathlib import Path
@@ -34,25 +35,34 @@ def add_scene_argument(parser: argparse.ArgumentParser) -> None:
                         help="scene TOML file (default: the paper scene, scenes/paper.toml)")
 
 
-def scene_from_args(args: argparse.Namespace, command: Optional[str] = None
-                    ) -> Scene | PackingScene:
-    """The scene named by the FILE argument, or the paper scene; raises SceneError. With
-    `command`, a chain Scene only: a packing scene is a one-line CommandError (exit 2) saying
-    which commands take packings so far (docs/packings.md)."""
-    file = args.scene if args.scene is not None else default_scene_path()
-    scene = load_scene(file)
-    return scene if command is None else chain_scene(command, file, scene)
+def scene_from_args(args: argparse.Namespace) -> Scene | PackingScene:
+    """The scene named by the FILE argument, or the paper scene; raises SceneError."""
+    return load_scene(args.scene if args.scene is not None else default_scene_path())
 
 
-def chain_scene(command: str, file, scene: Scene | PackingScene) -> Scene:
-    """`scene` if it is a chain; a packing is a one-line CommandError (exit 2) saying which
-    commands take packings so far."""
-    if isinstance(scene, PackingScene):
-        raise CommandError(f"{command} error: {file}: geometry = \"packing\": {command} takes "
-                           f"chain scenes only so far; `diskfriction scene`, `prepare`, "
-                           f"`bifurcate`, `simulate`, `verify`, `map` and `report` take packings "
-                           f"(docs/packings.md)")
-    return scene
+COMMANDS = ("scene", "prepare", "bifurcate", "simulate", "verify", "map", "report", "export",
+            "crosscheck")
+"""The commands that take a scene, in the order their refusals list them."""
+
+
+def front_for(command: str, scene):
+    """The function of `scene`'s model that does `command` (models/<geometry>/commands.py: a
+    function named after the command; map's is map_plan), or a one-line CommandError (exit 2)
+    saying which geometries `command` takes and which commands take this one's scenes."""
+    from diskfriction.models import GEOMETRIES
+
+    def function(name: str, geometry: str):
+        front = importlib.import_module(f"{GEOMETRIES[geometry]}.commands")
+        return getattr(front, "map_plan" if name == "map" else name, None)
+
+    found = function(command, scene.geometry)
+    if found is None:
+        takes = [g for g in GEOMETRIES if function(command, g) is not None]
+        ours = [c for c in COMMANDS if c == "scene" or function(c, scene.geometry) is not None]
+        raise CommandError(f"{command} error: {scene.source}: geometry = \"{scene.geometry}\": "
+                           f"{command} takes {' or '.join(takes)} scenes; "
+                           f"{', '.join(f'`{c}`' for c in ours)} take {scene.geometry} scenes")
+    return found
 
 
 def add_matrix_argument(parser: argparse.ArgumentParser, help: str) -> None:
@@ -124,6 +134,23 @@ def bracketed_only(records: list[dict]) -> str:
             "(resolved: false in collisions.json)")
 
 
+def check_window_covered(branch, given: str, matrix: str, unit: float) -> None:
+    """A CommandError (exit 1) when no eigenvalue of the branch ever had its real part in the
+    window: there is nothing to report for a band of the spectrum the branch never reached.
+    unit: the raw value of one unit of --window (PaperUnits.eigenvalue)."""
+    import numpy as np
+
+    lo, hi = branch.window
+    lam = branch.eigenvalues.real  # nan where a column holds no eigenvalue near the window
+    if ((lam >= lo) & (lam <= hi)).any():
+        return
+    near = lam[np.isfinite(lam)] / unit
+    seen = f"; the guard bands saw {near.min():.4g}:{near.max():.4g}" if near.size else ""
+    raise CommandError(f"bifurcate error: --window: no eigenvalue of {matrix} has its real part in "
+                       f"the window anywhere on the branch{seen}: nothing to report (got "
+                       f"{given!r})", EXIT_FAILED)
+
+
 def code_targets(subparsers: argparse._SubParsersAction, command: str, help: str
                  ) -> argparse._SubParsersAction:
     """Add `command`, whose first argument names the other code it works with (CODE); the
@@ -173,104 +200,6 @@ def check_memory(command: str, scene: Scene, processes: int = 1, dense: Optional
         require_memory(nbytes, f"N = {scene.N}: {what}")
     except NotEnoughMemory as error:
         raise CommandError(f"{command} error: {scene.source}: {error}") from None
-
-
-def check_packing(command: str, scene: PackingScene, strain: Optional[float] = None,
-                  processes: int = 1, window: bool = False, runs: int = 0,
-                  t_end: Optional[float] = None, dt: Optional[float] = None) -> None:
-    """Before any work on a packing scene, refuse in one line (exit 2) what `command` cannot
-    compute, and print on stderr the rough wall time of what it will do. Refused, in this order:
-    - more memory than this machine has (models/packing/memory.py), naming N and what it counted: the
-      preparation, and with `strain` a shear from gamma = 0 to it, dense 3N x 3N spectra in
-      each of `processes` processes (the shear's and its scan workers') or with `window` only
-      the points it stores;
-    - a scene the preparation cannot make (models/packing/limits.py: a box too narrow for its
-      contacts, a pressure below what double precision resolves), naming the key and value;
-    - with `runs` dynamics runs to t_end (step dt, default models/packing/cost.time_step), --t-end
-      and --dt as run_length takes them, and a run of more than MAX_RUN_STEPS time steps.
-    The estimate (models/packing/cost.py) is one line, ``COMMAND: about T (a rough estimate) to
-    prepare N disks, shear ...``, as the chain's long commands print theirs."""
-    from diskfriction.memory import NotEnoughMemory, require_memory
-    from diskfriction.models.packing import cost, limits, memory
-    from diskfriction.words import duration
-
-    N, n = scene.N, scene.ndof
-    if runs:
-        run_length(command, t_end, dt)
-    needs = [(memory.prepare_bytes(N), f"a preparation of {N} disks")]
-    seconds = [cost.prepare_seconds(N)]
-    parts = [f"prepare {N} disks"]
-    if strain is not None:
-        stored = memory.points_bytes(N, strain, window)
-        if window:
-            needs.append((stored, f"a shear with a window storing about "
-                                  f"{memory.shear_points(strain):.2g} points of {n} unknowns"))
-        else:
-            where = f" in {processes} processes" if processes > 1 else ""
-            needs.append((memory.dense_bytes(N, processes) + stored,
-                          f"a shear with dense {n} x {n} spectra{where}"))
-        seconds.append(cost.shear_seconds(N, strain, window))
-        parts.append(f"shear them to gamma = {strain:g}"
-                     + (" with a window" if window else " with every eigenvalue"))
-    nbytes, what = max(needs)
-    try:
-        require_memory(nbytes, f"N = {N}: {what}")
-    except NotEnoughMemory as error:
-        raise CommandError(f"{command} error: {scene.source}: {error}") from None
-    problem = limits.preparation_problem(scene)
-    if problem is not None:
-        key, why = problem
-        value = scene.N if key == "packing.N" else scene.pressure
-        raise CommandError(f"{command} error: {scene.source}: {key} = {value!r}: {why}")
-    if runs:
-        steps = cost.run_steps(scene, t_end, dt)
-        step = (f"--dt = {dt:g}" if dt is not None else
-                f"dt = {cost.time_step(scene):.2g}, {cost.STABLE_FRACTION:g} of the stability "
-                f"limit 2 / omega_max with omega_max about {cost.OMEGA_MAX_OVER_OMEGA_0:g} omega_0")
-        if steps > cost.MAX_RUN_STEPS:
-            option, given = ("dt", dt) if dt is not None else ("t-end", t_end)
-            raise CommandError(f"{command} error: --{option}: a run to t = {t_end:g} takes "
-                               f"about {steps:.2g} time steps ({step}), more than the "
-                               f"{cost.MAX_RUN_STEPS:.0e} a run may take: the slowest growth "
-                               f"measured shows within about {cost.GROWTH_STEPS:.0e} steps "
-                               f"(got {given!r})")
-        seconds.append(runs * cost.run_seconds(scene, steps))
-        parts.append(f"run {'once' if runs == 1 else f'up to {runs} times'} for about "
-                     f"{steps:.2g} time steps")
-    listed = ", ".join(parts[:-1]) + " and " + parts[-1] if len(parts) > 1 else parts[0]
-    print(f"{command}: about {duration(sum(seconds))} (a rough estimate) to {listed}",
-          file=sys.stderr, flush=True)
-
-
-def check_packing_bifurcate(args: argparse.Namespace, scene: PackingScene,
-                            window: Optional[tuple[float, float]]) -> None:
-    """check_packing for bifurcate on a packing: a shear over the scene's strain, its dense
-    spectra in the main process and the scan workers it will start (planned_workers, from
-    --workers and --detection), or with --window its points."""
-    from diskfriction.continuation.detection.collisions import DetectionParams
-    from diskfriction.continuation.detection.scans import planned_workers
-
-    asked = None if args.workers is None else max(args.workers, 0)  # < 0: bifurcate refuses it
-    workers = planned_workers(scene.ndof, DetectionParams(mode=args.detection), asked,
-                              dense=window is None)
-    check_packing("bifurcate", scene, strain=scene.gamma_range[1], processes=1 + workers,
-                  window=window is not None)
-
-
-def check_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> None:
-    """check_packing for simulate on a packing: --gamma G a number in [0, the scene's strain
-    stop] (simulate runs from a state of the scene's shear, which [shear] gamma bounds), then a
-    shear to G and one run to --t-end. Nothing without --gamma, which simulate asks for next."""
-    if args.gamma is None:
-        return
-    number("simulate", "gamma", args.gamma, zero=True)
-    stop = scene.gamma_range[1]
-    if args.gamma > stop:
-        raise CommandError(f"simulate error: --gamma: beyond the scene's strain range [0, "
-                           f"{stop:g}] ([shear] gamma of {scene.source}): simulate runs from a "
-                           f"state of the scene's shear; widen its range to go further "
-                           f"(got {args.gamma!r})")
-    check_packing("simulate", scene, strain=args.gamma, runs=1, t_end=args.t_end, dt=args.dt)
 
 
 def run_command(args: argparse.Namespace) -> int:

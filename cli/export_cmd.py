@@ -7,11 +7,8 @@ which on stdout and in the deck. What LAMMPS cannot represent is refused with on
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
-from diskfriction.cli.common import (add_scene_argument, check_memory, code_targets, load,
-                                     output_dir, scene_from_args)
-from diskfriction.cli.progress import Progress
+from diskfriction.cli.common import add_scene_argument, code_targets, front_for, scene_from_args
 
 STARTS = ("branch", "rest")
 DEFAULT_STEPS, DEFAULT_EVERY = 1000, 10
@@ -42,33 +39,5 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from diskfriction.peers.lammps_deck import check_representable
-
-    scene = scene_from_args(args, "export")
-    F_x = load("export", args.fx)
-    check_representable(scene)
-    out = output_dir("export", args.out, Path("out") / "export" / scene.name)
-    check_memory("export", scene, dense=False, spectra=1)  # the deck's dt: the start's spectrum
-
-    from diskfriction.peers.crosscheck import default_dt
-    from diskfriction.peers.lammps_deck import DUMP_FILE, deck, start_state
-    from diskfriction.symbolic import System
-
-    progress = Progress("export")
-    try:
-        system = System.from_scene(scene, progress.part("kernels"))
-        progress.stage(f"{args.start} state at F_x = {F_x:g}")
-        start = start_state(system, F_x, args.start)
-        written = deck(scene, start, default_dt(system, start), DEFAULT_STEPS, DEFAULT_EVERY)
-        paths = written.save(out)
-    finally:
-        progress.close()
-    print(f"start: {start.note}")
-    print(f"deck defaults: dt = {written.dt:.17g}, steps = {written.steps}, a dump every "
-          f"{written.every} steps to {DUMP_FILE} (lmp -var dt|steps|every VALUE)")
-    if scene.effects.conventions == "model":
-        print('conventions: the scene uses "model"; LAMMPS integrates with its own (lever arm '
-              'R - delta/2, end-of-step increment, whole increment on first contact): expect '
-              'O(delta) differences (docs/physics.md)')
-    print(f"wrote {', '.join(str(p) for p in paths)}; run: cd {out} && lmp -in {paths[1].name}")
-    return 0
+    scene = scene_from_args(args)
+    return front_for("export", scene)(args, scene)

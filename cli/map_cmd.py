@@ -18,14 +18,14 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from diskfriction.cli.bifurcate_cmd import parse_range, parse_window
-from diskfriction.cli.common import (CommandError, add_matrix_argument, add_scene_argument, check_memory,
-                                     number, output_dir, matrix_from_args, scene_from_args)
+from dataclasses import dataclass
+from typing import Callable
+
+from diskfriction.cli.common import (CommandError, add_matrix_argument, add_scene_argument, front_for,
+                                     number, output_dir, scene_from_args)
 from diskfriction.cli.progress import Progress
-from diskfriction.words import count, duration
 from diskfriction.cli.simulate_cmd import SCHEDULER, SINGLE_AMPLITUDE
-from diskfriction.cli.packing_cmd import PLASTIC_EVENTS
-from diskfriction.scenes.packing import PackingScene
+from diskfriction.words import count, duration
 
 VARY = "KEY=LO:HI:COUNT[:log]"
 T_END = 1000.0
@@ -103,8 +103,7 @@ def grid(scene, texts: list[str]):
     from diskfriction.studies.maps import map_cells
     from diskfriction.scenes.load import SceneError
 
-    geometry = "packing" if isinstance(scene, PackingScene) else "chain"
-    axes = [parse_vary(text, geometry) for text in texts]
+    axes = [parse_vary(text, scene.geometry) for text in texts]
     keys = [axis.key for axis in axes]
     if len(axes) > 2:
         raise CommandError(f"map error: --vary: a map varies one or two keys (got {len(axes)}: "
@@ -122,11 +121,32 @@ def grid(scene, texts: list[str]):
                            f"{error.what}") from None
 
 
+@dataclass(frozen=True)
+class MapPlan:
+    """What a geometry's front (its ``map_plan(args, scene)``) gives the map: the parameters
+    every cell runs with (checked), and
+    check_cell(cell, at_once): a one-line CommandError for a cell it cannot run;
+    kernels(cells, params, progress) -> str: compile what the cells need once, say what each runs;
+    cell(scene, params) -> dict: one cell's record (a dask task);
+    cell_seconds(scene, params): its rough wall time [s];
+    columns: the summary's keys, in the table's order;
+    plot(axes, cells, records, path, title): map.png;
+    describe(cell, summary) -> str: the line printed for a cell."""
+
+    params: object
+    check_cell: Callable
+    kernels: Callable
+    cell: Callable
+    cell_seconds: Callable
+    columns: tuple
+    plot: Callable
+    describe: Callable
+
+
 def run(args: argparse.Namespace) -> int:
     scene = scene_from_args(args)
-    packing = isinstance(scene, PackingScene)
     axes, cells = grid(scene, args.vary)
-    params = packing_params(args, scene) if packing else chain_params(args, scene)
+    plan = front_for("map", scene)(args, scene)
     if args.scheduler is not None and not SCHEDULER.match(args.scheduler):
         raise CommandError(f"map error: --scheduler: expected a dask scheduler address "
                            f"[tcp://]HOST:PORT (got {args.scheduler!r})")
@@ -138,158 +158,47 @@ def run(args: argparse.Namespace) -> int:
     from diskfriction.studies.cluster import code_version, local_workers
 
     at_once = 1 if args.scheduler is not None else min(len(cells), local_workers(args.workers))
-    from diskfriction.models.packing.limits import preparation_problem
-
     for cell in cells:
-        if packing:
-            check_memory("map", cell.scene, at_once, dense=params.window is None)
-            problem = preparation_problem(cell.scene)  # models/packing/limits.py: what FIRE cannot make
-            if problem is not None:
-                values = ", ".join(f"{key} = {value!r}" for key, value in cell.values)
-                raise CommandError(f"map error: --vary: cell {values}: {problem[0]}: {problem[1]}")
-        else:
-            check_memory("map", cell.scene, at_once, spectra=at_once if args.slide else 0)
+        plan.check_cell(cell, at_once)
     out = output_dir("map", args.out, Path("out") / "map" / scene.name)
     args.keeps = ("cells", out / "cells")  # what Ctrl-C leaves to resume from (cli.common)
 
-    from diskfriction.reports.maps import plot_map, save_map
-    from diskfriction.reports.packing_maps import plot_packing_map
-    from diskfriction.studies.maps import COLUMNS, map_cell, run_map
-    from diskfriction.studies.packing_maps import PACKING_COLUMNS, packing_cell
+    from diskfriction.reports.maps import save_map
+    from diskfriction.studies.maps import run_map
 
     progress = Progress("map")
     try:
         # compiled here once, so that the workers load them from the cache
-        what = compile_kernels(cells, params, progress)
+        what = plan.kernels(cells, plan.params, progress)
         progress.stage(f"{count(len(cells), 'cell')}: {what}; "
-                       f"{estimate(cells, params, out, at_once, args.scheduler is not None)}")
-        records = run_map(cells, params, out, args.scheduler, args.workers,
+                       f"{estimate(cells, plan, out, at_once, args.scheduler is not None)}")
+        records = run_map(cells, plan.params, out, args.scheduler, args.workers,
                           lambda done, total: progress(done / total, f"{done}/{total} cells"),
-                          compute=packing_cell if packing else map_cell)
+                          compute=plan.cell)
         progress.stage(f"writing {out}/map.csv, map.json")
-        save_map(out, scene, axes, params, code_version(), cells, records,
-                 PACKING_COLUMNS if packing else COLUMNS)
+        save_map(out, scene, axes, plan.params, code_version(), cells, records, plan.columns)
         progress.stage(f"plotting {out}/map.png")
-        title = f"{scene.name}: {' x '.join(a.key for a in axes)}, {params.matrix}"
-        if packing:
-            plot_packing_map(axes, cells, records, out / "map.png",
-                             f"{title}, gamma 0 -> {scene.gamma_range[1]:g}")
-        else:
-            plot_map(axes, cells, records, params, out / "map.png", title
-                     + (f", runs to t = {params.slide.t_end:g}" if args.slide else ""))
+        plan.plot(axes, cells, records, out / "map.png",
+                  f"{scene.name}: {' x '.join(a.key for a in axes)}, {plan.params.matrix}")
     finally:
         progress.close()
     for cell, record in zip(cells, records):
-        print((describe_packing if packing else describe)(cell, record["summary"]))
+        print(plan.describe(cell, record["summary"]))
     print(f"wrote {out}/map.csv, map.json, map.png and {out}/cells/")
     return 0
 
 
-def chain_params(args: argparse.Namespace, scene):
-    """A chain map's studies.maps.MapParams from --fx, --matrix, --slide, --t-end and
-    --amplitude (checked: one line, exit 2)."""
-    from diskfriction.studies.maps import MapParams, SlideParams
-
-    if args.window is not None:
-        raise CommandError(f"map error: --window: for packing scenes only; a chain's cells take "
-                           f"full spectra (got {args.window!r})")
-    F_from, F_to = parse_range(args.fx, command="map") if args.fx is not None else scene.F_x_range
-    if F_from > F_to:
-        raise CommandError(f"map error: --fx: a map loads, A < B (got {args.fx!r})")
-    for option, value in (("t-end", args.t_end), ("amplitude", args.amplitude)):
-        if value is not None and not args.slide:
-            raise CommandError(f"map error: --{option}: sets the slide runs; add --slide "
-                               f"(got {value!r})")
-    t_end = number("map", "t-end", args.t_end if args.t_end is not None else T_END)
-    amplitude = number("map", "amplitude",
-                       args.amplitude if args.amplitude is not None else SINGLE_AMPLITUDE, zero=True)
-    return MapParams(F_from, F_to, str(matrix_from_args("map", args, scene)),
-                     SlideParams(t_end, amplitude) if args.slide else None)
-
-
-NO_DYNAMICS = "a packing map runs no dynamics; `verify` runs them on one scene"
-PACKING_REFUSES = {"fx": "a packing's load is its strain: [shear] gamma in the scene",
-                   "slide": NO_DYNAMICS, "t_end": NO_DYNAMICS, "amplitude": NO_DYNAMICS}
-"""map's options a packing scene does not take, and why."""
-
-
-def packing_params(args: argparse.Namespace, scene):
-    """A packing map's studies.packing_maps.PackingMapParams from --matrix and --window
-    (checked: one line, exit 2); the chain's options are refused (PACKING_REFUSES)."""
-    from diskfriction.studies.packing_maps import PackingMapParams
-
-    for option, why in PACKING_REFUSES.items():
-        if getattr(args, option) not in (None, False):
-            flag = "--" + option.replace("_", "-")
-            raise CommandError(f"map error: {flag}: {why} (got {getattr(args, option)!r})")
-    window = parse_window(args.window, "map") if args.window is not None else None
-    return PackingMapParams(str(matrix_from_args("map", args, scene)), window, PLASTIC_EVENTS)
-
-
-def compile_kernels(cells, params, progress: Progress) -> str:
-    """Generate and compile the kernels every cell needs (a packing cell's effects may differ
-    with mu: mu = 0 has no tangential law), and say what each cell runs."""
-    if isinstance(cells[0].scene, PackingScene):
-        from diskfriction.symbolic.kernels import load_packing_kernels
-
-        for effects in dict.fromkeys(c.scene.resolved_effects for c in cells):
-            load_packing_kernels(effects, progress.part("kernels"))
-        g1 = cells[0].scene.gamma_range[1]
-        inside = "" if params.window is None else f", Re lambda in {params.window[0]:g}:{params.window[1]:g}"
-        return f"prepare and shear gamma 0 -> {g1:g} ({params.matrix}{inside})"
-    from diskfriction.dynamics.stepper import load_stepper
-    from diskfriction.symbolic import System
-
-    system = System.from_scene(cells[0].scene, progress.part("kernels"))
-    if params.slide is not None:
-        load_stepper(system.kernels, progress.part("stepper"))
-    return (f"bifurcate F_x {params.F_from:g} -> {params.F_to:g} ({params.matrix})"
-            + (f", one run per window to t = {params.slide.t_end:g}" if params.slide else ""))
-
-
-def estimate(cells, params, out: Path, at_once: int, remote: bool) -> str:
-    """The rough wall time of the cells not on disk yet (studies.maps.cell_seconds, a packing's
-    studies.packing_maps.packing_cell_seconds), on the
+def estimate(cells, plan: MapPlan, out: Path, at_once: int, remote: bool) -> str:
+    """The rough wall time of the cells not on disk yet (the plan's cell_seconds), on the
     local cluster's workers (at_once), or per worker of a remote scheduler."""
     from diskfriction.studies.cluster import code_version
-    from diskfriction.studies.maps import cell_path, cell_seconds
-    from diskfriction.studies.packing_maps import packing_cell_seconds
+    from diskfriction.studies.maps import cell_path
 
     version = code_version()
-    todo = [c for c in cells if not cell_path(out, c.scene, params, version).exists()]
+    todo = [c for c in cells if not cell_path(out, c.scene, plan.params, version).exists()]
     if not todo:
         return "all on disk"
-    cost = packing_cell_seconds if isinstance(todo[0].scene, PackingScene) else cell_seconds
-    seconds = sum(cost(c.scene, params) for c in todo)
+    seconds = sum(plan.cell_seconds(c.scene, plan.params) for c in todo)
     done = f"{len(cells) - len(todo)} on disk, " if len(todo) < len(cells) else ""
     where = "divided by the scheduler's workers" if remote else f"on {count(at_once, 'worker')}"
     return f"{done}about {duration(seconds / (1 if remote else at_once))} {where} (a rough estimate)"
-
-
-def describe(cell, s: dict) -> str:
-    """One printed line per cell: its values, status, collisions, F_slide and mu_eff, or why
-    it failed or ended (raw units)."""
-    values = ", ".join(f"{key} = {value:g}" for key, value in cell.values)
-    if s["status"] == "failed":
-        return f"{values}: failed: {s['reason']}"
-    line = f"{values}: {s['status']}, {count(s['collisions'], 'collision')}, {count(s['windows'], 'window')}"
-    if s["runs"] is not None:
-        lo = "the first run" if s["F_slide_lo"] is None else f"stuck at {s['F_slide_lo']:.5g}"
-        line += (f", no run slid (of {s['runs']})" if s["F_slide"] is None else
-                 f", F_slide = {s['F_slide']:.5g} ({lo}), mu_eff = {s['mu_eff']:.4g}")
-    return line + (f"; {s['reason']}" if s["reason"] else "")
-
-
-def describe_packing(cell, s: dict) -> str:
-    """One printed line per packing cell: its values, status, states, how many carry complex
-    pairs, the fastest growth rate, collisions and plastic events, or why it failed or ended."""
-    values = ", ".join(f"{key} = {value:g}" for key, value in cell.values)
-    if s["status"] == "failed":
-        return f"{values}: failed: {s['reason']}"
-    fastest = ("" if s["sigma_max"] is None else
-               f", sigma_max = {s['sigma_max']:.4g} ({s['sigma_max'] / s['omega_c']:.3g} omega_c)")
-    line = (f"{values}: {s['status']} to gamma = {s['gamma_end']:.4g}, "
-            f"{count(s['states'], 'state')}, complex pairs at {100 * s['complex_fraction']:.0f} %"
-            f"{fastest}, {count(s['collisions'], 'collision')}, "
-            f"{count(s['plastic_events'], 'plastic event')}")
-    return line + (f"; {s['reason']}" if s["reason"] else "")

@@ -25,7 +25,7 @@ OUTPUTS = ("packing.npz", "branch.npz", "collisions.json", "plastic.json", "diag
 """The files of a packing's shear, written together (save_packing_outputs)."""
 
 RUN_SCENE = Path("segments") / "scene.json"
-"""{"scene": scene_record} of a shear under way in DIR (cli/packing_cmd.py), beside its
+"""{"scene": scene_record} of a shear under way in DIR (models/packing/commands.py), beside its
 segments."""
 
 RECORDED = ("packing.npz", "packing.json", "branch.npz", "collisions.json", "plastic.json",

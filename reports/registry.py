@@ -16,11 +16,10 @@ from diskfriction.files import source_digest
 from diskfriction.scenes import Scene
 
 SWEEP_DEPS = ("diskfriction", "diskfriction.scenes", "diskfriction.symbolic",
-              "diskfriction.continuation", "diskfriction.models.chain")
-DYNAMICS_DEPS = SWEEP_DEPS + ("diskfriction.dynamics", "diskfriction.studies", "diskfriction.models.packing")
-"""The folders a computation's result depends on (tests/test_layers.py reads them from the
-imports): the chain's sweep and equilibria (models/chain/) were missing until stop 42, so a cached
-result outlived an edit there."""
+              "diskfriction.continuation", "diskfriction.models")
+DYNAMICS_DEPS = SWEEP_DEPS + ("diskfriction.dynamics", "diskfriction.studies")
+"""The folders a computation's result depends on (tests/test_layers.py checks them against the
+imports): a folder left out would let a cached result outlive an edit there."""
 
 
 class ComputationFailed(Exception):

@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 from diskfriction.scenes.rules import MAX_OVERLAP, NORMAL_LAWS, PACKING_RULES
 from diskfriction.scenes.scene import Effects, SceneValueError, _check_fields
@@ -28,6 +29,9 @@ class PackingScene:
     lever arms R_i, R_j; the disks rotate. After a plastic event the packing relaxes by
     `relaxation` (models/packing/plastic.py): FIRE, or Newtonian dynamics with a drag of rate
     damping omega_0 (omega_0: PackingScene.omega_0; `damping` is read only then)."""
+
+    geometry: ClassVar[str] = "packing"
+    """The scene file's top-level ``geometry`` (Scene.geometry)."""
 
     N: int = 256
     size_ratio: float = 1.4

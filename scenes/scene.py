@@ -11,7 +11,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 from diskfriction.scenes.rules import (CONVENTIONS, EFFECTS_RULES, FRICTION_KINDS, MATRICES,
                                        NEGATIVE_LOAD, NORMAL_LAWS, SCENE_RULES, TANGENTIAL_LAWS,
@@ -121,6 +121,10 @@ class Scene:
     Raw units throughout. ``inertia`` is c in I = c m R^2; ``F_x_range`` = (start, stop) of the
     quasistatic load on disk 1; ``matrix`` is the stability matrix ("J" or "M^-1 J").
     """
+
+    geometry: ClassVar[str] = "chain"
+    """The scene file's top-level ``geometry`` (scenes/rules.py GEOMETRIES): the model that
+    computes this scene (diskfriction.models)."""
 
     N: int = 10
     R: float = 0.5

@@ -145,7 +145,7 @@ def map_cells(scene: Scene | PackingScene, axes: list[Axis], origin: str) -> lis
     those values checked as if file `origin` held them (SceneError for the first bad one;
     a whole number for an integer key such as disks.N becomes an int, any other value is
     refused by the schema). ValueError for a key that holds no single number."""
-    kinds = number_keys("packing" if isinstance(scene, PackingScene) else "chain")
+    kinds = number_keys(scene.geometry)
     for axis in axes:
         if axis.key not in kinds:
             raise ValueError(f"{axis.key} is not a numeric scene key ({', '.join(kinds)})")

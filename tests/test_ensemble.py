@@ -100,7 +100,7 @@ def test_an_ensemble_says_how_long_its_missing_runs_take_before_it_starts(tmp_pa
     run to t = 1e9 is 1.7e11 steps, hours on 2 workers even for one load)."""
     from types import SimpleNamespace
 
-    from diskfriction.cli.simulate_cmd import ensemble_estimate
+    from diskfriction.models.chain.commands import ensemble_estimate
 
     args = lambda t_end: SimpleNamespace(t_end=t_end, amplitude=1e-5, perturbation=None, seed=0,
                                          scheduler=None)

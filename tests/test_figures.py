@@ -142,7 +142,7 @@ def test_verify_figure_shades_each_window_by_its_runs_outcome(axes):
 
 
 def test_slid_none_reads_not_resolved():
-    from diskfriction.cli.verify_cmd import format_table
+    from diskfriction.models.chain.commands import format_table
     from diskfriction.reports.figures import slid_word
 
     assert [slid_word(s) for s in (True, False, None)] == ["yes", "no", "not resolved"]

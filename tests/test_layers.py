@@ -4,6 +4,7 @@ an import inside a function counts too."""
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 import pytest
@@ -22,6 +23,9 @@ LAYERS = [
 ]
 RANK = {folder: k for k, layer in enumerate(LAYERS) for folder in layer}
 ENTRY_POINTS = {"diskfriction/__main__.py"}  # `python -m diskfriction` starts the command line
+FRONT = re.compile(r"^models/\w+/commands\.py$")
+"""A geometry's front (models/<geometry>/commands.py: what the commands do for its scenes) is
+part of the command line's layer, though it lives in its model's folder."""
 
 
 def imported_names(nodes) -> set[str]:
@@ -36,9 +40,19 @@ def imported_names(nodes) -> set[str]:
 
 
 def folder_of(name: str) -> str:
-    """The folder of a diskfriction.* module name ("diskfriction" for the bottom modules)."""
+    """The folder (layer) of a diskfriction.* module name ("diskfriction" for the bottom
+    modules; "cli" for a geometry's front)."""
     parts = name.split(".")
+    if FRONT.match("/".join(parts[1:]) + ".py"):
+        return "cli"
     return parts[1] if len(parts) > 1 and parts[1] in RANK else "diskfriction"
+
+
+def modules_of(folder: str) -> list[Path]:
+    """The sources of a layer's folder (a geometry's front counts as the command line's)."""
+    paths = sorted(ROOT.glob("models/*/commands.py")) if folder == "cli" else []
+    return paths + [p for p in sorted((ROOT / folder).rglob("*.py"))
+                    if not FRONT.match(p.relative_to(ROOT).as_posix())]
 
 
 def imported_folders(path: Path) -> set[str]:
@@ -51,7 +65,7 @@ def violations() -> list[str]:
     """'module -> folder' for every import of a layer above the module's or of a sibling."""
     found = []
     for folder, rank in RANK.items():
-        for path in sorted((ROOT / folder).rglob("*.py")):
+        for path in modules_of(folder):
             name = path.relative_to(ROOT).as_posix()
             if name in ENTRY_POINTS:
                 continue
@@ -88,7 +102,7 @@ def imported_closure(folder: str) -> set[str]:
         if current in seen:
             continue
         seen.add(current)
-        for path in sorted((ROOT / current).rglob("*.py")):
+        for path in modules_of(current):
             if path.relative_to(ROOT).as_posix() not in ENTRY_POINTS:
                 todo += imported_folders(path) - seen
     return seen

@@ -202,7 +202,7 @@ def test_bad_specifications_are_one_line_and_exit_2_before_anything_runs(tmp_pat
 def test_the_estimate_printed_first_grows_with_what_a_cell_does(tmp_path):
     """Issue 23: a map of 100 000 cells started silently. cell_seconds grows with N, with slide
     runs and their length; the CLI's estimate counts only the cells not yet on disk."""
-    from diskfriction.cli.map_cmd import estimate
+    from diskfriction.cli.map_cmd import MapPlan, estimate
     from diskfriction.studies.maps import cell_seconds
 
     sweep, slide = MapParams(0.0, 0.12, "J"), MapParams(0.0, 0.12, "J", SlideParams())
@@ -211,4 +211,5 @@ def test_the_estimate_printed_first_grows_with_what_a_cell_does(tmp_path):
     assert cell_seconds(small, sweep) < cell_seconds(small, slide) < cell_seconds(small, longer)
     assert cell_seconds(small, slide) < cell_seconds(large, slide)
     cells = map_cells(Scene(), [Axis("contacts.mu", grid_values(5.0, 10.0, 10_000))], "x")
-    assert estimate(cells, slide, tmp_path, 2, False).endswith("h on 2 workers (a rough estimate)")
+    plan = MapPlan(slide, None, None, None, cell_seconds, (), None, None)
+    assert estimate(cells, plan, tmp_path, 2, False).endswith("h on 2 workers (a rough estimate)")

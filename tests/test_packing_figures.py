@@ -172,7 +172,7 @@ def test_the_quiet_state_lies_away_from_folds_events_and_the_ends_of_its_interva
 def report_of(monkeypatch, tmp_path, text):
     """build_packing_report on the scene `text` with MSD runs of 40 slowest periods (not 400:
     seconds), its runs and branch kept from the plots."""
-    from diskfriction.cli.packing_cmd import PLASTIC_EVENTS
+    from diskfriction.models.packing.commands import PLASTIC_EVENTS
     from diskfriction.scenes import load_scene
 
     seen = {}

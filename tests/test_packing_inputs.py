@@ -147,7 +147,7 @@ def test_every_packing_command_says_how_long_it_will_take_before_it_starts(
         raise KeyboardInterrupt
 
     monkeypatch.setattr(prepared, "prepare_scene", stop)
-    for module in ("diskfriction.cli.packing_cmd", "diskfriction.models.packing.shear",
+    for module in ("diskfriction.models.packing.commands", "diskfriction.models.packing.shear",
                    "diskfriction.reports.packing_report"):
         monkeypatch.setattr(f"{module}.prepare_scene", stop, raising=False)
     path = scene(tmp_path, "[packing]\nN = 256\n[shear]\ngamma = [0.0, 0.05]\n")

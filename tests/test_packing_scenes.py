@@ -136,7 +136,7 @@ def test_prepare_writes_a_packing_that_a_second_run_reproduces_bit_for_bit(tmp_p
 
 def test_prepare_refuses_a_chain_scene_in_one_line(tmp_path):
     result = run_cli("prepare", str(PACKAGED.with_name("paper.toml")), "--out", str(tmp_path / "out"))
-    assert result.returncode == 2 and "prepare takes a packing scene" in error_line(result, "prepare")
+    assert result.returncode == 2 and "prepare takes packing scenes" in error_line(result, "prepare")
     assert not (tmp_path / "out").exists()
 
 

@@ -5,3 +5,6 @@ collisions (windows.py), the records of a branch (records.py), and what a sweep 
 and time (memory.py, cost.py). Built on the generic core (diskfriction.continuation) and the
 scene's kernels (diskfriction.symbolic); docs/architecture.md.
 """
+from diskfriction.models import Model
+
+MODEL = Model("chain", "F_x", "diskfriction.models.chain.commands")

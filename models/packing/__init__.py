@@ -4,3 +4,6 @@ fraction, then friction switched on), the contact network found with a cell list
 the sparse Jacobian from the generated kernels (docs/packings.md). A sibling of models/chain/ on the
 same layer: built on the generic core and the symbolic kernels.
 """
+from diskfriction.models import Model
+
+MODEL = Model("packing", "gamma", "diskfriction.models.packing.commands")

@@ -1,5 +1,5 @@
 """Rough wall time of a packing command's parts, for the estimate each prints before it starts
-(cli/common.check_packing), and a run's time steps, known before any work.
+(models/packing/commands.check_packing), and a run's time steps, known before any work.
 
 From the shared 2-core machine (docs/packings.md), good to a factor of 2 to 3: enough to tell
 minutes from days.

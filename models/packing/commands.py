@@ -1,4 +1,6 @@
-"""``diskfriction bifurcate PACKING_SCENE [--matrix J|M^-1J] [--window LO:HI] [--workers K]
+"""The packing's front: what each command does with a packing scene (models/__init__.py).
+
+``diskfriction bifurcate PACKING_SCENE [--matrix J|M^-1J] [--window LO:HI] [--workers K]
 [--out DIR] [--json]``: prepare the scene's packing, shear it quasistatically with friction and locate
 every birth and death of a complex pair (issue 25, docs/packings.md#shear).
 
@@ -17,11 +19,15 @@ import dataclasses
 import math
 import shutil
 import sys
+import time
+from typing import Optional
 from pathlib import Path
 
-from diskfriction.cli.common import (EXIT_FAILED, CommandError, bracketed_only, check_packing,
-                                     check_packing_bifurcate, check_packing_simulate,
+from diskfriction.cli.bifurcate_cmd import parse_window
+from diskfriction.cli.common import (EXIT_FAILED, CommandError, bracketed_only, check_memory,
+                                     check_window_covered,
                                      matrix_from_args, number, output_dir, run_length)
+from diskfriction.cli.map_cmd import MapPlan
 from diskfriction.cli.progress import Progress
 from diskfriction.files import json_text
 from diskfriction.scenes.packing import PackingScene
@@ -32,11 +38,12 @@ CHAIN_ONLY = {"fx": "a packing's load is its strain: [shear] gamma in the scene"
                    "the scene", "ds_max": "a packing's step follows its strain"}
 """bifurcate's options a packing scene does not take, and why."""
 
+
 PLASTIC_EVENTS = 1000
 """The plastic events a command passes (models/packing/plastic.py) before it stops at the next."""
 
 
-def run_packing(args: argparse.Namespace, scene: PackingScene,
+def bifurcate(args: argparse.Namespace, scene: PackingScene,
                 window: tuple[float, float] | None) -> int:
     """bifurcate on a packing scene: prepare, shear (with `window`, --window as bifurcate
     parsed and checked it), write packing.npz, branch.npz, collisions.json, plastic.json and
@@ -49,7 +56,6 @@ def run_packing(args: argparse.Namespace, scene: PackingScene,
             raise CommandError(f"bifurcate error: {flag}: {why} (got {getattr(args, option)!r})")
     if args.workers is not None and args.workers < 0:
         raise CommandError(f"bifurcate error: --workers: must be >= 0 (got {args.workers})")
-    from diskfriction.cli.bifurcate_cmd import check_window_covered
 
     matrix = matrix_from_args("bifurcate", args, scene)
     out = output_dir("bifurcate", args.out, Path("out") / "bifurcate" / scene.name)
@@ -186,7 +192,7 @@ def finished_segments(directory: Path, key: str) -> tuple[list, str]:
     return done, ""
 
 
-def run_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> int:
+def simulate(args: argparse.Namespace, scene: PackingScene) -> int:
     """simulate on a packing scene: prepare, shear to --gamma (exit 1 with one line if the
     branch ends before it), perturb the equilibrium there (default: along the eigenvector of its
     fastest-growing complex pair, else random velocities), integrate, and compare the measured
@@ -291,7 +297,7 @@ def spread(states, count: int) -> list[int]:
     return [int(states[i]) for i in np.unique(np.linspace(0, len(states) - 1, count).round().astype(int))]
 
 
-def run_packing_verify(args: argparse.Namespace, scene: PackingScene) -> int:
+def verify(args: argparse.Namespace, scene: PackingScene) -> int:
     """verify on a packing scene: shear over the scene's strain, then run the dynamics from up to
     VERIFY_STATES states: along the fastest complex pair's eigenvector from states with complex
     pairs, random velocities from states with every eigenvalue real; tabulate the growth rate
@@ -398,3 +404,233 @@ def sheared(scene: PackingScene, progress: Progress, asked: float | None = None)
                                                    if line.startswith("shear gamma") else line),
                        progress.part("relax"),
                        lambda g: progress(g / max(g1, 1e-300), f"gamma = {g:.3e}"))
+
+
+def prepare(args: argparse.Namespace, scene: PackingScene) -> int:
+    """prepare a packing scene: its frictionless packing at the target pressure, packing.npz."""
+    out = output_dir("prepare", args.out, Path("out") / "prepare" / scene.name)
+    refuse_other_scene("prepare", out, scene)
+    check_packing("prepare", scene)
+    from diskfriction.files import save_json
+    from diskfriction.models.packing.prepare import save_packing
+    from diskfriction.models.packing.prepared import contact_number, prepare_scene
+    from diskfriction.reports.packing_outputs import scene_arrays, scene_record
+
+    progress = Progress("prepare")
+    try:
+        progress.stage(f"{scene.N} disks to pressure {scene.pressure:g}")
+        start = time.perf_counter()
+        packing = prepare_scene(scene, progress.part("relax"))
+        seconds = time.perf_counter() - start
+    finally:
+        progress.close()
+    n_contacts, z = contact_number(packing)
+    rattling = packing.rattlers
+    save_packing(out / "packing.npz", packing, scene_arrays(scene))
+    summary = {"scene": scene_record(scene), "N": scene.N, "L": packing.L, "phi": packing.phi,
+               "pressure": packing.pressure, "target_pressure": scene.pressure,
+               "max_force": packing.max_force, "contacts": n_contacts,
+               "rattlers": int(rattling.sum()), "z": z, "fire_steps": packing.steps,
+               "relaxations": packing.relaxations, "seconds": seconds}
+    save_json(out / "packing.json", summary)
+    print(f"{scene.N} disks: phi = {packing.phi:.4f}, P = {packing.pressure:.6g} (target "
+          f"{scene.pressure:g}), {n_contacts} contacts, z = {z:.3f} without the "
+          f"{int(rattling.sum())} rattlers, max |F| = {packing.max_force:.1e}; "
+          f"{seconds:.1f} s -> {out}")
+    return 0
+
+
+def report(args: argparse.Namespace, files: list, scenes: list) -> int:
+    """report on one packing scene (reports/packing_report.py): shear, two dynamics runs, four
+    figures and report.md; the chain's sections, settings and cache do not apply."""
+    if len(scenes) > 1:
+        raise CommandError(f"report error: {files[0]}: a packing scene is reported alone (got "
+                           f"{len(scenes)} scenes)")
+    for option, given in (("only", args.only), ("set", args.settings or None),
+                          ("cache", args.cache)):
+        if given is not None:
+            raise CommandError(f"report error: --{option}: the packing report has no sections, "
+                               f"settings or cache (got {given!r})")
+    from diskfriction.reports.packing_report import build_packing_report
+
+    scene = scenes[0]
+    check_packing("report", scene, strain=scene.gamma_range[1])
+    out = output_dir("report", args.out, Path("out/report") / scene.name)
+    progress = Progress("report")
+    try:
+        written = build_packing_report(scene, out, PLASTIC_EVENTS, progress.stage)
+    finally:
+        progress.close()
+    print(f"wrote {out / 'report.md'} and {', '.join(written[1:])}")
+    return 0
+
+
+def check_packing(command: str, scene: PackingScene, strain: Optional[float] = None,
+                  processes: int = 1, window: bool = False, runs: int = 0,
+                  t_end: Optional[float] = None, dt: Optional[float] = None) -> None:
+    """Before any work on a packing scene, refuse in one line (exit 2) what `command` cannot
+    compute, and print on stderr the rough wall time of what it will do. Refused, in this order:
+    - more memory than this machine has (models/packing/memory.py), naming N and what it counted: the
+      preparation, and with `strain` a shear from gamma = 0 to it, dense 3N x 3N spectra in
+      each of `processes` processes (the shear's and its scan workers') or with `window` only
+      the points it stores;
+    - a scene the preparation cannot make (models/packing/limits.py: a box too narrow for its
+      contacts, a pressure below what double precision resolves), naming the key and value;
+    - with `runs` dynamics runs to t_end (step dt, default models/packing/cost.time_step), --t-end
+      and --dt as run_length takes them, and a run of more than MAX_RUN_STEPS time steps.
+    The estimate (models/packing/cost.py) is one line, ``COMMAND: about T (a rough estimate) to
+    prepare N disks, shear ...``, as the chain's long commands print theirs."""
+    from diskfriction.memory import NotEnoughMemory, require_memory
+    from diskfriction.models.packing import cost, limits, memory
+    from diskfriction.words import duration
+
+    N, n = scene.N, scene.ndof
+    if runs:
+        run_length(command, t_end, dt)
+    needs = [(memory.prepare_bytes(N), f"a preparation of {N} disks")]
+    seconds = [cost.prepare_seconds(N)]
+    parts = [f"prepare {N} disks"]
+    if strain is not None:
+        stored = memory.points_bytes(N, strain, window)
+        if window:
+            needs.append((stored, f"a shear with a window storing about "
+                                  f"{memory.shear_points(strain):.2g} points of {n} unknowns"))
+        else:
+            where = f" in {processes} processes" if processes > 1 else ""
+            needs.append((memory.dense_bytes(N, processes) + stored,
+                          f"a shear with dense {n} x {n} spectra{where}"))
+        seconds.append(cost.shear_seconds(N, strain, window))
+        parts.append(f"shear them to gamma = {strain:g}"
+                     + (" with a window" if window else " with every eigenvalue"))
+    nbytes, what = max(needs)
+    try:
+        require_memory(nbytes, f"N = {N}: {what}")
+    except NotEnoughMemory as error:
+        raise CommandError(f"{command} error: {scene.source}: {error}") from None
+    problem = limits.preparation_problem(scene)
+    if problem is not None:
+        key, why = problem
+        value = scene.N if key == "packing.N" else scene.pressure
+        raise CommandError(f"{command} error: {scene.source}: {key} = {value!r}: {why}")
+    if runs:
+        steps = cost.run_steps(scene, t_end, dt)
+        step = (f"--dt = {dt:g}" if dt is not None else
+                f"dt = {cost.time_step(scene):.2g}, {cost.STABLE_FRACTION:g} of the stability "
+                f"limit 2 / omega_max with omega_max about {cost.OMEGA_MAX_OVER_OMEGA_0:g} omega_0")
+        if steps > cost.MAX_RUN_STEPS:
+            option, given = ("dt", dt) if dt is not None else ("t-end", t_end)
+            raise CommandError(f"{command} error: --{option}: a run to t = {t_end:g} takes "
+                               f"about {steps:.2g} time steps ({step}), more than the "
+                               f"{cost.MAX_RUN_STEPS:.0e} a run may take: the slowest growth "
+                               f"measured shows within about {cost.GROWTH_STEPS:.0e} steps "
+                               f"(got {given!r})")
+        seconds.append(runs * cost.run_seconds(scene, steps))
+        parts.append(f"run {'once' if runs == 1 else f'up to {runs} times'} for about "
+                     f"{steps:.2g} time steps")
+    listed = ", ".join(parts[:-1]) + " and " + parts[-1] if len(parts) > 1 else parts[0]
+    print(f"{command}: about {duration(sum(seconds))} (a rough estimate) to {listed}",
+          file=sys.stderr, flush=True)
+
+
+def check_packing_bifurcate(args: argparse.Namespace, scene: PackingScene,
+                            window: Optional[tuple[float, float]]) -> None:
+    """check_packing for bifurcate on a packing: a shear over the scene's strain, its dense
+    spectra in the main process and the scan workers it will start (planned_workers, from
+    --workers and --detection), or with --window its points."""
+    from diskfriction.continuation.detection.collisions import DetectionParams
+    from diskfriction.continuation.detection.scans import planned_workers
+
+    asked = None if args.workers is None else max(args.workers, 0)  # < 0: bifurcate refuses it
+    workers = planned_workers(scene.ndof, DetectionParams(mode=args.detection), asked,
+                              dense=window is None)
+    check_packing("bifurcate", scene, strain=scene.gamma_range[1], processes=1 + workers,
+                  window=window is not None)
+
+
+def check_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> None:
+    """check_packing for simulate on a packing: --gamma G a number in [0, the scene's strain
+    stop] (simulate runs from a state of the scene's shear, which [shear] gamma bounds), then a
+    shear to G and one run to --t-end. Nothing without --gamma, which simulate asks for next."""
+    if args.gamma is None:
+        return
+    number("simulate", "gamma", args.gamma, zero=True)
+    stop = scene.gamma_range[1]
+    if args.gamma > stop:
+        raise CommandError(f"simulate error: --gamma: beyond the scene's strain range [0, "
+                           f"{stop:g}] ([shear] gamma of {scene.source}): simulate runs from a "
+                           f"state of the scene's shear; widen its range to go further "
+                           f"(got {args.gamma!r})")
+    check_packing("simulate", scene, strain=args.gamma, runs=1, t_end=args.t_end, dt=args.dt)
+
+
+NO_DYNAMICS = "a packing map runs no dynamics; `verify` runs them on one scene"
+
+
+PACKING_REFUSES = {"fx": "a packing's load is its strain: [shear] gamma in the scene",
+                   "slide": NO_DYNAMICS, "t_end": NO_DYNAMICS, "amplitude": NO_DYNAMICS}
+"""map's options a packing scene does not take, and why."""
+
+
+def packing_params(args: argparse.Namespace, scene):
+    """A packing map's studies.packing_maps.PackingMapParams from --matrix and --window
+    (checked: one line, exit 2); the chain's options are refused (PACKING_REFUSES)."""
+    from diskfriction.studies.packing_maps import PackingMapParams
+
+    for option, why in PACKING_REFUSES.items():
+        if getattr(args, option) not in (None, False):
+            flag = "--" + option.replace("_", "-")
+            raise CommandError(f"map error: {flag}: {why} (got {getattr(args, option)!r})")
+    window = parse_window(args.window, "map") if args.window is not None else None
+    return PackingMapParams(str(matrix_from_args("map", args, scene)), window, PLASTIC_EVENTS)
+
+
+def describe_packing(cell, s: dict) -> str:
+    """One printed line per packing cell: its values, status, states, how many carry complex
+    pairs, the fastest growth rate, collisions and plastic events, or why it failed or ended."""
+    values = ", ".join(f"{key} = {value:g}" for key, value in cell.values)
+    if s["status"] == "failed":
+        return f"{values}: failed: {s['reason']}"
+    fastest = ("" if s["sigma_max"] is None else
+               f", sigma_max = {s['sigma_max']:.4g} ({s['sigma_max'] / s['omega_c']:.3g} omega_c)")
+    line = (f"{values}: {s['status']} to gamma = {s['gamma_end']:.4g}, "
+            f"{count(s['states'], 'state')}, complex pairs at {100 * s['complex_fraction']:.0f} %"
+            f"{fastest}, {count(s['collisions'], 'collision')}, "
+            f"{count(s['plastic_events'], 'plastic event')}")
+    return line + (f"; {s['reason']}" if s["reason"] else "")
+
+
+
+def map_plan(args: argparse.Namespace, scene: PackingScene) -> MapPlan:
+    """A packing map (cli/map_cmd.py): every cell prepares its packing and shears it over the
+    scene's strain (studies/packing_maps.py)."""
+    from diskfriction.models.packing.limits import preparation_problem
+    from diskfriction.reports.packing_maps import plot_packing_map
+    from diskfriction.studies.packing_maps import (PACKING_COLUMNS, packing_cell,
+                                                   packing_cell_seconds)
+
+    params = packing_params(args, scene)
+
+    def check_cell(cell, at_once: int) -> None:
+        check_memory("map", cell.scene, at_once, dense=params.window is None)
+        problem = preparation_problem(cell.scene)  # models/packing/limits.py: what FIRE cannot make
+        if problem is not None:
+            values = ", ".join(f"{key} = {value!r}" for key, value in cell.values)
+            raise CommandError(f"map error: --vary: cell {values}: {problem[0]}: {problem[1]}")
+
+    def plot(axes, cells, records, path: Path, title: str) -> None:
+        plot_packing_map(axes, cells, records, path, f"{title}, gamma 0 -> {scene.gamma_range[1]:g}")
+
+    return MapPlan(params, check_cell, map_kernels, packing_cell, packing_cell_seconds,
+                   PACKING_COLUMNS, plot, describe_packing)
+
+
+def map_kernels(cells, params, progress: Progress) -> str:
+    """Compile the kernels every cell needs (a cell's effects may differ with mu: mu = 0 has
+    no tangential law), and say what each cell runs."""
+    from diskfriction.symbolic.kernels import load_packing_kernels
+
+    for effects in dict.fromkeys(c.scene.resolved_effects for c in cells):
+        load_packing_kernels(effects, progress.part("kernels"))
+    g1 = cells[0].scene.gamma_range[1]
+    inside = "" if params.window is None else f", Re lambda in {params.window[0]:g}:{params.window[1]:g}"
+    return f"prepare and shear gamma 0 -> {g1:g} ({params.matrix}{inside})"
