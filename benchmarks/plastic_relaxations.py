@@ -2,7 +2,7 @@
 (window LO:HI, as `bifurcate --window`, scans inline) until it has passed EVENTS plastic events,
 and the state at each fold is relaxed again here with each rule:
 - "fire": FIRE with plastic.time_step (dt_max from the state's ||J||_inf, the default);
-- "fire dt0": FIRE with prepare.first_time_step, the preparation's dt0 (the rule before stop 43);
+- "fire dt0": FIRE with prepare.first_time_step, the preparation's dt0 (an earlier rule, for comparison);
 - "damped D" for each D of --damping: Newtonian dynamics with the drag D omega_0
   (plastic.damped, the scene's relaxation = "damped").
 Prints per fold the strain, then per rule the steps, seconds ("failed": the relaxation raised

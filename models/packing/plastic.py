@@ -15,7 +15,7 @@ history is charged.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Optional
 
 import numpy as np
@@ -37,8 +37,8 @@ STALLED = 1e3
 """FIRE that ends its steps with max |F| within this factor of the tolerance is taken: the
 next segment starts with Newton at fixed strain from that state (arclength's first corrector
 solve), which takes the last digits in an iteration or two. 256 disks (seed 1) after the
-plastic event at gamma = 0.0212 stalled at 2.5e-11 against 1e-11 after 200 000 steps, and the
-run ended there (stop 42)."""
+plastic event at gamma = 0.0212 stalled at 2.5e-11 against 1e-11 after 200 000 steps; without
+this factor the run ended there."""
 
 
 DT_MAX_STABLE = 1.5
@@ -46,15 +46,15 @@ DT_MAX_STABLE = 1.5
 FIRE's step is semi-implicit Euler, stable for omega dt < 2. The preparation's dt0
 (prepare.first_time_step, sized for the overlaps of a random start) made it about 0.75 after
 the plastic events of 256 sheared disks (seed 1): their first 30 relaxations took 456 344
-steps with it and stop 42's code, one of them failing (stuck at max |F| = 9.8e-6), against
-159 271 with this rule, none failing (docs/packings.md#plastic-events; the two rules alone, on
+steps with it, one of them failing (stuck at max |F| = 9.8e-6), against 159 271 with this
+rule, none failing (docs/packings.md#plastic-events; the two rules alone, on
 the same compiled step: benchmarks/plastic_relaxations.py)."""
 
 ATTEMPTS = 3
 """Relaxations tried from the same state, each with half the last one's time step, before
 RelaxationFailed. With the Coulomb cap the forces are not a gradient, and FIRE can circle
 without settling: 256 disks (seed 1) after the event at gamma = 0.0147 stayed near max |F| =
-6e-4 for 200 000 steps at omega dt_max <= 1.5 and settled in 15 313 at half of it (stop 43)."""
+6e-4 for 200 000 steps at omega dt_max <= 1.5 and settled in 15 313 at half of it."""
 
 
 class RelaxationFailed(RuntimeError):
@@ -65,8 +65,10 @@ class RelaxationFailed(RuntimeError):
 class PlasticEvent:
     """A plastic event: the strain gamma where the branch was lost, the shear stress sigma_xy
     before and after [force / length], the mass-free displacement |q_after - q_before|
-    [length], the steps the relaxation took (FIRE's or the damped dynamics'), and how the
-    branch was lost (the segment's Stop code, models/packing/shear.py: PLASTIC)."""
+    [length], the steps the relaxation took (FIRE's or the damped dynamics'), how the
+    branch was lost (the segment's Stop code, models/packing/shear.py: PLASTIC), and the
+    relaxed state after it, (q, xi, rows, gamma), where the shear goes on (None where not
+    known)."""
 
     gamma: float
     stress_before: float
@@ -74,6 +76,7 @@ class PlasticEvent:
     displacement: float
     steps: int
     kind: str = "fold"
+    after: Optional[tuple] = field(default=None, compare=False, repr=False)
 
 
 def time_step(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray,
@@ -107,7 +110,7 @@ def relax(network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray, gam
     steps, then went through a second rearrangement (4.7e-3 at step 61 000) and was at
     2.2e-8 at step 200 000 (the band: 1e-8); the restarts from the fold state with half the
     time step ended at 1.3e-7 and 1.4e-5, and the shear stopped there. Continued, the first
-    run ends at 1.8e-9 (stop 58)."""
+    run ends at 1.8e-9."""
     reach = REACH * network.constants[0]
     state = {}
 
