@@ -172,7 +172,7 @@ def _strain_range(value: Any) -> tuple[float, float]:
     if stop > GAMMA_MAX:
         raise Invalid(f"must be <= {GAMMA_MAX:g}: quasistatic shear to order-one strain already "
                       f"reaches steady plastic flow, and beyond it takes hours to days "
-                      f"(docs/packings.md, Shear)")
+                      f"(docs/packings.md, What a packing scene may ask for)")
     return (start, stop)
 
 

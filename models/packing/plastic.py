@@ -9,7 +9,7 @@ slide during the rearrangement) either way, the contact rows found again wheneve
 have moved a fraction of the reach. The model has no damping (docs/model.md): FIRE's quenches
 (velocities zeroed going uphill) or the drag stand for the dissipation of a real
 rearrangement, and the state found is an equilibrium with the history its path charged, which
-depends on that choice (docs/packings.md#plastic-events compares them). Without tangential
+depends on that choice (docs/notes/packings-plastic-events.md compares them). Without tangential
 forces (Network.frictional) the same relaxations act on the normal forces alone, and no
 history is charged.
 """
@@ -47,7 +47,7 @@ FIRE's step is semi-implicit Euler, stable for omega dt < 2. The preparation's d
 (prepare.first_time_step, sized for the overlaps of a random start) made it about 0.75 after
 the plastic events of 256 sheared disks (seed 1): their first 30 relaxations took 456 344
 steps with it, one of them failing (stuck at max |F| = 9.8e-6), against 159 271 with this
-rule, none failing (docs/packings.md#plastic-events; the two rules alone, on
+rule, none failing (docs/notes/packings-plastic-events.md; the two rules alone, on
 the same compiled step: benchmarks/plastic_relaxations.py)."""
 
 ATTEMPTS = 3
