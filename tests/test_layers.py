@@ -143,3 +143,17 @@ def test_the_code_version_of_cached_report_results_covers_every_folder_they_run(
         reached = set().union(*(imported_closure(f) for f in folders - {"reports"}))
         wanted = {"diskfriction" if f == "diskfriction" else f"diskfriction.{f}" for f in reached}
         assert wanted <= set(each.depends), (each.name, wanted - set(each.depends))
+
+
+def test_a_geometry_front_counts_as_the_command_line(tmp_path, monkeypatch):
+    """models/<geometry>/commands.py sits on the command line's layer: it may import cli/, and
+    a study importing it is caught as an upward import."""
+    front = tmp_path / "models" / "shape"
+    front.mkdir(parents=True)
+    (front / "commands.py").write_text("from diskfriction.cli.common import CommandError\n")
+    (front / "model.py").write_text("from diskfriction.continuation import Options\n")
+    studies = tmp_path / "studies"
+    studies.mkdir()
+    (studies / "x.py").write_text("from diskfriction.models.shape.commands import prepare\n")
+    monkeypatch.setattr(__import__(__name__), "ROOT", tmp_path)
+    assert violations() == ["studies/x.py -> diskfriction.cli"]
