@@ -6,7 +6,7 @@ its eigensystem by LAPACK (spectra.eigensystem, one BLAS thread; the time is the
 --repeat); then one quasistatic step to 0.002 + dF and every eigenpair of the new J refined
 from the old ones (eigenvalues predicted to first order, lambda + l^H dA r, as the slopes do;
 vectors the old ones) by two-sided Rayleigh quotient iteration on the periodic block-tridiagonal
-matrix (continuation/linalg/block_tridiagonal.py; one core, the median of --repeat). Printed: the times,
+matrix (continuation/spectra/eigenpairs.py; one core, the median of --repeat). Printed: the times,
 the largest eigenvalue error against LAPACK's at the new point over the spectral radius, the
 largest residual |A r - lambda r| over it, and whether the result passes the refinement's
 certificate (continuation/spectra/refinement.py: residuals, error discs, trace identities). Run:
@@ -19,7 +19,8 @@ import time
 
 import numpy as np
 
-from diskfriction.continuation.linalg.block_tridiagonal import PeriodicBlocks, disk_major, refine_eigenpairs
+from diskfriction.continuation.linalg.block_tridiagonal import PeriodicBlocks, block_major as disk_major
+from diskfriction.continuation.spectra.eigenpairs import refine_eigenpairs
 from diskfriction.continuation.spectra.refinement import TOLERANCE, certified
 from diskfriction.continuation.linalg.solves import blas_threads, dense
 from diskfriction.continuation.spectra.tracking import eigensystem, eigenvalue_slopes, spectra_on, track

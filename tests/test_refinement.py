@@ -8,6 +8,7 @@ import pytest
 import scipy.sparse as sp
 
 from diskfriction.continuation.linalg import block_tridiagonal as bt
+from diskfriction.continuation.spectra import eigenpairs, rayleigh
 from diskfriction.continuation.spectra import refinement
 from diskfriction.continuation.linalg.solves import dense, measured
 from diskfriction.continuation.spectra.tracking import Eigensystem, eigensystem, track
@@ -68,11 +69,11 @@ def test_shifted_solves_are_numpys_for_every_chain_length(N, sigma):
     assert np.allclose(blocks.solve(sigma, rhs), np.linalg.solve(M, rhs), rtol=1e-11, atol=1e-11)
     assert np.allclose(blocks.solve(sigma, rhs, transpose=True), np.linalg.solve(M.T, rhs), rtol=1e-11, atol=1e-11)
     shifts = np.array([sigma, -0.4, 1.1 - 0.3j], complex)
-    factors, scratch, columns = bt._work(N, b, shifts.size, shifts)
-    bt._factor(blocks.diag, blocks.lower, blocks.upper, shifts, *factors, *scratch)
+    factors, scratch, columns = bt.work_arrays(N, b, shifts.size, shifts)
+    bt.factor_shifted(blocks.diag, blocks.lower, blocks.upper, shifts, *factors, *scratch)
     x, many = rng.standard_normal((N, b, shifts.size)) + 0j, np.empty((N, b, shifts.size), complex)
     for transpose in (False, True):
-        bt._solve(blocks.lower, blocks.upper, x, transpose, many, *factors, *columns)
+        bt.solve_shifted(blocks.lower, blocks.upper, x, transpose, many, *factors, *columns)
         for k, shift in enumerate(shifts):
             M = A - shift * np.eye(N * b)
             want = np.linalg.solve(M.T if transpose else M, x[:, :, k].ravel())
@@ -91,15 +92,15 @@ def test_the_pivoted_iteration_keeps_a_real_pair_real(monkeypatch):
     v, r, lft = exact.values[[i]] + 1e-6 * scale, right[:, [i]].real.copy(), left[[i]].real.copy()
     r[:, 0] += 1e-6 * rng.standard_normal(N * b)
     used = []
-    real_lu = bt.dgbtrf
-    monkeypatch.setattr(bt, "dgbtrf", lambda *args: used.append(1) or real_lu(*args))
+    real_lu = rayleigh.dgbtrf
+    monkeypatch.setattr(rayleigh, "dgbtrf", lambda *args: used.append(1) or real_lu(*args))
     one = (v.copy() + 0j, r + 0j, lft + 0j)
-    res = bt._pivoted_rqi(blocks, *one, 4, 1e-13 * scale)
+    res = rayleigh.pivoted_rqi(blocks, *one, 4, 1e-13 * scale)
     assert used and one[0].imag[0] == 0.0 and not np.any(one[1].imag)
     phase = np.exp(0.7j)
     other = (v.copy() + 0j, r * phase, lft / phase)
     calls = len(used)
-    res_c = bt._pivoted_rqi(blocks, *other, 4, 1e-13 * scale)
+    res_c = rayleigh.pivoted_rqi(blocks, *other, 4, 1e-13 * scale)
     assert len(used) == calls  # complex vectors: the complex LU
     assert res[0] <= 1e-13 * scale and res_c[0] <= 1e-13 * scale
     assert abs(one[0][0] - exact.values[i]) <= 1e-13 * scale and abs(one[0][0] - other[0][0]) <= 1e-13 * scale
@@ -123,10 +124,10 @@ def test_refined_eigenpairs_are_lapacks_at_the_next_point():
     A1 = chain_matrix(30, 0.05)[0]
     old = eigensystem(dense(A0), vectors=True)
     N, b = 30, system.ndof // 30
-    blocks = bt.PeriodicBlocks.from_matrix(A1, b, bt.disk_major(N, b))
+    blocks = bt.PeriodicBlocks.from_matrix(A1, b, bt.block_major(N, b))
     slopes = np.sum(old.left * (dense(A1 - A0) @ old.right).T, axis=1)  # l^H dA r
     scale = np.abs(old.values).max()
-    values, right, left, residual = bt.refine_eigenpairs(blocks, old.values + slopes, old.right, old.left, 6,
+    values, right, left, residual = eigenpairs.refine_eigenpairs(blocks, old.values + slopes, old.right, old.left, 6,
                                                          1e-13 * scale)
     exact = np.linalg.eigvals(dense(A1))
     assert np.abs(track(exact, values) - exact).max() <= 1e-12 * scale
@@ -144,7 +145,7 @@ def test_a_real_eigenvalue_with_complex_phased_vectors_is_refined_in_real_arithm
     A1 = chain_matrix(30, 0.05)[0]
     old = eigensystem(dense(A0), vectors=True)
     N, b = 30, system.ndof // 30
-    blocks = bt.PeriodicBlocks.from_matrix(A1, b, bt.disk_major(N, b))
+    blocks = bt.PeriodicBlocks.from_matrix(A1, b, bt.block_major(N, b))
     scale = np.abs(old.values).max()
     real = np.flatnonzero(old.values.imag == 0.0)
     values, right, left = old.values.astype(complex), old.right.astype(complex), old.left.astype(complex)
@@ -154,7 +155,7 @@ def test_a_real_eigenvalue_with_complex_phased_vectors_is_refined_in_real_arithm
     exact = np.linalg.eigvals(dense(A1))
 
     def refined():
-        return bt.refine_eigenpairs(blocks, values, right, left, 6, 1e-13 * scale)
+        return eigenpairs.refine_eigenpairs(blocks, values, right, left, 6, 1e-13 * scale)
 
     out = refined()
     # a simple eigenvalue (a degenerate one's pairs are refined again together, in complex arithmetic)
@@ -164,7 +165,7 @@ def test_a_real_eigenvalue_with_complex_phased_vectors_is_refined_in_real_arithm
     assert np.all(out[0][alone].imag == 0.0) and not np.any(out[1][:, alone].imag) and not np.any(out[2][alone].imag)
     assert np.abs(track(exact, out[0]) - exact).max() <= 1e-12 * scale
     assert refinement.certified(blocks, *out, scale) is not None
-    monkeypatch.setattr(bt, "NEAR_REAL", 0.0)
+    monkeypatch.setattr(eigenpairs, "NEAR_REAL", 0.0)
     assert np.any(refined()[1][:, real].imag)
 
 
@@ -186,11 +187,11 @@ def test_a_shift_that_breaks_the_blocks_lu_is_refined_with_pivoting():
     values, right, left = guess[[i]].copy(), exact.right[:, [i]].copy(), exact.left[[i]].copy()
     one, n = np.zeros(1, np.int64), N * b
     out_r, out_l = np.full((n, 1), np.nan, complex), np.full((1, n), np.nan, complex)  # as if never zeroed
-    residual = bt._rqi_many(blocks.diag, blocks.lower, blocks.upper, values.copy(), right, left, np.arange(n), one,
-                            one, one - 1, values, out_r, out_l, 3, 0.0)[0]
+    residual = rayleigh.rqi_many(blocks.diag, blocks.lower, blocks.upper, values.copy(), right, left, np.arange(n),
+                                 one, one, one - 1, values, out_r, out_l, 3, 0.0)[0]
     assert np.isinf(residual[0])
     assert not np.any(out_r) and not np.any(out_l)  # a failed pair's vectors are written as zeros
-    values, right, left, residual = bt.refine_eigenpairs(blocks, guess, exact.right, exact.left, 4, 1e-14)
+    values, right, left, residual = eigenpairs.refine_eigenpairs(blocks, guess, exact.right, exact.left, 4, 1e-14)
     assert residual[i] <= 1e-13 and abs(values[i] - mu) <= 1e-13
 
 
@@ -214,13 +215,13 @@ def test_pairs_of_a_degenerate_eigenvalue_are_refined_again_together(monkeypatch
     scale = np.abs(values).max()
 
     def refined():
-        out = bt.refine_eigenpairs(blocks, values.astype(complex), right, left, 6, 1e-13 * scale)
+        out = eigenpairs.refine_eigenpairs(blocks, values.astype(complex), right, left, 6, 1e-13 * scale)
         return out, refinement.certified(blocks, *out, scale)
 
     (_, r, lft, residual), system = refined()
     assert residual.max() <= 1e-13 * scale and system is not None
     assert abs(lft[i] @ r[:, i + 1]) <= 1e-12 and abs(lft[i + 1] @ r[:, i]) <= 1e-12
-    monkeypatch.setattr(bt, "LARGEST_CLUSTER", 1)
+    monkeypatch.setattr(eigenpairs, "LARGEST_CLUSTER", 1)
     assert refined()[1] is None
 
 
@@ -270,18 +271,18 @@ def test_a_pair_born_in_the_step_is_refined_together(crowded):
     scale = np.abs(old.values).max()
 
     def refined():
-        return bt.refine_eigenpairs(new, old.values, old.right, old.left, 6, 1e-13 * scale)
+        return eigenpairs.refine_eigenpairs(new, old.values, old.right, old.left, 6, 1e-13 * scale)
 
     values, right, left, residual = refined()
     assert np.abs(track(exact, values) - exact).max() <= 1e-12 * scale
     assert refinement.certified(new, values, right, left, residual, scale) is not None
     monkey = pytest.MonkeyPatch()
     with monkey.context() as m:
-        m.setattr(bt, "LARGEST_CLUSTER", 1)
+        m.setattr(eigenpairs, "LARGEST_CLUSTER", 1)
         assert refinement.certified(new, *refined(), scale) is None
     if crowded:
         with monkey.context() as m:
-            m.setattr(bt, "PARTNERS", 1)
+            m.setattr(eigenpairs, "PARTNERS", 1)
             assert refinement.certified(new, *refined(), scale) is None
 
 
@@ -293,8 +294,8 @@ def test_pairs_the_groups_leave_rough_are_repaired_by_shift_invert(monkeypatch):
     LAPACK's."""
     old, new = eigensystem(born_pair_blocks(12, -1e-4, True).dense(), vectors=True), born_pair_blocks(12, 1e-4, True)
     scale = np.abs(old.values).max()
-    monkeypatch.setattr(bt, "PARTNERS", 1)
-    out = bt.refine_eigenpairs(new, old.values, old.right, old.left, 6, 1e-13 * scale)
+    monkeypatch.setattr(eigenpairs, "PARTNERS", 1)
+    out = eigenpairs.refine_eigenpairs(new, old.values, old.right, old.left, 6, 1e-13 * scale)
     assert refinement.certified(new, *out, scale) is None
     bad = refinement.failing(*out, scale)
     members = np.flatnonzero(np.abs(old.values - 10.0) < 0.015)
@@ -352,18 +353,18 @@ def test_the_repairs_parts_left_over_and_polish():
     A = shuffled.original()
     rough = np.linalg.norm(A @ r[:, [i]] - v[i] * r[:, [i]], axis=0)
     assert rough[0] > 1e-8 * scale
-    res = bt.polish(shuffled, np.array([i]), v, r, lft, rough, 1e-13 * scale)
+    res = rayleigh.polish(shuffled, np.array([i]), v, r, lft, rough, 1e-13 * scale)
     assert res[0] <= 1e-13 * scale and abs(v[i] - exact.values[i]) <= 1e-12 * scale
     assert np.linalg.norm(A @ r[:, i] - v[i] * r[:, i]) == pytest.approx(res[0], rel=1e-6, abs=1e-15 * scale)
     kept = v.copy()
-    assert bt.polish(shuffled, np.array([i]), v, r, lft, np.zeros(1), 1e-13 * scale)[0] == 0.0
+    assert rayleigh.polish(shuffled, np.array([i]), v, r, lft, np.zeros(1), 1e-13 * scale)[0] == 0.0
     assert np.array_equal(v, kept)
 
 
 def test_a_group_that_does_not_converge_replaces_only_the_members_it_improved(monkeypatch):
     """A pair above tol (a far guess) is refined again with its nearest guesses; where the
     group's iteration leaves a member above tol, only the members whose residual fell are
-    written: a group returning worse pairs (here a stand-in for _refine_cluster that moves
+    written: a group returning worse pairs (here a stand-in for refine_cluster that moves
     every value and reports residual 1e3 R) leaves the result as without groups, and one
     that improves only the rough pair writes that pair alone."""
     blocks = random_blocks(6, 2, seed=3)
@@ -380,9 +381,9 @@ def test_a_group_that_does_not_converge_replaces_only_the_members_it_improved(mo
     left[rough] = rng.standard_normal(values.size)
     right[:, rough] /= np.linalg.norm(right[:, rough])
     left[rough] /= left[rough] @ right[:, rough]
-    refine = lambda: bt.refine_eigenpairs(blocks, values, right, left, 1, tol)  # noqa: E731
+    refine = lambda: eigenpairs.refine_eigenpairs(blocks, values, right, left, 1, tol)  # noqa: E731
     with monkeypatch.context() as m:
-        m.setattr(bt, "LARGEST_CLUSTER", 1)
+        m.setattr(eigenpairs, "LARGEST_CLUSTER", 1)
         alone = refine()
     assert alone[3][rough] > tol
 
@@ -390,7 +391,7 @@ def test_a_group_that_does_not_converge_replaces_only_the_members_it_improved(mo
         v += 0.01 * scale
         return np.full(v.size, 1e3 * scale)  # above any unit vector's residual
 
-    monkeypatch.setattr(bt, "_refine_cluster", worse)
+    monkeypatch.setattr(eigenpairs, "refine_cluster", worse)
     kept = refine()
     assert np.array_equal(kept[0], alone[0]) and np.array_equal(kept[3], alone[3])
 
@@ -398,8 +399,8 @@ def test_a_group_that_does_not_converge_replaces_only_the_members_it_improved(mo
         v += 0.01 * scale
         return np.where(np.arange(v.size) == 0, 0.0, 1e3 * scale)  # member 0: the lowest index
 
-    monkeypatch.setattr(bt, "_refine_cluster", rough_only)
-    groups = bt.refinement_groups(values, alone[0], alone[3], np.ones(values.size), tol)
+    monkeypatch.setattr(eigenpairs, "refine_cluster", rough_only)
+    groups = eigenpairs.refinement_groups(values, alone[0], alone[3], np.ones(values.size), tol)
     first = min(g[0] for g in groups if rough in g)
     mixed = refine()
     changed = np.flatnonzero(mixed[0] != alone[0])
@@ -415,13 +416,13 @@ def test_the_groups_refined_again_are_meeting_discs_and_pairs_left_above_tol():
     values = guess + np.array([0.0, 2e-4, -3e-4, 0.0, 0.0, 0.0])
     residual = np.array([1e-16, 1e-6, 1e-16, 1e-16, 1e-9, 1e-9])
     kappa = np.ones(guess.size)
-    groups = bt.refinement_groups(guess, values, residual, kappa, 1e-13)
+    groups = eigenpairs.refinement_groups(guess, values, residual, kappa, 1e-13)
     assert [g.tolist() for g in groups] == [[1, 2], [4, 5]]  # 0 is 1000 times farther than 2
     # the second nearest guess joins within PARTNER_REACH times the nearest one's distance
     guess[0] = 1.0 - 0.003
-    groups = bt.refinement_groups(guess, values, residual, kappa, 1e-13)
+    groups = eigenpairs.refinement_groups(guess, values, residual, kappa, 1e-13)
     assert [g.tolist() for g in groups] == [[0, 1, 2], [4, 5]]
-    assert bt.refinement_groups(guess, values, np.full(guess.size, 1e-16), kappa, 1e-13) == []
+    assert eigenpairs.refinement_groups(guess, values, np.full(guess.size, 1e-16), kappa, 1e-13) == []
 
 
 def test_row_norms_are_numpys():

@@ -41,7 +41,7 @@ from typing import Optional
 import numpy as np
 import scipy.sparse as sp
 
-from diskfriction.continuation.linalg.solves import Refined, SingularMatrix, bordered, factorize
+from diskfriction.continuation.linalg.solves import RefinedSolve, SingularMatrix, bordered, factorize
 from diskfriction.continuation.stepping.newton import bordered_matrix
 from diskfriction.continuation.problem import Problem
 
@@ -152,9 +152,9 @@ def locate_double_eigenvalue(problem: Problem, x0: Array, lam0: float, right0: A
     raise LocatorFailed(f"no convergence in {max_iter} Newton iterations (|dp| = {history[-1]:.3g})")
 
 
-def _shifted(A, lam: float, b: Array, c: Array, near, options) -> Refined:
-    """B = [[A - lam I, b], [c^T, 0]] as a Refined on `near` (the last iterate's B)."""
-    return Refined(lambda: bordered(A - lam * _identity(A), b, c),
+def _shifted(A, lam: float, b: Array, c: Array, near, options) -> RefinedSolve:
+    """B = [[A - lam I, b], [c^T, 0]] as a RefinedSolve on `near` (the last iterate's B)."""
+    return RefinedSolve(lambda: bordered(A - lam * _identity(A), b, c),
                    lambda y: np.append(A @ y[:-1] - lam * y[:-1] + b * y[-1], c @ y[:-1]),
                    lambda y: np.append(A.T @ y[:-1] - lam * y[:-1] + c * y[-1], b @ y[:-1]),
                    near, options)
@@ -195,7 +195,7 @@ def jordan_chain(A, lam: float, b: Array, c: Array,
     generalized eigenvector w ((A - lam I) w = v up to the border, made orthogonal to v) and
     overlap = |y . v| for the unit left eigenvector y (B^T [y; .] = e_(n+1); -> 0 at a Jordan
     block). options: the problem's factor_options (Problem). near: the factorization of B at a
-    point nearby (the locator's last iterate), refined on instead of factorizing (Refined).
+    point nearby (the locator's last iterate), refined on instead of factorizing (RefinedSolve).
     Raises SingularMatrix if the borders do not make B regular."""
     m = A.shape[0]
     e = np.zeros(m + 1)

@@ -289,7 +289,7 @@ def solve_near(lu, apply, rhs: Array, transpose: bool = False) -> Optional[Array
 
 
 @dataclass
-class Refined:
+class RefinedSolve:
     """Solves with a matrix M known by its products (apply(y) = M y, apply_t(y) = M^T y) on
     `near`, the factorization of a matrix nearby (solve_near, anything with Factorization's
     solve; None: none); where that does not converge, M is built (matrix()) and factorized

@@ -8,9 +8,9 @@ reference sample is carried to the new point x:
     predicted   lambda_i + dlambda_i/ds ds,   ds = (x - x_ref) . t_ref  (the slopes along the
                 reference's tangent; the reference's own value where it has no slopes),
     refined     by two-sided Rayleigh quotient iteration on the O(N b^3) shifted solves of
-                block_tridiagonal.py, each pair alone, then again together with its neighbours
+                linalg/block_tridiagonal.py (rayleigh.py), each pair alone, then again together with its neighbours
                 where it did not converge or its error disc meets another's
-                (block_tridiagonal.refinement_groups),
+                (eigenpairs.refinement_groups),
 
 O(n^2 b^2) for the n = N b pairs against LAPACK's O(n^3): 6.7 times faster at n = 3000 on one
 core (2.45 against 16.5 s; docs/continuation.md, Eigenpair continuation).
@@ -44,7 +44,8 @@ from scipy.optimize import linear_sum_assignment
 from scipy.sparse.csgraph import connected_components
 import scipy.sparse as sp
 
-from diskfriction.continuation.linalg.block_tridiagonal import close_pairs, meeting_discs, polish, refine_eigenpairs
+from diskfriction.continuation.spectra.eigenpairs import close_pairs, meeting_discs, refine_eigenpairs
+from diskfriction.continuation.spectra.rayleigh import polish
 from diskfriction.continuation.linalg.solves import book, row_norms
 from diskfriction.continuation.spectra.nearest import ShiftInvertFailed, nearest_eigensystem
 from diskfriction.continuation.spectra.tracking import Eigensystem, on_gpu
@@ -74,7 +75,7 @@ RESIDUAL = 1e-12
 
 TOLERANCE = 5e-13
 """Residual, relative to the spectral radius, at which a pair's Rayleigh quotient iteration
-stops (block_tridiagonal.refine_eigenpairs: below it a pair is converged, above it it goes on
+stops (eigenpairs.refine_eigenpairs: below it a pair is converged, above it it goes on
 to the pivoted LU and the groups): half of RESIDUAL. Most pairs converge far below it (median
 3e-15 R); it decides the pairs whose iteration stalls in the blocks' LU (pivot growth) at 1e-13
 to 1e-12 R. On the captured matrix of 1000 disks (docs/continuation.md, Stop 56) 250 pairs
@@ -105,7 +106,7 @@ many eigenvalues that no certified pair holds as the cluster has pairs (repaired
 
 POLISH = 1e-13
 """Residual (relative to R) above which a repaired pair gets two pivoted Rayleigh quotient steps
-(block_tridiagonal._pivoted_rqi): ARPACK's tolerance is relative to the shift-inverted
+(rayleigh.pivoted_rqi): ARPACK's tolerance is relative to the shift-inverted
 eigenvalues, and a pair far from the shift came out at 1.07e-12 R, above RESIDUAL (the chain
 of 400 disks)."""
 
@@ -174,7 +175,7 @@ def certified(blocks, values: Array, right: Array, left: Array, residual: Array,
 
 
 def degenerate_only(i: Array, j: Array, cross: Array, kappa: Array) -> bool:
-    """Whether the pairs (i, j) whose discs meet (block_tridiagonal.meeting_discs) are all
+    """Whether the pairs (i, j) whose discs meet (eigenpairs.meeting_discs) are all
     members of a semisimple degenerate eigenvalue (a ring's standing waves, a mode repeated by
     symmetry; not_degenerate); their discs then hold as many eigenvalues as they are."""
     return not np.any(not_degenerate(i, j, cross, kappa))
@@ -223,7 +224,7 @@ def repaired(blocks, guess: Array, values: Array, right: Array, left: Array, res
     matched first to the certified pairs inside their disc (left_over); those left over (k
     doubled, up to REPAIR_TRIES runs, until as many are left as the cluster has pairs) go to
     the cluster's pairs by least distance from the guesses, polished where ARPACK left them
-    above POLISH R (block_tridiagonal.polish). Where the failing
+    above POLISH R (rayleigh.polish). Where the failing
     pairs were nearly defective pairs that the Rayleigh iterations could not split, or a pair
     found twice, shift-invert sees the eigenvalues themselves. The result is certified again
     as a whole by the caller: a wrong match leaves two pairs on one eigenvalue, whose discs

@@ -17,7 +17,7 @@ from typing import Optional
 
 import numpy as np
 
-from diskfriction.continuation.linalg.solves import Refined, SingularMatrix, bordered, factorize
+from diskfriction.continuation.linalg.solves import RefinedSolve, SingularMatrix, bordered, factorize
 from diskfriction.continuation.problem import ROUNDING, Problem
 
 Array = np.ndarray
@@ -171,8 +171,8 @@ def tangent(problem: Problem, x: Array, border: Array, near: Optional[tuple] = N
     return t / np.linalg.norm(t)
 
 
-def _tangent_system(problem: Problem, x: Array, border: Array, near: Optional[tuple]) -> Refined:
-    """The bordered matrix at x with border b as a Refined on near = (lu, b_lu) (tangent)."""
+def _tangent_system(problem: Problem, x: Array, border: Array, near: Optional[tuple]) -> RefinedSolve:
+    """The bordered matrix at x with border b as a RefinedSolve on near = (lu, b_lu) (tangent)."""
     u, p = x[:-1], x[-1]
     G_u, G_p = problem.jacobian(u, p), problem.dG_dp(u, p)
     lu = None
@@ -180,7 +180,7 @@ def _tangent_system(problem: Problem, x: Array, border: Array, near: Optional[tu
         lu, b_lu = near
         if not np.array_equal(b_lu, border):
             lu = _Rebordered.of(lu, b_lu, border)
-    return Refined(lambda: bordered(G_u, G_p, border[:-1], border[-1]),
+    return RefinedSolve(lambda: bordered(G_u, G_p, border[:-1], border[-1]),
                    lambda y: np.append(G_u @ y[:-1] + G_p * y[-1], border @ y), None, lu,
                    problem.factor_options)
 

@@ -52,7 +52,7 @@ import scipy.sparse as sp
 from diskfriction.continuation.linalg.solves import SingularMatrix, dense, solve
 from diskfriction.continuation.problem import Problem
 from diskfriction.continuation.spectra.tracking import Eigensystem, eigensystem
-from diskfriction.continuation.linalg.block_tridiagonal import PeriodicBlocks, disk_major
+from diskfriction.continuation.linalg.block_tridiagonal import PeriodicBlocks, block_major
 from diskfriction.continuation.spectra.window import Window, sized, widened, window_eigensystem
 from diskfriction.matrices import Matrix
 from diskfriction.symbolic import System
@@ -254,7 +254,7 @@ class DiskEquilibria(Problem):
         if self.window is not None or self.free or N < 3:
             return None
         D = self.system.ndof // N
-        return PeriodicBlocks.from_matrix(self.stability_matrix(q, F_x), D, disk_major(N, D))
+        return PeriodicBlocks.from_matrix(self.stability_matrix(q, F_x), D, block_major(N, D))
 
     def _window_eigensystem(self, q, F_x, vectors: bool) -> Eigensystem:
         """The spectral window's eigenvalues (spectral_window.py; its k fixed at the start state,
