@@ -51,12 +51,11 @@ def run_case(args: list[str], scenes: Path, out: Path) -> dict:
     workers = [] if "--problem" in argv else ["--workers", "0"]
     subprocess.run([str(COMMAND), "bifurcate", *argv, *workers, "--out", str(out)], cwd=ROOT,
                    check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    found = json.loads((out / "collisions.json").read_text())
-    found = found["collisions"] if isinstance(found, dict) else found
+    found = json.loads((out / "collisions.json").read_text())  # continuation/records.py
     with np.load(out / "branch.npz") as branch:
-        name = str(branch["parameter"]) if "parameter" in branch else "F_x"  # --problem: its own
-        p, lam = branch[name], branch["eigenvalues"]
-        collisions = [[c[name], c["kind"], c["lambda_re"], c.get("lambda_im", 0.0)] for c in found]
+        p, lam = branch[str(branch["parameter"])], branch["eigenvalues"]  # F_x, or a problem's own
+        # [p, kind, lambda, Im lambda]: a collision's double eigenvalue is real
+        collisions = [[c["p"], c["kind"], c["lambda"], 0.0] for c in found["collisions"]]
         return {"collisions": collisions, "p": p.tolist(), "n_complex": branch["n_complex"].tolist(),
                 "re": np.nan_to_num(lam.real, nan=0.0).tolist(), "im": np.nan_to_num(lam.imag, nan=0.0).tolist()}
 

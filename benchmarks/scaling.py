@@ -95,7 +95,7 @@ out = {"N": N, "eps": eps, "mode": mode + ("" if window is None else " " + sys.a
 with measured() as work:
     try:
         branch = sweep(system, 0.0, 0.12, "J", params, progress)
-        out.update(done=branch.status[-1].reached, points=len(branch),
+        out.update(done=branch.status.reached, points=len(branch),
                    collisions=[c.p for c in branch.collisions], free=int(branch.free[-1]))
     except Exception:  # OutOfTime, or what a compiled function makes of it (SystemError)
         if not reached.get("out of time"):

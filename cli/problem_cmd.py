@@ -201,8 +201,7 @@ def _continue(spec, label: str, span, options, out: Path, as_json: bool,
         progress.close()
     records = collision_json(result, spec)
     if as_json:
-        print(json_text([{k: r[k] for k in (spec.parameter, "kind", "lambda_re", "lambda_im", "matrix")}
-                         for r in records]))
+        print(json_text([{k: r[k] for k in ("p", "kind", "lambda")} for r in records]))
     else:
         if switch is not None:
             print(f"the second branch through branch point {switch[0] + 1}"

@@ -30,7 +30,7 @@ from diskfriction.errors import OneLineError
 from diskfriction.continuation.stepping.arclength import Callback, ContinuationError, ContinuationParams, continuation
 from diskfriction.continuation.detection.bifurcations import (CONSERVATIVE, SpecialPoint, branch_point_brackets, conservative,
                            locate_branch_points, locate_folds, locate_hopf, other_direction)
-from diskfriction.continuation.branch import Branch, StopCode
+from diskfriction.continuation.branch import Branch, Record, StopCode, recorded
 from diskfriction.continuation.detection.collisions import Collision, DetectionParams
 from diskfriction.continuation.stepping.differences import (METHODS, ParameterDerivative, StateDerivative, check_complex_step,
                           warn_differences)
@@ -349,7 +349,7 @@ def _tol_p(tol_p: float, in_p: float, p_start: float, p_stop: float) -> float:
 
 
 def solve_branch(problem: Problem, u0, p_span, options: Options = Options(), *,
-                 callback: Optional[Callback] = None) -> BranchResult:
+                 callback: Optional[Callback] = None, record: Optional[Record] = None) -> BranchResult:
     """Continue G(u, p) = 0 from p_span[0] to p_span[1] and locate what happens on the way.
 
     u0 is a guess of the state at p_span[0], corrected there by Newton (ContinuationError if it
@@ -360,9 +360,11 @@ def solve_branch(problem: Problem, u0, p_span, options: Options = Options(), *,
     folds and Hopf points are located after the run (bifurcations.py). The core runs in y = (p_scale sqrt(theta / n) u,
     p), whose Euclidean length is the Options' arclength (weighting.py), with newton_tol times
     residual_scale: the same problem with G or p in other units takes the same steps.
-    callback(k, p, u, eigenvalues) is called at every accepted point. Bad input (span,
-    options, a problem whose functions fail or return wrong shapes at the start) raises
-    ValueError or ProblemError before anything is computed."""
+    callback(k, p, u, eigenvalues) is called at every accepted point; record(p, u), a record
+    hook (branch.Record), gives each accepted point's columns of the branch (Branch.columns;
+    its "residual", the point's residual).
+    Bad input (span, options, a problem whose functions fail or return wrong shapes at the
+    start) raises ValueError or ProblemError before anything is computed."""
     p_start, p_stop = _span(p_span)
     u0 = check_problem(problem, u0, p_start)
     p_scale, residual_scale = _units(options, problem, u0, p_start, p_stop)
@@ -373,27 +375,36 @@ def solve_branch(problem: Problem, u0, p_span, options: Options = Options(), *,
         replace(options.detection, tol_p=tol_p)
     s = scale_of(options.theta, u0.size) * p_scale
     core = problem if s == 1.0 else Weighted(problem, s, p_scale)  # the metric of the Options
-    told = None if callback is None else (lambda k, p, y, ev: callback(k, p, y / s, ev))
-    branch = continuation(core, u0 * s, p_start, params, detection,
-                          workers=options.workers, callback=told)
+    records = []
+
+    def told(k, p, y, ev):
+        if record is not None:
+            records.append(record(p, y / s))
+        if callback is not None:
+            callback(k, p, y / s, ev)
+    branch = continuation(core, u0 * s, p_start, params, detection, workers=options.workers,
+                          callback=None if callback is None and record is None else told)
     asked = options.special_points if _stateless(problem) else ()
     folds, hopf, warnings, branch_points = special_points(core, branch, asked, params, detection,
                                                           in_p)
     folds, hopf, branch_points = ([replace(point, u=point.u / s) for point in points]
                                   for points in (folds, hopf, branch_points))
-    return BranchResult(unweighted(branch, s), tuple(folds), tuple(hopf),
+    return BranchResult(recorded(unweighted(branch, s), records),
+                        tuple(folds), tuple(hopf),
                         branch.warnings + warnings, tuple(branch_points), p_scale, residual_scale)
 
 
 def solve_in_runs(problem: Problem, u0, p_span, options: Options,
-                  callback_of: Callable[[int], Optional[Callback]]) -> tuple[list[Branch], int]:
+                  callback_of: Callable[[int], Optional[Callback]],
+                  record: Optional[Record] = None) -> tuple[list[Branch], int]:
     """solve_branch, where a crowded spectral window does not end the work: the problem's
     window is sized anew, wider, at the last certified point (Problem.widen_window) and a new
     run goes on from there (a run that ended with StopCode.WINDOW), or the run starts again
     (its first point crowded: WindowCrowded before any point, as at the start of a packing's
     segment after a plastic event), until a run ends otherwise or WIDENINGS widenings in a row
     reach no further point. callback_of(r) is run r's callback (None: none); a run after the
-    first starts at the last point of the one before, which its callback does not get again.
+    first starts at the last point of the one before, which its callback does not get again
+    (record, solve_branch's, gets every point of every run, that one too).
     Returns (the runs' branches in order, their eigenvalues under each run's own labels: a
     widened window holds more of them; how often the window was widened)."""
     runs, stuck, widenings, (p_start, p_stop) = [], 0, 0, p_span
@@ -402,7 +413,8 @@ def solve_in_runs(problem: Problem, u0, p_span, options: Options,
         if runs and callback is not None:
             callback = _after_start(callback)
         try:
-            branch = solve_branch(problem, u0, (p_start, p_stop), options, callback=callback).branch
+            branch = solve_branch(problem, u0, (p_start, p_stop), options, callback=callback,
+                                  record=record).branch
         except WindowCrowded:
             stuck += 1
             if stuck > WIDENINGS or not problem.widen_window():

@@ -1,9 +1,11 @@
-"""The result of a continuation run: one object of arrays (one row per accepted point)."""
+"""The result of a continuation: one record of arrays, one row per accepted point, with the
+pieces it is made of and its labelled points, for every problem (Branch); its columns from a
+record hook (Record); the recorder that builds a run's branch (BranchRecorder)."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field, fields, replace
 from enum import StrEnum
-from typing import Callable, Optional
+from typing import Any, Callable, Mapping, Optional, Sequence, Union
 
 import numpy as np
 
@@ -73,49 +75,191 @@ class Stop:
         return self.reason
 
 
+Column = Union[Array, tuple]
+"""A per-point column of a Branch: an array whose first axis runs over the points, where every
+point's value has one shape, else a tuple of the points' arrays (ragged: a packing's contact
+rows)."""
+
+
+def column_of(values: Sequence, ragged: bool = False) -> Column:
+    """The points' values as one Column: stacked (np.array) where they share a shape, else,
+    or where asked (ragged: a column whose shape varies from point to point, kept as tuples
+    whatever the points at hand), a tuple of arrays."""
+    if ragged or len({np.shape(v) for v in values}) > 1:
+        return tuple(np.asarray(v) for v in values)
+    return np.array(values)
+
+
+def columns_of(records: Sequence[Mapping[str, Any]]) -> dict[str, Column]:
+    """The columns of a branch's points from each point's record {name: value} (a record hook's,
+    Record): one Column per name, in the first record's order."""
+    if not records:
+        return {}
+    return {name: column_of([r[name] for r in records]) for name in records[0]}
+
+
+Record = Callable[[float, Array], Mapping[str, Any]]
+"""A record hook, record(p, u) -> {name: value}: what a branch stores of each accepted point
+besides p, u and the spectrum, called with the problem in the state committed at the point (as
+BifurcationKit's record_from_solution): a chain's committed histories xi and free rolling modes,
+a packing's contact rows, stress and contacts. Every point's record has the same names; the
+Branch stacks them into its columns (recorded). A record's "residual", where it gives one, is
+the point's residual in place of the corrector's max|G| (a chain's and a packing's: max|F|
+over the disks with the committed history)."""
+
+
+@dataclass(frozen=True)
+class Piece:
+    """A stretch of a branch, its rows start:stop (start inclusive, stop exclusive).
+
+    kind: what stretch, "leg" (a chain's sweep: 0 the preparation from rest, 1 the requested
+    sweep), "segment" (a packing's shear between two plastic events: 0, 1, ...) or "run" (a
+    stretch with one size of spectral window: a window that crowded is sized anew, wider, at
+    the last certified point and its columns start anew there); label: its number among the
+    pieces of its kind; status: how it ended (a Stop). The pieces of one kind partition the
+    branch's rows in order: a piece that goes on from the one before starts at its first own
+    point (the shared point is the one before's last)."""
+
+    kind: str
+    label: int
+    start: int
+    stop: int
+    status: Stop
+
+
 @dataclass(frozen=True)
 class Branch:
-    """Accepted points k = 0..m-1 of a branch G(u, p) = 0.
+    """Accepted points k = 0..m-1 of a branch G(u, p) = 0: one record for every problem (a run
+    of the core, a chain's sweep in F_x, a packing's shear in gamma, a problem file's).
 
-    p (m,); u (m, n); eigenvalues (m, n) complex, tracked: column i is one eigenvalue followed
-    along the branch; n_complex (m,): number of complex pairs (spectra.count_complex_pairs);
-    ds (m,): arclength step that reached the point (0 for the first); newton_iterations (m,):
-    corrector updates; residual (m,): max|G| at the stored point; tangent (m, n+1): unit
-    tangent in x = (u, p); detection_solves (m,): corrector solves spent on collision detection
-    in the step ending at the point; collisions: located births and deaths in branch order;
-    status: why the run stopped (a Stop: its code, reason and p);
-    warnings; events: steps cut at an event (problem.event_functions); continued (m, n) bool,
-    with a spectral window only (else None): label i at point k is certified to hold the
-    eigenvalue it held at point k - 1 (False at k = 0): it stayed in the tracked set throughout
-    the step (the detection certified it), or samples.certified_labels certifies the step;
-    condition (m, n): each tracked eigenvalue's condition number |l| |r| / |l^H r|
-    (spectra.condition_numbers; nan where the point's sample holds no vectors: exhaustive
-    detection, or no spectra).
+    Per point: p (m,) [units]; u (m, n) the state; eigenvalues (m, n_A) complex, tracked: column
+    i is one eigenvalue followed along the branch (with a spectral window, one column per
+    eigenvalue that passed through the window or its guard bands: window.block_columns, nan
+    where it was not tracked); n_complex (m,): complex pairs (spectra.count_complex_pairs; in the
+    window, with one); residual (m,): max|G| at the stored point (a model may record its own:
+    a chain's or a packing's max|F| over the disks); condition (m, n_A): each tracked
+    eigenvalue's condition number |l| |r| / |l^H r| (spectra.condition_numbers; nan where the
+    point's sample holds no vectors: exhaustive detection, no spectra, a free disk's mode);
+    columns: {name: Column} from a record hook (Record: a chain's xi, free; a packing's rows,
+    xi, contacts, loose, stress).
+    The core's run also keeps, per point (None on a branch joined from runs): ds (m,) the
+    arclength step that reached it (0 for the first); newton_iterations (m,) corrector
+    updates; tangent (m, n+1) the unit tangent in x = (u, p); detection_solves (m,) corrector
+    solves spent on collision detection in the step ending at it; continued (m, n_A) bool, with
+    a spectral window only: label i at point k is certified to hold the eigenvalue it held at
+    point k - 1 (False at k = 0; samples.continued_labels).
+    Pieces: the stretches it is made of (Piece: a chain's legs, a packing's segments, the runs
+    of a widened window); () for a branch of one piece.
+    Labelled points, in branch order: collisions (Collision: the located births and deaths of
+    complex pairs; with a window, those with the double eigenvalue in it; step, the row that
+    starts the step holding it), and labelled {label: records with a location p or gamma}:
+    a packing's "plastic" events (models/packing/plastic.PlasticEvent), a problem's "fold",
+    "branch" and "hopf" points (bifurcations.SpecialPoint); events: how many steps were cut at
+    an event of the problem (a contact opening, closing or reaching the Coulomb cap).
+    The run: status, why it stopped (a Stop; a joined branch's last piece's); warnings; window
+    (lo, hi) of Re lambda tracked, or None (every eigenvalue); widenings: how often the window
+    crowded and was sized anew.
+    Names: parameter, the name of p ("F_x", "gamma", or a problem's own), units its units (""
+    for none); state, the name of u ("q" for the disks); matrix, the tracked matrix's name
+    ("J", "M^-1 J", a problem's own), eigenvalue_units its eigenvalues' units. Besides its
+    fields a branch answers, as attributes, its parameter's and state's names (branch.F_x is
+    branch.p on a chain), each column (branch.xi), each label of labelled points
+    (branch.plastic) and each kind of piece, as the label of the piece of that kind holding
+    each point (branch.leg, branch.segment: int (m,), -1 where none does).
     """
 
     p: Array
     u: Array
     eigenvalues: Array
     n_complex: Array
-    ds: Array
-    newton_iterations: Array
     residual: Array
-    tangent: Array
-    detection_solves: Array
     collisions: tuple[Collision, ...]
     status: Stop
-    warnings: tuple[str, ...] = ()
-    events: int = 0
-    continued: Optional[Array] = None
     condition: Optional[Array] = None
+    columns: Mapping[str, Column] = field(default_factory=dict)
+    pieces: tuple[Piece, ...] = ()
+    labelled: Mapping[str, tuple] = field(default_factory=dict)
+    events: int = 0
+    warnings: tuple[str, ...] = ()
+    window: Optional[tuple[float, float]] = None
+    widenings: int = 0
+    parameter: str = "p"
+    units: str = ""
+    state: str = "u"
+    matrix: str = ""
+    eigenvalue_units: str = ""
+    ds: Optional[Array] = None
+    newton_iterations: Optional[Array] = None
+    tangent: Optional[Array] = None
+    detection_solves: Optional[Array] = None
+    continued: Optional[Array] = None
+
+    def __post_init__(self):
+        names = [*self.columns, *self.labelled, *{piece.kind for piece in self.pieces}]
+        names += [name for name, own in ((self.parameter, "p"), (self.state, "u")) if name != own]
+        taken = [n for n in names if n in _FIELDS or names.count(n) > 1]
+        if taken:
+            raise ValueError(f"a branch's names must differ from each other and from its fields: "
+                             f"{sorted(set(taken))}")
 
     def __len__(self) -> int:
         return self.p.size
+
+    def __getattr__(self, name: str):
+        """The parameter and state by their names, a column, labelled points or the labels of
+        a kind of piece (class docstring)."""
+        fields = self.__dict__
+        if name.startswith("__") or name in _FIELDS or "columns" not in fields:
+            raise AttributeError(name)  # not set yet (a copy or an unpickling in progress)
+        if name == fields["parameter"]:
+            return self.p
+        if name == fields["state"]:
+            return self.u
+        for found in (fields["columns"], fields["labelled"]):
+            if name in found:
+                return found[name]
+        if any(piece.kind == name for piece in fields["pieces"]):
+            return self.labels(name)
+        raise AttributeError(f"this branch has no field, column, labelled points or pieces "
+                             f"named {name!r}")
 
     @property
     def x(self) -> Array:
         """Rows (u, p), shape (m, n+1)."""
         return np.column_stack([self.u, self.p])
+
+    def of_kind(self, kind: str) -> tuple[Piece, ...]:
+        """The pieces of one kind, in order."""
+        return tuple(piece for piece in self.pieces if piece.kind == kind)
+
+    def labels(self, kind: str) -> Array:
+        """int (m,): the label of the piece of `kind` holding each point (-1 where none does)."""
+        out = np.full(len(self), -1, dtype=np.int64)
+        for piece in self.of_kind(kind):
+            out[piece.start:piece.stop] = piece.label
+        return out
+
+    def holding(self, row: int) -> Array:
+        """The rows of every piece that holds `row`, intersected: a point's leg, segment and
+        run (all rows for a branch of one piece)."""
+        on = np.ones(len(self), bool)
+        for piece in self.pieces:
+            if piece.start <= row < piece.stop:
+                on[:piece.start] = on[piece.stop:] = False
+        return np.flatnonzero(on)
+
+
+_FIELDS = frozenset(f.name for f in fields(Branch))
+
+
+def recorded(branch: Branch, records: Sequence[Mapping[str, Any]]) -> Branch:
+    """The branch with its points' records (a Record's, one per point, in order) as its
+    columns (columns_of), a record's "residual" as its residual; the branch itself for none."""
+    if not records:
+        return branch
+    columns = columns_of(records)
+    residual = columns.pop("residual", branch.residual)
+    return replace(branch, columns=columns, residual=residual)
 
 
 class BranchRecorder:

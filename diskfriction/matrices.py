@@ -16,3 +16,8 @@ class Matrix(StrEnum):
 
 MATRIX_OPTIONS = {"J": Matrix.J, "M^-1J": Matrix.M_INV_J, "M^-1 J": Matrix.M_INV_J}
 """The values `--matrix` takes (the space may be left out on a command line)."""
+
+EIGENVALUE_UNITS = {Matrix.J: "force / length", Matrix.M_INV_J: "1 / time^2"}
+"""The units of each matrix's eigenvalues in the raw units of a scene (docs/outputs.md): J's
+are a stiffness (its rows mix forces and torques, its columns lengths and angles), M^-1 J's
+are omega^2."""

@@ -11,26 +11,23 @@ from typing import Optional
 import numpy as np
 
 from diskfriction.continuation.spectra.tracking import Kind
-from diskfriction.models.chain.records import collision_records
-from diskfriction.models.chain.sweep import DiskBranch
-from diskfriction.files import save_json, save_npz
+from diskfriction.continuation import records
+from diskfriction.continuation.branch import Branch
+from diskfriction.continuation.records import collision_records  # noqa: F401  (the commands')
 from diskfriction.reports.figures import (legend, line_key, new_figure, re_scale, re_values,
                                           save_figure, set_re_axis)
 from diskfriction.reports.units import F_X_LABEL, PaperUnits, eig_label
 from diskfriction.scenes import Scene
 
 
-def save_branch(out: Path, branch: DiskBranch, scene: Scene) -> None:
-    """DIR/branch.npz (every accepted point: F_x, q, xi, eigenvalues, their condition numbers,
-    n_complex, residual, leg, free rolling modes; window: the band of Re lambda tracked, nan
-    nan for the whole spectrum) and DIR/collisions.json, each written atomically."""
-    save_npz(Path(out) / "branch.npz", F_x=branch.F_x, q=branch.q, xi=branch.xi,
-             eigenvalues=branch.eigenvalues, condition=branch.condition, n_complex=branch.n_complex,
-             residual=branch.residual, leg=branch.leg, free=branch.free,
-             window=np.array(branch.window if branch.window is not None else (np.nan, np.nan)),
-             matrix=np.array(branch.matrix),
-             k_n=np.array(scene.k_n), N=np.array(scene.N))
-    save_json(Path(out) / "collisions.json", collision_records(branch))
+def save_branch(out: Path, branch: Branch, scene: Scene) -> None:
+    """DIR/branch.npz (continuation/records.branch_arrays: every accepted point's F_x, q, xi,
+    eigenvalues, condition numbers, n_complex, residual, free rolling modes, leg and window run,
+    and the names; with the scene's k_n and N) and DIR/collisions.json
+    (records.save_collisions), each written atomically."""
+    records.save_branch(Path(out) / "branch.npz", branch, k_n=np.array(scene.k_n),
+                        N=np.array(scene.N))
+    records.save_collisions(Path(out) / "collisions.json", branch)
 
 
 LEG_LINES = {True: "-", False: "--"}
@@ -216,7 +213,7 @@ def save_diagram(fig, top, handles: list, title: str, path: Path) -> None:
     save_figure(fig, path)
 
 
-def plot_diagram(branch: DiskBranch, scene: Scene, path: Path) -> None:
+def plot_diagram(branch: Branch, scene: Scene, path: Path) -> None:
     """Im(lambda) (top) and Re(lambda) (bottom) of every eigenvalue against F_x in the paper's
     units (lambda / k_n for the paper's scene): draw_spectrum."""
     unit = PaperUnits.of(scene).eigenvalue(branch.matrix)

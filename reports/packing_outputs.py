@@ -13,11 +13,12 @@ from typing import Optional
 
 import numpy as np
 
+from diskfriction.continuation.branch import Branch
+from diskfriction.continuation.records import save_branch, save_collisions
 from diskfriction.continuation.spectra.window import Window
-from diskfriction.files import json_values, save_json, save_npz
+from diskfriction.files import json_values, save_json
 from diskfriction.matrices import Matrix
 from diskfriction.models.packing.prepare import Packing, save_packing
-from diskfriction.models.packing.shear import PackingBranch, collision_records
 from diskfriction.reports.figures import new_figure, save_figure
 from diskfriction.scenes.packing import PackingScene
 
@@ -89,7 +90,7 @@ def other_scene(out: Path, scene: PackingScene) -> Optional[tuple[Path, dict, li
     return None
 
 
-def plastic_records(branch: PackingBranch) -> list[dict]:
+def plastic_records(branch: Branch) -> list[dict]:
     """One record per plastic event passed, in order: its strain gamma, kind (how the branch was
     lost: models/packing/shear.py PLASTIC), the shear stress sigma_xy before and after and the drop
     before - after [force / length], the displacement |q_after - q_before| [length] and the
@@ -117,23 +118,19 @@ def plastic_records(branch: PackingBranch) -> list[dict]:
     return records
 
 
-def save_packing_branch(out: Path, branch: PackingBranch, scene: PackingScene) -> None:
-    """branch.npz (every PackingBranch array, raw units, and scene_arrays), collisions.json
+def save_packing_branch(out: Path, branch: Branch, scene: PackingScene) -> None:
+    """branch.npz (continuation/records.branch_arrays: every per-point array of the shear's
+    branch, raw units, the contact rows and histories left out, the segments and window runs
+    as labels, plastic_gamma; and scene_arrays), collisions.json (records.save_collisions)
     and plastic.json (plastic_records), each naming the scene (scene_record)."""
-    save_npz(out / "branch.npz", gamma=branch.gamma, q=branch.q, eigenvalues=branch.eigenvalues,
-             condition=branch.condition,
-             segment=branch.segment, plastic_gamma=np.array([e.gamma for e in branch.plastic]),
-             n_complex=branch.n_complex, residual=branch.residual, contacts=branch.contacts,
-             loose=branch.loose, stress=branch.stress, matrix=np.array(str(branch.matrix)),
-             status=np.array(branch.status.sentence(len(branch))), **scene_arrays(scene))
+    save_branch(out / "branch.npz", branch, **scene_arrays(scene))
     record = scene_record(scene)
-    save_json(out / "collisions.json", {"scene": record, "matrix": str(branch.matrix),
-                                        "collisions": collision_records(branch)})
+    save_collisions(out / "collisions.json", branch, scene=record)
     save_json(out / "plastic.json", {"scene": record, "matrix": str(branch.matrix),
                                      "events": plastic_records(branch)})
 
 
-def save_packing_outputs(out: Path, staging: Path, branch: PackingBranch, scene: PackingScene,
+def save_packing_outputs(out: Path, staging: Path, branch: Branch, scene: PackingScene,
                          packing: Packing) -> None:
     """OUTPUTS, every one naming the scene: packing.npz (save_packing), save_packing_branch's
     and diagram.png, written to `staging` first and then renamed into `out` one after
@@ -167,7 +164,7 @@ def strain_lines(ax, strains, **style):
                              autolim=False)
 
 
-def plot_packing_diagram(branch: PackingBranch, scene: PackingScene, path: Path) -> None:
+def plot_packing_diagram(branch: Branch, scene: PackingScene, path: Path) -> None:
     """Three panels against the shear strain gamma: the shear stress sigma_xy [force / length]
     with every collision as a thin line (red: a complex pair born, blue: one dying), the number
     of complex pairs, and Im lambda > 0 of every complex eigenvalue of the branch's matrix

@@ -31,13 +31,14 @@ from typing import Callable, Optional
 
 import numpy as np
 
+from diskfriction.continuation.branch import Branch
 from diskfriction.files import save_text
 from diskfriction.matrices import Matrix
 from diskfriction.models.packing.dynamics import (fastest_pair, mean_squared_displacement, simulate,
                                             time_step)
 from diskfriction.models.packing.equilibria import PackingEquilibria
 from diskfriction.models.packing.runs import linearized
-from diskfriction.models.packing.shear import PackingBranch, shear_scene
+from diskfriction.models.packing.shear import shear_scene
 from diskfriction.reports.figures import new_figure, save_figure
 from diskfriction.reports.packing_outputs import (PLASTIC_STYLE, eigenvalue_unit,
                                                   plot_packing_snapshot, strain_lines)
@@ -120,7 +121,7 @@ def build_packing_report(scene: PackingScene, out: Path, plastic_events: int,
     return ["report.md", "stress.png", "spectrum.png", "snapshot.png", "msd.png"]
 
 
-def contact_events(branch: PackingBranch, network, mass: np.ndarray) -> np.ndarray:
+def contact_events(branch: Branch, network, mass: np.ndarray) -> np.ndarray:
     """The strains of the states where a step of the shear ended at a contact event (a contact
     closing or opening, starting or ending to hold its disk, reaching its Coulomb limit or
     sticking again): an event function of the state before (PackingEquilibria.event_functions)
@@ -181,7 +182,7 @@ def quiet_state(gamma: np.ndarray, chosen: np.ndarray, segment: np.ndarray, boun
     return best if best[1] > 0 else (longest[0], 0.0)
 
 
-def msd_run(branch: PackingBranch, k: int, label: str, clearance: float, network,
+def msd_run(branch: Branch, k: int, label: str, clearance: float, network,
             mass: np.ndarray, linear, scene: PackingScene) -> MsdRun:
     """Random velocities (AMPLITUDE, seed 0) of the network's disks, their centre-of-mass
     velocity removed, from state k (`linear`: runs.linearized there), run PERIODS periods of
@@ -246,7 +247,7 @@ def state_marks(ax, runs: list[MsdRun]) -> list:
                    label=f"{r.label} state of the MSD run") for r in runs]
 
 
-def plastic_key(branch: PackingBranch) -> list:
+def plastic_key(branch: Branch) -> list:
     """The legend handle of PLASTIC_STYLE's lines, where the branch passed plastic events."""
     from matplotlib.lines import Line2D
 
@@ -254,7 +255,7 @@ def plastic_key(branch: PackingBranch) -> list:
             ][:len(branch.plastic)]
 
 
-def plot_stress(branch: PackingBranch, runs: list[MsdRun], scene: PackingScene,
+def plot_stress(branch: Branch, runs: list[MsdRun], scene: PackingScene,
                 path: Path) -> None:
     """stress.png: sigma_xy [force / length] against gamma, one line per segment, the states
     with complex pairs shaded, plastic events dashed, the MSD runs' states dotted."""
@@ -281,7 +282,7 @@ def plot_stress(branch: PackingBranch, runs: list[MsdRun], scene: PackingScene,
     save_figure(fig, path)
 
 
-def plot_spectrum(branch: PackingBranch, sigma: np.ndarray, runs: list[MsdRun],
+def plot_spectrum(branch: Branch, sigma: np.ndarray, runs: list[MsdRun],
                   scene: PackingScene, path: Path) -> None:
     """spectrum.png: the LOWEST eigenvalues by Re lambda of every state (grey real, red
     complex) and `sigma`, the fastest pair's |Im sqrt(lambda)| of every state; for M^-1 J in
@@ -349,7 +350,7 @@ def plot_msd(runs: list[MsdRun], scene: PackingScene, path: Path) -> None:
     save_figure(fig, path)
 
 
-def report_text(scene: PackingScene, branch: PackingBranch, sigma: np.ndarray,
+def report_text(scene: PackingScene, branch: Branch, sigma: np.ndarray,
                 runs: list[MsdRun]) -> str:
     growth = (f"fastest growth rate {sigma.max():.4g} at gamma = "
               f"{branch.gamma[int(np.argmax(sigma))]:.6g}" if sigma.max() > 0

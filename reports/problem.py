@@ -1,32 +1,35 @@
 """Outputs of any problem's branch (`diskfriction bifurcate --problem`): branch.npz,
 collisions.json, special_points.json and the diagram, in the problem's own names and units.
 
-The same files as the disks' (reports/bifurcation.py), with the parameter's name where the
-disks have F_x: branch.npz holds the parameter's values under its name, u, eigenvalues,
-condition, n_complex, residual, and the strings parameter, units, matrix; collisions.json one record per
-collision keyed by the parameter's name (bifurcation.collision_record); special_points.json
-the folds, branch points and Hopf points.
+The same files as a chain's or a packing's (continuation/records.py), from the run's branch with
+the problem's names (problem_branch): branch.npz holds the parameter's values under its name,
+u, eigenvalues, condition, n_complex, residual, the special points' locations and the names;
+collisions.json one object naming the parameter, with one record per collision;
+special_points.json the folds, branch points and Hopf points, the same way.
 """
 from __future__ import annotations
 
+from dataclasses import fields, replace
 from pathlib import Path
 
 import numpy as np
 
 from diskfriction.continuation.api import BifurcationProblem, BranchResult
+from diskfriction.continuation.branch import Branch
 from diskfriction.continuation.detection.bifurcations import SpecialPoint
-from diskfriction.files import save_json, save_npz
-from diskfriction.models.chain.records import RECORD_KEYS, collision_record, pair_condition
+from diskfriction.continuation.records import collision_records, save_branch, save_collisions
+from diskfriction.files import save_json
 from diskfriction.reports.bifurcation import diagram_axes, draw_spectrum, save_diagram
 from diskfriction.reports.figures import relabel
 
-BRANCH_KEYS = ("u", "eigenvalues", "condition", "n_complex", "residual", "parameter", "units",
-               "matrix")
-"""The arrays of branch.npz besides the parameter's values."""
-RESERVED = frozenset(BRANCH_KEYS + RECORD_KEYS + ("value_re", "value_im"))
-"""Names a parameter cannot have: they key the other entries of the files."""
+RESERVED = frozenset(f.name for f in fields(Branch)) - {"p"}
+"""Names a parameter cannot have: they are the branch's own (and key the other entries of
+branch.npz)."""
 FOLD, BRANCH, HOPF = ("s", "k"), ("D", "C2"), ("*", "C0")
 """Marker and colour of a fold, a branch point and a Hopf point on the diagram."""
+SPECIAL = {"fold": "folds", "branch_point": "branch_points", "hopf": "hopf"}
+"""The labels of a problem's special points on its branch (Branch.labelled) and the
+BranchResult's field of each."""
 
 
 def parameter_label(spec: BifurcationProblem) -> str:
@@ -34,32 +37,45 @@ def parameter_label(spec: BifurcationProblem) -> str:
     return f"{spec.parameter} [{spec.units}]" if spec.units else spec.parameter
 
 
-def special_point_record(point: SpecialPoint, parameter: str) -> dict:
-    """A fold, branch point or Hopf point as a JSON object: kind ("fold", "branch", "hopf"),
-    the parameter's value, bracket, the value (0 at a fold or branch point, the eigenvalue
-    i omega at a Hopf point) and u."""
-    return {parameter: float(point.p), "kind": point.kind,
+def problem_branch(result: BranchResult, spec: BifurcationProblem) -> Branch:
+    """The run's branch with the problem's names (parameter, units, matrix, eigenvalue_units)
+    and its special points labelled: "fold", "branch_point", "hopf" (SPECIAL)."""
+    return replace(result.branch, parameter=spec.parameter, units=spec.units, matrix=spec.matrix,
+                   eigenvalue_units=spec.eigenvalue_units,
+                   labelled={label: tuple(getattr(result, name)) for label, name in SPECIAL.items()})
+
+
+def special_point_record(point: SpecialPoint) -> dict:
+    """A fold, branch point or Hopf point as a JSON object: p, the parameter there; kind
+    ("fold", "branch", "hopf"); bracket; value_re, value_im, the eigenvalue that marks it (0 at
+    a fold or branch point, i omega at a Hopf point); u, the state there."""
+    return {"p": float(point.p), "kind": point.kind,
             "bracket": [float(b) for b in point.bracket], "value_re": float(np.real(point.value)),
             "value_im": float(np.imag(point.value)), "u": np.asarray(point.u, dtype=float).tolist()}
 
 
+def special_points_json(branch: Branch) -> dict:
+    """special_points.json's object: the names (parameter, units, matrix, eigenvalue_units, as
+    collisions.json's) and special_points, one record per point (special_point_record) in
+    branch order."""
+    points = sorted((s for label in SPECIAL for s in branch.labelled.get(label, ())),
+                    key=lambda s: s.step)
+    return {"parameter": branch.parameter, "units": branch.units, "matrix": str(branch.matrix),
+            "eigenvalue_units": branch.eigenvalue_units,
+            "special_points": [special_point_record(s) for s in points]}
+
+
 def save_outputs(out: Path, result: BranchResult, spec: BifurcationProblem) -> None:
     """DIR/branch.npz, DIR/collisions.json, DIR/special_points.json, each written atomically."""
-    b, name = result.branch, spec.parameter
-    save_npz(Path(out) / "branch.npz", **{name: b.p}, u=b.u, eigenvalues=b.eigenvalues,
-             condition=b.condition, n_complex=b.n_complex, residual=b.residual,
-             parameter=np.array(name), units=np.array(spec.units), matrix=np.array(spec.matrix))
-    save_json(Path(out) / "collisions.json", collision_json(result, spec))
-    save_json(Path(out) / "special_points.json",
-              [special_point_record(s, name) for s in special_points(result)])
+    branch = problem_branch(result, spec)
+    save_branch(Path(out) / "branch.npz", branch)
+    save_collisions(Path(out) / "collisions.json", branch)
+    save_json(Path(out) / "special_points.json", special_points_json(branch))
 
 
 def collision_json(result: BranchResult, spec: BifurcationProblem) -> list[dict]:
-    """collisions.json's records of a problem's run, with the pairs' condition numbers."""
-    b = result.branch
-    return [collision_record(c, spec.parameter, spec.matrix, None,
-                             pair_condition(b.p, b.condition, c, result.collisions))
-            for c in result.collisions]
+    """collisions.json's records of a problem's run (records.collision_records)."""
+    return collision_records(problem_branch(result, spec))
 
 
 def special_points(result: BranchResult) -> list[SpecialPoint]:

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from diskfriction.models.chain.sweep import DiskBranch
+from diskfriction.continuation.branch import Branch
 from diskfriction.reports.bifurcation import draw_spectrum
 from diskfriction.reports.figures import (OUTCOME_STYLE, legend, new_figure, outcome_patches,
                                           save_figure)
@@ -78,7 +78,7 @@ def draw_verify(top, bottom, F_x: np.ndarray, lam: np.ndarray, leg: np.ndarray,
     return handles
 
 
-def plot_verify(branch: DiskBranch, rows: list[dict], scene: Scene, t_end: float,
+def plot_verify(branch: Branch, rows: list[dict], scene: Scene, t_end: float,
                 path: Path) -> None:
     """verify.png of a `diskfriction verify` run: draw_verify in the paper's units, the legend
     right of the panels, the scene, matrix and run length in the title."""

@@ -216,7 +216,7 @@ def branch_summary(system, branch) -> dict:
     spans = complex_spans(todo)
     rows = np.flatnonzero(branch.leg == 1)
     F_end = float(branch.F_x[-1])
-    stopped = [status for status in branch.status if not status.reached]
+    stopped = [leg.status for leg in branch.of_kind("leg") if not leg.status.reached]
     reason = "" if not stopped else (f"branch ended at F_x = {F_end:.6g}: "
                                      f"{stopped[0].sentence(len(branch))}; there "
                                      f"{contact_states(system, branch.q[-1], branch.xi[-1])}")
@@ -232,7 +232,7 @@ def map_cell(scene: Scene, params: MapParams) -> dict:
     with slide runs, one row per window (studies.verify.window_run)."""
     from diskfriction.continuation.stepping.arclength import ContinuationError
     from diskfriction.models.chain.equilibria import EquilibriumError
-    from diskfriction.models.chain.records import collision_records
+    from diskfriction.continuation.records import collision_records
     from diskfriction.models.chain.sweep import SweepParams, sweep
     from diskfriction.studies.verify import windows
     from diskfriction.symbolic import System

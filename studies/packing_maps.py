@@ -109,7 +109,8 @@ def packing_cell(scene: PackingScene, params: PackingMapParams) -> dict:
     from diskfriction.models.packing.equilibria import MissedContact
     from diskfriction.models.packing.plastic import RelaxationFailed
     from diskfriction.models.packing.prepared import prepare_scene
-    from diskfriction.models.packing.shear import ShearParams, collision_records, shear
+    from diskfriction.continuation.records import collision_records
+    from diskfriction.models.packing.shear import ShearParams, shear
 
     start = time.perf_counter()
     summary = dict.fromkeys(PACKING_COLUMNS)

@@ -10,7 +10,8 @@ from __future__ import annotations
 from typing import Callable, Optional
 
 from diskfriction.models.chain.equilibrium import check_reached, equilibrium_at
-from diskfriction.models.chain.sweep import DiskBranch, sweep
+from diskfriction.continuation.branch import Branch
+from diskfriction.models.chain.sweep import sweep
 from diskfriction.models.chain.windows import Window, leg_windows
 from diskfriction.dynamics.simulate import inaccuracy, simulate, summarize
 from diskfriction.dynamics.start import Perturbation, spectrum
@@ -19,7 +20,7 @@ from diskfriction.symbolic import System
 from diskfriction.words import count
 
 
-def windows(branch: DiskBranch) -> list[Window]:
+def windows(branch: Branch) -> list[Window]:
     """The windows of a swept branch's requested leg (disks.windows.leg_windows)."""
     return leg_windows(branch.F_x, branch.n_complex, branch.leg, [(c.p, c.kind) for c in branch.collisions])
 
@@ -46,7 +47,7 @@ def window_run(system: System, window: Window, index: int, t_end: float, amplitu
 
 def verify_windows(scene: Scene, matrix: str, t_end: float, amplitude: float,
                    progress: Optional[Callable[[str, Optional[float]], None]] = None
-                   ) -> tuple[DiskBranch, list[dict]]:
+                   ) -> tuple[Branch, list[dict]]:
     """The branch whose windows were run (from rest to the scene's F_x range end), and one row
     per window (window_run), in order; raises NoEquilibrium when the branch ends short of the
     range end. progress(stage, fraction or None): the stage "sweep ...", then "runs" with the

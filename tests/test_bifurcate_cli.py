@@ -35,12 +35,14 @@ def test_writes_branch_collisions_and_diagram(paper_run):
     assert {"F_x", "q", "xi", "eigenvalues", "n_complex", "residual", "leg"} <= set(branch.files)
     assert branch["q"].shape == (m, 30) and branch["xi"].shape == (m, 20)
     assert branch["eigenvalues"].shape == (m, 30) and branch["residual"].max() <= 1e-10
-    records = json.loads((out / "collisions.json").read_text())
-    assert records and all(r["kind"] in ("birth", "death") and r["matrix"] == "J" for r in records)
-    assert all(0.0 < r["F_x"] < 0.12 for r in records)
+    found = json.loads((out / "collisions.json").read_text())
+    assert (found["parameter"], found["units"], found["matrix"]) == ("F_x", "force", "J")
+    records = found["collisions"]
+    assert records and all(r["kind"] in ("birth", "death") for r in records)
+    assert all(0.0 < r["p"] < 0.12 for r in records)
     # the records account for every change of the pair count between consecutive points
     assert unaccounted_pair_changes(branch["F_x"], branch["n_complex"],
-                                    [(r["F_x"], r["kind"]) for r in records]) == []
+                                    [(r["p"], r["kind"]) for r in records]) == []
     assert (out / "diagram.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
@@ -94,9 +96,8 @@ def test_the_diagram_draws_lines_windows_bubbles_and_a_key():
 def test_json_flag_prints_the_collision_list(paper_run):
     out, result = paper_run
     printed = json.loads(result.stdout)
-    stored = json.loads((out / "collisions.json").read_text())
-    assert printed == [{k: r[k] for k in ("F_x", "kind", "lambda_re", "lambda_im", "matrix")}
-                       for r in stored]
+    stored = json.loads((out / "collisions.json").read_text())["collisions"]
+    assert printed == [{k: r[k] for k in ("p", "kind", "lambda")} for r in stored]
 
 
 BAD = [
@@ -177,7 +178,7 @@ def test_collisions_only_bracketed_are_counted_and_marked(tmp_path, monkeypatch,
     budget = collisions.DetectionParams  # what bifurcate imports when it runs
     monkeypatch.setattr(collisions, "DetectionParams", lambda **kw: budget(max_solves=1, **kw))
     assert main(["bifurcate", "--workers", "0", "--out", str(tmp_path)]) == 0
-    records = json.loads((tmp_path / "collisions.json").read_text())
+    records = json.loads((tmp_path / "collisions.json").read_text())["collisions"]
     unlocated = [r for r in records if not r["resolved"]]
     out = capsys.readouterr().out
     summary = f"{len(records)} collisions (J), {len(unlocated)} of them only bracketed"

@@ -7,7 +7,7 @@ import pytest
 import scipy.linalg as sla
 
 from diskfriction.continuation import Options, problem_from_functions, solve_branch
-from diskfriction.models.chain.records import collision_records, pair_condition
+from diskfriction.continuation.records import collision_records, pair_condition
 
 P1 = 0.3
 

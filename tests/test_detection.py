@@ -171,7 +171,7 @@ def test_eps_zero_runs_to_the_end_with_free_rolling_modes_excluded(chain_sweep):
     spreads, and the branch reaches F_x = 0.12."""
     system = System.from_scene(Scene(N=20))
     branch = chain_sweep(Scene(N=20), "J")[0]
-    assert branch.status == (Stop(StopCode.REACHED),) and branch.F_x[-1] == 0.12
+    assert branch.status == Stop(StopCode.REACHED) and branch.F_x[-1] == 0.12
     assert branch.free[0] > 0 and branch.free[-1] < branch.free[0]
     problem = DiskEquilibria(system, branch.q[0], branch.xi[0], branch.F_x[0], "J")
     assert problem.free_count == branch.free[0]
@@ -190,7 +190,7 @@ def test_eps_zero_long_sparse_chain_finds_the_collisions_of_the_short_one(chain_
     within 1e-9 in F_x; N = 100 runs to 0.12 with its free modes counted and falling."""
     branches = {N: chain_sweep(Scene(N=N), "J")[0] for N in (20, 100)}
     long, short = branches[100], branches[20]
-    assert long.status == (Stop(StopCode.REACHED),) and long.F_x[-1] == 0.12
+    assert long.status == Stop(StopCode.REACHED) and long.F_x[-1] == 0.12
     assert long.free[-1] > 0 and long.free[-1] < long.free[0]
     assert [c.kind for c in long.collisions] == [c.kind for c in short.collisions]
     assert max(abs(a.p - b.p) for a, b in zip(long.collisions, short.collisions)) <= 1e-9
@@ -776,7 +776,7 @@ def test_a_chain_window_that_crowds_is_widened_and_finds_the_same_collisions(mon
     monkeypatch.setattr(equilibria, "sized", lambda w, A, *_: sized(w, A, 1.0, 1))
     tight = sweep(system, 0.0, 0.12, params=window)
     assert generous.widenings == 0 and tight.widenings >= 1
-    assert tight.status[-1].reached and np.all(np.diff(tight.F_x) > 0)
+    assert tight.status.reached and np.all(np.diff(tight.F_x) > 0)
     assert [c.kind for c in tight.collisions] == [c.kind for c in generous.collisions]
     assert len(generous.collisions) == 20
     assert np.abs(np.array([c.p for c in tight.collisions])

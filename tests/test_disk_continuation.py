@@ -44,7 +44,7 @@ def test_rest_state_is_singular_and_relaxation_starts_the_branch(paper_system):
 
 
 def test_equilibrium_residual_stays_below_1e10_along_the_paper_branch(paper_branch, paper_system):
-    assert paper_branch.status == (Stop(StopCode.REACHED),) and paper_branch.F_x[-1] == 0.12
+    assert paper_branch.status == Stop(StopCode.REACHED) and paper_branch.F_x[-1] == 0.12
     res = [np.abs(paper_system.forces(q, xi, F)).max()
            for F, q, xi in zip(paper_branch.F_x, paper_branch.q, paper_branch.xi)]
     assert max(res) <= 1e-10

@@ -39,9 +39,11 @@ DYNAMIC = {"V1": "<F_x>", "V_cm": "<F_x>", "realizations": "<F_x>", "status": "<
 
 def placeholder(key: str, parent: str, parameter: str) -> str:
     """A key as the page writes it: a load as <F_x>, a cell status as <status>, the problem's
-    parameter as <parameter>."""
+    parameter as <parameter> (in a labelled point's key too: fold_<parameter>)."""
     if key == parameter:
         return "<parameter>"
+    if parameter and key.endswith("_" + parameter):
+        return key[:-len(parameter)] + "<parameter>"
     return DYNAMIC.get(parent, key)
 
 

@@ -156,8 +156,10 @@ def test_bifurcate_shears_a_packing_scene_and_writes_its_branch(tmp_path):
     with np.load(out / "branch.npz") as branch:
         assert branch["gamma"][-1] == 0.002 and branch["residual"].max() <= 1e-11
         assert branch["eigenvalues"].shape == (branch["gamma"].size, 3 * 24)
-    records = json.loads((out / "collisions.json").read_text())["collisions"]
-    assert records and all(0 <= r["gamma"] <= 0.002 for r in records)
+    found = json.loads((out / "collisions.json").read_text())
+    records = found["collisions"]
+    assert (found["parameter"], found["units"], found["matrix"]) == ("gamma", "", "M^-1 J")
+    assert records and all(0 <= r["p"] <= 0.002 for r in records)
     assert f"{len(records)} collisions" in result.stdout
 
 
@@ -194,7 +196,7 @@ def test_bifurcate_with_a_window_lists_only_its_collisions(tmp_path):
     result = run_cli("bifurcate", str(scene), "--window", "5:50", "--out", str(tmp_path / "out"))
     assert result.returncode == 0, result.stderr
     records = json.loads((tmp_path / "out" / "collisions.json").read_text())["collisions"]
-    assert records and all(5 <= r["lambda_re"] <= 50 for r in records)
+    assert records and all(5 <= r["lambda"] <= 50 for r in records)
     with np.load(tmp_path / "out" / "branch.npz") as branch:
         lam = branch["eigenvalues"]
     assert np.isnan(lam).any() and np.isfinite(lam).any(axis=0).all()

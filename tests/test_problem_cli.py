@@ -40,12 +40,14 @@ def test_ziegler_file_writes_the_outputs_in_its_own_names_and_units(tmp_path):
     assert {"P", "u", "eigenvalues", "n_complex", "residual"} <= set(branch.files)
     assert (str(branch["parameter"]), str(branch["units"]), str(branch["matrix"])) == ("P", "k/l", "M^-1 K")
     assert branch["P"][0] == 0.0 and branch["P"][-1] == 6.0 and branch["u"].shape == (branch["P"].size, 2)
-    records = json.loads((out / "collisions.json").read_text())
+    found = json.loads((out / "collisions.json").read_text())
+    assert (found["parameter"], found["units"], found["matrix"]) == ("P", "k/l", "M^-1 K")
+    records = found["collisions"]
     assert [r["kind"] for r in records] == ["birth", "death"]
-    assert [r["P"] for r in records] == pytest.approx([3.5 - np.sqrt(2), 3.5 + np.sqrt(2)], abs=1e-10)
-    assert json.loads(result.stdout) == [{k: r[k] for k in ("P", "kind", "lambda_re", "lambda_im", "matrix")}
-                                         for r in records]
-    assert json.loads((out / "special_points.json").read_text()) == []
+    assert [r["p"] for r in records] == pytest.approx([3.5 - np.sqrt(2), 3.5 + np.sqrt(2)], abs=1e-10)
+    assert json.loads(result.stdout) == [{k: r[k] for k in ("p", "kind", "lambda")} for r in records]
+    special = json.loads((out / "special_points.json").read_text())
+    assert special["parameter"] == "P" and special["special_points"] == []
     assert (out / "diagram.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
@@ -79,8 +81,8 @@ BAD_FILES = {
                        "problem: dG/du returned shape (2, 3), expected (2, 2)"),
     "raises_inside": (HEADER + LINEAR + "problem = make(G=lambda u, p: u[7], p_span=(0, 1))\n",
                       "problem: G(u, p) raised IndexError at p = 0: index 7 is out of bounds"),
-    "reserved": (HEADER + LINEAR + "problem = make(p_span=(0, 1), parameter='kind')\n",
-                 "problem: parameter name 'kind' clashes with the outputs' keys"),
+    "reserved": (HEADER + LINEAR + "problem = make(p_span=(0, 1), parameter='eigenvalues')\n",
+                 "problem: parameter name 'eigenvalues' clashes with the outputs' keys"),
     "not_a_name": (HEADER + LINEAR + "problem = make(p_span=(0, 1), parameter='P [N]')\n",
                    "failed to import: ValueError: parameter must be a name such as P, F_x or I"),
 }
@@ -161,7 +163,7 @@ def test_detection_applies_to_a_problem_file(tmp_path, capsys):
     assert main(["bifurcate", "--problem", target, "--detection", "exhaustive", "--json",
                  "--out", str(tmp_path / "z")]) == 0
     records = json.loads(capsys.readouterr().out)
-    assert [r["P"] for r in records] == pytest.approx([3.5 - np.sqrt(2), 3.5 + np.sqrt(2)], abs=1e-10)
+    assert [r["p"] for r in records] == pytest.approx([3.5 - np.sqrt(2), 3.5 + np.sqrt(2)], abs=1e-10)
     code, line = run_in_process(capsys, "--problem", str(tmp_path / "missing.py"), "--detection", "slow")
     assert code == 2 and line.startswith("bifurcate error: --detection: ") and "'slow'" in line
 

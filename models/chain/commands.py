@@ -82,8 +82,7 @@ def bifurcate(args: argparse.Namespace, scene: Scene, window) -> int:
         progress.close()
     records = collision_records(branch)
     if args.json:
-        print(json_text([{k: r[k] for k in ("F_x", "kind", "lambda_re", "lambda_im", "matrix")}
-                         for r in records]))
+        print(json_text([{k: r[k] for k in ("p", "kind", "lambda")} for r in records]))
     else:
         print(f"{count(len(branch), 'equilibrium', 'equilibria')}, max residual {branch.residual.max():.1e}, "
               f"{branch.events} contact events split")
@@ -102,15 +101,15 @@ def bifurcate(args: argparse.Namespace, scene: Scene, window) -> int:
         for r in records:
             unlocated = ("" if r["resolved"] else
                          "  bracketed only: F_x in [{:.10f}, {:.10f}]".format(*r["bracket"]))
-            print(f"  {r['kind']:5s}  F_x = {r['F_x']:.10f}  lambda = {r['lambda_re']:.6g}  "
-                  f"(lambda/k_n = {r['lambda_re'] / scene.k_n:.5g}){unlocated}")
+            print(f"  {r['kind']:5s}  F_x = {r['p']:.10f}  lambda = {r['lambda']:.6g}  "
+                  f"(lambda/k_n = {r['lambda'] / scene.k_n:.5g}){unlocated}")
         print(f"wrote {out}/branch.npz, collisions.json, diagram.png")
-    if not branch.status[-1].reached:
+    if not branch.status.reached:
         from diskfriction.models.chain.equilibrium import contact_states
 
         raise CommandError(f"bifurcate error: {scene.source}: the sweep ended at F_x = "
                            f"{branch.F_x[-1]:.6g}, short of {F_to:g}: "
-                           f"{branch.status[-1].sentence(len(branch))}; there "
+                           f"{branch.status.sentence(len(branch))}; there "
                            f"{contact_states(system, branch.q[-1], branch.xi[-1])}; what it "
                            f"reached is written", EXIT_FAILED)
     return 0
@@ -122,7 +121,7 @@ def leg_lines(branch, F_to: float) -> list[str]:
     import numpy as np
 
     lines = []
-    for leg, status in zip(sorted(set(branch.leg.tolist())), branch.status):
+    for leg, status in ((piece.label, piece.status) for piece in branch.of_kind("leg")):
         rows = np.flatnonzero(branch.leg == leg)
         F = branch.F_x[np.r_[rows[0] - 1, rows] if rows[0] > 0 else rows]  # from where one ended
         what = ("preparation: loading from rest" if leg == 0 else

@@ -22,7 +22,8 @@ import numpy as np
 from diskfriction.continuation.stepping.arclength import ContinuationError
 from diskfriction.continuation.detection.collisions import DetectionParams
 from diskfriction.models.chain.equilibria import EquilibriumError
-from diskfriction.models.chain.sweep import DiskBranch, SweepParams, sweep
+from diskfriction.continuation.branch import Branch
+from diskfriction.models.chain.sweep import SweepParams, sweep
 from diskfriction.errors import OneLineError
 from diskfriction.symbolic import System
 
@@ -73,14 +74,14 @@ def equilibrium_at(system: System, F_x: float) -> Equilibrium:
     return Equilibrium(float(branch.F_x[-1]), branch.q[-1], branch.xi[-1], float(branch.residual[-1]))
 
 
-def check_reached(system: System, branch: DiskBranch, F_x: float) -> None:
+def check_reached(system: System, branch: Branch, F_x: float) -> None:
     """Raise NoEquilibrium (where the branch ended, why, and its contacts there) unless the
     branch's last point is F_x, reached (to REACHED * F_x)."""
     F_end = float(branch.F_x[-1])
-    if branch.status[-1].reached and abs(F_end - F_x) <= REACHED * F_x:
+    if branch.status.reached and abs(F_end - F_x) <= REACHED * F_x:
         return
     raise NoEquilibrium(f"no equilibrium beyond F_x = {F_end:.6g} (asked for {F_x:g}): "
-                        f"{branch.status[-1].sentence(len(branch))}; there "
+                        f"{branch.status.sentence(len(branch))}; there "
                         f"{contact_states(system, branch.q[-1], branch.xi[-1])}", F_end, F_x)
 
 

@@ -22,12 +22,11 @@ from typing import Callable, Optional
 import numpy as np
 
 from diskfriction.continuation.api import Options, solve_in_runs
-from diskfriction.continuation.detection.collisions import Collision
+from diskfriction.continuation.branch import Branch, Piece, column_of
 from diskfriction.models.chain.equilibria import DiskEquilibria, relax
-from diskfriction.continuation.branch import Branch, Stop
 from diskfriction.continuation.spectra.window import Window, block_columns
 from diskfriction.continuation.spectra.tracking import count_complex_pairs, match_eigenvalues
-from diskfriction.matrices import Matrix
+from diskfriction.matrices import EIGENVALUE_UNITS, Matrix
 from diskfriction.symbolic import System
 
 START_FRACTION = 1e-4
@@ -67,54 +66,27 @@ class SweepParams(Options):
     window: Optional[tuple[float, float]] = None
 
 
-@dataclass(frozen=True)
-class DiskBranch:
-    """Accepted equilibria of a sweep, one row per point (raw units).
-
-    F_x (m,); q (m, n); xi (m, 2N) committed history; eigenvalues (m, n) tracked spectrum of
-    `matrix`; n_complex (m,); residual (m,) max|F|; leg (m,) 0 = preparation from rest,
-    1 = the requested sweep; free (m,) free rolling modes (disks touching only the substrate,
-    models/chain/equilibria.py), excluded from the collisions; collisions of the requested leg, in
-    branch order; status per leg run (a leg that did not reach its end is the last run);
-    events: contact events (opening, closing, Coulomb cap, a free disk joining) the steps were
-    cut at; window: (lo, hi) of Re lambda tracked, or None (then every eigenvalue); with a
-    window, eigenvalues holds one column per eigenvalue that passed through the window or its
-    guard bands (spectral_window.window_columns: its value where lo - g <= Re lambda <= hi + g,
-    nan elsewhere and before and after it is this column's), of which those with Re lambda in
-    [lo, hi] are certified, n_complex counts the pairs there and only collisions there are
-    listed. condition (m, n), as eigenvalues: each eigenvalue's condition number |l| |r| /
-    |l^H r| (spectra.condition_numbers: 1 for a normal matrix, diverging like
-    |F_x - F_c|^(-1/2) at a collision F_c; nan where no vectors were computed: the exhaustive
-    detection, a free disk's mode). widenings: how often the window crowded and was sized
-    anew, wider, at the last point (its eigenvalues start new columns there).
-    """
-
-    F_x: np.ndarray
-    q: np.ndarray
-    xi: np.ndarray
-    eigenvalues: np.ndarray
-    n_complex: np.ndarray
-    residual: np.ndarray
-    leg: np.ndarray
-    free: np.ndarray
-    collisions: tuple[Collision, ...]
-    matrix: Matrix
-    status: tuple[Stop, ...]
-    events: int
-    window: Optional[tuple[float, float]] = None
-    condition: Optional[np.ndarray] = None
-    widenings: int = 0
-
-    def __len__(self) -> int:
-        return self.F_x.size
-
-
 Progress = Callable[[float], None]
 
 
 def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = None,
-          params: SweepParams = SweepParams(), progress: Optional[Progress] = None) -> DiskBranch:
-    """Follow the equilibria from rest to F_from (leg 0, if F_from != 0), then to F_to (leg 1)."""
+          params: SweepParams = SweepParams(), progress: Optional[Progress] = None) -> Branch:
+    """Follow the equilibria from rest to F_from (leg 0, if F_from != 0), then to F_to (leg 1).
+
+    The branch (continuation/branch.Branch, raw units): p = F_x [force] (parameter "F_x"), u =
+    q (state "q"); columns xi (m, 2N) the committed histories and free (m,) the free rolling
+    modes (disks touching only the substrate, models/chain/equilibria.py, excluded from the
+    collisions); residual max|F| with the committed history [force]; pieces: the legs (0 the
+    preparation from rest, 1 the requested sweep; a leg that ended short is the last) and the
+    runs of the spectral window (sized anew, wider, where it crowded: their columns start anew);
+    collisions: the requested leg's; events: contact events (opening, closing, Coulomb cap, a
+    free disk joining) the steps were cut at; window (lo, hi) of Re lambda tracked, or None
+    (every eigenvalue): with one, eigenvalues holds one column per eigenvalue that passed
+    through the window or its guard bands (window.block_columns: nan where it was not
+    tracked), of which those with Re lambda in [lo, hi] are certified, and n_complex and the
+    collisions count only those there. condition: each eigenvalue's condition number, in the
+    columns of eigenvalues (diverging like |F_x - F_c|^(-1/2) at a collision F_c; nan where
+    no vectors were computed: the exhaustive detection, a free disk's mode)."""
     if F_from == F_to:
         raise ValueError(f"empty sweep {F_from}:{F_to}")
     if F_from < 0 or F_to < 0:
@@ -127,45 +99,54 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
     q, xi = relax(system, *system.rest_state(), F_1)
     window = None if params.window is None else Window(*params.window)
     problem = DiskEquilibria(system, q, xi, F_1, matrix, params.newton_tol, window=window)
-    rows, collisions, status, events, widenings = [], [], [], 0, 0
-    continued, condition, blocks_used = {}, [], 0
+
+    def record(F_x, q_k):  # the point's columns (branch.Record)
+        xi_k = problem.trial(q_k)[0]
+        return {"xi": xi_k, "free": problem.free_count,
+                "residual": np.abs(system.forces(q_k, xi_k, F_x)).max()}
+
+    def callback_of(run):  # progress once per point: a later leg's first is the last one's
+        if progress is None:
+            return None
+        return lambda k, F_x, q_k, eigvals: None if k == 0 and F_x_all else progress(F_x)
+
+    F_x_all, q_all, residual, columns, eig, condition, blocks = [], [], [], {}, [], [], []
+    collisions, continued, pieces, ended, events, widenings, blocks_used = [], {}, [], {}, 0, 0, 0
     F_start = F_1
     for leg, _, b in legs:
         b = max(b, F_1)  # unloading ends where loading started: F_x = 0 is the singular rest state
         ds = min(F_1, ds_max) if leg == legs[0][0] else ds_max / 2  # graded away from rest
         options = replace(params, ds_max=ds_max, ds=ds, ds_min=min(params.ds_min, ds))
-        first, base = len(rows), max(blocks_used - 1, 0)  # a leg continues the last block
-
-        def record_of(run, leg=leg, base=base):
-            def record(k, F_x, q_k, eigvals):
-                if k == 0 and rows:
-                    return  # the leg starts at the last point of the one before
-                xi_k = problem.trial(q_k)[0]
-                res = np.abs(system.forces(q_k, xi_k, F_x)).max()
-                rows.append((F_x, q_k.copy(), xi_k, eigvals, res, leg, problem.free_count, base + run))
-                if progress is not None:
-                    progress(F_x)
-            return record
-
-        runs, widened = solve_in_runs(problem, problem.q_c, (F_start, b), options, record_of)
+        first, base = len(F_x_all), max(blocks_used - 1, 0)  # a leg continues the last block
+        runs, widened = solve_in_runs(problem, problem.q_c, (F_start, b), options, callback_of, record)
         for run, branch in enumerate(runs):  # a run after the first follows a widened window
-            skipped = run > 0 or first > 0  # its first point was recorded before
+            skip = int(run > 0 or first > 0)  # its first point is the last one recorded
             if run == 0 and first > 0:
-                branch = _continue_leg(rows, first, branch)
-            condition += list(branch.condition[1:] if skipped else branch.condition)
+                branch = _continue_leg(eig[first - 1], branch)
+            offset = len(F_x_all) - skip  # the run's row k is the branch's row offset + k
+            F_x_all += list(branch.p[skip:])
+            q_all += list(branch.u[skip:])
+            residual += list(branch.residual[skip:])
+            for name, column in branch.columns.items():
+                columns.setdefault(name, []).extend(column[skip:])
+            eig += list(branch.eigenvalues[skip:])
+            condition += list(branch.condition[skip:])
+            blocks += [base + run] * (len(branch) - skip)
+            ended[base + run] = branch.status
             if window is not None:
-                continued.setdefault(base + run, []).extend(
-                    branch.continued[1:] if skipped else branch.continued)
+                continued.setdefault(base + run, []).extend(branch.continued[skip:])
             events += branch.events
             if leg == 1:
-                collisions += branch.collisions
-        blocks_used, widenings = base + len(runs), widenings + widened
-        status.append(runs[-1].status)
+                collisions += [replace(c, step=offset + c.step) for c in branch.collisions]
+        blocks_used, widenings, status = base + len(runs), widenings + widened, runs[-1].status
+        pieces.append(Piece("leg", leg, first, len(F_x_all), status))
         F_start = float(runs[-1].p[-1])
-        if not runs[-1].status.reached:
+        if not status.reached:
             break  # a leg that ended short: the next would start from a load never asked for
-    F_x, q, xi, eig, res, leg, free, blocks = (list(c) for c in zip(*rows))
-    F_x, q, xi, res, leg, free, blocks = (np.array(c) for c in (F_x, q, xi, res, leg, free, blocks))
+    columns = {name: column_of(values) for name, values in columns.items()}
+    blocks = np.array(blocks)
+    pieces += [Piece("run", int(b), int(on[0]), int(on[-1]) + 1, ended[b])
+               for b in np.unique(blocks) for on in [np.flatnonzero(blocks == b)]]
     rel_tol = params.detection.rel_tol
     if window is None:
         eig, condition = np.array(eig), np.array(condition)
@@ -174,23 +155,22 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
         n_complex = np.array([count_complex_pairs(e[window.inside(e)], rel_tol) for e in eig])
         collisions = [c for c in collisions if window.lo <= c.eigenvalue <= window.hi]
         eig, condition = block_columns(eig, blocks, continued, window, condition)
-    return DiskBranch(F_x, q, xi, eig, n_complex, res, leg, free, tuple(collisions), matrix,
-                      tuple(status), events, params.window, condition, widenings)
+    return Branch(np.array(F_x_all), np.array(q_all), eig, n_complex, np.array(residual), tuple(collisions),
+                  status, condition, columns, tuple(pieces), events=events, window=params.window,
+                  widenings=widenings, parameter="F_x", units="force", state="q", matrix=matrix,
+                  eigenvalue_units=EIGENVALUE_UNITS[matrix])
 
 
-def _continue_leg(rows: list, first: int, branch: Branch) -> Branch:
-    """A leg after another starts at that one's last point with its labels in order of value
-    (arclength._sorted), and its first point is not recorded again: its rows (from rows[first])
-    are relabelled (in place) to continue the last point's labels, the same eigenvalues at the same
-    point matched by value (spectra.match_eigenvalues), and the branch's collision pairs and
-    window columns (Branch.continued) with them. The first leg is returned as it is."""
-    if first == 0:
-        return branch
-    perm = match_eigenvalues(rows[first - 1][3], branch.eigenvalues[0])  # new label i holds old perm[i]
+def _continue_leg(before: np.ndarray, branch: Branch) -> Branch:
+    """A leg after another starts at that one's last point, whose eigenvalues are `before`, with
+    its labels in order of value (arclength._sorted): its branch relabelled to continue the last
+    point's labels, the same eigenvalues at the same point matched by value
+    (spectra.match_eigenvalues), and the branch's collision pairs, window columns
+    (Branch.continued) and condition numbers with them."""
+    perm = match_eigenvalues(before, branch.eigenvalues[0])  # new label i holds old perm[i]
     of_label = np.argsort(perm)
-    for r in range(first, first + len(branch) - 1):  # this branch's rows, not a later run's
-        rows[r] = rows[r][:3] + (rows[r][3][perm],) + rows[r][4:]
     pairs = tuple(replace(c, pair=(int(of_label[c.pair[0]]), int(of_label[c.pair[1]])))
                   for c in branch.collisions)
     continued = None if branch.continued is None else branch.continued[:, perm]
-    return replace(branch, collisions=pairs, continued=continued, condition=branch.condition[:, perm])
+    return replace(branch, eigenvalues=branch.eigenvalues[:, perm], collisions=pairs,
+                   continued=continued, condition=branch.condition[:, perm])

@@ -72,7 +72,8 @@ def bifurcate(args: argparse.Namespace, scene: PackingScene,
     from diskfriction.models.packing.plastic import RelaxationFailed
     from diskfriction.models.packing.prepared import prepare_scene
     from diskfriction.models.packing.segments import save_segment
-    from diskfriction.models.packing.shear import ShearParams, collision_records, shear
+    from diskfriction.continuation.records import collision_records
+    from diskfriction.models.packing.shear import ShearParams, shear
     from diskfriction.reports.packing_outputs import (OUTPUTS, RUN_SCENE, save_packing_outputs,
                                                       scene_record)
 
@@ -86,7 +87,7 @@ def bifurcate(args: argparse.Namespace, scene: PackingScene,
         key = resume_key(scene, window, args.detection)
         done, unread = finished_segments(kept, key)
         resumed = (f" (resumed after {count(len(done), 'segment')}, at gamma = "
-                   f"{done[-1].next_start[3]:.6g})" if done else "")
+                   f"{done[-1].plastic[0].after[3]:.6g})" if done else "")
         again = f"; computed again: {unread}" if unread else ""
         progress.stage(f"shear gamma 0 -> {g1:g}{resumed}{again}")
         params = ShearParams(detection=DetectionParams(mode=args.detection), workers=args.workers)
@@ -95,7 +96,7 @@ def bifurcate(args: argparse.Namespace, scene: PackingScene,
                            lambda gamma: progress(gamma / g1, f"gamma = {gamma:.3e}"),
                            plastic_events=PLASTIC_EVENTS, window=window, done=done,
                            on_segment=lambda segment: save_segment(
-                               kept / SEGMENT_FILE.format(segment.points[-1].segment), segment, key))
+                               kept / SEGMENT_FILE.format(segment.segment[-1]), segment, key))
         except (ContinuationError, MissedContact, NotJammed, RelaxationFailed,
                 WindowCrowded) as error:
             kept_line = (f" (the segments finished before it are kept in {kept}: a rerun resumes "

@@ -23,7 +23,7 @@ from diskfriction.models.packing.dynamics import (LINEAR_RANGE, GrowthFit, Packi
 from diskfriction.models.packing.equilibria import PackingEquilibria, row_keys
 from diskfriction.models.packing.network import Network
 from diskfriction.models.packing.plastic import RelaxationFailed, relax
-from diskfriction.models.packing.shear import PackingBranch
+from diskfriction.continuation.branch import Branch
 
 KINDS = ("eigenvector", "random-position", "random-velocity", "none")
 
@@ -78,7 +78,7 @@ class Linearized:
     problem: PackingEquilibria
 
 
-def linearized(branch: PackingBranch, k: int, network: Network, mass: np.ndarray) -> Linearized:
+def linearized(branch: Branch, k: int, network: Network, mass: np.ndarray) -> Linearized:
     """M^-1 J at state k (dense spectrum) and its fastest pair's growing solution. The reduced
     eigensystem (models/packing/equilibria.py) gives r, A_red r = lambda r at the kept dofs, and w,
     w A_red = lambda w; in every coordinate V = A r / lambda (A = M^-1 J: A V = lambda V, since
@@ -207,7 +207,7 @@ def touching(network: Network, q: np.ndarray, rows: np.ndarray, gamma: float) ->
     return row_keys(rows[network.overlaps(q, rows, gamma) > 0]).tolist()
 
 
-def run_from_state(branch: PackingBranch, k: int, network: Network, mass: np.ndarray,
+def run_from_state(branch: Branch, k: int, network: Network, mass: np.ndarray,
                    kind: str, amplitude: float, t_end: float, delta_0: float,
                    dt: float | None = None, seed: int = 0,
                    linear: Linearized | None = None) -> StateRun:

@@ -10,18 +10,16 @@ from typing import Callable, Optional, Sequence
 import numpy as np
 
 from diskfriction.continuation.api import Options, solve_in_runs
-from diskfriction.continuation.branch import Stop, StopCode
-from diskfriction.continuation.detection.collisions import Collision
+from diskfriction.continuation.branch import Branch, Piece, StopCode, column_of
 from diskfriction.continuation.spectra.tracking import count_complex_pairs
 from diskfriction.continuation.spectra.window import Window, block_columns
-from diskfriction.matrices import Matrix
+from diskfriction.matrices import EIGENVALUE_UNITS, Matrix
 from diskfriction.models.packing.equilibria import (NotJammed, PackingEquilibria, largest_force,
                                               mass_diagonal, start)
 from diskfriction.models.packing.network import Network
 from diskfriction.models.packing.plastic import PlasticEvent, drag_rate, past_fold
 from diskfriction.models.packing.prepare import Packing
 from diskfriction.models.packing.prepared import prepare_scene
-from diskfriction.models.packing.segments import Point, ShearSegment
 from diskfriction.scenes.packing import PackingScene
 
 PLASTIC = (StopCode.FOLD, StopCode.COMMIT, StopCode.DS_MIN, StopCode.TURNED_BACK)
@@ -56,59 +54,9 @@ class ShearParams(Options):
     residual_scale: Optional[float] = 1.0
 
 
-@dataclass(frozen=True)
-class PackingBranch:
-    """Accepted equilibria of a shear run, one row per point (raw units).
-
-    gamma (m,); q (m, 3N); rows, xi: each point's contact rows (i, j, cx, cy) and their
-    committed histories (the state a run starts from); eigenvalues (m, 3N) of `matrix` in
-    coordinates relative to the reference disk (models/packing/equilibria.py; the translations' and
-    loose disks' zeros included), or with a window one column per eigenvalue that passed
-    through the window or its guard bands (spectral_window.window_columns; nan elsewhere);
-    n_complex (m,) (in the window, if one); residual (m,) max|F| over the network's disks
-    [force]; contacts (m,) active contacts; loose (m,) loose disks; stress (m, 4) sigma_xx, sigma_yy, sigma_xy,
-    sigma_yx [force / length]; collisions in branch order (each segment's eigenvalue labels are
-    its own); status of the last segment; events: steps cut at a contact event; segment (m,)
-    the segment of each point: the branch between two plastic events; plastic: the plastic
-    events (folds in gamma) passed, one between each two segments; window: (lo, hi) of Re
-    lambda tracked (collisions then only those with lo <= lambda <= hi), or None; widenings:
-    how often the window crowded and was sized anew, wider, at the last certified state;
-    condition, as eigenvalues: each eigenvalue's condition number |l| |r| / |l^H r|
-    (spectra.condition_numbers; nan for the zeros of the translations and loose disks, which
-    carry no vectors)."""
-
-    gamma: np.ndarray
-    q: np.ndarray
-    rows: tuple[np.ndarray, ...]
-    xi: tuple[np.ndarray, ...]
-    eigenvalues: np.ndarray
-    n_complex: np.ndarray
-    residual: np.ndarray
-    contacts: np.ndarray
-    loose: np.ndarray
-    stress: np.ndarray
-    collisions: tuple[Collision, ...]
-    matrix: Matrix
-    status: Stop
-    events: int
-    segment: np.ndarray
-    plastic: tuple[PlasticEvent, ...] = ()
-    window: Optional[tuple[float, float]] = None
-    widenings: int = 0
-    condition: Optional[np.ndarray] = None
-
-    def __len__(self) -> int:
-        return self.gamma.size
-
-
-def collision_records(branch: PackingBranch) -> list[dict]:
-    """One record per collision: strain, kind, the double eigenvalue, the matrix, the bracket
-    of strain it lies in and whether it is located to the detection's tolerance (resolved;
-    docs/outputs.md)."""
-    return [{"gamma": c.p, "kind": str(c.kind), "lambda_re": c.eigenvalue,
-             "lambda_im": 0.0, "matrix": str(branch.matrix),
-             "bracket": [float(b) for b in c.bracket], "resolved": bool(c.resolved)}
-            for c in branch.collisions]
+RAGGED = ("rows", "xi")
+"""The columns of a shear's branch whose shape varies from point to point: each point's committed
+contact rows (i, j, cx, cy) and their histories."""
 
 
 def network_of(scene: PackingScene, packing: Packing) -> Network:
@@ -119,8 +67,8 @@ def network_of(scene: PackingScene, packing: Packing) -> Network:
 
 def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearParams(),
           progress: Optional[Callable[[float], None]] = None, plastic_events: int = 0,
-          window: Optional[tuple[float, float]] = None, done: Sequence[ShearSegment] = (),
-          on_segment: Optional[Callable[[ShearSegment], None]] = None) -> PackingBranch:
+          window: Optional[tuple[float, float]] = None, done: Sequence[Branch] = (),
+          on_segment: Optional[Callable[[Branch], None]] = None) -> Branch:
     """Follow the equilibria of `packing` with friction switched on from gamma = 0 to the end
     of the scene's gamma range (collisions below its start are left out). At a fold (a plastic
     event) the run ends, unless plastic_events > 0: then up to that many events are passed
@@ -134,7 +82,21 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
     interrupted; on_segment(segment) is told each segment finished here once it is passed.
     Without tangential forces (mu = 0, or the tangential law "none") the spectrum is real and
     no collision is looked for (with a window the scans stay on: they certify its columns);
-    NotJammed where the packing unjams (under shear, or in a relaxation)."""
+    NotJammed where the packing unjams (under shear, or in a relaxation).
+
+    The branch (continuation/branch.Branch, raw units): p = gamma (parameter "gamma", no
+    units), u = q (m, 3N) (state "q"); eigenvalues of `matrix` in coordinates relative to the
+    reference disk (models/packing/equilibria.py; the translations' and loose disks' zeros
+    included: their condition numbers nan, they carry no vectors), or with a window one column
+    per eigenvalue that passed through the window or its guard bands (nan elsewhere; n_complex
+    and the collisions then those in the window); residual max|F| over the network's disks
+    [force]; columns rows and xi (each point's committed contact rows (i, j, cx, cy) and
+    their histories, tuples: the state a run starts from), contacts (active contacts), loose
+    (loose disks), stress (m, 4) sigma_xx, sigma_yy, sigma_xy, sigma_yx [force / length];
+    pieces: the segments (the branch between two plastic events: each segment's eigenvalue
+    labels are its own) and the window's runs; labelled "plastic": the plastic events passed
+    (folds in gamma), one between each two segments; events: steps cut at a contact event;
+    status: the last segment's."""
     network = network_of(scene, packing)
     mass = mass_diagonal(network, scene.m, scene.inertia)
     affine = float(np.linalg.norm(packing.positions[:, 1]))
@@ -146,97 +108,139 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
         # is certified by the detection's scans, so they stay on there)
         options = replace(options, detection=replace(options.detection, enabled=False))
     segments = list(done)
-    begin = segments[-1].next_start if segments else (*start(network, packing.positions), 0.0)
+    begin = segments[-1].plastic[0].after if segments else (*start(network, packing.positions), 0.0)
     while True:
         try:
             segment = shear_segment(network, mass, scene, options, window, begin, len(segments),
-                                    sum(len(s.continued) for s in segments), progress)
+                                    sum(len(s.of_kind("run")) for s in segments), progress)
         except NotJammed as error:  # at the start of a segment after a plastic event
             if not segments or error.where != "the packing":
                 raise
             raise NotJammed(error.reason, f"after the plastic event at gamma = "
-                                          f"{segments[-1].plastic.gamma:.9g} the packing relaxed "
+                                          f"{segments[-1].plastic[0].gamma:.9g} the packing relaxed "
                                           f"into a state that") from None
         segments.append(segment)
         if segment.status.code not in PLASTIC or len(segments) > plastic_events:
             break
-        last = segment.points[-1]
-        q, xi, rows, gamma_start, steps = past_fold(network, last.q, last.xi, last.rows, last.gamma,
+        q_last, xi_last, rows_last = segment.q[-1], segment.xi[-1], segment.rows[-1]
+        gamma_last = float(segment.gamma[-1])
+        q, xi, rows, gamma_start, steps = past_fold(network, q_last, xi_last, rows_last, gamma_last,
                                                     params.newton_tol, mass, drag_rate(scene))
         after = network.stress(q, xi, rows, gamma_start)[2]
-        event = PlasticEvent(last.gamma, float(last.stress[2]), float(after),
-                             float(np.linalg.norm(q - last.q)), steps, str(segment.status.code))
-        segments[-1] = segment = replace(segment, plastic=event, next_start=(q, xi, rows, gamma_start))
+        event = PlasticEvent(gamma_last, float(segment.stress[-1][2]), float(after),
+                             float(np.linalg.norm(q - q_last)), steps, str(segment.status.code),
+                             after=(q, xi, rows, gamma_start))
+        segments[-1] = segment = replace(segment, labelled={"plastic": (event,)})
         if on_segment is not None:
             on_segment(segment)
-        begin = segment.next_start
-    return joined(segments, scene, window, params.detection.rel_tol)
+        begin = event.after
+    return joined(segments, scene)
 
 
 def shear_segment(network: Network, mass: np.ndarray, scene: PackingScene, options: ShearParams,
                   window: Optional[tuple[float, float]], begin: tuple, index: int, base: int,
-                  progress: Optional[Callable[[float], None]]) -> ShearSegment:
+                  progress: Optional[Callable[[float], None]]) -> Branch:
     """Segment `index` of a shear run from the relaxed state begin = (q, xi, rows, gamma) to the
-    end of the scene's strain range or the first plastic event; its window blocks are numbered
-    from `base` (a window is sized again for every segment: its columns start anew there)."""
+    end of the scene's strain range or the first plastic event, as a branch (shear's) of one
+    segment, its rows from 0, no plastic event yet and every collision (the scene's strain
+    range is applied when the segments are joined); its window runs are numbered from `base`
+    (a window is sized again for every segment: its columns start anew there)."""
     q, xi, rows, gamma_start = begin
     problem = PackingEquilibria(network, q, xi, rows, gamma_start, mass, scene.matrix,
                                 options.newton_tol, None if window is None else Window(*window))
-    records, continued, condition, events, collisions = [], {}, [], 0, []
 
-    def record_of(run):
-        def record(k, gamma, q_k, eigvals):
-            xi_all = problem.trial(q_k, gamma)[0]
-            xi_k, rows_k = xi_all[problem.active], problem.rows_c[problem.active]
-            delta = network.overlaps(q_k, rows_k, gamma)
-            records.append((gamma, q_k.copy(), problem.rows_c.copy(), xi_all, eigvals,
-                            largest_force(problem, q_k, gamma), int((delta > 0).sum()),
-                            int(problem.gauge.loose.sum()), network.stress(q_k, xi_k, rows_k, gamma),
-                            index, base + run))
-            if progress is not None:
-                progress(gamma)
-        return record
+    def record(gamma, q_k):  # the point's columns (branch.Record)
+        xi_all = problem.trial(q_k, gamma)[0]
+        xi_k, rows_k = xi_all[problem.active], problem.rows_c[problem.active]
+        delta = network.overlaps(q_k, rows_k, gamma)
+        return {"rows": problem.rows_c.copy(), "xi": xi_all,
+                "residual": largest_force(problem, q_k, gamma), "contacts": int((delta > 0).sum()),
+                "loose": int(problem.gauge.loose.sum()),
+                "stress": network.stress(q_k, xi_k, rows_k, gamma)}
 
-    runs, widened = solve_in_runs(problem, q, (gamma_start, scene.gamma_range[1]), options, record_of)
+    def callback_of(run):
+        return None if progress is None else (lambda k, gamma, q_k, eigvals: progress(gamma))
+
+    runs, widened = solve_in_runs(problem, q, (gamma_start, scene.gamma_range[1]), options,
+                                  callback_of, record)
+    gamma, qs, residual, columns, eig, kappas, blocks, collisions = [], [], [], {}, [], [], [], []
+    continued, pieces, events = {}, [], 0
     for run, branch in enumerate(runs):  # a run after the first follows a widened window
-        collisions += branch.collisions
-        events += branch.events
+        skip = int(run > 0)  # its first point is the last one's
+        offset = len(gamma) - skip  # the run's row k is the segment's row offset + k
+        gamma += list(branch.p[skip:])
+        qs += list(branch.u[skip:])
+        residual += list(branch.residual[skip:])
+        for name, column in branch.columns.items():
+            columns.setdefault(name, []).extend(column[skip:])
+        eig += list(branch.eigenvalues[skip:])
+        kappas += list(branch.condition[skip:])
+        blocks += [base + run] * (len(branch) - skip)
         continued[base + run] = branch.continued if run == 0 else branch.continued[1:]
-        condition += list(branch.condition if run == 0 else branch.condition[1:])
-    points = tuple(Point(*record, condition=kappa) for record, kappa in zip(records, condition))
-    return ShearSegment(points, tuple(collisions), events, continued, widened, runs[-1].status)
-
-
-def joined(segments: Sequence[ShearSegment], scene: PackingScene, window: Optional[tuple[float, float]],
-           rel_tol: float) -> PackingBranch:
-    """The branch of a shear run from its segments in order (the last one's status is the
-    run's); collisions below the scene's strain range, or with a window outside it, left out."""
-    points = [p for s in segments for p in s.points]
-    gamma, q, residual, contacts, loose, stress, segment = (
-        np.array([getattr(p, name) for p in points])
-        for name in ("gamma", "q", "residual", "contacts", "loose", "stress", "segment"))
-    eig, kappas = [p.eigenvalues for p in points], [p.condition for p in points]
-    continued = {b: rows for s in segments for b, rows in s.continued.items()}
-    kept = [c for s in segments for c in s.collisions if c.p >= scene.gamma_range[0]]
+        pieces.append(Piece("run", base + run, offset + skip, len(gamma), branch.status))
+        collisions += [replace(c, step=offset + c.step) for c in branch.collisions]
+        events += branch.events
+    columns = {name: column_of(values, name in RAGGED) for name, values in columns.items()}
+    rel_tol = options.detection.rel_tol
     if window is None:
         eig, condition = np.array(eig), np.array(kappas)
         n_complex = np.array([count_complex_pairs(e[e != 0], rel_tol) for e in eig])
     else:  # the pairs in the window; collisions with their double eigenvalue there
         band = Window(*window)
         n_complex = np.array([count_complex_pairs(e[band.inside(e)], rel_tol) for e in eig])
-        kept = [c for c in kept if band.lo <= c.eigenvalue <= band.hi]
-        eig, condition = block_columns(eig, np.array([p.block for p in points]), continued, band, kappas)
-    return PackingBranch(gamma, q, tuple(p.rows for p in points), tuple(p.xi for p in points), eig,
-                         n_complex, residual, contacts, loose, stress, tuple(kept),
-                         Matrix(scene.matrix), segments[-1].status, sum(s.events for s in segments),
-                         segment, tuple(s.plastic for s in segments if s.plastic is not None),
-                         window, sum(s.widenings for s in segments), condition)
+        collisions = [c for c in collisions if band.lo <= c.eigenvalue <= band.hi]
+        eig, condition = block_columns(eig, np.array(blocks), continued, band, kappas)
+    status = runs[-1].status
+    matrix = Matrix(scene.matrix)
+    return Branch(np.array(gamma), np.array(qs), eig, n_complex, np.array(residual), tuple(collisions), status,
+                  condition, columns, (Piece("segment", index, 0, len(gamma), status), *pieces),
+                  {"plastic": ()}, events=events, window=window, widenings=widened,
+                  parameter="gamma", units="", state="q", matrix=matrix,
+                  eigenvalue_units=EIGENVALUE_UNITS[matrix])
+
+
+def joined(segments: Sequence[Branch], scene: PackingScene) -> Branch:
+    """The branch of a shear run from its segments in order (shear_segment's, each with the
+    plastic event passed at its end; the last one's status is the run's): the segments' rows
+    one after another, their window columns side by side (each segment's own, nan at the
+    other segments' points), collisions below the scene's strain range left out."""
+    starts = np.cumsum([0] + [len(s) for s in segments])
+    first = segments[0]
+    columns = {name: column_of([v for s in segments for v in s.columns[name]], name in RAGGED)
+               for name in first.columns}
+    kept = [replace(c, step=int(start) + c.step) for s, start in zip(segments, starts)
+            for c in s.collisions if c.p >= scene.gamma_range[0]]
+    pieces = tuple(replace(piece, start=int(start) + piece.start, stop=int(start) + piece.stop)
+                   for s, start in zip(segments, starts) for piece in s.pieces)
+    side_by_side = np.concatenate if first.window is None else _diagonal
+    return replace(first, p=np.concatenate([s.p for s in segments]),
+                   u=np.concatenate([s.u for s in segments]),
+                   eigenvalues=side_by_side([s.eigenvalues for s in segments]),
+                   condition=side_by_side([s.condition for s in segments]),
+                   n_complex=np.concatenate([s.n_complex for s in segments]),
+                   residual=np.concatenate([s.residual for s in segments]), collisions=tuple(kept),
+                   status=segments[-1].status, columns=columns, pieces=pieces,
+                   labelled={"plastic": tuple(e for s in segments for e in s.plastic)},
+                   events=sum(s.events for s in segments),
+                   widenings=sum(s.widenings for s in segments))
+
+
+def _diagonal(blocks: Sequence[np.ndarray]) -> np.ndarray:
+    """The (m_i, k_i) arrays as one (sum m_i, sum k_i) array, each in its own rows and columns,
+    nan elsewhere (window.block_columns across segments)."""
+    out = np.full((sum(b.shape[0] for b in blocks), sum(b.shape[1] for b in blocks)), np.nan,
+                  dtype=blocks[0].dtype)
+    r = c = 0
+    for b in blocks:
+        out[r:r + b.shape[0], c:c + b.shape[1]] = b
+        r, c = r + b.shape[0], c + b.shape[1]
+    return out
 
 
 def shear_scene(scene: PackingScene, plastic_events: int,
                 stage: Optional[Callable[[str], None]] = None,
                 relax_progress=None, on_gamma: Optional[Callable[[float], None]] = None
-                ) -> tuple[PackingBranch, Network, np.ndarray]:
+                ) -> tuple[Branch, Network, np.ndarray]:
     """(branch, network, mass diagonal): the scene's packing prepared (prepared.prepare_scene)
     and sheared over its strain range with every eigenvalue tracked, passing up to
     `plastic_events` plastic events; `stage` is told each stage, `relax_progress` is the
