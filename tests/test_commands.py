@@ -1,6 +1,7 @@
 """The commands at the door (issue 9): --out checked before computing, memory estimates,
 negative loads, bad options as one line, a load beyond the branch, Ctrl-C during an ensemble,
-progress on a pipe and on a terminal, and a light start."""
+progress on a pipe and on a terminal, and a light start. The refusals run in this interpreter
+(commandline.run_main); whole runs and Ctrl-C run the command in a fresh one (slow)."""
 from __future__ import annotations
 
 import io
@@ -13,9 +14,7 @@ import time
 from pathlib import Path
 
 import pytest
-from commandline import ROOT, error_line, run_cli
-
-pytestmark = pytest.mark.slow  # whole runs of commands or examples: the slow tier (README, Tests)
+from commandline import ROOT, error_line, run_cli, run_main
 
 FOUR = "[disks]\nN = 4\n[load]\nF_x = [0.0, 0.05]\n"
 """A small scene: every command on it takes a second or two."""
@@ -37,11 +36,30 @@ def scene_file(tmp_path: Path, text: str = FOUR, name: str = "four.toml") -> str
 
 def one_line(result: subprocess.CompletedProcess, command: str, code: int = 2) -> str:
     """The refusal of bad input: exit `code`, exactly one line on stderr (so nothing was
-    computed: no progress stage started), no traceback."""
+    computed: no progress stage started), no traceback. The refusals below run in this
+    interpreter (commandline.run_main); test_a_refusal_is_the_same_in_a_fresh_interpreter
+    runs one for each command end to end."""
     assert result.returncode == code, result.stderr
     assert result.stderr.count("\n") == 1, result.stderr
     return error_line(result, command)
 
+
+
+def test_run_main_ends_as_the_interpreter_would_and_leaves_this_one_as_it_was(tmp_path):
+    """commandline.run_main: --version exits 0 with its line on stdout, a usage error (argparse's
+    SystemExit) 2 with one line; a relative scene path is read in `cwd`; afterwards the working
+    directory and os.environ are this process's again."""
+    version = run_main("--version")
+    assert version.returncode == 0 and version.stdout.startswith("diskfriction ")
+    assert version.stderr == ""
+    usage = run_main("scene", "a.toml", "b.toml")
+    assert usage.returncode == 2 and usage.stdout == "" and usage.stderr.count("\n") == 1
+    assert usage.stderr.startswith("diskfriction: error: unrecognized arguments: b.toml")
+    (tmp_path / "here.toml").write_text("[disks]\nN = 5\n")
+    cwd, env = os.getcwd(), dict(os.environ)
+    scene = run_main("scene", "here.toml", cwd=tmp_path, env={"DISKFRICTION_RUN_MAIN_TEST": "1"})
+    assert scene.returncode == 0 and "N = 5" in scene.stdout and 'name = "here"' in scene.stdout
+    assert os.getcwd() == cwd and dict(os.environ) == env
 
 # ---- --out, checked before anything is computed -------------------------------------------
 
@@ -57,15 +75,26 @@ def bad_outs(tmp_path: Path) -> dict[str, str]:
 @pytest.mark.parametrize("case", ["existing file", "under a file", "in /proc", "empty"])
 def test_an_unusable_out_is_one_line_and_exit_2_before_computing(tmp_path, command, case):
     out = bad_outs(tmp_path)[case]
-    result = run_cli(command, scene_file(tmp_path), *COMMANDS[command], "--out", out)
+    result = run_main(command, scene_file(tmp_path), *COMMANDS[command], "--out", out)
     assert "--out" in one_line(result, command)
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+def test_a_refusal_is_the_same_in_a_fresh_interpreter(tmp_path, command):
+    """End to end, `python -m diskfriction COMMAND SCENE --out A-FILE`: exit 2 and one line,
+    the same bytes as in this interpreter (run_main, which the other refusals here use)."""
+    out = bad_outs(tmp_path)["existing file"]
+    fresh = run_cli(command, scene_file(tmp_path), *COMMANDS[command], "--out", out)
+    assert "--out: not a directory" in one_line(fresh, command)
+    here = run_main(command, scene_file(tmp_path), *COMMANDS[command], "--out", out)
+    assert (here.returncode, here.stdout, here.stderr) == (fresh.returncode, fresh.stdout, fresh.stderr)
 
 
 @pytest.mark.skipif(os.geteuid() == 0, reason="root writes into a read-only directory anyway")
 def test_a_read_only_out_is_one_line_and_exit_2(tmp_path):
     locked = tmp_path / "locked"
     locked.mkdir(mode=0o555)
-    result = run_cli("bifurcate", scene_file(tmp_path), "--out", str(locked / "out"))
+    result = run_main("bifurcate", scene_file(tmp_path), "--out", str(locked / "out"))
     assert "cannot write there" in one_line(result, "bifurcate")
 
 
@@ -76,7 +105,7 @@ def test_a_read_only_out_is_one_line_and_exit_2(tmp_path):
 def test_a_scene_too_large_for_this_machine_is_refused_with_one_line(tmp_path, command, N, eps):
     """Pre-compressed (eps > 0: dense spectra) at N = 100 000, or any scene at N = 10^12."""
     scene = scene_file(tmp_path, f"[disks]\nN = {N}\neps = {eps}\n")
-    result = run_cli(command, scene, *COMMANDS[command], "--out", str(tmp_path / "out"))
+    result = run_main(command, scene, *COMMANDS[command], "--out", str(tmp_path / "out"))
     line = one_line(result, command)
     assert f"N = {N}" in line and "more than this machine's" in line
 
@@ -104,8 +133,8 @@ def test_the_memory_guard_counts_the_scan_workers(tmp_path):
         check_memory("bifurcate", scene, processes=3)
     check_memory("bifurcate", Scene(N=N), processes=3, dense=False)  # eps = 0: free disks
     if planned_workers(scene.ndof, DetectionParams()) == 2:
-        result = run_cli("bifurcate", scene_file(tmp_path, f"[disks]\nN = {N}\neps = 1e-4\n"),
-                         "--out", str(tmp_path / "out"))
+        result = run_main("bifurcate", scene_file(tmp_path, f"[disks]\nN = {N}\neps = 1e-4\n"),
+                          "--out", str(tmp_path / "out"))
         assert "in 3 processes" in one_line(result, "bifurcate")
 
 
@@ -121,7 +150,7 @@ def test_each_command_names_what_its_memory_estimate_counts(tmp_path, command):
     no dense matrix at eps = 0, while simulate and verify take a dense spectrum at a run's
     start; each line says which it counted, and the same need gives the same figure."""
     scene = scene_file(tmp_path, "[disks]\nN = 100000\n")
-    result = run_cli(command, scene, *COMMANDS[command], "--out", str(tmp_path / "out"))
+    result = run_main(command, scene, *COMMANDS[command], "--out", str(tmp_path / "out"))
     line = one_line(result, command)
     assert f"N = 100000: {NEEDS[command]} needs about " in line
     if command != "bifurcate":
@@ -139,13 +168,14 @@ def test_counts_agree_with_their_nouns():
 
 def test_the_scene_command_shows_a_large_scene(tmp_path):
     """A scene is a description: `scene` prints it whatever its size; commands refuse it."""
-    result = run_cli("scene", scene_file(tmp_path, "[disks]\nN = 1000000000000\n"))
+    result = run_main("scene", scene_file(tmp_path, "[disks]\nN = 1000000000000\n"))
     assert result.returncode == 0 and "N = 1000000000000" in result.stdout
 
 
+@pytest.mark.slow
 def test_a_run_whose_frames_exceed_the_memory_is_refused(tmp_path):
-    result = run_cli("simulate", scene_file(tmp_path), "--fx", "0.01", "--t-end", "1e15",
-                     "--out", str(tmp_path / "out"))
+    result = run_main("simulate", scene_file(tmp_path), "--fx", "0.01", "--t-end", "1e15",
+                      "--out", str(tmp_path / "out"))
     assert result.returncode == 2
     assert "frames" in error_line(result, "simulate")
     assert not list((tmp_path / "out").iterdir())
@@ -168,18 +198,19 @@ BAD = [
 
 @pytest.mark.parametrize("args, says", BAD, ids=[" ".join(a) for a, _ in BAD])
 def test_bad_option_is_one_line_and_exit_2(tmp_path, args, says):
-    result = run_cli(*args, "--out", str(tmp_path / "out"))
+    result = run_main(*args, "--out", str(tmp_path / "out"))
     assert says in one_line(result, args[0])
 
 
 def test_a_negative_load_in_a_scene_is_refused_for_the_same_reason(tmp_path):
     scene = scene_file(tmp_path, "[load]\nF_x = [-0.12, 0.0]\n")
     for command in ("scene", "bifurcate"):
-        result = run_cli(command, scene)
+        result = run_main(command, scene)
         assert result.returncode == 2 and "mirror image" in result.stderr
         assert result.stderr.count("\n") == 1
 
 
+@pytest.mark.slow
 def test_a_step_beyond_the_stability_limit_or_an_unresolved_run_is_not_reported(tmp_path):
     """Issue 23: --dt 0.2 at F_x = 0.03 once reported "slid: True" with max M = 1e11. A step
     not below 2 / omega_max is refused (exit 2, the option named); one below it whose run goes
@@ -204,6 +235,7 @@ SHORT = "[disks]\nN = 4\n[contacts]\nmu = 1.0\n"
 below the substrate's limit N mu F_y = 0.4: a quick case of a load beyond the branch."""
 
 
+@pytest.mark.slow
 def test_simulate_beyond_the_end_of_the_branch_says_where_and_why(tmp_path):
     """Nothing may be written or reported for the load asked for."""
     out = tmp_path / "out"
@@ -217,6 +249,7 @@ def test_simulate_beyond_the_end_of_the_branch_says_where_and_why(tmp_path):
     assert result.stdout == "" and not list(out.iterdir())
 
 
+@pytest.mark.slow
 def test_verify_of_a_branch_ending_short_of_the_scenes_range_says_where_and_why(tmp_path):
     """verify's windows are those of the branch up to the scene's F_x range end: a branch that
     ends before it is one line and exit 1, not a table of the windows it happened to reach."""
@@ -228,6 +261,7 @@ def test_verify_of_a_branch_ending_short_of_the_scenes_range_says_where_and_why(
     assert result.stdout == "" and not (out / "verify.json").exists()
 
 
+@pytest.mark.slow
 def test_equilibrium_at_ends_exactly_on_the_load_or_raises():
     from diskfriction.models.chain.equilibrium import NoEquilibrium, equilibrium_at
     from diskfriction.scenes import Scene
@@ -290,6 +324,7 @@ def default_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
+@pytest.mark.slow
 def test_interrupting_an_ensemble_prints_one_line_and_exits_130(tmp_path):
     """As a terminal does: SIGINT to the whole process group, once the dask workers run. The
     workers ignore it (else each may print a KeyboardInterrupt traceback while the parent
@@ -330,6 +365,7 @@ def test_interrupting_an_ensemble_prints_one_line_and_exits_130(tmp_path):
     assert "Traceback" not in err
 
 
+@pytest.mark.slow
 def test_interrupting_a_sweep_with_scan_workers_prints_one_line_and_exits_130(tmp_path):
     """N = 100 scans its steps on 2 forked workers (continuation/detection/scans.py): they ignore SIGINT,
     the command ends them and says one line."""

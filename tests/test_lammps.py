@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from commandline import error_line, run_cli
+from commandline import error_line, run_cli, run_main
 from extras import needs_lammps
 
 from diskfriction.peers.crosscheck import Steps, crosscheck, lever_arm_band
@@ -22,8 +22,6 @@ from diskfriction.scenes import Effects, Scene
 from diskfriction.scenes.load import format_scene
 from diskfriction.symbolic import System
 from diskfriction.dynamics import Stepper
-
-pytestmark = pytest.mark.slow  # whole runs of commands or examples: the slow tier (README, Tests)
 
 LINEAR = Effects("mindlin-linear", conventions="lammps")
 PAPER_LINEAR = Scene(effects=LINEAR, name="linear", source="<test>")
@@ -47,6 +45,7 @@ def largest(result) -> dict[str, float]:
 
 
 @needs_lammps
+@pytest.mark.slow
 def test_linear_law_with_lammps_conventions_agrees_to_1e_10_up_to_t_5(lammps, tmp_path):
     """N = 10, F_x = 0.03 switched on at rest, dt = 1e-3: positions and angles to <= 1e-10."""
     system, result = run_both(lammps, PAPER_LINEAR, 0.03, 5.0, 1e-3, tmp_path)
@@ -57,6 +56,7 @@ def test_linear_law_with_lammps_conventions_agrees_to_1e_10_up_to_t_5(lammps, tm
 
 
 @needs_lammps
+@pytest.mark.slow
 def test_sliding_chain_agrees_to_1e_6_up_to_t_5(lammps, tmp_path):
     """F_x = 2 on disk 1 (mu = 10): substrate contacts reach the Coulomb cap, one after the
     other, and the chain slides; the cap is LAMMPS's rescaling of the history."""
@@ -67,6 +67,7 @@ def test_sliding_chain_agrees_to_1e_6_up_to_t_5(lammps, tmp_path):
 
 
 @needs_lammps
+@pytest.mark.slow
 def test_model_conventions_part_from_lammps_by_the_lever_arm(lammps, tmp_path):
     """With conventions "model" the two codes differ by the O(delta) lever arm: the deviation
     of theta at t = 5 lies within the lever arm's band (peers/crosscheck.py: between the
@@ -88,6 +89,7 @@ def test_model_conventions_part_from_lammps_by_the_lever_arm(lammps, tmp_path):
     {"eps": 1e-3},
 ], ids=["substrate-friction-only", "pair-friction-only", "no-friction", "c=2/5", "no-rotation",
         "precompressed-branch-start"])
+@pytest.mark.slow
 def test_every_representable_variant_agrees_to_1e_10(lammps, tmp_path, change):
     """Friction subsets (mu = 0 at the frictionless kind: linear_nohistory 0 0), the plain
     nve/sphere (c = 2/5), rotation = false (nve: omega stays 0), and the branch point of a
@@ -99,6 +101,7 @@ def test_every_representable_variant_agrees_to_1e_10(lammps, tmp_path, change):
 
 
 @needs_lammps
+@pytest.mark.slow
 def test_exported_deck_round_trips_and_its_first_step_forces_are_ours(lammps, tmp_path):
     """`export lammps` at the branch point F_x = 0.03: LAMMPS reads back the same positions
     bit for bit, and its forces and torques at step 0 (normal forces only: zero histories)
@@ -142,11 +145,25 @@ def test_what_lammps_cannot_represent_is_refused_with_one_line(tmp_path, toml, s
     scene_file = tmp_path / "scene.toml"
     scene_file.write_text(toml)
     out = tmp_path / "out"
-    done = run_cli(*command, str(scene_file), "--out", str(out))
+    done = run_main(*command, str(scene_file), "--out", str(out))
     assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
     line = error_line(done, command[0])
     assert str(scene_file) in line and "LAMMPS cannot represent this scene" in line and says in line
     assert not out.exists()
+
+
+def test_a_refusal_is_the_same_in_a_fresh_interpreter(tmp_path):
+    """End to end, `python -m diskfriction export lammps SCENE` on the smoothed law: exit 2 and
+    one line, the same bytes as in this interpreter (run_main, which the refusals here use)."""
+    scene_file = tmp_path / "scene.toml"
+    scene_file.write_text("")
+    args = ("export", "lammps", str(scene_file), "--out", str(tmp_path / "out"))
+    fresh = run_cli(*args)
+    assert fresh.returncode == 2 and fresh.stderr.count("\n") == 1, fresh.stderr
+    assert "LAMMPS cannot represent this scene" in error_line(fresh, "export")
+    assert not (tmp_path / "out").exists()
+    here = run_main(*args)
+    assert (here.returncode, here.stdout, here.stderr) == (fresh.returncode, fresh.stdout, fresh.stderr)
 
 
 @pytest.mark.parametrize("command", [["export", "lammps"],
@@ -162,7 +179,7 @@ def test_bad_input_is_one_line_and_exit_2_before_computing(tmp_path, command, N,
     scene_file = tmp_path / "linear.toml"
     scene_file.write_text(format_scene(dataclasses.replace(PAPER_LINEAR, N=N)))
     out = [] if "--out" in args else ["--out", str(tmp_path / "out")]
-    done = run_cli(*command, str(scene_file), *args, *out)
+    done = run_main(*command, str(scene_file), *args, *out)
     assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
     assert says in done.stderr and "Traceback" not in done.stderr, done.stderr
 
@@ -180,6 +197,7 @@ def test_crosscheck_without_lammps_says_so_in_one_line(tmp_path):
 
 
 @needs_lammps
+@pytest.mark.slow
 def test_crosscheck_command_prints_the_table_and_writes_its_files(tmp_path):
     scene_file = tmp_path / "linear.toml"
     scene_file.write_text(format_scene(PAPER_LINEAR))
@@ -206,6 +224,7 @@ def test_steps_end_on_t_end_and_every_divides_them():
 
 
 @needs_lammps
+@pytest.mark.slow
 def test_crosscheck_says_when_every_shortens_dt_and_refuses_an_unstable_one(tmp_path):
     """Issue 23: --every 7 made 100 steps of --dt 0.01 into 105 shorter ones, silently; a --dt
     not below the start's stability limit is refused as simulate refuses it."""

@@ -2,29 +2,19 @@
 from __future__ import annotations
 
 import dataclasses
-import os
-import subprocess
-import sys
 import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
+from commandline import error_line, run_cli, run_main
 
 from diskfriction.cli.main import main
 from diskfriction.scenes.load import (KEYS, SCHEMA, SceneError, default_scene_path, format_scene,
                                       load_scene)
 from diskfriction.scenes.scene import Effects, Scene, SceneValueError
 
-REPO = Path(__file__).resolve().parents[1]
 MISSING, DIRECTORY = object(), object()  # bad-scene contents that are not file text
-
-
-def run_cli(*args: str) -> subprocess.CompletedProcess[str]:
-    """``python -m cli ARGS`` in a fresh interpreter, with the repository importable."""
-    env = os.environ | {"PYTHONPATH": str(REPO)}
-    return subprocess.run([sys.executable, "-m", "diskfriction", *args], capture_output=True, text=True,
-                          cwd=REPO, env=env, timeout=60)
 
 
 def write_scene(tmp_path: Path, content: str | bytes | object) -> Path:
@@ -223,13 +213,24 @@ def test_bad_scene_raises_one_scene_error(bad_scene):
 
 def test_bad_scene_on_the_command_line_is_one_line_and_exit_2(bad_scene):
     path, key, fragment = bad_scene
-    result = run_cli("scene", str(path))
+    result = run_main("scene", str(path))
     assert result.returncode == 2
     assert result.stdout == ""
     assert result.stderr.endswith("\n") and result.stderr.count("\n") == 1
     assert result.stderr.startswith(f"scene error: {path}: {key}: ")
     assert fragment in result.stderr
     assert "Traceback" not in result.stdout + result.stderr
+
+
+def test_a_bad_scene_is_refused_alike_in_a_fresh_interpreter(tmp_path):
+    """End to end, `python -m diskfriction scene BAD`: exit 2, one line, nothing on stdout;
+    the same bytes as in this interpreter (run_main, which the cases above use)."""
+    path = write_scene(tmp_path, "[disks]\nN = 1\n")
+    fresh = run_cli("scene", str(path))
+    assert fresh.returncode == 2 and fresh.stdout == "" and fresh.stderr.count("\n") == 1
+    assert error_line(fresh, "scene").startswith(f"scene error: {path}: disks.N: ")
+    here = run_main("scene", str(path))
+    assert (here.returncode, here.stdout, here.stderr) == (fresh.returncode, fresh.stdout, fresh.stderr)
 
 
 def test_every_schema_key_has_bad_values():
