@@ -2,31 +2,20 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
-from commandline import error_line
+from commandline import error_line, run_cli, run_main
 from invariants import unaccounted_pair_changes
-
-pytestmark = pytest.mark.slow  # whole runs of commands or examples: the slow tier (README, Tests)
-
-ROOT = Path(__file__).resolve().parents[1]
-
-
-def bifurcate(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "diskfriction", "bifurcate", *args], cwd=ROOT,
-                          capture_output=True, text=True, timeout=300)
 
 
 @pytest.fixture(scope="module")
 def paper_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("bifurcate")
-    return out, bifurcate("--out", str(out), "--json")
+    return out, run_cli("bifurcate", "--out", str(out), "--json")
 
 
+@pytest.mark.slow
 def test_writes_branch_collisions_and_diagram(paper_run):
     out, result = paper_run
     assert result.returncode == 0, result.stderr
@@ -46,6 +35,7 @@ def test_writes_branch_collisions_and_diagram(paper_run):
     assert (out / "diagram.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+@pytest.mark.slow
 def test_progress_is_one_line_per_stage_when_stderr_is_not_a_terminal(paper_run):
     out, result = paper_run
     stages = [line.split(": ", 1)[1] for line in result.stderr.splitlines()]
@@ -55,6 +45,7 @@ def test_progress_is_one_line_per_stage_when_stderr_is_not_a_terminal(paper_run)
     assert len(stages) == len(set(stages))
 
 
+@pytest.mark.slow
 def test_the_diagram_draws_lines_windows_bubbles_and_a_key():
     """Two tracked columns form a pair between the collisions at 0.2 and 0.6 (sampled every
     0.1), and a bubble 1e-9 wide sits at 0.8: the pair is one line closed at Im = 0 by its
@@ -93,6 +84,7 @@ def test_the_diagram_draws_lines_windows_bubbles_and_a_key():
     plt.close(fig)
 
 
+@pytest.mark.slow
 def test_json_flag_prints_the_collision_list(paper_run):
     out, result = paper_run
     printed = json.loads(result.stdout)
@@ -116,25 +108,27 @@ BAD = [
 
 @pytest.mark.parametrize("args, key", BAD, ids=[" ".join(a) for a, _ in BAD])
 def test_bad_input_gets_one_line_and_exit_2(args, key, tmp_path):
-    result = bifurcate(*args, "--out", str(tmp_path))
+    result = run_main("bifurcate", *args, "--out", str(tmp_path))
     assert result.returncode == 2
     assert result.stderr.count("\n") == 1 and key in result.stderr
     assert "Traceback" not in result.stderr + result.stdout
 
 
+@pytest.mark.slow
 def test_a_branch_that_cannot_start_fails_with_one_line(tmp_path):
     """mu = 0.1: the first load step already makes pairs slide and the relaxation stalls."""
     scene = tmp_path / "slippery.toml"
     scene.write_text("[contacts]\nmu = 0.1\n")
-    result = bifurcate(str(scene), "--out", str(tmp_path))
+    result = run_cli("bifurcate", str(scene), "--out", str(tmp_path))
     assert result.returncode == 1
     assert "relaxation did not converge" in error_line(result, "bifurcate")
 
 
+@pytest.mark.slow
 def test_a_loading_and_unloading_sweep_says_what_each_leg_did(tmp_path):
     """--fx 0.06:0 loads from rest to 0.06, then unloads (issue 23: the summary said "F_x
     1e-05 .. 1e-05 ... status p_end, p_end")."""
-    result = bifurcate("--fx", "0.06:0", "--out", str(tmp_path))
+    result = run_cli("bifurcate", "--fx", "0.06:0", "--out", str(tmp_path))
     assert result.returncode == 0, result.stderr
     legs = [line.strip() for line in result.stdout.splitlines() if line.strip().startswith("leg ")]
     assert len(legs) == 2
@@ -145,12 +139,13 @@ def test_a_loading_and_unloading_sweep_says_what_each_leg_did(tmp_path):
     assert counts == [int((branch["leg"] == 0).sum()), int((branch["leg"] == 1).sum())]
 
 
+@pytest.mark.slow
 def test_a_sweep_stops_at_a_leg_that_ends_short_and_says_where(tmp_path):
     """A preparation leg that ends before its load (a 4-disk chain with mu = 1 folds over at
     F_x ~ 3e-5) is the sweep's last: no unloading from a load never reached; exit 1, one line."""
     scene = tmp_path / "short.toml"
     scene.write_text("[disks]\nN = 4\n[contacts]\nmu = 1.0\n")
-    result = bifurcate(str(scene), "--fx", "0.2:0", "--out", str(tmp_path / "out"))
+    result = run_cli("bifurcate", str(scene), "--fx", "0.2:0", "--out", str(tmp_path / "out"))
     assert result.returncode == 1
     line = error_line(result, "bifurcate")
     assert "the sweep ended at F_x = " in line and "short of 0" in line and "there " in line
@@ -158,16 +153,18 @@ def test_a_sweep_stops_at_a_leg_that_ends_short_and_says_where(tmp_path):
     assert set(branch["leg"].tolist()) == {0} and branch["F_x"][-1] < 1e-4
 
 
+@pytest.mark.slow
 def test_a_window_no_eigenvalue_enters_is_refused_with_one_line(tmp_path):
     """--window 5:6 lies above the whole spectrum (lambda / k_n <= 0.17): bifurcate used to say
     "0 collisions" for a band it never saw (issue 23); it fails with one line and writes nothing."""
-    result = bifurcate("--window", "5:6", "--out", str(tmp_path / "out"))
+    result = run_cli("bifurcate", "--window", "5:6", "--out", str(tmp_path / "out"))
     assert result.returncode == 1
     line = error_line(result, "bifurcate")
     assert "--window" in line and "no eigenvalue of J" in line and "'5:6'" in line
     assert not (tmp_path / "out" / "collisions.json").exists()
 
 
+@pytest.mark.slow
 def test_collisions_only_bracketed_are_counted_and_marked(tmp_path, monkeypatch, capsys):
     """With the detection's solve budget at 1 a step (500 by default), the paper's scene keeps
     some collisions bracketed but not located: the summary says how many, and each such line

@@ -3,21 +3,16 @@ from __future__ import annotations
 
 import json
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from commandline import run_cli, run_main
 
 from diskfriction.studies.ensemble import (EnsembleMismatch, RunSpec, pending, aggregate, breach_speed,
                                            check_directory, code_version, front_slope,
                                            parameters, run_ensemble, sliding_speed)
 from diskfriction.scenes import Scene
-
-pytestmark = pytest.mark.slow  # whole runs of commands or examples: the slow tier (README, Tests)
-
-ROOT = Path(__file__).resolve().parents[1]
 
 
 def synthetic(V1, V2, V_cm, N=10, slid=True, accurate=True):
@@ -69,6 +64,7 @@ def scheduler():
         yield cluster.scheduler_address
 
 
+@pytest.mark.slow
 def test_resumed_ensemble_equals_an_uninterrupted_one(tmp_path, scheduler):
     """Run 1 realization, then rerun asking for 3: the first is reused from disk, and the
     result equals a run of 3 in one go (the integrator is deterministic). F_x = 0.087 on the
@@ -131,13 +127,9 @@ def test_an_ensemble_folder_refuses_runs_with_other_parameters(tmp_path):
         check_directory(tmp_path, record(RunSpec(150.0)))
 
 
-def cli(*args):
-    return subprocess.run([sys.executable, "-m", "diskfriction", *args], cwd=ROOT, capture_output=True,
-                          text=True, timeout=300)
-
-
+@pytest.mark.slow
 def test_simulate_writes_trajectory_summary_and_plot(tmp_path):
-    result = cli("simulate", "--fx", "0.087", "--t-end", "50", "--out", str(tmp_path))
+    result = run_cli("simulate", "--fx", "0.087", "--t-end", "50", "--out", str(tmp_path))
     assert result.returncode == 0, result.stderr
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert {"slid", "sigma_measured", "sigma_predicted", "V_cm", "first_breach"} <= set(summary)
@@ -159,7 +151,7 @@ BAD = [(["simulate", "--fx", "0.08", "--t-end", "-1"], "--t-end"),
 
 @pytest.mark.parametrize("args, key", BAD, ids=[" ".join(a) for a, _ in BAD])
 def test_bad_input_gets_one_line_and_exit_2(args, key, tmp_path):
-    result = cli(*args, "--out", str(tmp_path))
+    result = run_main(*args, "--out", str(tmp_path))
     assert result.returncode == 2 and result.stderr.count("\n") == 1 and key in result.stderr
     assert "Traceback" not in result.stderr
 
@@ -203,10 +195,11 @@ def test_windows_are_the_intervals_between_collisions_with_their_pair_count():
     assert windows(prepared) == [(0.5, 0.9, 3), (0.9, 1.0, 2)]
 
 
+@pytest.mark.slow
 def test_verify_runs_every_window_and_writes_its_table(tmp_path):
     scene = tmp_path / "four.toml"
     scene.write_text("[disks]\nN = 4\n[load]\nF_x = [0.0, 0.05]\n")
-    result = cli("verify", str(scene), "--t-end", "100", "--out", str(tmp_path / "out"))
+    result = run_cli("verify", str(scene), "--t-end", "100", "--out", str(tmp_path / "out"))
     assert result.returncode == 0, result.stderr
     rows = json.loads((tmp_path / "out" / "verify.json").read_text())
     assert len(rows) >= 2 and all(r["window"][0] < r["F_x"] < r["window"][1] for r in rows)

@@ -14,7 +14,7 @@ from diskfriction.continuation.spectra import tracking as spectra
 from diskfriction.continuation.detection.collisions import DetectionParams
 from diskfriction.continuation.problem import FunctionProblem
 from diskfriction.continuation.spectra.tracking import NoGpu, eigensystem, spectra_on
-from commandline import error_line, run_cli
+from commandline import error_line, run_main
 
 WHY_NO_GPU = gpu_spectra.unavailable()
 
@@ -156,16 +156,15 @@ def test_asking_for_gpu_spectra_without_a_gpu_says_why_in_one_line():
 
 
 @pytest.mark.skipif(WHY_NO_GPU is None, reason="a GPU is present: bifurcate --spectra gpu runs")
-@pytest.mark.slow
 def test_bifurcate_asked_for_gpu_spectra_without_a_gpu_says_why_in_one_line(tmp_path):
-    result = run_cli("bifurcate", "--spectra", "gpu", "--out", str(tmp_path / "out"))
+    result = run_main("bifurcate", "--spectra", "gpu", "--out", str(tmp_path / "out"))
     assert result.returncode == 2 and result.stderr.count("\n") == 1, result.stderr
     assert error_line(result, "bifurcate") == f"bifurcate error: --spectra gpu: {WHY_NO_GPU}"
     assert not (tmp_path / "out").exists()
 
 
 def test_bifurcate_refuses_an_unknown_device_in_one_line(tmp_path):
-    result = run_cli("bifurcate", "--spectra", "xpu", "--out", str(tmp_path / "out"))
+    result = run_main("bifurcate", "--spectra", "xpu", "--out", str(tmp_path / "out"))
     assert result.returncode == 2 and result.stderr.count("\n") == 1, result.stderr
     assert error_line(result, "bifurcate") == "bifurcate error: --spectra: must be cpu, gpu or auto (got 'xpu')"
 

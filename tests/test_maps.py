@@ -9,15 +9,13 @@ import json
 from pathlib import Path
 
 import pytest
-from commandline import error_line, run_cli
+from commandline import error_line, run_cli, run_main
 
 from diskfriction.studies.maps import (COLUMNS, Axis, MapParams, SlideParams, grid_values,
                                         map_cell, map_cells, run_map, sliding_load)
 from diskfriction.reports.maps import csv_text, save_map, table_rows
 from diskfriction.scenes import Scene
 from diskfriction.scenes.load import SceneError
-
-pytestmark = pytest.mark.slow  # whole runs of commands or examples: the slow tier (README, Tests)
 
 TINY = Scene(N=3, F_x_range=(0.0, 0.05), name="tiny")
 """Three disks to F_x = 0.05: 4 collisions of J, five windows, about a second a cell."""
@@ -92,6 +90,7 @@ def test_the_sliding_load_is_the_lowest_that_slid_above_the_highest_that_stuck_b
 
 # ---- one cell, failures ---------------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_a_map_of_one_cell_equals_bifurcate_on_the_same_scene(tmp_path):
     scene = tmp_path / "four.toml"
     scene.write_text("[disks]\nN = 4\n[load]\nF_x = [0.0, 0.05]\n")
@@ -115,6 +114,7 @@ def test_a_map_of_one_cell_equals_bifurcate_on_the_same_scene(tmp_path):
     assert (tmp_path / "m" / "map.png").read_bytes()[:4] == b"\x89PNG"
 
 
+@pytest.mark.slow
 def test_cells_without_a_sticking_branch_are_shown_with_the_reason():
     """mu = 0.1: no equilibrium from the first load step; mu = 1 (N = 4): the branch turns back
     at F_x ~ 3e-5. Both rows are in the table, with their reason, and nothing beyond."""
@@ -136,6 +136,7 @@ def test_cells_without_a_sticking_branch_are_shown_with_the_reason():
 
 # ---- on dask: worker count, interrupts ------------------------------------------------------------
 
+@pytest.mark.slow
 def test_a_two_key_map_on_two_workers_gives_a_byte_identical_table(one_worker, tmp_path):
     out, table = one_worker
     records = run_map(map_cells(TINY, AXES, "tiny"), PARAMS, tmp_path, workers=2)
@@ -145,6 +146,7 @@ def test_a_two_key_map_on_two_workers_gives_a_byte_identical_table(one_worker, t
     assert len(rows) == 4 and any(row["F_slide"] for row in rows)  # the runs are compared too
 
 
+@pytest.mark.slow
 def test_an_interrupted_map_resumes_to_the_same_table_leaving_finished_cells_alone(one_worker,
                                                                                   tmp_path):
     """Ctrl-C arrives (as a KeyboardInterrupt) once the first cell is written."""
@@ -193,12 +195,13 @@ BAD = [
 
 @pytest.mark.parametrize("args, says", BAD, ids=[" ".join(a) for a, _ in BAD])
 def test_bad_specifications_are_one_line_and_exit_2_before_anything_runs(tmp_path, args, says):
-    result = run_cli("map", *args, "--out", str(tmp_path / "out"))
+    result = run_main("map", *args, "--out", str(tmp_path / "out"))
     assert result.returncode == 2 and result.stderr.count("\n") == 1, result.stderr
     assert says in error_line(result, "map")
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.slow
 def test_the_estimate_printed_first_grows_with_what_a_cell_does(tmp_path):
     """Issue 23: a map of 100 000 cells started silently. cell_seconds grows with N, with slide
     runs and their length; the CLI's estimate counts only the cells not yet on disk."""

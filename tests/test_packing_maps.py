@@ -7,13 +7,11 @@ import json
 
 import numpy as np
 import pytest
-from commandline import error_line, run_cli
+from commandline import error_line, run_cli, run_main
 
 from diskfriction.scenes.load import SceneError, number_keys, with_values
 from diskfriction.scenes.packing import PackingScene
 from diskfriction.studies.packing_maps import PACKING_COLUMNS, PackingMapParams, packing_cell
-
-pytestmark = pytest.mark.slow  # whole runs of commands or examples: the slow tier (README, Tests)
 
 SMALL = 'geometry = "packing"\nname = "small"\n[packing]\nN = 16\n[shear]\ngamma = [0.0, 0.002]\n'
 """16 disks to gamma = 0.002: some 30 states, complex pairs, one plastic event at mu = 10."""
@@ -40,6 +38,7 @@ def test_a_packing_cell_scene_is_checked_as_a_file_would_be():
     assert raised.value.key == "disks.eps"
 
 
+@pytest.mark.slow
 def test_a_packing_map_of_one_cell_equals_bifurcate_on_the_same_scene(tmp_path):
     scene = tmp_path / "small.toml"
     scene.write_text(SMALL)
@@ -68,6 +67,7 @@ def test_a_packing_map_of_one_cell_equals_bifurcate_on_the_same_scene(tmp_path):
     assert (tmp_path / "m" / "map.png").read_bytes()[:4] == b"\x89PNG"
 
 
+@pytest.mark.slow
 def test_a_cell_that_may_pass_no_plastic_event_ends_at_the_first_and_says_so():
     scene = PackingScene(N=16, gamma_range=(0.0, 0.002))
     record = packing_cell(scene, PackingMapParams("M^-1 J", plastic_events=0))
@@ -97,13 +97,13 @@ def test_a_packing_map_refuses_what_it_does_not_take_in_one_line(tmp_path, args,
     scene = tmp_path / "small.toml"
     scene.write_text(SMALL)
     vary = [] if "--vary" in args else ["--vary", "contacts.mu=1:10:2"]
-    result = run_cli("map", str(scene), *vary, *args, "--out", str(tmp_path / "out"))
+    result = run_main("map", str(scene), *vary, *args, "--out", str(tmp_path / "out"))
     assert result.returncode == 2 and result.stderr.count("\n") == 1, result.stderr
     assert says in error_line(result, "map")
     assert not (tmp_path / "out").exists()
 
 
 def test_a_chain_map_refuses_a_window(tmp_path):
-    result = run_cli("map", "--vary", "contacts.mu=1:10:2", "--window=-1:1",
-                     "--out", str(tmp_path / "out"))
+    result = run_main("map", "--vary", "contacts.mu=1:10:2", "--window=-1:1",
+                      "--out", str(tmp_path / "out"))
     assert result.returncode == 2 and "--window: for packing scenes only" in error_line(result, "map")

@@ -6,14 +6,12 @@ import dataclasses
 from pathlib import Path
 
 import pytest
-from commandline import error_line, run_cli
+from commandline import error_line, run_cli, run_main
 
 from diskfriction.scenes import Effects, SceneError, format_scene, load_scene
 from diskfriction.scenes.load import PACKING_SCHEMA
 from diskfriction.scenes.packing import PackingScene
 from diskfriction.scenes.scene import SceneValueError
-
-pytestmark = pytest.mark.slow  # whole runs of commands or examples: the slow tier (README, Tests)
 
 PACKAGED = Path(__file__).resolve().parents[1] / "scenes" / "packing.toml"
 
@@ -102,7 +100,7 @@ def test_the_packing_scene_checks_its_effects():
 @pytest.mark.parametrize("command", [["export", "lammps"],
                                      ["crosscheck", "lammps", "--fx", "0", "--t-end", "1"]])
 def test_commands_without_packings_refuse_a_packing_scene_in_one_line(tmp_path, command):
-    result = run_cli(*command[:2], str(PACKAGED), *command[2:], "--out", str(tmp_path / "out"))
+    result = run_main(*command[:2], str(PACKAGED), *command[2:], "--out", str(tmp_path / "out"))
     command = command[0]
     assert result.returncode == 2 and result.stderr.count("\n") == 1
     line = error_line(result, command)
@@ -110,6 +108,7 @@ def test_commands_without_packings_refuse_a_packing_scene_in_one_line(tmp_path, 
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.slow
 def test_prepare_writes_a_packing_that_a_second_run_reproduces_bit_for_bit(tmp_path):
     """`prepare` on a 32-disk scene: the target pressure to 1e-3, every disk balanced to
     F_TOL of a contact's force, z at least isostatic without rattlers; the same scene gives
@@ -140,6 +139,7 @@ def test_prepare_refuses_a_chain_scene_in_one_line(tmp_path):
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.slow
 def test_bifurcate_shears_a_packing_scene_and_writes_its_branch(tmp_path):
     """`bifurcate` on a 24-disk packing to gamma = 0.002: exit 0, the files written, every
     collision in collisions.json within the range, the branch in force balance."""
@@ -163,6 +163,7 @@ def test_bifurcate_shears_a_packing_scene_and_writes_its_branch(tmp_path):
     assert f"{len(records)} collisions" in result.stdout
 
 
+@pytest.mark.slow
 def test_bifurcate_says_how_many_collisions_are_only_bracketed(tmp_path, monkeypatch, capsys):
     """A detection whose solve budget runs out (1 solve a step here; 500 by default) leaves
     collisions bracketed but not located: bifurcate says how many in its summary, as
@@ -184,6 +185,7 @@ def test_bifurcate_says_how_many_collisions_are_only_bracketed(tmp_path, monkeyp
     assert summary in out, out
 
 
+@pytest.mark.slow
 def test_bifurcate_with_a_window_lists_only_its_collisions(tmp_path):
     """`bifurcate PACKING --window 5:50` on 24 disks: exit 0, every collision's double
     eigenvalue in the window, the branch's spectrum stored as window columns (nan where a
@@ -206,11 +208,12 @@ def test_bifurcate_with_a_window_lists_only_its_collisions(tmp_path):
 @pytest.mark.parametrize("option, value", [("--fx", "0:0.1"), ("--ds-max", "0.1"),
                                            ("--window", "2:1")])
 def test_bifurcate_refuses_chain_options_for_a_packing_in_one_line(tmp_path, option, value):
-    result = run_cli("bifurcate", str(PACKAGED), option, value, "--out", str(tmp_path / "out"))
+    result = run_main("bifurcate", str(PACKAGED), option, value, "--out", str(tmp_path / "out"))
     assert result.returncode == 2 and option in error_line(result, "bifurcate")
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.slow
 def test_simulate_from_a_sheared_packing_grows_at_the_spectrums_rate(tmp_path):
     """`simulate PACKING --gamma 0.002`: the fastest complex pair's eigenvector, grown in the
     dynamics at the spectrum's sigma within 2 %; the energy budget drift below 1e-2 of the
@@ -232,18 +235,19 @@ def test_simulate_from_a_sheared_packing_grows_at_the_spectrums_rate(tmp_path):
                                           (["--t-end", "1"], "--gamma")])
 def test_simulate_refuses_chain_options_for_a_packing_in_one_line(tmp_path, args, option):
     extra = [] if "--t-end" in args else ["--t-end", "1"]
-    result = run_cli("simulate", str(PACKAGED), *args, *extra, "--out", str(tmp_path / "out"))
+    result = run_main("simulate", str(PACKAGED), *args, *extra, "--out", str(tmp_path / "out"))
     assert result.returncode == 2 and option in error_line(result, "simulate")
 
 
 def test_simulate_on_a_chain_needs_fx_and_refuses_gamma(tmp_path):
-    missing = run_cli("simulate", "--t-end", "1", "--out", str(tmp_path / "a"))
+    missing = run_main("simulate", "--t-end", "1", "--out", str(tmp_path / "a"))
     assert missing.returncode == 2 and "--fx" in error_line(missing, "simulate")
-    gamma = run_cli("simulate", "--fx", "0.01", "--gamma", "0.1", "--t-end", "1", "--out",
-                    str(tmp_path / "b"))
+    gamma = run_main("simulate", "--fx", "0.01", "--gamma", "0.1", "--t-end", "1", "--out",
+                     str(tmp_path / "b"))
     assert gamma.returncode == 2 and "--gamma" in error_line(gamma, "simulate")
 
 
+@pytest.mark.slow
 def test_report_on_a_packing_draws_its_figures_and_tells_a_complex_state_from_a_real_one(tmp_path):
     """`report PACKING` on 24 disks to gamma = 0.002: report.md and its four figures; from the
     state of fastest growth the random perturbation grows until contacts slide, from a state
@@ -263,11 +267,12 @@ def test_report_on_a_packing_draws_its_figures_and_tells_a_complex_state_from_a_
 
 
 def test_report_refuses_the_chains_options_for_a_packing_in_one_line(tmp_path):
-    result = run_cli("report", str(PACKAGED), "--only", "fig6", "--out", str(tmp_path / "out"))
+    result = run_main("report", str(PACKAGED), "--only", "fig6", "--out", str(tmp_path / "out"))
     assert result.returncode == 2 and "--only" in error_line(result, "report")
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.slow
 def test_verify_on_a_packing_measures_each_states_growth_against_its_spectrum(tmp_path):
     """`verify PACKING` on 24 disks to gamma = 0.002 (t_end 400): runs from states with complex
     pairs grow at the spectrum's rate (most within 2 %; two pairs of near rates may blur one)
@@ -303,6 +308,7 @@ def test_verify_on_a_packing_measures_each_states_growth_against_its_spectrum(tm
     assert f"Runs from real states: {len(still)} came back." in text
 
 
+@pytest.mark.slow
 def test_simulate_a_packing_without_perturbation_runs_and_fits_no_growth(tmp_path):
     """--perturbation none (one of simulate's kinds) on a packing: the state as it is, no
     growth rate fitted, the energy budget closed; not a traceback."""
@@ -317,6 +323,7 @@ def test_simulate_a_packing_without_perturbation_runs_and_fits_no_growth(tmp_pat
     assert summary["sliding_updates"] == 0
 
 
+@pytest.mark.slow
 def test_an_interrupted_bifurcate_resumes_after_its_finished_segments(tmp_path, monkeypatch, capsys):
     """`bifurcate` on 32 disks (seed 2, to gamma = 0.0021, a plastic event passed), stopped by
     Ctrl-C right after its first segment was written to DIR/segments/: it says what it keeps;

@@ -13,8 +13,6 @@ from diskfriction.cli.main import main
 
 from gallery import EXAMPLES
 
-pytestmark = pytest.mark.slow  # whole runs of commands or examples: the slow tier (README, Tests)
-
 HEADER = """
 import numpy as np
 from diskfriction.continuation import BifurcationProblem, problem_from_functions
@@ -26,6 +24,7 @@ def make(G=lambda u, p: u - p, dG_du=lambda u, p: np.eye(2), **names):
 """
 
 
+@pytest.mark.slow
 def test_ziegler_file_writes_the_outputs_in_its_own_names_and_units(tmp_path):
     """One run of the gallery's Ziegler file in a fresh interpreter: exit 0, progress one line
     per stage, branch.npz keyed P, collisions.json records keyed P at (7/2 -+ sqrt 2) k/l,
@@ -51,6 +50,7 @@ def test_ziegler_file_writes_the_outputs_in_its_own_names_and_units(tmp_path):
     assert (out / "diagram.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+@pytest.mark.slow
 def test_a_file_that_fails_to_import_is_one_line_and_exit_2_in_a_fresh_interpreter(tmp_path):
     bad = tmp_path / "bad.py"
     bad.write_text("import numpy\n\nraise RuntimeError('no lattice here')\n")
@@ -122,6 +122,7 @@ def test_p_is_refused_without_a_problem(capsys):
     assert code == 2 and line.startswith("bifurcate error: --p: ") and "--problem" in line
 
 
+@pytest.mark.slow
 def test_name_selects_the_problem_and_p_its_span(tmp_path, capsys):
     """FILE.py:NAME runs NAME; --p overrides its span, negative values included."""
     path = tmp_path / "two.py"
@@ -156,6 +157,7 @@ def test_a_problem_that_fails_inside_the_run_ends_it_with_one_line_and_exit_1(tm
     assert not (tmp_path / "out" / "branch.npz").exists()
 
 
+@pytest.mark.slow
 def test_detection_applies_to_a_problem_file(tmp_path, capsys):
     """--detection exhaustive (bisection with full spectra) on Ziegler's file: the same two
     collisions to 1e-10; an unknown detection is refused before the file is imported."""
@@ -168,6 +170,7 @@ def test_detection_applies_to_a_problem_file(tmp_path, capsys):
     assert code == 2 and line.startswith("bifurcate error: --detection: ") and "'slow'" in line
 
 
+@pytest.mark.slow
 def test_a_branch_that_folds_back_out_of_its_span_exits_1_with_one_line(tmp_path):
     """G = u^2 - p from p = 1 towards -1 (issue 23): the branch turns at the fold p = 0 and
     leaves the span at p = 1 again, never reaching -1. What it reached is written and printed
@@ -191,6 +194,7 @@ def test_a_branch_that_folds_back_out_of_its_span_exits_1_with_one_line(tmp_path
     assert (out / "branch.npz").exists()
 
 
+@pytest.mark.slow
 def test_only_the_problem_that_runs_says_its_derivatives_are_differenced(tmp_path, capsys):
     """Two problems without derivatives in one file: one warning line, naming the one run."""
     path = tmp_path / "two.py"
