@@ -54,8 +54,7 @@ def branch(scene: Scene, matrix: str, ds_divisions: int, tol_p: float | None = N
             "collision_eigenvalue": np.array([c.eigenvalue for c in b.collisions], dtype=float),
             "collision_kind": [c.kind for c in b.collisions],
             "collision_resolved": [bool(c.resolved) for c in b.collisions],
-            "status": [stop.sentence(int((b.leg == leg).sum()))
-                       for stop, leg in zip(b.status, np.unique(b.leg))],
+            "status": [leg.status.sentence(leg.stop - leg.start) for leg in b.of_kind("leg")],
             "points": len(b), "seconds": seconds}
 
 
