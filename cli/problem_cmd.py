@@ -164,6 +164,7 @@ def _continue(spec, label: str, span, options, out: Path, as_json: bool,
     from diskfriction.continuation.stepping.arclength import ContinuationError
     from diskfriction.models.chain.memory import sweep_bytes
     from diskfriction.memory import NotEnoughMemory, require_memory
+    from diskfriction.continuation.records import brief
     from diskfriction.reports.problem import collision_json, plot_problem_diagram, save_outputs
 
     a, b = span
@@ -201,7 +202,7 @@ def _continue(spec, label: str, span, options, out: Path, as_json: bool,
         progress.close()
     records = collision_json(result, spec)
     if as_json:
-        print(json_text([{k: r[k] for k in ("p", "kind", "lambda")} for r in records]))
+        print(json_text(brief(records)))
     else:
         if switch is not None:
             print(f"the second branch through branch point {switch[0] + 1}"

@@ -93,6 +93,15 @@ def collision_records(branch: Branch) -> list[dict]:
     return records
 
 
+BRIEF_KEYS = ("p", "kind", "lambda")
+"""What `bifurcate --json` prints of each collision's record (brief)."""
+
+
+def brief(records: Sequence[dict]) -> list[dict]:
+    """Collision records as `bifurcate --json` prints them: p, kind and lambda of each."""
+    return [{key: r[key] for key in BRIEF_KEYS} for r in records]
+
+
 def collisions_json(branch: Branch, **extra) -> dict:
     """collisions.json's object: parameter (its name), units (its units, "" for none), matrix
     (the tracked matrix's name), eigenvalue_units (its eigenvalues'), window ([lo, hi] of Re

@@ -41,6 +41,7 @@ def bifurcate(args: argparse.Namespace, scene: Scene, window) -> int:
     from diskfriction.continuation.detection.scans import planned_workers
     from diskfriction.continuation.spectra.window import WindowCrowded
     from diskfriction.models.chain.sweep import SweepParams, sweep
+    from diskfriction.continuation.records import brief
     from diskfriction.reports.bifurcation import collision_records, plot_diagram, save_branch
     from diskfriction.symbolic import System
 
@@ -82,7 +83,7 @@ def bifurcate(args: argparse.Namespace, scene: Scene, window) -> int:
         progress.close()
     records = collision_records(branch)
     if args.json:
-        print(json_text([{k: r[k] for k in ("p", "kind", "lambda")} for r in records]))
+        print(json_text(brief(records)))
     else:
         print(f"{count(len(branch), 'equilibrium', 'equilibria')}, max residual {branch.residual.max():.1e}, "
               f"{branch.events} contact events split")

@@ -72,7 +72,7 @@ def bifurcate(args: argparse.Namespace, scene: PackingScene,
     from diskfriction.models.packing.plastic import RelaxationFailed
     from diskfriction.models.packing.prepared import prepare_scene
     from diskfriction.models.packing.segments import save_segment
-    from diskfriction.continuation.records import collision_records
+    from diskfriction.continuation.records import brief, collision_records
     from diskfriction.models.packing.shear import ShearParams, shear
     from diskfriction.reports.packing_outputs import (OUTPUTS, RUN_SCENE, save_packing_outputs,
                                                       scene_record)
@@ -118,7 +118,7 @@ def bifurcate(args: argparse.Namespace, scene: PackingScene,
         progress.close()
     records = collision_records(branch)
     if args.json:
-        print(json_text(records))
+        print(json_text(brief(records)))
     else:
         print(f"{count(len(branch), 'equilibrium', 'equilibria')} from gamma = 0 to "
               f"{branch.gamma[-1]:.6g}, max residual {branch.residual.max():.1e}, "
