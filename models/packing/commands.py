@@ -1,16 +1,13 @@
-"""The packing's front: what each command does with a packing scene (models/__init__.py).
+"""The packing's front: what each command does with a packing scene (models/__init__.py):
+prepare, bifurcate (shear), simulate, verify, report and map. cli/ parses the arguments and
+calls these; they check at the door (check_packing: memory, what the preparation can make, run
+length, with a rough wall-time estimate), run the packing's physics and studies, write through
+reports/ and print. Values on the command line and in files are raw units (docs/packings.md).
 
-``diskfriction bifurcate PACKING_SCENE [--matrix J|M^-1J] [--window LO:HI] [--workers K]
-[--out DIR] [--json]``: prepare the scene's packing, shear it quasistatically with friction and locate
-every birth and death of a complex pair (issue 25, docs/packings.md#shear).
-
-A long shear keeps what it finished: each segment (the branch up to a plastic event passed,
-models/packing/segments.py) is written to DIR/segments/ as it is passed, keyed by everything its
-result depends on (resume_key); a rerun of the same command, interrupted or failed, goes on
-after them with the same result (a segment file it cannot read is computed again), and the
-directory is removed once the outputs are written. The outputs are written together at the
-end, each naming its scene (reports/packing_outputs.py); DIR/segments/scene.json names the
-scene of the shear under way, and a DIR holding another scene's files is refused."""
+bifurcate keeps what a long shear finished (studies/kept_shear.py: a rerun resumes after it)
+and writes its outputs together at the end, each naming its scene
+(reports/packing_outputs.py); DIR/segments/scene.json names the scene of the shear under way,
+and a DIR holding another scene's files is refused."""
 from __future__ import annotations
 
 import argparse
@@ -71,48 +68,44 @@ def bifurcate(args: argparse.Namespace, scene: PackingScene,
     from diskfriction.models.packing.equilibria import MissedContact, NotJammed
     from diskfriction.models.packing.plastic import RelaxationFailed
     from diskfriction.models.packing.prepared import prepare_scene
-    from diskfriction.models.packing.segments import save_segment
     from diskfriction.continuation.records import brief, collision_records
     from diskfriction.models.packing.shear import ShearParams, shear
+    from diskfriction.studies.kept_shear import kept_segments
     from diskfriction.reports.packing_outputs import (OUTPUTS, RUN_SCENE, save_packing_outputs,
                                                       scene_record)
 
     g0, g1 = scene.gamma_range
-    kept = out / "segments"
     save_json(out / RUN_SCENE, {"scene": scene_record(scene)})  # the shear under way's scene
     progress = Progress("bifurcate")
+    kept = None
     try:
         progress.stage(f"prepare {scene.N} disks to pressure {scene.pressure:g}")
         packing = prepare_scene(scene, progress.part("relax"))
-        key = resume_key(scene, window, args.detection)
-        done, unread = finished_segments(kept, key)
-        resumed = (f" (resumed after {count(len(done), 'segment')}, at gamma = "
-                   f"{done[-1].plastic[0].after[3]:.6g})" if done else "")
-        again = f"; computed again: {unread}" if unread else ""
-        progress.stage(f"shear gamma 0 -> {g1:g}{resumed}{again}")
+        kept = kept_segments(out / "segments", scene, window, args.detection, PLASTIC_EVENTS)
+        progress.stage(f"shear gamma 0 -> {g1:g}{kept.resumed()}")
         params = ShearParams(detection=DetectionParams(mode=args.detection), workers=args.workers)
         try:
             branch = shear(scene, packing, params,
                            lambda gamma: progress(gamma / g1, f"gamma = {gamma:.3e}"),
-                           plastic_events=PLASTIC_EVENTS, window=window, done=done,
-                           on_segment=lambda segment: save_segment(
-                               kept / SEGMENT_FILE.format(segment.segment[-1]), segment, key))
+                           plastic_events=PLASTIC_EVENTS, window=window, done=kept.done,
+                           on_segment=kept.save)
         except (ContinuationError, MissedContact, NotJammed, RelaxationFailed,
                 WindowCrowded) as error:
-            kept_line = (f" (the segments finished before it are kept in {kept}: a rerun resumes "
-                         "after them)" if any(kept.glob("segment-*.npz")) else "")
+            kept_line = (f" (the segments finished before it are kept in {kept.directory}: a "
+                         "rerun resumes after them)" if kept.finished() else "")
             raise CommandError(f"bifurcate error: {scene.source}: {error}{kept_line}",
                                EXIT_FAILED) from None
         if window is not None:
             check_window_covered(branch, args.window, matrix, 1.0)
         progress.stage(f"writing {out}/{', '.join(OUTPUTS)}")
-        save_packing_outputs(out, kept / "writing", branch, scene, packing)
-        shutil.rmtree(kept, ignore_errors=True)
+        save_packing_outputs(out, kept.directory / "writing", branch, scene, packing)
+        kept.release(keep=False)
     except BaseException:
-        finished = any(kept.glob("segment-*.npz"))
-        if not finished:  # nothing to resume from: the shear's claim on DIR goes too
-            shutil.rmtree(kept, ignore_errors=True)
-        args.keeps = ("segments", kept if finished else None)  # what Ctrl-C says (cli.common)
+        directory = out / "segments"
+        finished = kept is not None and kept.finished()
+        if kept is None or not finished:  # nothing to resume from: the shear's claim on DIR goes too
+            shutil.rmtree(directory, ignore_errors=True)
+        args.keeps = ("segments", directory if finished else None)  # what Ctrl-C says (cli.common)
         raise
     finally:
         progress.close()
@@ -161,36 +154,6 @@ def refuse_other_scene(command: str, out: Path, scene: PackingScene) -> None:
                            f"scene '{record['name']}' ({record['file']}), not to '{scene.name}' "
                            f"({scene.source}): {'; '.join(differ)}; give another --out or "
                            f"remove that scene's files (got {str(out)!r})")
-
-
-SEGMENT_FILE = "segment-{:04d}.npz"
-"""A finished segment's file in DIR/segments/ (its index in the run)."""
-
-
-def resume_key(scene: PackingScene, window, detection: str) -> str:
-    """What a shear's segments depend on: the scene's physics (its matrix included), the
-    window, the detection, the plastic events passed and the code version
-    (studies.cluster.code_version). Not the scan workers: a run resumed on other workers is
-    the same shear."""
-    from diskfriction.studies.cluster import code_version, task_key
-
-    return task_key(scene.physics_fields(), window, detection, PLASTIC_EVENTS, code_version())
-
-
-def finished_segments(directory: Path, key: str) -> tuple[list, str]:
-    """(the segments of an earlier run with `key` in `directory`, in order from the first, up
-    to the first one missing, unreadable or written for another key; why that one is not read,
-    "" if it is missing). The run computes that segment and those after it again and writes
-    them over the files."""
-    from diskfriction.models.packing.segments import SegmentFileError, load_segment
-
-    done = []
-    while (directory / SEGMENT_FILE.format(len(done))).exists():
-        try:
-            done.append(load_segment(directory / SEGMENT_FILE.format(len(done)), key))
-        except SegmentFileError as error:
-            return done, str(error)
-    return done, ""
 
 
 def simulate(args: argparse.Namespace, scene: PackingScene) -> int:
@@ -598,7 +561,6 @@ def describe_packing(cell, s: dict) -> str:
             f"{fastest}, {count(s['collisions'], 'collision')}, "
             f"{count(s['plastic_events'], 'plastic event')}")
     return line + (f"; {s['reason']}" if s["reason"] else "")
-
 
 
 def map_plan(args: argparse.Namespace, scene: PackingScene) -> MapPlan:
