@@ -6,7 +6,7 @@ with the collision locator's borders as unit vectors and as it scales them
 its ordering kept for a repeated pattern (continuation/linalg/orderings.py), on the chain's matrix and
 on a sheared packing's A - sigma I (the spectral window's shift-invert, --packing N
 disks, window [-3, 8]; 0: none); last, the packing's bordered corrector matrix with its
-factor_options (PackingEquilibria: minimum degree on A + A^T, partial pivoting) against
+linear solver (equilibria.LINEAR_SOLVER: minimum degree on A + A^T, partial pivoting) against
 SuperLU's default.
 
 The chain's matrix is the bordered A - sigma I of the locator and of a shift-invert (A the
@@ -28,7 +28,7 @@ from diskfriction.continuation.linalg.solves import bordered, blas_threads
 from diskfriction.continuation.spectra.nearest import SHIFT_INVERT_ORDERING
 from diskfriction.continuation.detection.locate import BORDER_SCALE
 from diskfriction.continuation.stepping.newton import bordered_matrix, tangent
-from diskfriction.models.packing.equilibria import PackingEquilibria
+from diskfriction.models.packing.equilibria import LINEAR_SOLVER, PackingEquilibria
 from diskfriction.continuation.linalg.triangular import TriangularFactors
 from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
@@ -96,7 +96,7 @@ def main() -> None:
         compare_orderings(f"{args.packing} sheared disks, the corrector's bordered matrix", M,
                           rng.standard_normal(M.shape[0]), calls,
                           args.repeat, (("the packing's (MMD, A + A^T, partial pivoting)",
-                                         PackingEquilibria.factor_options), DEFAULT))
+                                         LINEAR_SOLVER.options), DEFAULT))
 
 
 DEFAULT = ("SuperLU's default (COLAMD)", {})

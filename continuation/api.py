@@ -38,6 +38,8 @@ from diskfriction.continuation.stepping.newton import bordered_matrix, bordered_
 from diskfriction.continuation.problem import FunctionProblem, Problem
 from diskfriction.continuation.stepping.weighting import Weighted, scale_of, unweighted
 from diskfriction.continuation.stepping.segment import SegmentSolveError
+from diskfriction.continuation.linalg.solves import DIRECT, LinearSolver
+from diskfriction.continuation.spectra.eigensolvers import DEFAULT, Eigensolver
 from diskfriction.continuation.spectra.window import WIDENINGS, WindowCrowded
 
 Array = np.ndarray
@@ -132,7 +134,14 @@ class Options:
     other (e.g. M^-1 K, whose eigenvalues are omega^2). Nothing is located for a problem with a
     commit hook (its state is gone after the run). stop_at_fold: end the run at the last point
     before a step that turns p back (Stop code "fold"), for a problem whose branch beyond a
-    fold is not physical (a loaded state that carries history jumps there)."""
+    fold is not physical (a loaded state that carries history jumps there).
+    eigensolver: how the tracked spectra are computed (spectra/eigensolvers.py): DenseSpectra
+    (every eigenvalue, LAPACK or a GPU: device), RefinedSpectra (the default: dense, full
+    spectra refined from the previous sample's where the problem's stability matrix is
+    periodic block-tridiagonal) or SpectralWindow(lo, hi) (the eigenvalues near a band of real
+    parts, by sparse shift-invert); linear_solver: how the bordered systems are solved
+    (linalg.solves.LinearSolver: LAPACK for a dense Jacobian, SuperLU with its column ordering
+    for a sparse one)."""
 
     ds_max: Optional[float] = None
     ds: Optional[float] = None
@@ -147,6 +156,8 @@ class Options:
     theta: Optional[float] = 1.0
     p_scale: Optional[float] = None
     residual_scale: Optional[float] = None
+    eigensolver: Eigensolver = DEFAULT
+    linear_solver: LinearSolver = DIRECT
 
     def __post_init__(self):
         for name in ("ds_max", "ds", "ds_min", "newton_tol", "p_scale", "residual_scale"):
@@ -172,7 +183,8 @@ class Options:
                                   max_newton=self.max_newton, p_min=min(p_start, p_stop),
                                   p_max=max(p_start, p_stop), max_steps=self.max_steps,
                                   direction=1 if p_stop > p_start else -1,
-                                  stop_at_fold=self.stop_at_fold)
+                                  stop_at_fold=self.stop_at_fold, linear_solver=self.linear_solver,
+                                  eigensolver=self.eigensolver)
 
 
 @dataclass(frozen=True)
@@ -298,17 +310,18 @@ def special_points(problem: Problem, branch: Branch, asked: tuple[str, ...],
     points solved to max|G| <= params.newton_tol / 100 (with the branch's own tolerance a
     fold's p would be off by up to ~newton_tol / |dG/dp|); where no Hopf point was found on a
     conservative spectrum, a warning says why."""
-    tol = LOCATOR_TOL * params.newton_tol
-    crossings = branch_point_brackets(problem, branch, tol, rel_tol=detection.rel_tol) \
-        if "branch" in asked else []
+    tol, solver = LOCATOR_TOL * params.newton_tol, params.linear_solver
+    crossings = branch_point_brackets(problem, branch, tol, rel_tol=detection.rel_tol,
+                                      linear_solver=solver) if "branch" in asked else []
     steps = tuple(sorted({k for k, _, _ in crossings}))
     locators = {"fold": lambda: locate_folds(problem, branch, tol_x=FOLD_TOL * in_p,
-                                             newton_tol=tol, skip=steps),
+                                             newton_tol=tol, skip=steps, linear_solver=solver),
                 "branch": lambda: locate_branch_points(problem, branch, crossings,
                                                        tol_x=BRANCH_POINT_TOL * in_p,
-                                                       newton_tol=tol),
+                                                       newton_tol=tol, linear_solver=solver),
                 "hopf": lambda: locate_hopf(problem, branch, tol_p=detection.tol_p,
-                                            rel_tol=detection.rel_tol, newton_tol=tol)}
+                                            rel_tol=detection.rel_tol, newton_tol=tol,
+                                            linear_solver=solver, eigensolver=params.eigensolver)}
     found, warnings = dict.fromkeys(SPECIAL_POINTS, ()), []
     for kind in asked:
         try:
@@ -369,6 +382,8 @@ def solve_branch(problem: Problem, u0, p_span, options: Options = Options(), *,
     u0 = check_problem(problem, u0, p_start)
     p_scale, residual_scale = _units(options, problem, u0, p_start, p_stop)
     params = options.params(p_start, p_stop, residual_scale)
+    if options.detection.spectra:  # a spectral window sized at the start (Eigensolver.prepared)
+        params = replace(params, eigensolver=params.eigensolver.prepared(problem, u0, p_start))
     in_p = min(1.0, p_scale)  # the tolerances in p: absolute, or relative to a smaller p_scale
     tol_p = _tol_p(options.detection.tol_p, in_p, p_start, p_stop)
     detection = options.detection if tol_p == options.detection.tol_p else \
@@ -396,36 +411,53 @@ def solve_branch(problem: Problem, u0, p_span, options: Options = Options(), *,
 
 def solve_in_runs(problem: Problem, u0, p_span, options: Options,
                   callback_of: Callable[[int], Optional[Callback]],
-                  record: Optional[Record] = None) -> tuple[list[Branch], int]:
-    """solve_branch, where a crowded spectral window does not end the work: the problem's
-    window is sized anew, wider, at the last certified point (Problem.widen_window) and a new
-    run goes on from there (a run that ended with StopCode.WINDOW), or the run starts again
-    (its first point crowded: WindowCrowded before any point, as at the start of a packing's
-    segment after a plastic event), until a run ends otherwise or WIDENINGS widenings in a row
-    reach no further point. callback_of(r) is run r's callback (None: none); a run after the
-    first starts at the last point of the one before, which its callback does not get again
-    (record, solve_branch's, gets every point of every run, that one too).
-    Returns (the runs' branches in order, their eigenvalues under each run's own labels: a
-    widened window holds more of them; how often the window was widened)."""
+                  record: Optional[Record] = None,
+                  committed: Optional[Callable[[], tuple[Array, float]]] = None
+                  ) -> tuple[list[Branch], int, Eigensolver]:
+    """solve_branch, where a crowded spectral window does not end the work. The eigensolver
+    (options.eigensolver) is prepared at the start (Eigensolver.prepared: a window sized
+    there); where a run ends crowded (StopCode.WINDOW) it is sized anew, wider, at the point of
+    the problem's committed state, committed() (None: the last point of the run), and a new run
+    goes on from the last certified point, or the run starts again (its first point crowded:
+    WindowCrowded before any point, as at the start of a packing's segment after a plastic
+    event), until a run ends otherwise or WIDENINGS widenings in a row reach no further point.
+    callback_of(r) is run r's callback (None: none); a run after the first starts at the last
+    point of the one before, which its callback does not get again (record, solve_branch's,
+    gets every point of every run, that one too). Returns (the runs' branches in order, their
+    eigenvalues under each run's own labels: a widened window holds more of them; how often
+    the window was widened; the eigensolver as the last run took it, for a run that goes on
+    from there)."""
     runs, stuck, widenings, (p_start, p_stop) = [], 0, 0, p_span
+    eigensolver = options.eigensolver
+    if options.detection.spectra:
+        eigensolver = eigensolver.prepared(problem, u0, p_start)
+
+    def wider(u, p) -> Optional[Eigensolver]:
+        """The eigensolver widened at the committed point (or at (u, p)), None: none, or stuck."""
+        if stuck > WIDENINGS:
+            return None
+        return eigensolver.widened(problem, *(committed() if committed is not None else (u, p)))
+
     while True:
         callback = callback_of(len(runs))
         if runs and callback is not None:
             callback = _after_start(callback)
         try:
-            branch = solve_branch(problem, u0, (p_start, p_stop), options, callback=callback,
-                                  record=record).branch
+            branch = solve_branch(problem, u0, (p_start, p_stop), replace(options, eigensolver=eigensolver),
+                                  callback=callback, record=record).branch
         except WindowCrowded:
             stuck += 1
-            if stuck > WIDENINGS or not problem.widen_window():
+            widened = wider(u0, p_start)
+            if widened is None:
                 raise
-            widenings += 1
+            eigensolver, widenings = widened, widenings + 1
             continue
         runs.append(branch)
         stuck = stuck + 1 if len(branch) == 1 else 0
-        if branch.status.code is not StopCode.WINDOW or stuck > WIDENINGS or not problem.widen_window():
-            return runs, widenings
-        widenings += 1
+        widened = None if branch.status.code is not StopCode.WINDOW else wider(branch.u[-1], float(branch.p[-1]))
+        if widened is None:
+            return runs, widenings, eigensolver
+        eigensolver, widenings = widened, widenings + 1
         u0, p_start = branch.u[-1], float(branch.p[-1])
 
 
@@ -467,7 +499,7 @@ def switch_branch(problem: Problem, result: BranchResult, k: int, p_stop: float,
     params = options.params(point.p, p_stop, options.residual_scale)
     x_star = np.append(point.u, point.p)
     halves = [bordered_newton(problem, x_star + params.ds * d, d, params.newton_tol,
-                              params.max_newton) for d in (phi, -phi)]
+                              params.max_newton, linear_solver=params.linear_solver) for d in (phi, -phi)]
     ahead = [h for h in halves if h.converged and (h.x[-1] - point.p) * (p_stop - point.p)
              > FLAT_IN_P * params.ds]
     first = ahead[0] if ahead else halves[0]

@@ -7,7 +7,8 @@ A(u, p) along it. It knows nothing else about the problem (units, meaning of u, 
 Required:
     residual(u, p)  -> G(u, p),        shape (n,)
     jacobian(u, p)  -> dG/du (u, p),   shape (n, n), a dense ndarray or a scipy.sparse matrix
-                                       (the core factorizes it with LAPACK or SuperLU: linalg.py)
+                                       (the core factorizes it with LAPACK or SuperLU, as the
+                                       run's linalg.solves.LinearSolver says)
     dG_dp(u, p)     -> dG/dp (u, p),   shape (n,)
 Optional hooks (defaults below):
     commit(u_old, p_old, u_new, p_new) -> None | bool
@@ -31,17 +32,10 @@ Optional hooks (defaults below):
         side g > 0 (a Hertz contact opening or forming, stiffness ~ delta^(1/2)); a scan of a
         step ending on one treats that end apart (root_ends.py).
     stability_matrix(u, p) -> A(u, p), shape (n, n), dense or sparse; default dG/du.
-    eigensystem(u, p, vectors) -> spectra.Eigensystem of A(u, p); default LAPACK dgeev of the
-        dense A. Override to exclude exactly decoupled modes from detection or to use a faster
-        solver for the same matrix.
-    stability_blocks(u, p) -> block_tridiagonal.PeriodicBlocks of A(u, p) or None (default):
-        where A is periodic block-tridiagonal (the disk chain), full spectra from n =
-        refinement.REFINE_FROM are refined from the previous sample's instead of decomposed
-        (refinement.py). Only for a problem whose eigensystem() is A's whole spectrum, none
-        excluded.
-    dense_spectra() -> bool: whether eigensystem() takes dense spectra (spectra.eigensystem,
-        which may run on a GPU); default True. A problem that tracks a spectral window returns
-        False: its scans may then run on workers whatever device the dense spectra use.
+    stability_structure(u, p) -> spectra.structure.StructuredMatrix: A(u, p) with what the
+        eigensolvers may use of its structure (modes decoupled or gauged out of A, a matrix to
+        shift-invert in its place, a symmetric form, a periodic block-tridiagonal layout);
+        default StructuredMatrix(stability_matrix(u, p)): A alone, every eigenvalue tracked.
     derivative_step(x) -> h: length in x = (u, p) of the finite differences of A along a
         direction (eigenvalue slopes, the collision locator); default 1e-6 (1 + max|x|).
 """
@@ -54,8 +48,7 @@ from typing import Callable, ClassVar, Optional
 import numpy as np
 import scipy.sparse as sp
 
-from diskfriction.continuation.linalg.solves import dense
-from diskfriction.continuation.spectra.tracking import Eigensystem, eigensystem
+from diskfriction.continuation.spectra.structure import StructuredMatrix
 
 Array = np.ndarray
 
@@ -65,22 +58,16 @@ sum; 3.6e-15): FunctionProblem's rounding."""
 
 
 class Problem(ABC):
-    """Base class of a one-parameter problem G(u, p) = 0 (see the module docstring).
+    """Base class of a one-parameter problem G(u, p) = 0 (see the module docstring): its
+    equations, the state it carries along the branch and its events. How its linear systems
+    and spectra are solved is the run's choice, not the problem's (Options.linear_solver,
+    Options.eigensolver).
 
     rounding: 0, or the relative rounding of G's evaluation: a Newton iterate with max|G| <=
     rounding * max_i sum_j |dG_i/dx_j| |x_j| (the size of the terms that cancel in G,
-    newton.term_size) is converged whatever newton_tol asks (newton.bordered_newton).
-
-    factor_options: SuperLU's keyword arguments (scipy's splu) for the sparse LU factorizations
-    of the bordered systems (the corrector's, the tangent's, the collision locator's); None:
-    SuperLU's defaults, COLAMD's column order with partial pivoting. A problem whose Jacobian
-    has a symmetric pattern may order by minimum degree on A + A^T instead (PackingEquilibria:
-    1.44 against 2.08 ms at 256 disks). The chain keeps the default: minimum degree would save
-    11 % there (N = 1000, the corrector's matrix: 1.18 against 1.33 ms) and move its reference
-    sweeps at the rounding level."""
+    newton.term_size) is converged whatever newton_tol asks (newton.bordered_newton)."""
 
     rounding: float = 0.0
-    factor_options: Optional[dict] = None
 
     @abstractmethod
     def residual(self, u: Array, p: float) -> Array:
@@ -124,37 +111,9 @@ class Problem(ABC):
         """The matrix A(u, p) whose eigenvalues are tracked; default dG/du."""
         return self.jacobian(u, p)
 
-    def deflated(self, u: Array, p: float):
-        """A nearest.Deflated to shift-invert in place of stability_matrix(u, p) (its LU fills
-        less), or None (default): the matrix itself."""
-        return None
-
-    def spectrum_matrix(self, u: Array, p: float):
-        """What eigensystem(u, p) is computed from: two points where it is the same matrix
-        (linalg.same_matrix) have the same eigensystem. Default: stability_matrix(u, p)."""
-        return self.stability_matrix(u, p)
-
-    def eigensystem(self, u: Array, p: float, vectors: bool = False) -> Eigensystem:
-        """Eigenvalues (and, with `vectors`, normalised left and right vectors) of A(u, p)."""
-        return eigensystem(dense(self.stability_matrix(u, p)), vectors)
-
-    def dense_spectra(self) -> bool:
-        """Whether eigensystem() takes dense spectra (spectra.eigensystem); True by default."""
-        return True
-
-    def stability_blocks(self, u: Array, p: float):
-        """A(u, p) as periodic blocks (block_tridiagonal.PeriodicBlocks), or None: no such
-        structure (the default)."""
-        return None
-
-    def spectrum(self, u: Array, p: float) -> Array:
-        """All eigenvalues of A(u, p) (complex array, any order)."""
-        return self.eigensystem(u, p).values
-
-    def widen_window(self) -> bool:
-        """Size the tracked spectral window anew at the committed state, wider, where it
-        crowded (spectral_window.widened; solve_in_runs); False: the problem tracks no window."""
-        return False
+    def stability_structure(self, u: Array, p: float) -> StructuredMatrix:
+        """A(u, p) with its structure (spectra/structure.py); default: A alone."""
+        return StructuredMatrix(self.stability_matrix(u, p))
 
     def derivative_step(self, x: Array) -> float:
         """Finite-difference length along a unit direction in x = (u, p)."""

@@ -15,7 +15,7 @@ import numpy as np
 
 from diskfriction.continuation.branch import Branch
 from diskfriction.continuation.records import save_branch, save_collisions
-from diskfriction.continuation.spectra.window import Window
+from diskfriction.continuation.spectra.window import SpectralWindow
 from diskfriction.files import json_values, save_json
 from diskfriction.matrices import Matrix
 from diskfriction.models.packing.prepare import Packing, save_packing
@@ -107,7 +107,7 @@ def plastic_records(branch: Branch) -> list[dict]:
         lam = branch.eigenvalues[last]
         lam = lam[np.isfinite(lam)]
         if branch.window is not None:
-            lam = lam[Window(*branch.window).inside(lam)]
+            lam = lam[SpectralWindow(*branch.window).inside(lam)]
         growth = (fastest_pair(lam)[1] if pairs and branch.matrix == Matrix.M_INV_J else None)
         records.append({"gamma": event.gamma, "kind": event.kind,
                         "sigma_xy_before": event.stress_before,
@@ -206,7 +206,7 @@ def plot_packing_diagram(branch: Branch, scene: PackingScene, path: Path) -> Non
     lam = branch.eigenvalues
     tracked = np.isfinite(lam)
     if window is not None:  # nan: a window column not tracked at that state
-        tracked &= Window(*window).inside(np.nan_to_num(lam, nan=np.inf))
+        tracked &= SpectralWindow(*window).inside(np.nan_to_num(lam, nan=np.inf))
     shown = tracked & (lam.imag > 1e-12 * np.nanmax(np.abs(lam)))  # one per pair
     g = np.broadcast_to(gamma[:, None], lam.shape)
     unit = eigenvalue_unit(branch.matrix)

@@ -17,6 +17,7 @@ from diskfriction.continuation.branch import Stop, StopCode
 from diskfriction.continuation.stepping.segment import refine_sign_change
 from diskfriction.continuation.detection.detectors import DETECTORS, Kind
 from diskfriction.continuation.detection.detectors.fast import Fast
+from diskfriction.continuation.spectra.eigensolvers import DenseSpectra
 from diskfriction.continuation.spectra.tracking import sort_spectrum
 
 TOL_P = 1e-10
@@ -58,6 +59,11 @@ def run(problem, n, p_min=0.0, p_max=1.0, ds=0.05, ds_max=None, u0=None, directi
     return continuation(problem, np.zeros(n) if u0 is None else u0, p_min if direction > 0 else p_max, par)
 
 
+def spectrum(problem, u, p):
+    """Every eigenvalue of the problem's stability matrix at (u, p) (DenseSpectra)."""
+    return DenseSpectra().eigensystem(problem, u, p).values
+
+
 def located(branch, kind):
     return sorted(c.p for c in branch.collisions if c.kind == kind)
 
@@ -69,7 +75,7 @@ def assert_count_changes_only_at_collisions(problem, branch, p_lo, p_hi, n_grid=
     extra = [q for c in branch.collisions for q in (c.bracket[0] - 1e-9, c.bracket[1] + 1e-9)]
     grid = np.unique(np.clip(np.concatenate([np.linspace(p_lo, p_hi, n_grid), extra]), p_lo, p_hi))
     n = branch.u.shape[1]
-    counts = np.array([count_complex_pairs(problem.spectrum(np.zeros(n), q)) for q in grid])
+    counts = np.array([count_complex_pairs(spectrum(problem, np.zeros(n), q)) for q in grid])
     up = 1 if branch.p[-1] > branch.p[0] else -1
     sign = {"birth": up, "death": -up}
     for g0, g1, c0, c1 in zip(grid[:-1], grid[1:], counts[:-1], counts[1:]):
@@ -77,8 +83,8 @@ def assert_count_changes_only_at_collisions(problem, branch, p_lo, p_hi, n_grid=
         assert c1 - c0 == sum(sign[c.kind] for c in inside), (g0, g1, c0, c1, inside)
     for c in branch.collisions:  # the count changes across every bracket (by all it holds)
         lo, hi = c.bracket[0] - 1e-9, c.bracket[1] + 1e-9
-        before = count_complex_pairs(problem.spectrum(np.zeros(n), lo))
-        after = count_complex_pairs(problem.spectrum(np.zeros(n), hi))
+        before = count_complex_pairs(spectrum(problem, np.zeros(n), lo))
+        after = count_complex_pairs(spectrum(problem, np.zeros(n), hi))
         assert after - before == sum(sign[d.kind] for d in branch.collisions if lo < d.p < hi) != 0
 
 
@@ -274,7 +280,7 @@ def test_stored_eigenvalues_equal_recomputed_ones_and_are_tracked():
     problem = brusselator(a)
     br = run(problem, 2, p_min=0.0, p_max=7.0, ds=0.1, ds_max=0.5, u0=np.array([a, 0.0]))
     for k in range(len(br)):
-        again = problem.spectrum(br.u[k], br.p[k])
+        again = spectrum(problem, br.u[k], br.p[k])
         assert np.allclose(sort_spectrum(br.eigenvalues[k]), sort_spectrum(again), rtol=1e-12, atol=1e-12)
         assert br.n_complex[k] == count_complex_pairs(again)
     # tracked columns: each step moves every eigenvalue by no more than a re-sorted order would
@@ -587,8 +593,8 @@ def test_segment_points_by_the_chord_method_match_newtons():
     factorized = []
     original = factorize
     with pytest.MonkeyPatch.context() as mp:
-        import diskfriction.continuation.stepping.newton as newton
-        mp.setattr(newton, "factorize", lambda *a: factorized.append(1) or original(*a))
+        import diskfriction.continuation.linalg.solves as solves
+        mp.setattr(solves, "factorize", lambda *a: factorized.append(1) or original(*a))
         chord = Segment(problem, x_a, x_b, 1e-12, 20, chord=True)
         plain = Segment(problem, x_a, x_b, 1e-12, 20)
         first = chord.point(0.5)

@@ -11,6 +11,7 @@ from diskfriction.models.chain.equilibria import DiskEquilibria, relax
 from diskfriction.continuation.linalg.solves import measured
 from diskfriction.continuation.detection.locate import locate_double_eigenvalue
 from diskfriction.continuation.stepping.newton import bordered_newton, tangent
+from diskfriction.continuation.spectra.eigensolvers import DenseSpectra
 from diskfriction.continuation.spectra.tracking import eigenvalue_slopes
 from diskfriction.models.chain.sweep import SweepParams, sweep
 from diskfriction.scenes import Scene
@@ -175,7 +176,7 @@ def test_eps_zero_runs_to_the_end_with_free_rolling_modes_excluded(chain_sweep):
     assert branch.free[0] > 0 and branch.free[-1] < branch.free[0]
     problem = DiskEquilibria(system, branch.q[0], branch.xi[0], branch.F_x[0], "J")
     assert problem.free_count == branch.free[0]
-    modes = problem.eigensystem(branch.q[0], branch.F_x[0])
+    modes = DenseSpectra().eigensystem(problem, branch.q[0], branch.F_x[0])
     assert modes.excluded.sum() == 3 * branch.free[0]
     s = system.scene
     rolling = np.sort(np.abs(modes.values[modes.excluded]))[:branch.free[0]]
@@ -209,7 +210,7 @@ def test_free_disks_spectrum_is_the_matrix_spectrum_with_vectors_on_the_coupled_
     A = A.toarray() if hasattr(A, "toarray") else A
     n, free = A.shape[0], 3 * len(problem.free)
     assert free >= n // 2
-    modes = problem.eigensystem(q, 1e-5, vectors=True)
+    modes = DenseSpectra().eigensystem(problem, q, 1e-5, vectors=True)
     whole = np.linalg.eigvals(A)
     assert np.max(np.abs(np.sort_complex(modes.values) - np.sort_complex(whole))) <= 1e-9 * np.abs(whole).max()
     assert modes.right.shape == (n, n - free) and modes.left.shape == (n - free, n)
@@ -242,7 +243,7 @@ def test_sparse_and_dense_solves_agree_at_N40():
     assert np.max(np.abs(steps[0].x - steps[1].x)) <= 1e-12
     t = [tangent(pr, steps[0].x, e_p) for pr in (dense, sparse)]
     assert np.max(np.abs(t[0] - t[1])) <= 1e-10
-    ev = [np.sort_complex(pr.spectrum(steps[0].x[:-1], 0.0101)) for pr in (dense, sparse)]
+    ev = [np.sort_complex(DenseSpectra().eigensystem(pr, steps[0].x[:-1], 0.0101).values) for pr in (dense, sparse)]
     assert np.max(np.abs(ev[0] - ev[1])) <= 1e-9 * np.abs(ev[0]).max()
 
 
@@ -762,18 +763,19 @@ def test_a_chain_window_that_crowds_is_widened_and_finds_the_same_collisions(mon
     along the sweep, is sized anew, wider, at the last certified point and the sweep goes on
     (before: an exception that lost the sweep). The same 20 collisions as a generous window, of
     the same kinds, within 1e-9: the steps after the restart differ, and the history makes the
-    branch depend on its steps by up to 5.9e-10 (docs/continuation.md). (Until stop 42 the
-    window [0, 0.01] k_n crowded so with guard bands of 0.25; with the reach at the corner of
-    its rectangle, Window.reach, it does not.)"""
+    branch depend on its steps by up to 5.9e-10 (docs/continuation.md)."""
     from diskfriction.continuation.spectra import window as spectral_window
-    from diskfriction.models.chain import equilibria
     from diskfriction.models.chain.sweep import SweepParams, sweep
 
     system = System.from_scene(Scene(N=20, eps=1e-4))
     window = SweepParams(window=(0.0, 40.0))
     generous = sweep(system, 0.0, 0.12, params=window)
     sized = spectral_window.sized
-    monkeypatch.setattr(equilibria, "sized", lambda w, A, *_: sized(w, A, 1.0, 1))
+
+    def tightly_sized(w, problem, u, p):  # at the start; widened with the window's own margins
+        return w if w.k else sized(w, problem.stability_structure(u, p).shifted(), 1.0, 1)
+
+    monkeypatch.setattr(spectral_window.SpectralWindow, "prepared", tightly_sized)
     tight = sweep(system, 0.0, 0.12, params=window)
     assert generous.widenings == 0 and tight.widenings >= 1
     assert tight.status.reached and np.all(np.diff(tight.F_x) > 0)

@@ -3,6 +3,8 @@ array module, where no GPU is), the device switch, and, where CuPy and a CUDA de
 present, cuSOLVER against LAPACK."""
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -13,6 +15,8 @@ from diskfriction.continuation.detection import scans
 from diskfriction.continuation.spectra import tracking as spectra
 from diskfriction.continuation.detection.collisions import DetectionParams
 from diskfriction.continuation.problem import FunctionProblem
+from diskfriction.continuation.spectra.eigensolvers import DenseSpectra, RefinedSpectra
+from diskfriction.continuation.spectra.window import SpectralWindow
 from diskfriction.continuation.spectra.tracking import NoGpu, eigensystem, spectra_on
 from commandline import error_line, run_main
 
@@ -119,32 +123,24 @@ def test_scans_run_inline_where_the_spectra_run_on_the_gpu(fake_gpu, monkeypatch
         assert scans.planned_workers(300, detection) == 0
         with pytest.raises(scans.WorkersOnGpu, match="--spectra cpu"):
             scans.planned_workers(300, detection, asked=2)
-        # a problem that tracks a spectral window takes no dense spectra: its scans stay on workers
+        # a spectral window takes no dense spectra: its scans stay on workers
+        window = SpectralWindow(-1.0, 0.0)
         assert scans.planned_workers(300, detection, dense=False) == 2
         assert scans.planned_workers(300, detection, asked=3, dense=False) == 3
-        assert scans.default_workers(Windowed(np.subtract, None, None), 300, detection) == 2
+        problem = FunctionProblem(np.subtract, None, None)
+        assert scans.default_workers(problem, 300, detection, eigensolver=window) == 2
+        assert scans.default_workers(problem, 300, detection, eigensolver=DenseSpectra("cpu")) == 2
+    assert scans.default_workers(problem, 300, detection, eigensolver=DenseSpectra("gpu")) == 0
 
 
-class Windowed(FunctionProblem):
-    """A stateless problem whose eigensystem tracks a window (no dense spectra)."""
-
-    def dense_spectra(self) -> bool:
-        return False
-
-
-def test_windowed_chains_take_no_dense_spectra():
-    """DiskEquilibria takes dense spectra unless given a window; Weighted asks its inner problem."""
-    from diskfriction.continuation.stepping.weighting import Weighted
-    from diskfriction.models.chain.equilibria import DiskEquilibria
-    from diskfriction.continuation.spectra.window import Window
-    from diskfriction.scenes import Scene
-    from diskfriction.symbolic import System
-
-    system = System.from_scene(Scene(N=4, eps=1e-4))
-    for window, dense in [(None, True), (Window(-1.0, 0.0), False)]:
-        problem = DiskEquilibria(system, *system.rest_state(), 0.0, window=window)
-        assert problem.dense_spectra() is dense
-        assert Weighted(problem, 1.0).dense_spectra() is dense
+def test_the_dense_eigensolvers_take_dense_spectra_on_their_device(fake_gpu):
+    """DenseSpectra and RefinedSpectra take dense spectra, on spectra_on's device or their own;
+    a spectral window takes none."""
+    assert DenseSpectra().dense and RefinedSpectra().dense and not SpectralWindow(-1.0, 0.0).dense
+    assert DenseSpectra("gpu").on_gpu(10) and not DenseSpectra("cpu").on_gpu(5000)
+    assert not SpectralWindow(-1.0, 0.0).on_gpu(5000)
+    with pytest.raises(ValueError):
+        DenseSpectra("tpu")
 
 
 @pytest.mark.skipif(WHY_NO_GPU is None, reason="a GPU is present: spectra_on('gpu') runs")
@@ -153,6 +149,8 @@ def test_asking_for_gpu_spectra_without_a_gpu_says_why_in_one_line():
         with spectra_on("gpu"):
             pass
     assert "\n" not in str(error.value) and str(error.value) == WHY_NO_GPU
+    with pytest.raises(NoGpu, match="^" + re.escape(WHY_NO_GPU) + "$"):
+        DenseSpectra("gpu")  # the eigensolver's own device: the same line
 
 
 @pytest.mark.skipif(WHY_NO_GPU is None, reason="a GPU is present: bifurcate --spectra gpu runs")

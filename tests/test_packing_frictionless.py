@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from diskfriction.continuation.spectra.eigensolvers import DenseSpectra
 from diskfriction.models.packing.equilibria import NotJammed, PackingEquilibria, mass_diagonal, start
 from diskfriction.models.packing.prepared import prepare_scene
 from diskfriction.models.packing.shear import ShearParams, network_of, shear
@@ -85,7 +86,7 @@ def test_the_unknowns_are_the_positions_and_the_spectrum_is_the_networks(packing
     loose = int(problem.gauge.loose.sum())
     assert problem.gauge.kept.size == 2 * (N - loose) - 2 and (problem.gauge.kept < 2 * N).all()
     full = np.linalg.eigvals(problem.physical(q, 0.0).toarray())
-    system = problem.eigensystem(q, 0.0, vectors=True)
+    system = DenseSpectra().eigensystem(problem, q, 0.0, vectors=True)
     tracked = system.values[~system.excluded]
     zeros = 2 + N + 2 * loose
     nonzero = np.sort(full[np.argsort(np.abs(full))[zeros:]].real)

@@ -13,6 +13,7 @@ import scipy.sparse as sp
 from invariants import unaccounted_pair_changes
 
 from diskfriction.continuation.detection.detectors import fast
+from diskfriction.continuation.spectra.eigensolvers import DenseSpectra
 from diskfriction.models.packing.assembly import Assembly
 from diskfriction.models.packing.equilibria import Gauge, PackingEquilibria, mass_diagonal, start
 from diskfriction.models.packing.prepared import prepare_scene
@@ -55,7 +56,8 @@ def test_the_tracked_spectrum_is_the_networks_without_its_zero_modes(packing, ma
     problem.xi_c = rng.uniform(-0.5, 0.5, problem.xi_c.size) * 1e-4  # a charged history
     q = problem.q_c
     full = np.linalg.eigvals(problem.physical(q, 0.0).toarray())
-    tracked = problem.eigensystem(q, 0.0).values[~problem.eigensystem(q, 0.0).excluded]
+    system = DenseSpectra().eigensystem(problem, q, 0.0)
+    tracked = system.values[~system.excluded]
     zeros = 2 + 3 * int(problem.gauge.loose.sum())
     nonzero = full[np.argsort(np.abs(full))[zeros:]]
     assert np.allclose(np.sort_complex(nonzero), np.sort_complex(tracked),
@@ -64,28 +66,28 @@ def test_the_tracked_spectrum_is_the_networks_without_its_zero_modes(packing, ma
 
 
 def test_the_bordered_systems_factorized_by_minimum_degree_solve_as_superlus_default(packing, monkeypatch):
-    """PackingEquilibria.factor_options (minimum degree on A + A^T, partial pivoting): the
-    corrector's and the tangent's factorizations take them, with less fill than SuperLU's
-    default (COLAMD), and the bordered solves agree with the default's to 1e-12."""
+    """The shear's linear solver (ShearParams.linear_solver: minimum degree on A + A^T, partial
+    pivoting): the corrector's and the tangent's factorizations take its ordering, with less
+    fill than SuperLU's default (COLAMD), and the bordered solves agree with the default's to
+    1e-12."""
     from diskfriction.continuation.linalg import solves as linalg
     from diskfriction.continuation.stepping import newton
-    problem = problem_at_start(packing)
+    problem, solver = problem_at_start(packing), ShearParams().linear_solver
     x = np.append(problem.q_c, 0.0)
     e_p = np.zeros(x.size)
     e_p[-1] = 1.0
     M = newton.bordered_matrix(problem, x, e_p)
     rhs = np.random.default_rng(1).standard_normal(x.size)
-    ours, default = linalg.factorize(M, problem.factor_options), linalg.factorize(M)
+    ours, default = solver.factorize(M), linalg.DIRECT.factorize(M)
     fill = [f.lu.L.nnz + f.lu.U.nnz for f in (ours, default)]
     assert fill[0] < fill[1]
     assert np.allclose(ours.solve(rhs), default.solve(rhs), rtol=0, atol=1e-12 * np.abs(default.solve(rhs)).max())
     taken, factorize = [], linalg.factorize
     recorded = lambda M, options=None: taken.append(options) or factorize(M, options)  # noqa: E731
-    monkeypatch.setattr(newton, "factorize", recorded)
-    monkeypatch.setattr(linalg, "factorize", recorded)  # the tangent's (linalg.Refined)
-    newton.tangent(problem, x, e_p)
-    newton.bordered_newton(problem, x + 1e-9, e_p, tol=0.0, max_iter=1)
-    assert taken == [problem.factor_options] * 2 and problem.factor_options["permc_spec"] == "MMD_AT_PLUS_A"
+    monkeypatch.setattr(linalg, "factorize", recorded)  # the corrector's and the tangent's (RefinedSolve)
+    newton.tangent(problem, x, e_p, linear_solver=solver)
+    newton.bordered_newton(problem, x + 1e-9, e_p, tol=0.0, max_iter=1, linear_solver=solver)
+    assert taken == [solver.options] * 2 and solver.options["permc_spec"] == "MMD_AT_PLUS_A"
 
 
 def test_every_accepted_point_is_in_force_balance(branch):
@@ -388,7 +390,7 @@ def test_detection_at_64_disks_agrees_with_dense_spectra_inside_every_step(monke
     real_scan, checked, wrong = scans.scan_step, [], []
 
     def pairs(problem, x):
-        found = problem.eigensystem(x[:-1], float(x[-1]))
+        found = DenseSpectra().eigensystem(problem, x[:-1], float(x[-1]))
         return count_complex_pairs(found.values[~found.excluded])
 
     def checking_scan(problem, segment, start, end, *args, **kwargs):
@@ -506,15 +508,13 @@ def test_a_window_that_crowds_is_widened_and_finds_the_same_collisions(packing, 
     anew, wider, at the last certified state and the shear goes on; the collisions equal a
     generous window's within 1e-9, and each strain is recorded once. The crowding comes before
     the collisions here: the steps after the restart differ, and the history makes the branch
-    depend on its steps (measured 1.2e-10; the chain's 5.9e-10, tests/test_detection.py).
-    ([0, 50], the window of the tests above, crowded after its collisions, found 1e-12 apart,
-    until the reach became the rectangle's corner in stop 42; now it does not crowd.)"""
-    from diskfriction.models.packing import equilibria
+    depend on its steps (measured 1.2e-10; the chain's 5.9e-10, tests/test_detection.py)."""
+    from diskfriction.models.packing import shear as shearing
 
     window = (0.0, 40.0)
     generous = shear(SCENE, packing, ShearParams(workers=0), window=window)
-    monkeypatch.setattr(equilibria, "WINDOW_MARGIN", 1.0)
-    monkeypatch.setattr(equilibria, "WINDOW_EXTRA", 1)
+    monkeypatch.setattr(shearing, "WINDOW_MARGIN", 1.0)  # the shear's window's margins
+    monkeypatch.setattr(shearing, "WINDOW_EXTRA", 1)
     tight = shear(SCENE, packing, ShearParams(workers=0), window=window)
     assert generous.widenings == 0 and tight.widenings >= 1
     assert tight.status.reached and np.all(np.diff(tight.gamma) > 0)
@@ -532,9 +532,8 @@ def test_a_window_that_crowds_at_its_first_point_is_widened_there(packing, windo
     shear): it is sized anew, wider, there and the shear goes on; the same collisions as a
     generous window within 1e-12."""
     from diskfriction.continuation.spectra import window as spectral_window
-    from diskfriction.models.packing import equilibria
 
-    sized, decompose = spectral_window.sized, equilibria.window_eigensystem
+    sized, decompose = spectral_window.sized, spectral_window.window_eigensystem
     points, crowded_at = [], []
 
     def watched(A, window, vectors, deflated=None):
@@ -544,8 +543,11 @@ def test_a_window_that_crowds_at_its_first_point_is_widened_there(packing, windo
             crowded_at.append(len(points))
             raise
 
-    monkeypatch.setattr(equilibria, "sized", lambda w, A, *_: replace(w, k=sized(w, A, 1.0, 1).k - 1))
-    monkeypatch.setattr(equilibria, "window_eigensystem", watched)
+    def too_tight(w, problem, u, p):  # at the start; widened with the window's own margins
+        return w if w.k else replace(w, k=sized(w, problem.stability_structure(u, p).shifted(), 1.0, 1).k - 1)
+
+    monkeypatch.setattr(spectral_window.SpectralWindow, "prepared", too_tight)
+    monkeypatch.setattr(spectral_window, "window_eigensystem", watched)
     tight = shear(SCENE, packing, ShearParams(workers=0), points.append, window=WINDOW)
     assert crowded_at[0] == 0 and tight.widenings >= 1 and tight.status.reached
     assert len(tight.collisions) == len(windowed.collisions) >= 4
@@ -655,7 +657,8 @@ def test_the_deflated_shift_invert_finds_the_tracked_matrix_eigensystem(branch, 
     point = int(np.argmax(branch.n_complex[branch.segment == 0]))
     q, gamma = branch.q[point], float(branch.gamma[point])
     problem._set_committed(q, branch.xi[point], branch.rows[point], gamma)
-    A, deflated = problem.stability_matrix(q, gamma), problem.deflated(q, gamma)
+    structure = problem.stability_structure(q, gamma)
+    A, deflated = structure.matrix, structure.deflated
     assert np.abs(deflated.matrix @ deflated.right_null).max() <= 1e-12 * np.abs(deflated.matrix).max()
     k = 12
     for sigma in (0.05, 3.0):
@@ -681,7 +684,7 @@ def test_a_restored_state_is_the_state_set_afresh(packing):
     assembling again; an unknown snapshot is set afresh, its matrices assembled at their first
     use only (a restore to record a point assembles nothing); only the last KEPT_STATES are
     kept."""
-    from diskfriction.models.packing import equilibria
+    from diskfriction.models.packing import assembly, equilibria
 
     problem = problem_at_start(packing)
     first = problem.state()
@@ -697,9 +700,9 @@ def test_a_restored_state_is_the_state_set_afresh(packing):
     target = states[-3]
     fresh.restore(target)  # not kept by `fresh`: set afresh
     assembled = []
-    original = equilibria.Assembly.of
+    original = assembly.Assembly.of
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(equilibria.Assembly, "of", lambda *a, **k: assembled.append(1) or original(*a, **k))
+        mp.setattr(assembly.Assembly, "of", lambda *a, **k: assembled.append(1) or original(*a, **k))
         problem.restore(target)
     assert not assembled
     x = target[0] + 1e-7 * rng.standard_normal(target[0].size)
@@ -708,7 +711,7 @@ def test_a_restored_state_is_the_state_set_afresh(packing):
                           (problem.stability_matrix(x, 1e-6).toarray(), fresh.stability_matrix(x, 1e-6).toarray())):
         assert np.array_equal(got, expected)
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(equilibria.Assembly, "of", lambda *a, **k: assembled.append(1) or original(*a, **k))
+        mp.setattr(assembly.Assembly, "of", lambda *a, **k: assembled.append(1) or original(*a, **k))
         problem.restore(first)  # dropped from the kept states long ago
         assert not assembled
         problem.residual(x, 1e-6)

@@ -473,30 +473,34 @@ def test_sweeps_with_refined_spectra_find_the_same_collisions(N, chain_sweep, mo
 
 
 def test_refinement_applies_only_where_the_whole_spectrum_is_refined(monkeypatch):
-    """No periodic blocks with a spectral window or a free disk; not below REFINE_FROM, nor
-    where the dense spectra run on a GPU."""
+    """The chain's stability matrix is periodic block-tridiagonal (3 x 3 blocks) but for free
+    disks; RefinedSpectra refines from REFINE_FROM (or its own refine_from) on, not where the
+    dense spectra run on a GPU; DenseSpectra and a spectral window never refine."""
     from diskfriction.continuation.detection.samples import sample_at
-    from diskfriction.continuation.spectra.window import Window
+    from diskfriction.continuation.spectra.eigensolvers import DenseSpectra, RefinedSpectra
+    from diskfriction.continuation.spectra.window import SpectralWindow
 
     system = System.from_scene(Scene(N=6, eps=1e-4))
     q, xi = relax(system, *system.rest_state(), 0.01)
     problem = DiskEquilibria(system, q, xi, 0.01)
-    assert problem.stability_blocks(q, 0.01) is not None
-    assert DiskEquilibria(system, q, xi, 0.01, window=Window(-1.0, 0.0)).stability_blocks(q, 0.01) is None
+    assert problem.stability_structure(q, 0.01).block_size == 3
     free = System.from_scene(Scene(N=6, eps=0.0))
-    assert DiskEquilibria(free, *free.rest_state(), 0.0).stability_blocks(free.rest_state()[0], 0.0) is None
+    assert not DiskEquilibria(free, *free.rest_state(), 0.0).stability_structure(free.rest_state()[0], 0.0).block_size
     x = np.append(q, 0.01)
     tangent = np.zeros(x.size)
     tangent[-1] = 1.0
     reference = sample_at(problem, 0.0, x, 1e-9, None, tangent)
     n = reference.eigvals.size
     monkeypatch.setattr(refinement, "REFINE_FROM", n + 1)
-    assert not refinement.refinable(reference)
+    assert not refinement.refinable(reference) and RefinedSpectra().refined(problem, x, reference) is None
+    assert RefinedSpectra(refine_from=n).refined(problem, x, reference) is not None
     monkeypatch.setattr(refinement, "REFINE_FROM", n)
     assert refinement.refinable(reference)
-    monkeypatch.setattr(refinement, "on_gpu", lambda n: True)
+    assert DenseSpectra().refined(problem, x, reference) is None
+    assert SpectralWindow(-1.0, 0.0).refined(problem, x, reference) is None
+    monkeypatch.setattr(refinement, "on_gpu", lambda n, device=None: True)
     assert not refinement.refinable(reference)
-    monkeypatch.setattr(refinement, "on_gpu", lambda n: False)
+    monkeypatch.setattr(refinement, "on_gpu", lambda n, device=None: False)
     with measured() as work:
         again = sample_at(problem, 0.0, x, 1e-9, reference, tangent)
     assert work.spectra_refined == 1 and work.spectra == 0

@@ -89,7 +89,7 @@ def test_a_failed_scan_rejects_its_step_after_the_branch_went_on(monkeypatch, ch
             return scans
 
         monkeypatch.setattr(arclength, "scans_for", scans_for)
-        monkeypatch.setattr(arclength, "default_workers", lambda problem, n, detection, asked: 1)
+        monkeypatch.setattr(arclength, "default_workers", lambda problem, n, detection, asked, eigensolver: 1)
         branches.append(sweep(system, 0.0, 0.12, "J"))
         assert scans.failed == 1 and not scans._done
     inline, deferred = branches

@@ -10,7 +10,7 @@ from diskfriction.continuation.spectra import window as spectral_window
 from diskfriction.continuation.detection.collisions import certified_tracked
 from diskfriction.continuation.detection.detectors import fast
 from diskfriction.continuation.detection.samples import Sample, continuation_perm
-from diskfriction.continuation.spectra.window import Window, window_columns
+from diskfriction.continuation.spectra.window import SpectralWindow, window_columns
 from diskfriction.continuation.detection.verdicts import beyond_band
 from diskfriction.models.chain.sweep import SweepParams, sweep
 from diskfriction.scenes import Scene
@@ -82,7 +82,7 @@ def test_windowed_columns_follow_the_full_spectrum(name, lo, hi, chain_sweep):
     full, window = full_sweep(chain_sweep, name), windowed_sweep(name, lo, hi)
     assert np.max(np.abs(window.F_x - full.F_x)) <= 1e-12  # the same points
     assert jumps(window, full, np.arange(len(window))) == []
-    W, band = window.eigenvalues, Window(*window.window)
+    W, band = window.eigenvalues, SpectralWindow(*window.window)
     assert np.all(band.tracked(W[~np.isnan(W)]))
     tol = MATCH * np.abs(full.eigenvalues).max()
     for r in range(len(full)):
@@ -195,7 +195,7 @@ def test_collisions_beyond_the_certified_band_are_not_located(monkeypatch):
     reported; with the outer half only watched it is not located, and the sweep reports the
     same collisions at the same F_x."""
     k_n = SCENES["paper"].k_n
-    band = Window(0.06 * k_n, 0.07 * k_n)
+    band = SpectralWindow(0.06 * k_n, 0.07 * k_n)
     everywhere, before = _located_collisions(monkeypatch, 1.0)
     certified, after = _located_collisions(monkeypatch, 0.5)
     lo, hi = band.lo - 0.5 * band.guard, band.hi + 0.5 * band.guard

@@ -22,9 +22,10 @@ from typing import Callable
 import numpy as np
 
 from diskfriction.continuation.branch import Branch
-from diskfriction.continuation.linalg.solves import dense, log_determinant
+from diskfriction.continuation.linalg.solves import DIRECT, LinearSolver, dense, log_determinant
 from diskfriction.continuation.stepping.newton import bordered_matrix, tangent
 from diskfriction.continuation.problem import Problem
+from diskfriction.continuation.spectra.eigensolvers import DEFAULT, Eigensolver
 from diskfriction.continuation.stepping.segment import Segment, refine_sign_change
 from diskfriction.continuation.spectra.tracking import DEFAULT_REL_TOL, eigen_status, imag_threshold, status_at
 
@@ -47,10 +48,11 @@ class SpecialPoint:
 
 def _locate(problem: Problem, branch: Branch, k: int, psi: Callable[[Segment, Array, float], float],
             done_tol: float, newton_tol: float, max_newton: int, by_x: bool,
-            span: tuple[float, float] = (0.0, 1.0)):
+            span: tuple[float, float] = (0.0, 1.0), linear_solver: LinearSolver = DIRECT):
     """Refine the sign change of psi over step k, between segment coordinates span (default the
     whole step); returns (x at the interpolated root, p bracket)."""
-    seg = Segment(problem, branch.x[k], branch.x[k + 1], newton_tol, max_newton, polish=False)
+    seg = Segment(problem, branch.x[k], branch.x[k + 1], newton_tol, max_newton, polish=False,
+                  linear_solver=linear_solver)
     pts, vals = {}, {}
 
     def f(s: float) -> float:
@@ -76,8 +78,8 @@ def bordered_determinant(problem: Problem, x: Array, border: Array) -> float:
 
 
 def branch_point_brackets(problem: Problem, branch: Branch, newton_tol: float = 1e-12,
-                          max_newton: int = 10,
-                          rel_tol: float = DEFAULT_REL_TOL) -> list[tuple[int, float, float]]:
+                          max_newton: int = 10, rel_tol: float = DEFAULT_REL_TOL,
+                          linear_solver: LinearSolver = DIRECT) -> list[tuple[int, float, float]]:
     """Where the branch passes simple branch points: (step k, s_lo, s_hi), a bracket in the
     step's segment coordinate over which the determinant of [[G_u, G_p], [sigma^T]] (sigma the
     step's unit secant) changes sign. On a regular branch it is (sigma . t) det [[G_u, G_p],
@@ -90,7 +92,8 @@ def branch_point_brackets(problem: Problem, branch: Branch, newton_tol: float = 
     x, lam = branch.x, branch.eigenvalues
     found = []
     for k in range(len(branch) - 1):
-        seg = Segment(problem, x[k], x[k + 1], newton_tol, max_newton, polish=False)
+        seg = Segment(problem, x[k], x[k + 1], newton_tol, max_newton, polish=False,
+                      linear_solver=linear_solver)
         ends = lam[k:k + 2]
         real = (eigen_status(ends[0], rel_tol) == 0) & (eigen_status(ends[1], rel_tol) == 0)
         re0, re1 = ends[0].real[real], ends[1].real[real]
@@ -104,8 +107,8 @@ def branch_point_brackets(problem: Problem, branch: Branch, newton_tol: float = 
 
 
 def locate_branch_points(problem: Problem, branch: Branch, brackets: list[tuple[int, float, float]],
-                         tol_x: float = 1e-12, newton_tol: float = 1e-12,
-                         max_newton: int = 10) -> list[SpecialPoint]:
+                         tol_x: float = 1e-12, newton_tol: float = 1e-12, max_newton: int = 10,
+                         linear_solver: LinearSolver = DIRECT) -> list[SpecialPoint]:
     """Branch points: the sign change of bordered_determinant over each of `brackets`
     (branch_point_brackets), refined until |x_hi - x_lo| <= tol_x (kind "branch", value 0)."""
     def psi(seg: Segment, x: Array, s: float) -> float:
@@ -114,7 +117,7 @@ def locate_branch_points(problem: Problem, branch: Branch, brackets: list[tuple[
     found = []
     for k, s_lo, s_hi in brackets:
         x, bracket = _locate(problem, branch, int(k), psi, tol_x, newton_tol, max_newton, by_x=True,
-                             span=(s_lo, s_hi))
+                             span=(s_lo, s_hi), linear_solver=linear_solver)
         found.append(SpecialPoint("branch", float(x[-1]), x[:-1], bracket, int(k), 0.0))
     return found
 
@@ -136,18 +139,19 @@ def other_direction(problem: Problem, point: SpecialPoint, along: Array) -> Arra
 
 def locate_folds(problem: Problem, branch: Branch, tol_x: float = 1e-9,
                  newton_tol: float = 1e-12, max_newton: int = 10,
-                 skip: tuple[int, ...] = ()) -> list[SpecialPoint]:
+                 skip: tuple[int, ...] = (), linear_solver: LinearSolver = DIRECT) -> list[SpecialPoint]:
     """Folds: sign changes of t_p between accepted points, refined until |x_hi - x_lo| <= tol_x.
     Since p is quadratic in arclength at a fold, |p - p_fold| ~ |p''| tol_x^2 / 2. Steps in
     `skip` are left out: a branch point where the branch also turns in p (a pitchfork seen
     from its symmetric branch) is a branch point, not a fold."""
     def psi(seg: Segment, x: Array, s: float) -> float:
-        return float(tangent(problem, x, seg.sigma)[-1])
+        return float(tangent(problem, x, seg.sigma, linear_solver=linear_solver)[-1])
 
     found = []
     turns = np.flatnonzero(np.sign(branch.tangent[:-1, -1]) * np.sign(branch.tangent[1:, -1]) < 0)
     for k in (k for k in turns if k not in skip):
-        x, bracket = _locate(problem, branch, int(k), psi, tol_x, newton_tol, max_newton, by_x=True)
+        x, bracket = _locate(problem, branch, int(k), psi, tol_x, newton_tol, max_newton, by_x=True,
+                             linear_solver=linear_solver)
         found.append(SpecialPoint("fold", float(x[-1]), x[:-1], bracket, int(k), 0.0))
     return found
 
@@ -213,9 +217,11 @@ def hopf_steps(eigenvalues: Array, rel_tol: float = DEFAULT_REL_TOL) -> list[tup
 
 
 def locate_hopf(problem: Problem, branch: Branch, tol_p: float = 1e-10, rel_tol: float = DEFAULT_REL_TOL,
-                newton_tol: float = 1e-12, max_newton: int = 10) -> list[SpecialPoint]:
+                newton_tol: float = 1e-12, max_newton: int = 10, linear_solver: LinearSolver = DIRECT,
+                eigensolver: Eigensolver = DEFAULT) -> list[SpecialPoint]:
     """Hopf points: a tracked complex pair whose real part crosses zero (hopf_steps), refined
-    until |dp| <= tol_p. None on a conservative spectrum (conservative: see CONSERVATIVE)."""
+    until |dp| <= tol_p, the spectra by `eigensolver`. None on a conservative spectrum
+    (conservative: see CONSERVATIVE)."""
     found = []
     ev = branch.eigenvalues
     if conservative(ev):
@@ -224,12 +230,12 @@ def locate_hopf(problem: Problem, branch: Branch, tol_p: float = 1e-10, rel_tol:
         lam_a, lam_b = ev[k, i], ev[k + 1, i]
 
         def pair(x: Array, s: float) -> complex:
-            lam = problem.spectrum(x[:-1], x[-1])
+            lam = eigensolver.eigensystem(problem, x[:-1], x[-1]).values
             lam = lam[lam.imag > 0]
             return complex(lam[np.argmin(np.abs(lam - (lam_a + s * (lam_b - lam_a))))])
 
         x, bracket = _locate(problem, branch, k, lambda seg, x, s: pair(x, s).real,
-                             tol_p, newton_tol, max_newton, by_x=False)
+                             tol_p, newton_tol, max_newton, by_x=False, linear_solver=linear_solver)
         value = pair(x, 0.5)
         found.append(SpecialPoint("hopf", float(x[-1]), x[:-1], bracket, k, value))
     return found

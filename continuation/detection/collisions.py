@@ -54,6 +54,7 @@ from diskfriction.continuation.problem import Problem
 from diskfriction.continuation.detection.root_ends import scan_ends
 from diskfriction.continuation.detection.samples import Sample, claimed_outside, continuation_perm, known, partial_sample_at, sample_at
 from diskfriction.continuation.stepping.segment import Segment, SegmentSolveError
+from diskfriction.continuation.spectra.eigensolvers import DEFAULT, Eigensolver
 from diskfriction.continuation.spectra.tracking import DEFAULT_REL_TOL
 from diskfriction.continuation.detection.verdicts import Verdict, VerdictKind, band_side, scaled_slopes
 
@@ -154,7 +155,9 @@ class StepScan:
     """Collision detection on one step (module docstring): the step's samples, their labels and
     the refinement loop; the detector (params.detector) judges the intervals and resolves their
     events. samples: sorted by s; the first with s = 0 is x_a unless a stencil sample from the
-    previous step (s < 0; Detector.stencil_from_previous) precedes it; the last is x_b (s = 1)."""
+    previous step (s < 0; Detector.stencil_from_previous) precedes it; the last is x_b (s = 1).
+    eigensolver: the run's, for the full samples it inserts (partial ones are shift-inverts of
+    the problem's StructuredMatrix: samples.partial_sample_at)."""
 
     problem: Problem
     segment: Segment
@@ -162,6 +165,7 @@ class StepScan:
     params: DetectionParams
     step: int
     ends_at_event: bool = False
+    eigensolver: Eigensolver = DEFAULT
     solves: int = 0
     warnings: list = field(default_factory=list)
     located: dict = field(default_factory=dict)
@@ -191,7 +195,7 @@ class StepScan:
                 raise _Budget
             x = self.segment.point(s)
             self.solves += 1
-            t = (tangent(self.problem, x, self.segment.sigma, self.segment.near(s))
+            t = (tangent(self.problem, x, self.segment.sigma, self.segment.near(s), self.segment.linear_solver)
                  if self.detector.slopes else None)
             self._points[s] = (x, t)
             self.segment.remember(s, x.copy(), self._points[s][1])
@@ -202,7 +206,8 @@ class StepScan:
         relabelled to continue it. Returns (index, perm or None)."""
         x, t = self._point(s)
         idx = bisect.bisect([smp.s for smp in self.samples], s)
-        self.samples.insert(idx, sample_at(self.problem, s, x, self.params.rel_tol, self.samples[idx - 1], t))
+        self.samples.insert(idx, sample_at(self.problem, s, x, self.params.rel_tol, self.samples[idx - 1], t,
+                                           eigensolver=self.eigensolver))
         self._born[s] = len(self._born)
         return idx, self._relabel_right(idx)
 
@@ -242,7 +247,7 @@ class StepScan:
         """samples[k] recomputed as a full sample tracked to its (full) left neighbour."""
         smp = self.samples[k]
         self.samples[k] = sample_at(self.problem, smp.s, smp.x, self.params.rel_tol, self.samples[k - 1],
-                                    smp.tangent)
+                                    smp.tangent, eigensolver=self.eigensolver)
 
     # ---- partial samples (partial_splits.py) ------------------------------------------------
     def _insert_partial(self, idx: int, s: float, labels: Array) -> bool:
@@ -431,7 +436,7 @@ class StepScan:
         mean_a, mean_b = (a.eigvals[i] + a.eigvals[j]).real / 2, (b.eigvals[i] + b.eigvals[j]).real / 2
         lam = float(mean_a + t * (mean_b - mean_a))
         u, p = x[:-1], float(x[-1])
-        v, w, overlap = jordan_chain_near(self.problem.stability_matrix(u, p), lam, self.problem.factor_options)
+        v, w, overlap = jordan_chain_near(self.problem.stability_matrix(u, p), lam, self.segment.linear_solver)
         # a sample on the collision itself (real side with D <= 4 thr^2) is its own bracket
         bracket = (min(a.p, b.p), max(a.p, b.p)) if self.narrow(a, b) or not resolved else (p, p)
         return Collision(p=p, kind=kind, eigenvalue=lam, eigenvector=v, generalized_eigenvector=w,
@@ -458,13 +463,14 @@ class ScanResult:
 
 def scan_step(problem: Problem, segment: Segment, start: Sample, end: Sample,
               params: DetectionParams, step: int, previous: Optional[Sample] = None,
-              ends_at_event: bool = False) -> ScanResult:
+              ends_at_event: bool = False, eigensolver: Eigensolver = DEFAULT) -> ScanResult:
     """Detect and locate the collisions between start (x_a) and end (x_b = segment.x_b).
 
     start: the sample of x_a (its labels are kept); end: the sample of x_b, labels continuing
     start; previous: the accepted point before x_a, the exhaustive detection's stencil (pass
     None if its step had collisions); ends_at_event: x_b lies just past a contact event (where
-    it is a square-root point of the spectrum, root_ends.py treats the end apart).
+    it is a square-root point of the spectrum, root_ends.py treats the end apart);
+    eigensolver: the run's, for the samples inside the step (eigensolvers.py).
     """
     if not params.enabled:
         return ScanResult([], np.arange(end.eigvals.size), 0, [])
@@ -476,7 +482,7 @@ def scan_step(problem: Problem, segment: Segment, start: Sample, end: Sample,
         s_prev = float(segment.sigma @ (previous.x - segment.x_a)) / segment.length
         if s_prev < 0.0:
             samples.insert(0, previous.at(s_prev))
-    scan = StepScan(problem, segment, samples, params, step, ends_at_event)
+    scan = StepScan(problem, segment, samples, params, step, ends_at_event, eigensolver)
     found = scan.run()
     tracked = None if b.disc is None else certified_tracked(scan.samples[scan._start:])
     return ScanResult(found, scan.end_perm, scan.solves, scan.warnings, tracked)

@@ -36,12 +36,11 @@ At the solution, v is the eigenvector and v_lambda (B [v_lambda; gamma] = [v; 0]
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Optional
 
 import numpy as np
 import scipy.sparse as sp
 
-from diskfriction.continuation.linalg.solves import RefinedSolve, SingularMatrix, bordered, factorize
+from diskfriction.continuation.linalg.solves import DIRECT, LinearSolver, RefinedSolve, SingularMatrix, bordered
 from diskfriction.continuation.stepping.newton import bordered_matrix
 from diskfriction.continuation.problem import Problem
 
@@ -88,10 +87,10 @@ def _unit(z: Array) -> Array:
 
 def locate_double_eigenvalue(problem: Problem, x0: Array, lam0: float, right0: Array, left0: Array,
                              tangent0: Array, tol_p: float, newton_tol: float,
-                             max_iter: int = 12) -> Located:
+                             max_iter: int = 12, linear_solver: LinearSolver = DIRECT) -> Located:
     """Newton on (G, g, h) = 0 from (x0, lam0); right0 and left0 approximate the eigenvectors of
     the colliding pair (their real parts become the fixed borders c and b), tangent0 the branch
-    tangent near x0. Raises LocatorFailed."""
+    tangent near x0; the bordered systems solved by linear_solver. Raises LocatorFailed."""
     x, lam, t = np.array(x0, dtype=float), float(lam0), _unit(tangent0)
     c, b = _unit(right0), _unit(left0)  # scaled by _border_scale at the first A
     m = c.size  # A is m x m (m may differ from the number of unknowns)
@@ -104,7 +103,7 @@ def locate_double_eigenvalue(problem: Problem, x0: Array, lam0: float, right0: A
         u, p = x[:-1], float(x[-1])
         G = problem.residual(u, p)
         try:
-            branch = factorize(bordered_matrix(problem, x, t), problem.factor_options)
+            branch = linear_solver.factorize(bordered_matrix(problem, x, t))
             a = branch.solve(np.append(-G, 0.0))
             t_new = branch.solve(e)
             t = t_new / np.linalg.norm(t_new) * np.sign(t_new @ t)
@@ -112,7 +111,7 @@ def locate_double_eigenvalue(problem: Problem, x0: Array, lam0: float, right0: A
             if it == 1:
                 scale = _border_scale(A)
                 c, b = scale * c, scale * b
-            B = factorize(bordered(A - lam * _identity(A), b, c), problem.factor_options)
+            B = linear_solver.factorize(bordered(A - lam * _identity(A), b, c))
             vg = B.solve(e_m)
             v, g = vg[:m], vg[m]
             w = B.solve(e_m, transpose=True)[:m]
@@ -148,16 +147,16 @@ def locate_double_eigenvalue(problem: Problem, x0: Array, lam0: float, right0: A
         residual = float(np.max(np.abs(problem.residual(x[:-1], x[-1]))))
         if abs(dx[-1]) <= 0.01 * tol_p and residual <= newton_tol:
             return _finish(problem, x, lam, b, c, residual, abs(dx[-1]), it, tuple(history),
-                           B if B.sparse else None)
+                           linear_solver, B if B.sparse else None)
     raise LocatorFailed(f"no convergence in {max_iter} Newton iterations (|dp| = {history[-1]:.3g})")
 
 
-def _shifted(A, lam: float, b: Array, c: Array, near, options) -> RefinedSolve:
+def _shifted(A, lam: float, b: Array, c: Array, near, linear_solver: LinearSolver) -> RefinedSolve:
     """B = [[A - lam I, b], [c^T, 0]] as a RefinedSolve on `near` (the last iterate's B)."""
     return RefinedSolve(lambda: bordered(A - lam * _identity(A), b, c),
-                   lambda y: np.append(A @ y[:-1] - lam * y[:-1] + b * y[-1], c @ y[:-1]),
-                   lambda y: np.append(A.T @ y[:-1] - lam * y[:-1] + c * y[-1], b @ y[:-1]),
-                   near, options)
+                        lambda y: np.append(A @ y[:-1] - lam * y[:-1] + b * y[-1], c @ y[:-1]),
+                        lambda y: np.append(A.T @ y[:-1] - lam * y[:-1] + c * y[-1], b @ y[:-1]),
+                        near, linear_solver.options)
 
 
 def _border_scale(A) -> float:
@@ -177,30 +176,30 @@ def _derivative_products(problem: Problem, x: Array, d: Array, v: Array, w: Arra
     return (A_plus @ v - A_minus @ v) / (2 * h), (A_plus.T @ w - A_minus.T @ w) / (2 * h)
 
 
-def _finish(problem, x, lam, b, c, residual, dp, iterations, history, near=None) -> Located:
+def _finish(problem, x, lam, b, c, residual, dp, iterations, history, linear_solver, near=None) -> Located:
     """Eigenvector, Jordan vector and left-right overlap at the converged point (near: the last
     iterate's sparse factorization of B, refined on: jordan_chain; a dense one costs less to
     make again than to refine on)."""
     A = problem.stability_matrix(x[:-1], float(x[-1]))
-    v, w, overlap = jordan_chain(A, lam, b, c, problem.factor_options, near)
+    v, w, overlap = jordan_chain(A, lam, b, c, linear_solver, near)
     return Located(x, float(lam), v, w, overlap, residual, dp, iterations, history)
 
 
 def jordan_chain(A, lam: float, b: Array, c: Array,
-                 options: Optional[dict] = None, near=None) -> tuple[Array, Array, float]:
+                 linear_solver: LinearSolver = DIRECT, near=None) -> tuple[Array, Array, float]:
     """(v, w, overlap) at a double eigenvalue lam of A (dense or sparse), from the bordered
     matrix B = [[A - lam I, b], [c^T, 0]] (module docstring; one factorization at most, three
     solves):
     the unit right eigenvector v (B [v; g] = e_(n+1), largest component positive), the
     generalized eigenvector w ((A - lam I) w = v up to the border, made orthogonal to v) and
     overlap = |y . v| for the unit left eigenvector y (B^T [y; .] = e_(n+1); -> 0 at a Jordan
-    block). options: the problem's factor_options (Problem). near: the factorization of B at a
+    block). linear_solver: the run's (its ordering for a sparse A). near: the factorization of B at a
     point nearby (the locator's last iterate), refined on instead of factorizing (RefinedSolve).
     Raises SingularMatrix if the borders do not make B regular."""
     m = A.shape[0]
     e = np.zeros(m + 1)
     e[-1] = 1.0
-    B = _shifted(A, lam, b, c, near, options)
+    B = _shifted(A, lam, b, c, near, linear_solver)
     v = B.solve(e)[:m]
     y = B.solve(e, transpose=True)[:m]
     scale = np.linalg.norm(v)
@@ -211,7 +210,7 @@ def jordan_chain(A, lam: float, b: Array, c: Array,
     return v_unit, w, float(abs(y @ v_unit) / np.linalg.norm(y))
 
 
-def jordan_chain_near(A, lam: float, options: Optional[dict] = None) -> tuple[Array, Array, float]:
+def jordan_chain_near(A, lam: float, linear_solver: LinearSolver = DIRECT) -> tuple[Array, Array, float]:
     """jordan_chain at lam when no approximate eigenvector is at hand (a collision interpolated
     between samples): a first bordered solve with pseudo-random borders (seeded: runs repeat;
     B is singular only for borders orthogonal to a null vector, a set of measure zero) gives
@@ -223,7 +222,7 @@ def jordan_chain_near(A, lam: float, options: Optional[dict] = None) -> tuple[Ar
     scale = _border_scale(A)
     e = np.zeros(m + 1)
     e[-1] = 1.0
-    B = factorize(bordered(A - lam * _identity(A), scale * _unit(rng.standard_normal(m)),
-                           scale * _unit(rng.standard_normal(m))), options)
+    B = linear_solver.factorize(bordered(A - lam * _identity(A), scale * _unit(rng.standard_normal(m)),
+                                         scale * _unit(rng.standard_normal(m))))
     v, y = B.solve(e)[:m], B.solve(e, transpose=True)[:m]
-    return jordan_chain(A, lam, scale * _unit(y), scale * _unit(v), options)
+    return jordan_chain(A, lam, scale * _unit(y), scale * _unit(v), linear_solver)

@@ -28,7 +28,7 @@ from diskfriction.continuation.detection.certify import inconsistent_labels, nea
 from diskfriction.continuation.linalg.solves import book
 from diskfriction.continuation.spectra.nearest import ShiftInvertFailed, nearest_eigensystem
 from diskfriction.continuation.problem import Problem
-from diskfriction.continuation.spectra.refinement import refinable, refined_eigensystem
+from diskfriction.continuation.spectra.eigensolvers import DEFAULT, Eigensolver
 from diskfriction.continuation.detection.spill import is_on_disk, on_disk
 from diskfriction.continuation.spectra.tracking import (Eigensystem, eigen_status, eigenvalue_slopes, imag_threshold, match_eigenvalues,
                       status_at)
@@ -438,16 +438,17 @@ def make_sample(s: float, x: Array, system: Eigensystem, rel_tol: float,
 
 
 def sample_at(problem: Problem, s: float, x: Array, rel_tol: float, reference: Optional[Sample],
-              tangent: Optional[Array] = None, side: int = 0) -> Sample:
-    """The sample of the branch point x: eigenvalues only (tangent None), or the eigensystem
-    with vectors and the slopes along `tangent` (matrix_derivative on `side`); that eigensystem
-    refined from `reference`'s where refinement.py can and certifies it, else decomposed."""
+              tangent: Optional[Array] = None, side: int = 0, eigensolver: Eigensolver = DEFAULT) -> Sample:
+    """The sample of the branch point x by `eigensolver` (eigensolvers.py): eigenvalues only
+    (tangent None), or the eigensystem with vectors and the slopes along `tangent`
+    (matrix_derivative on `side`); that eigensystem refined from `reference`'s where the
+    eigensolver can (Eigensolver.refined), else computed anew."""
     u, p = x[:-1], float(x[-1])
     if tangent is None:
-        return make_sample(s, x, problem.eigensystem(u, p), rel_tol, reference)
-    system = refined_eigensystem(problem, x, reference) if refinable(reference) else None
+        return make_sample(s, x, eigensolver.eigensystem(problem, u, p), rel_tol, reference)
+    system = eigensolver.refined(problem, x, reference)
     if system is None:
-        system = problem.eigensystem(u, p, vectors=True)
+        system = eigensolver.eigensystem(problem, u, p, vectors=True)
     dA = matrix_derivative(problem, x, tangent, side)
     return make_sample(s, x, system, rel_tol, reference, tangent, eigenvalue_slopes(system, dA), dA)
 
@@ -467,9 +468,9 @@ def partial_sample_at(problem: Problem, s: float, x: Array, left: Sample, cluste
     None when a disc does not cover its labels (every eigenvalue within twice its distance to
     a label's prediction must be among the k, so that the match saw every candidate a full
     spectrum would offer), when two groups claim the same eigenvalue, or when a shift-invert
-    fails."""
-    A = problem.stability_matrix(x[:-1], float(x[-1]))
-    deflated = problem.deflated(x[:-1], float(x[-1]))
+    fails. The shift-inverts take the problem's StructuredMatrix: A, or its deflation."""
+    structure = problem.stability_structure(x[:-1], float(x[-1]))
+    A, deflated = structure.matrix, structure.deflated
     dA = matrix_derivative(problem, x, tangent)
     step = x - left.x
     ds_left, ds_new = float(step @ left.tangent), float(step @ tangent)

@@ -34,10 +34,12 @@ import scipy.sparse
 from diskfriction.errors import OneLineError
 
 from diskfriction.continuation.detection.collisions import DetectionParams, ScanResult, scan_step
-from diskfriction.continuation.linalg.solves import SingularMatrix, blas_threads, book_counts, measured
+from diskfriction.continuation.linalg.solves import (DIRECT, LinearSolver, SingularMatrix, blas_threads, book_counts,
+                                                     measured)
 from diskfriction.continuation.problem import Problem
 from diskfriction.continuation.detection.samples import Sample
 from diskfriction.continuation.stepping.segment import Segment, SegmentSolveError
+from diskfriction.continuation.spectra.eigensolvers import DEFAULT, Eigensolver
 from diskfriction.continuation.spectra.tracking import GPU_FROM, on_gpu
 from diskfriction.continuation.spectra.window import WindowCrowded
 
@@ -61,8 +63,9 @@ PENDING_BYTES = 2 ** 30
 @dataclass(frozen=True)
 class ScanJob:
     """The scan of accepted step `step` from x_a to x_b (collisions.scan_step's arguments);
-    state: the problem's state committed at x_a (Problem.state); tol, max_iter: the corrector
-    of the step's intermediate points (segment.Segment)."""
+    state: the problem's state committed at x_a (Problem.state); tol, max_iter, linear_solver:
+    the corrector of the step's intermediate points (segment.Segment); eigensolver: their
+    spectra's (eigensolvers.py)."""
 
     state: object
     x_a: Array
@@ -75,6 +78,8 @@ class ScanJob:
     step: int
     previous: Optional[Sample] = None
     ends_at_event: bool = False
+    linear_solver: LinearSolver = DIRECT
+    eigensolver: Eigensolver = DEFAULT
 
 
 @dataclass(frozen=True)
@@ -96,9 +101,10 @@ def run_scan(problem: Problem, job: ScanJob) -> ScanOutcome:
     with measured() as spent:
         try:
             result = scan_step(problem, Segment(problem, job.x_a, job.x_b, job.tol, job.max_iter,
-                                                    job.start.tangent, job.end.tangent, chord=True),
+                                                    job.start.tangent, job.end.tangent, chord=True,
+                                                    linear_solver=job.linear_solver),
                                job.start, job.end, job.detection, job.step, job.previous,
-                               job.ends_at_event)
+                               job.ends_at_event, job.eigensolver)
         except SegmentSolveError as err:
             failure = f"collision scan: {err}"
         except SingularMatrix as err:
@@ -115,11 +121,11 @@ class WorkersOnGpu(OneLineError, ValueError):
 
 
 def default_workers(problem: Problem, n: int, detection: DetectionParams,
-                    asked: Optional[int] = None) -> int:
-    """Workers for `problem`, whose stability matrix is n x n: planned_workers, or 0 (inline)
-    for a problem whose committed state cannot be shipped (has_snapshots); asking for workers
-    explicitly for such a problem raises ValueError."""
-    workers = planned_workers(n, detection, asked, dense=problem.dense_spectra())
+                    asked: Optional[int] = None, eigensolver: Eigensolver = DEFAULT) -> int:
+    """Workers for `problem`, whose stability matrix is n x n, its spectra by `eigensolver`:
+    planned_workers, or 0 (inline) for a problem whose committed state cannot be shipped
+    (has_snapshots); asking for workers explicitly for such a problem raises ValueError."""
+    workers = planned_workers(n, detection, asked, dense=eigensolver.dense, gpu=eigensolver.on_gpu(n))
     if workers and not has_snapshots(problem):
         if asked is not None:
             raise ValueError(f"{type(problem).__name__} commits a state but has no state()/restore(): "
@@ -129,20 +135,21 @@ def default_workers(problem: Problem, n: int, detection: DetectionParams,
 
 
 def planned_workers(n: int, detection: DetectionParams, asked: Optional[int] = None,
-                    dense: bool = True) -> int:
+                    dense: bool = True, gpu: Optional[bool] = None) -> int:
     """Scan workers for an n x n stability matrix: 0 (inline) unless the detector's scans are
     independent (Detector.parallel: the exhaustive one's stencil is a sample of the previous
     step, known only once that step's scan is done); then `asked` if given (0: every scan
     inline), else 2 from n = PARALLEL_FROM on, on Linux, when this process may use 2 cores or
-    more and is not daemonic. Always 0 where dense spectra are taken (`dense`: the problem
-    tracks no spectral window, Problem.dense_spectra) and run on a GPU (spectra.on_gpu): the
-    GPU does the heavy part, and a forked worker cannot use the CUDA context this process
-    started. ValueError for asked < 0, or asked > 0 with dense spectra on a GPU."""
+    more and is not daemonic. Always 0 where dense spectra are taken (`dense`: the eigensolver
+    is no spectral window, Eigensolver.dense) and run on a GPU (`gpu`, None: tracking.on_gpu
+    on spectra_on's device): the GPU does the heavy part, and a forked worker cannot use the
+    CUDA context this process started. ValueError for asked < 0, or asked > 0 with dense
+    spectra on a GPU."""
     if asked is not None and asked < 0:
         raise ValueError(f"workers must be >= 0 (or None: automatic), got {asked}")
     if not (detection.enabled and detection.detector.parallel):
         return 0
-    if dense and on_gpu(n):
+    if dense and (on_gpu(n) if gpu is None else gpu):
         if asked:
             raise WorkersOnGpu(f"--workers: the spectra run on the GPU (--spectra gpu, or auto from "
                                f"n = {GPU_FROM}), where the scans run inline; ask for --spectra cpu "

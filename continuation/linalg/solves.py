@@ -239,6 +239,39 @@ def factorize(M: Matrix, ordering: Optional[dict] = None) -> Factorization:
     return Factorization((lu, piv), False)
 
 
+@dataclass(frozen=True)
+class LinearSolver:
+    """How the core solves its linear systems (the corrector's and the tangent's bordered
+    matrices, the collision locator's; a choice of the run: Options.linear_solver,
+    ContinuationParams.linear_solver), as BifurcationKit's linsolver: a dense matrix by LAPACK's
+    LU (getrf), a sparse one by SuperLU with partial pivoting and the column ordering
+    `ordering`, scipy's splu permc_spec (None: SuperLU's default, COLAMD; "MMD_AT_PLUS_A":
+    minimum degree on the pattern of A + A^T, for a structurally symmetric matrix; "MMD_ATA",
+    "NATURAL"). Which of the two a system takes is the matrix's: what the problem's jacobian
+    returns."""
+
+    ordering: Optional[str] = None
+
+    ORDERINGS = ("COLAMD", "MMD_AT_PLUS_A", "MMD_ATA", "NATURAL")
+
+    def __post_init__(self):
+        if self.ordering is not None and self.ordering not in self.ORDERINGS:
+            raise ValueError(f"ordering must be one of {self.ORDERINGS} or None, got {self.ordering!r}")
+
+    @property
+    def options(self) -> Optional[dict]:
+        """SuperLU's keyword arguments (factorize's `ordering`), None: its defaults."""
+        return None if self.ordering is None else dict(permc_spec=self.ordering)
+
+    def factorize(self, M: Matrix) -> Factorization:
+        """The LU of M (factorize)."""
+        return factorize(M, self.options)
+
+
+DIRECT = LinearSolver()
+"""The linear solver of a run that names none: LAPACK, or SuperLU with its default ordering."""
+
+
 REFINE_TOL = 1e-14
 """solve_near accepts a solution once a correction is at most this fraction of it (max norms)."""
 REFINE_STEPS = 6

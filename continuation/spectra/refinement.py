@@ -1,16 +1,16 @@
-"""Full spectra by eigenpair continuation (issue 26 item 1): the eigensystem at a branch point
-refined from a nearby sample's instead of a dense O(n^3) decomposition.
+"""Full spectra by eigenpair continuation: the eigensystem at a branch point refined from a
+nearby sample's instead of a dense O(n^3) decomposition (eigensolvers.RefinedSpectra).
 
-Where the stability matrix is periodic block-tridiagonal (Problem.stability_blocks: the disk
-chain, each disk coupled to its two neighbours), every eigenpair (lambda_i, r_i, l_i) of the
+Where the stability matrix is periodic block-tridiagonal (its StructuredMatrix's block layout:
+a ring of cells, each coupled to its two neighbours), every eigenpair (lambda_i, r_i, l_i) of the
 reference sample is carried to the new point x:
 
     predicted   lambda_i + dlambda_i/ds ds,   ds = (x - x_ref) . t_ref  (the slopes along the
                 reference's tangent; the reference's own value where it has no slopes),
     refined     by two-sided Rayleigh quotient iteration on the O(N b^3) shifted solves of
-                linalg/block_tridiagonal.py (rayleigh.py), each pair alone, then again together with its neighbours
-                where it did not converge or its error disc meets another's
-                (eigenpairs.refinement_groups),
+                linalg/block_tridiagonal.py (rayleigh.py), each pair alone, then again
+                together with its neighbours where it did not converge or its error disc
+                meets another's (eigenpairs.refinement_groups),
 
 O(n^2 b^2) for the n = N b pairs against LAPACK's O(n^3): 6.7 times faster at n = 3000 on one
 core (2.45 against 16.5 s; docs/continuation.md, Eigenpair continuation).
@@ -44,14 +44,14 @@ from scipy.optimize import linear_sum_assignment
 from scipy.sparse.csgraph import connected_components
 import scipy.sparse as sp
 
-from diskfriction.continuation.spectra.eigenpairs import close_pairs, meeting_discs, refine_eigenpairs
-from diskfriction.continuation.spectra.rayleigh import polish
+from diskfriction.continuation.linalg.block_tridiagonal import PeriodicBlocks
 from diskfriction.continuation.linalg.solves import book, row_norms
+from diskfriction.continuation.spectra.eigenpairs import close_pairs, meeting_discs, refine_eigenpairs
 from diskfriction.continuation.spectra.nearest import ShiftInvertFailed, nearest_eigensystem
-from diskfriction.continuation.spectra.tracking import Eigensystem, on_gpu
+from diskfriction.continuation.spectra.rayleigh import polish
+from diskfriction.continuation.spectra.tracking import Eigensystem, SpectraDevice, on_gpu
 
 if TYPE_CHECKING:  # pragma: no cover
-    from diskfriction.continuation.problem import Problem
     from diskfriction.continuation.detection.samples import Sample
 
 Array = np.ndarray
@@ -113,27 +113,27 @@ of 400 disks)."""
 EPS = np.finfo(float).eps
 
 
-def refinable(reference: Optional[Sample]) -> bool:
-    """Whether a full sample may be refined from `reference`: n >= REFINE_FROM,
-    dense spectra on the CPU, and a full reference with every eigenvalue's vectors and none
-    excluded (no free disk, no spectral window)."""
+def refinable(reference: Optional[Sample], refine_from: Optional[int] = None,
+              device: Optional[SpectraDevice] = None) -> bool:
+    """Whether a full sample may be refined from `reference`: n >= refine_from (None:
+    REFINE_FROM), dense spectra on the CPU (on `device`, None: spectra_on's), and a full
+    reference with every eigenvalue's vectors and none excluded (no decoupled or gauge mode,
+    no spectral window)."""
     if reference is None or reference.partial or reference.system is None:
         return False
     n = reference.eigvals.size
     system = reference.system
-    return (n >= REFINE_FROM and not on_gpu(n) and system.disc is None and system.guard is None
+    least = REFINE_FROM if refine_from is None else refine_from
+    return (n >= least and not on_gpu(n, device) and system.disc is None and system.guard is None
             and (system.columns is None or bool(np.all(system.columns >= 0)))
             and not np.any(reference.excluded))
 
 
-def refined_eigensystem(problem: Problem, x: Array, reference: Sample) -> Optional[Eigensystem]:
-    """The eigensystem of the stability matrix at x (= (u, p)) refined from `reference`'s
-    (refinable), in the reference's label order, vectors normalised to |r_i| = 1, l_i^H r_i = 1;
-    None where the problem has no periodic blocks or the result is not certified (module
-    docstring). Booked as spectra_refined or refinements_declined."""
-    blocks = problem.stability_blocks(x[:-1], float(x[-1]))
-    if blocks is None:
-        return None
+def refined_eigensystem(blocks: PeriodicBlocks, x: Array, reference: Sample) -> Optional[Eigensystem]:
+    """The eigensystem of the stability matrix at x (= (u, p)), `blocks`, refined from
+    `reference`'s (refinable), in the reference's label order, vectors normalised to |r_i| = 1,
+    l_i^H r_i = 1; None where the result is not certified (module docstring). Booked as
+    spectra_refined or refinements_declined."""
     old = reference.system
     values = np.asarray(reference.eigvals, complex)
     scale = float(np.abs(values).max()) or 1.0

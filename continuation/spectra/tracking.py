@@ -20,9 +20,11 @@ optimal and the assignment solve is skipped. Column i of a branch's eigenvalue a
 one continuous eigenvalue (up to the arbitrary choice at a collision).
 
 Devices. Every dense spectrum of the core is taken by eigensystem(): LAPACK's dgeev on the CPU,
-or cuSOLVER's geev on a GPU (gpu_spectra.py) inside `with spectra_on("gpu" | "auto"):`. The
-default, "auto", sends an n x n matrix to the GPU from n = GPU_FROM on where CuPy and a CUDA
-device are present, and keeps everything on the CPU elsewhere (CI, any machine without one).
+or cuSOLVER's geev on a GPU (gpu.py), on the device an eigensolver names
+(eigensolvers.DenseSpectra(device)) or else inside `with spectra_on("gpu" | "cpu" | "auto"):`.
+The default, "auto", sends an n x n matrix to the GPU from n = GPU_FROM on where CuPy and a
+CUDA device are present, and keeps everything on the CPU elsewhere (CI, any machine without
+one).
 """
 from __future__ import annotations
 
@@ -159,17 +161,17 @@ class Eigensystem:
     """Eigenvalues of a stability matrix A with, optionally, right vectors (columns of `right`,
     A r_i = lambda_i r_i) and left vectors (rows of `left`, l_i^H A = lambda_i l_i^H) scaled so
     that l_i^H r_i = 1; `excluded` marks modes kept out of collision detection (exactly
-    decoupled modes such as free rolling disks, whose eigenvalues are degenerate by symmetry
-    and can never become complex: see models/chain/equilibria.py; or, when only a spectral window
-    is tracked, the eigenvalues beyond its guard band: continuation/spectra/window.py); `guard` marks
+    decoupled modes or the zero modes of a gauge, structure.py, whose eigenvalues can never
+    become complex; or, when only a spectral window is tracked, the eigenvalues beyond its
+    guard band: window.py); `guard` marks
     the eigenvalues in a window's guard band, the only ones that may enter or leave the
     tracked set between two samples; `columns`, when only some eigenvalues have vectors (a
-    partial sample, samples.partial_sample_at; the free disks' modes, DiskEquilibria.eigensystem),
+    partial sample, samples.partial_sample_at; a reduced eigensystem's, structure.embedded),
     the column of `right` and row of `left` of each eigenvalue (-1: none), else None
     (eigenvalue i has column i); `disc`, when only the eigenvalues nearest a shift were computed
     (a spectral window), (sigma, radius): every eigenvalue with |lambda - sigma| < radius is
     among `values`, and radius is the largest |lambda_i - sigma| of them; None: all computed;
-    `band`, with a window, the certified band (lo, hi) of Re lambda (Window.certified: no
+    `band`, with a window, the certified band (lo, hi) of Re lambda (SpectralWindow.certified: no
     collision beyond it is located), None: every eigenvalue is certified."""
 
     values: Array
@@ -200,7 +202,7 @@ class Eigensystem:
 
 class SpectraDevice(StrEnum):
     """Where eigensystem() takes dense spectra: "cpu" (LAPACK), "gpu" (cuSOLVER, every size;
-    gpu_spectra.py) or "auto" (the GPU from n = GPU_FROM on where one is usable, else the CPU)."""
+    gpu.py) or "auto" (the GPU from n = GPU_FROM on where one is usable, else the CPU)."""
 
     CPU = "cpu"
     GPU = "gpu"
@@ -235,21 +237,22 @@ def spectra_on(device: str):
         _DEVICE[0] = before
 
 
-def on_gpu(n: int) -> bool:
-    """Whether eigensystem() takes an n x n spectrum on the GPU under the current device."""
-    device = _DEVICE[0]
+def on_gpu(n: int, device: Optional[SpectraDevice] = None) -> bool:
+    """Whether eigensystem() takes an n x n spectrum on the GPU on `device` (None: the current
+    one, spectra_on's)."""
+    device = _DEVICE[0] if device is None else SpectraDevice(device)
     if device is SpectraDevice.AUTO:
         return n >= GPU_FROM and gpu_spectra.unavailable() is None
     return device is SpectraDevice.GPU
 
 
-def eigensystem(A: Array, vectors: bool) -> Eigensystem:
-    """All eigenvalues of the dense matrix A (LAPACK dgeev, or cuSOLVER's geev where on_gpu:
-    gpu_spectra.py; LAPACK where the GPU's right vectors are singular or its memory is too
-    small), with left and right vectors normalised to l_i^H r_i = 1 if `vectors`; booked as a
-    full spectrum (linalg.book)."""
+def eigensystem(A: Array, vectors: bool, device: Optional[SpectraDevice] = None) -> Eigensystem:
+    """All eigenvalues of the dense matrix A (LAPACK dgeev, or cuSOLVER's geev where on_gpu on
+    `device`, None: spectra_on's: gpu.py; LAPACK where the GPU's right vectors are singular or
+    its memory is too small), with left and right vectors normalised to l_i^H r_i = 1 if
+    `vectors`; booked as a full spectrum (linalg.book)."""
     book("spectra")
-    if on_gpu(A.shape[0]) and (arrays := gpu_spectra.eigensystem_arrays(A, vectors)) is not None:
+    if on_gpu(A.shape[0], device) and (arrays := gpu_spectra.eigensystem_arrays(A, vectors)) is not None:
         return Eigensystem(*arrays)
     if not vectors:
         return Eigensystem(np.linalg.eigvals(A).astype(complex))

@@ -1,5 +1,6 @@
 """A spectral window: the eigenvalues near a band of real parts, by sparse shift-invert, when a
-full dense spectrum (O(n^3)) is too expensive (a chain of 1000 disks: n = 3000).
+full dense spectrum (O(n^3)) is too expensive (a chain of 1000 disks: n = 3000). The
+eigensolver SpectralWindow(lo, hi) (eigensolvers.py) holds the window and its size k.
 
 The window W = [lo, hi] of Re lambda is tracked with a guard band of width g = GUARD (hi - lo)
 on each side. At every sample the k eigenvalues nearest sigma = (lo + hi) / 2 are computed by
@@ -8,15 +9,16 @@ ARPACK on both sides, and a two-sided Rayleigh-Ritz projection pairs them). Comp
 nearest eigenvalues include every eigenvalue within the distance of the farthest one; if that
 distance does not exceed the reach of the guard bands (the farthest corner of the rectangle
 of Re lambda in [lo - g, hi + g] and |Im lambda| up to the largest |Im| seen there:
-Window.reach), some eigenvalue of the band may be missing and WindowCrowded is raised (choose a
-narrower window). A pair that comes down into the band from a larger |Im| enters the disc
-where its own |Im| puts it within the new reach: the window crowds and is sized anew. The k
-eigenvalues keep their labels along the branch like a full spectrum's; those beyond the guard
-band are `excluded`, those in the guard band are `guard`: an eigenvalue joins or leaves the
-tracked set only through the guard band (verdicts._enters_past_guard). The detection certifies
-pairs, and locates collisions, only in the certified band, W widened by CERTIFIED of the guard
-band on each side (Window.certified): an eigenvalue beyond it at both ends of an interval on
-the same side (verdicts.beyond_band) takes part in no certificate and none of its collisions is
+SpectralWindow.reach), some eigenvalue of the band may be missing and WindowCrowded is raised
+(choose a narrower window, or size it anew: SpectralWindow.widened). A pair that comes down
+into the band from a larger |Im| enters the disc where its own |Im| puts it within the new
+reach: the window crowds and is sized anew. The k eigenvalues keep their labels along the
+branch like a full spectrum's; those beyond the guard band are `excluded`, those in the guard
+band are `guard`: an eigenvalue joins or leaves the tracked set only through the guard band
+(verdicts._enters_past_guard). The detection certifies pairs, and locates collisions, only in
+the certified band, W widened by CERTIFIED of the guard band on each side
+(SpectralWindow.certified): an eigenvalue beyond it at both ends of an interval on the same
+side (verdicts.beyond_band) takes part in no certificate and none of its collisions is
 located while the cubic model of its real part stays beyond the band between the samples, for
 its value at any collision inside the interval lies outside W (the assumption the guard band
 rests on: an eigenvalue does not stray CERTIFIED of the guard band off its model between two
@@ -37,12 +39,14 @@ column. A column holds its eigenvalue while it is in W or its guard bands, nan e
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from diskfriction.continuation.linalg.solves import Matrix, book
+from diskfriction.continuation.spectra.eigensolvers import Eigensolver
 from diskfriction.continuation.spectra.nearest import nearest_eigensystem, nearest_values
+from diskfriction.continuation.spectra.structure import on_blocks
 from diskfriction.continuation.spectra.tracking import Eigensystem
 
 Array = np.ndarray
@@ -64,6 +68,9 @@ collisions to 3e-17 (docs/continuation.md)."""
 WIDENING = 1.5
 """Where a window crowds, a caller may size it anew (widened) with k at least this factor
 times the old k."""
+BLOCK_SHARE = 0.999
+"""A window's mode with more than this share of its right vector's norm^2 on a decoupled
+block's coordinates is that block's own: excluded (SpectralWindow.eigensystem)."""
 WIDENINGS = 3
 """A caller that widens a crowded window and goes on from the last certified point gives up
 after this many widenings in a row that reach no further point (StopCode.WINDOW)."""
@@ -74,17 +81,49 @@ class WindowCrowded(RuntimeError):
 
 
 @dataclass(frozen=True)
-class Window:
-    """lo, hi: the band of Re lambda tracked [the stability matrix's units]; k: the number of
-    eigenvalues computed (0: decided at the first sample)."""
+class SpectralWindow(Eigensolver):
+    """The eigensolver of a spectral window (module docstring). lo, hi: the band of Re lambda
+    tracked [the stability matrix's units]; k: the number of eigenvalues computed (0: sized at
+    the run's start, prepared); margin, extra: k is sized as margin times the eigenvalues
+    within reach, plus extra (sized)."""
 
     lo: float
     hi: float
     k: int = 0
+    margin: float = MARGIN
+    extra: int = EXTRA
+
+    dense = False
 
     def __post_init__(self):
         if not self.lo < self.hi:
             raise ValueError(f"window needs lo < hi, got {self.lo}, {self.hi}")
+
+    def eigensystem(self, problem, u, p, vectors=False) -> Eigensystem:
+        """The k eigenvalues of A(u, p) nearest the window's centre (window_eigensystem): of
+        its coupled part where the structure gives one, without vectors; of A with vectors
+        (shift-inverting the structure's deflation), the modes of decoupled blocks excluded;
+        real where the structure has a symmetric form. Raises WindowCrowded."""
+        structure = problem.stability_structure(u, p)
+        if not vectors:
+            found = window_eigensystem(structure.shifted(), self, False)
+        else:
+            found = window_eigensystem(structure.matrix, self, True, structure.deflated)
+            if structure.decoupled is not None and found.right is not None:
+                found = replace(found, excluded=found.excluded | on_blocks(found, structure.decoupled, BLOCK_SHARE))
+        if structure.symmetric is not None:  # a real spectrum: the imaginary parts are rounding
+            found = replace(found, values=found.values.real + 0j)
+        return found
+
+    def prepared(self, problem, u, p) -> "SpectralWindow":
+        """The window sized at (u, p) where its k is 0 (sized), else itself."""
+        if self.k:
+            return self
+        return sized(self, problem.stability_structure(u, p).shifted(), self.margin, self.extra)
+
+    def widened(self, problem, u, p) -> "SpectralWindow":
+        """The window sized anew at (u, p), wider (widened)."""
+        return widened(self, problem.stability_structure(u, p).shifted(), self.margin, self.extra)
 
     @property
     def sigma(self) -> float:
@@ -119,7 +158,7 @@ class Window:
         return (values.real >= self.lo - self.guard) & (values.real <= self.hi + self.guard)
 
 
-def sized(window: Window, A: Matrix, margin: float = MARGIN, extra: int = EXTRA) -> Window:
+def sized(window: SpectralWindow, A: Matrix, margin: float = MARGIN, extra: int = EXTRA) -> SpectralWindow:
     """The window with its k: `margin` times the eigenvalues within reach at A, plus `extra`."""
     k = extra
     n = A.shape[0]
@@ -127,18 +166,18 @@ def sized(window: Window, A: Matrix, margin: float = MARGIN, extra: int = EXTRA)
         values = nearest_values(A, window.sigma, min(k, n - 2))
         near = np.abs(values - window.sigma) <= window.reach(values)
         if not near.all() or k >= n - 2:
-            return Window(window.lo, window.hi, min(n - 2, int(margin * near.sum()) + extra))
+            return replace(window, k=min(n - 2, int(margin * near.sum()) + extra))
         k *= 2
 
 
-def widened(window: Window, A: Matrix, margin: float = MARGIN, extra: int = EXTRA) -> Window:
+def widened(window: SpectralWindow, A: Matrix, margin: float = MARGIN, extra: int = EXTRA) -> SpectralWindow:
     """The window sized anew at A (sized), with k at least WIDENING times its old k, at most
     A's size less 2 (ARPACK's limit): where it crowded, so that the run can go on."""
-    k = max(sized(Window(window.lo, window.hi), A, margin, extra).k, math.ceil(WIDENING * window.k))
-    return Window(window.lo, window.hi, min(k, A.shape[0] - 2))
+    k = max(sized(replace(window, k=0), A, margin, extra).k, math.ceil(WIDENING * window.k))
+    return replace(window, k=min(k, A.shape[0] - 2))
 
 
-def window_eigensystem(A: Matrix, window: Window, vectors: bool, deflated=None) -> Eigensystem:
+def window_eigensystem(A: Matrix, window: SpectralWindow, vectors: bool, deflated=None) -> Eigensystem:
     """The window.k eigenvalues of the sparse A nearest the window's centre (module docstring),
     with normalised left and right vectors if `vectors` (shift-inverting `deflated`'s matrix
     if given: nearest.Deflated); excluded beyond the guard bands, guard within them. Raises
@@ -151,7 +190,7 @@ def window_eigensystem(A: Matrix, window: Window, vectors: bool, deflated=None) 
     return _classified(nearest_eigensystem(A, sigma, k, deflated)[0], window)
 
 
-def _classified(system: Eigensystem, window: Window) -> Eigensystem:
+def _classified(system: Eigensystem, window: SpectralWindow) -> Eigensystem:
     values = system.values
     far = np.abs(values - window.sigma).max()
     if far <= window.reach(values):
@@ -169,7 +208,7 @@ def window_columns(values: Array, continued: Array, shown: Array) -> Array:
     point under labels continued[r, i] (Branch.continued) certifies from point r - 1 to r;
     label i starts a new column wherever it is not certified (a label that left the disc
     holds a new eigenvalue then). Returns (m, C) with each column one eigenvalue: its value
-    where `shown` (the window and its guard bands, Window.tracked), nan elsewhere (not
+    where `shown` (the window and its guard bands, SpectralWindow.tracked), nan elsewhere (not
     tracked there, or not yet or no more this column's eigenvalue); the columns in order of
     first appearance (point, then label), those never shown left out."""
     return in_columns(values, column_layout(continued, shown))
@@ -202,7 +241,7 @@ def in_columns(values: Array, layout: tuple[Array, Array, Array, int]) -> Array:
     return out
 
 
-def block_columns(values: list, blocks: Array, continued: dict, band: Window,
+def block_columns(values: list, blocks: Array, continued: dict, band: SpectralWindow,
                   *more: list) -> tuple[Array, ...]:
     """The stored spectrum of a windowed branch made of blocks, stretches with one window size
     (a window sized anew where it crowded, a packing's segment after a plastic event): values

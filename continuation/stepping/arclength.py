@@ -43,13 +43,14 @@ import numpy as np
 
 from diskfriction.continuation.branch import Branch, BranchRecorder, Stop, StopCode
 from diskfriction.continuation.detection.collisions import DetectionParams
-from diskfriction.continuation.linalg.solves import SingularMatrix, blas_threads, heap_kept, same_matrix
+from diskfriction.continuation.linalg.solves import DIRECT, LinearSolver, SingularMatrix, blas_threads, heap_kept, same_matrix
 from diskfriction.continuation.stepping.newton import (NewtonResult, factored_fixed_p, factored_newton, fixed_p_newton, residual_norm,
                      tangent)
 from diskfriction.continuation.problem import Problem
 from diskfriction.continuation.detection.samples import Sample, make_sample, matrix_derivative, sample_at
 from diskfriction.continuation.detection.scans import ScanJob, default_workers, pending_full, scans_for
 from diskfriction.continuation.stepping.segment import Segment, SegmentSolveError, refine_sign_change
+from diskfriction.continuation.spectra.eigensolvers import DEFAULT, Eigensolver
 from diskfriction.continuation.spectra.tracking import Eigensystem, eigenvalue_slopes
 from diskfriction.continuation.detection.spill import files_kept
 from diskfriction.continuation.spectra.window import WindowCrowded
@@ -68,7 +69,9 @@ class StepRejected(Exception):
 @dataclass(frozen=True)
 class ContinuationParams:
     """Algorithm parameters (see the module docstring). Arclength in the norm of x = (u, p);
-    max_angle in radians; direction +1 follows increasing p at the start, -1 decreasing."""
+    max_angle in radians; direction +1 follows increasing p at the start, -1 decreasing;
+    linear_solver: how the bordered systems are solved (linalg.solves.LinearSolver);
+    eigensolver: how the spectra are computed (spectra/eigensolvers.py)."""
 
     ds: float = 1e-2
     ds_min: float = 1e-8
@@ -84,6 +87,8 @@ class ContinuationParams:
     fast_newton: int = 3
     event_tol: float = 1e-13
     stop_at_fold: bool = False
+    linear_solver: LinearSolver = DIRECT
+    eigensolver: Eigensolver = DEFAULT
 
     def __post_init__(self):
         if not 0.0 < self.ds_min <= self.ds <= self.ds_max:
@@ -128,7 +133,8 @@ def _cut_at_event(problem: Problem, x: Array, t: Array, step: _Step, g0: Array, 
     g1 = problem.event_functions(step.x[:-1], step.x[-1])
     if not crossed(g0, g1).any():
         return step
-    seg = Segment(problem, x, step.x, par.newton_tol, par.max_newton, t, step.tangent)
+    seg = Segment(problem, x, step.x, par.newton_tol, par.max_newton, t, step.tangent,
+                  linear_solver=par.linear_solver)
     hi, x_hi = 1.0, step.x
     while True:  # locate the first crossing in [0, hi]; one found crossed on the near side wins
         mask = crossed(g0, g1)
@@ -151,7 +157,7 @@ def _cut_at_event(problem: Problem, x: Array, t: Array, step: _Step, g0: Array, 
             x_e = pts[up]
             break
         hi, x_hi, g1 = lo, pts[lo], g_lo
-    t_e = tangent(problem, x_e, step.tangent, seg.near(up))
+    t_e = tangent(problem, x_e, step.tangent, seg.near(up), par.linear_solver)
     return _Step(x_e, t_e, replace(step.newton, x=x_e, residual=residual_norm(problem, x_e)),
                  False, True)
 
@@ -170,23 +176,24 @@ def _angle(t0: Array, t1: Array) -> float:
 
 def _attempt(problem: Problem, x: Array, t: Array, ds: float, par: ContinuationParams) -> _Step:
     """One predictor-corrector step of length ds; raises StepRejected."""
-    res, lu = factored_newton(problem, x + ds * t, t, par.newton_tol, par.max_newton)
+    res, lu = factored_newton(problem, x + ds * t, t, par.newton_tol, par.max_newton,
+                              linear_solver=par.linear_solver)
     if not res.converged:
         raise StepRejected(f"corrector failed ({res.failure()})")
     x_new, last = res.x, False
     try:
-        t_new = tangent(problem, x_new, t, None if lu is None else (lu, t))
+        t_new = tangent(problem, x_new, t, None if lu is None else (lu, t), par.linear_solver)
         if _angle(t, t_new) > par.max_angle:
             raise StepRejected(f"tangent turned by {_angle(t, t_new):.3g} rad")
         p_new = x_new[-1]
         if not par.p_min < p_new < par.p_max:  # landing exactly on an end also ends the run
             p_end = par.p_max if p_new >= par.p_max else par.p_min
             guess = x + (p_end - x[-1]) / (p_new - x[-1]) * (x_new - x)
-            res = fixed_p_newton(problem, guess[:-1], p_end, par.newton_tol, par.max_newton)
+            res = fixed_p_newton(problem, guess[:-1], p_end, par.newton_tol, par.max_newton, par.linear_solver)
             if not res.converged:
                 raise StepRejected("landing on the end value failed")
             x_new, last = res.x, True
-            t_new = tangent(problem, x_new, t)
+            t_new = tangent(problem, x_new, t, linear_solver=par.linear_solver)
     except np.linalg.LinAlgError:
         raise StepRejected("singular bordered matrix") from None
     return _Step(x_new, t_new, res, last)
@@ -205,21 +212,24 @@ def continuation(problem: Problem, u0: Array, p0: float,
                  workers: Optional[int] = None, callback: Optional[Callback] = None) -> Branch:
     """Follow G(u, p) = 0 from (u0, p0) (u0 is first corrected at fixed p0).
 
-    Stores at every accepted point the tracked spectrum of problem.stability_matrix and locates
+    Stores at every accepted point the tracked spectrum of problem.stability_matrix (by
+    params.eigensolver, prepared at (u0, p0): a spectral window is sized there) and locates
     every birth/death of a complex pair (collisions.py). workers: processes that scan steps
     while the continuation goes on (scans.py; 0: every scan inline; None: automatic,
     scans.planned_workers). callback(k, p, u, eigenvalues) is called for every accepted point
     k. Returns a Branch.
     """
     _validate_start(p0, params)
-    workers = default_workers(problem, np.size(u0), detection, workers)
+    u0, p0 = np.asarray(u0, dtype=float), float(p0)
+    if detection.spectra:
+        params = replace(params, eigensolver=params.eigensolver.prepared(problem, u0, p0))
+    workers = default_workers(problem, u0.size, detection, workers, params.eigensolver)
     with blas_threads(), heap_kept(), files_kept():
-        return _continuation(problem, np.asarray(u0, dtype=float), float(p0), params, detection, workers,
-                             callback)
+        return _continuation(problem, u0, p0, params, detection, workers, callback)
 
 
 def _continuation(problem, u0, p0, params, detection, workers, callback) -> Branch:
-    start = fixed_p_newton(problem, u0, p0, params.newton_tol, params.max_newton)
+    start = fixed_p_newton(problem, u0, p0, params.newton_tol, params.max_newton, params.linear_solver)
     if not start.converged:
         raise ContinuationError(f"no equilibrium found at the start of the branch, parameter = "
                                 f"{p0:.12g} (Newton's residual stayed at {start.residual:.3g})")
@@ -227,11 +237,11 @@ def _continuation(problem, u0, p0, params, detection, workers, callback) -> Bran
     e_p = np.zeros_like(x)
     e_p[-1] = params.direction
     try:
-        t = tangent(problem, x, e_p)
+        t = tangent(problem, x, e_p, linear_solver=params.linear_solver)
     except np.linalg.LinAlgError as err:
         raise ContinuationError(f"the branch has no tangent at its start, parameter = {p0:.12g} "
                                 f"(a fold or a singular point there)") from err
-    sample = _sorted(_sample(problem, 0.0, x, t, detection, None, side=+1))
+    sample = _sorted(_sample(problem, 0.0, x, t, params, detection, None, side=+1))
     rec = BranchRecorder(detection.rel_tol, detection.rho, callback)
     rec.add(sample, 0.0, start, t, 0)
     with scans_for(problem, workers) as scans:
@@ -341,7 +351,7 @@ def _advance(problem, scans, here: _Start, index: int, pending: deque, previous,
                 # the step went round two folds (an S in p, parity unchanged at its ends) and
                 # its first event lies on the branch between them
                 return _towards_fold(here, "the step's first contact event lies past a fold in p", params)
-        end = _sample(problem, 1.0, step.x, step.tangent, detection, here.sample, side=-1)
+        end = _sample(problem, 1.0, step.x, step.tangent, params, detection, here.sample, side=-1)
         if params.stop_at_fold and negative_parity(end) != negative_parity(here.sample):
             return _towards_fold(here, "the next step crossed a fold: a real eigenvalue of the "
                                        "tracked matrix changed sign", params)
@@ -355,7 +365,8 @@ def _advance(problem, scans, here: _Start, index: int, pending: deque, previous,
         return here, Stop(StopCode.WINDOW, str(err), float(here.x[-1]))
     state = problem.state()
     ticket = scans.submit(ScanJob(state, here.x, step.x, params.newton_tol, params.max_newton, here.sample,
-                                  end, detection, index, previous, step.event))
+                                  end, detection, index, previous, step.event, params.linear_solver,
+                                  params.eigensolver))
     try:
         committed, end = _commit(problem, here.x, step, end, params, detection)
     except WindowCrowded as err:  # the spectrum after a commit's change: the step is not taken
@@ -398,11 +409,12 @@ def _before_fold(problem: Problem, here: _Start, step: _Step, params: Continuati
     start, end = direction * float(here.t[-1]), direction * float(step.tangent[-1])
     if step.last or not start > 0.0 > end:  # step.tangent is oriented by here.t, as below
         return None
-    seg = Segment(problem, here.x, step.x, params.newton_tol, params.max_newton, here.t, step.tangent)
+    seg = Segment(problem, here.x, step.x, params.newton_tol, params.max_newton, here.t, step.tangent,
+                  linear_solver=params.linear_solver)
     tangents = {0.0: here.t}
 
     def f(s: float) -> float:
-        tangents[s] = tangent(problem, seg.point(s), here.t, seg.near(s))
+        tangents[s] = tangent(problem, seg.point(s), here.t, seg.near(s), params.linear_solver)
         return direction * float(tangents[s][-1])
 
     try:
@@ -464,14 +476,15 @@ def _record(problem: Problem, rec: "BranchRecorder", item: _Pending, end: Sample
         problem.restore(now)
 
 
-def _sample(problem: Problem, s: float, x: Array, t: Array, detection: DetectionParams,
-            reference: Optional[Sample], side: int) -> Sample:
-    """The sample of an accepted point: with slopes along t (one-sided towards `side`, the
-    inside of the step) when the detection needs them; no eigenvalue at all without spectra."""
+def _sample(problem: Problem, s: float, x: Array, t: Array, params: ContinuationParams,
+            detection: DetectionParams, reference: Optional[Sample], side: int) -> Sample:
+    """The sample of an accepted point by params.eigensolver: with slopes along t (one-sided
+    towards `side`, the inside of the step) when the detection needs them; no eigenvalue at all
+    without spectra."""
     if not detection.spectra:
         return make_sample(s, x, Eigensystem(np.zeros(0, complex)), detection.rel_tol)
     return sample_at(problem, s, x, detection.rel_tol, reference,
-                     t if detection.slopes else None, side)
+                     t if detection.slopes else None, side, params.eigensolver)
 
 
 def _sorted(sample: Sample) -> Sample:
@@ -484,27 +497,28 @@ def _commit(problem: Problem, x: Array, step: _Step, end: Sample, par: Continuat
     """Call problem.commit; if it reports a change, re-solve at fixed p (from
     problem.resolve_start) and refresh tangent and spectrum (the jump is not scanned for
     collisions; the stored residual is the re-solve's, the iterations add up). Where the
-    matrix the spectrum is computed from (problem.spectrum_matrix) came out the same, the end
-    sample's spectrum is kept (_moved). After an event the slopes are refreshed on the side of
-    the next step. Returns (step, end sample) or (None, end)."""
+    matrix the spectrum is computed from (the problem's StructuredMatrix.spectrum_matrix) came
+    out the same, the end sample's spectrum is kept (_moved). After an event the slopes are
+    refreshed on the side of the next step. Returns (step, end sample) or (None, end)."""
     u, p = step.x[:-1].copy(), float(step.x[-1])
-    before = problem.spectrum_matrix(u, p) if detection.spectra else None
+    before = problem.stability_structure(u, p).spectrum_matrix if detection.spectra else None
     changed = problem.commit(x[:-1], float(x[-1]), u, p)
     if not changed:
         if step.event and detection.slopes:
             end = _moved(problem, end, step.x, step.tangent)
         return step, end
-    res, near = factored_fixed_p(problem, problem.resolve_start(u), p, par.newton_tol, par.max_newton)
+    res, near = factored_fixed_p(problem, problem.resolve_start(u), p, par.newton_tol, par.max_newton,
+                                 par.linear_solver)
     if not res.converged:
         return None, end
     try:
-        t_new = tangent(problem, res.x, step.tangent, near)
+        t_new = tangent(problem, res.x, step.tangent, near, par.linear_solver)
     except SingularMatrix:
         return None, end
-    if before is not None and same_matrix(before, problem.spectrum_matrix(res.x[:-1], p)):
+    if before is not None and same_matrix(before, problem.stability_structure(res.x[:-1], p).spectrum_matrix):
         end = _moved(problem, end, res.x, t_new if detection.slopes else None)
     else:
-        end = _sample(problem, 0.0, res.x, t_new, detection, end, side=+1)
+        end = _sample(problem, 0.0, res.x, t_new, par, detection, end, side=+1)
     newton = replace(res, iterations=step.newton.iterations + res.iterations)
     return _Step(res.x, t_new, newton, step.last, step.event, step.fold), end
 

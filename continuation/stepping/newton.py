@@ -17,7 +17,7 @@ from typing import Optional
 
 import numpy as np
 
-from diskfriction.continuation.linalg.solves import RefinedSolve, SingularMatrix, bordered, factorize
+from diskfriction.continuation.linalg.solves import DIRECT, LinearSolver, RefinedSolve, SingularMatrix, bordered
 from diskfriction.continuation.problem import ROUNDING, Problem
 
 Array = np.ndarray
@@ -56,7 +56,8 @@ def residual_norm(problem: Problem, x: Array) -> float:
 
 
 def bordered_newton(problem: Problem, x_target: Array, border: Array, tol: float, max_iter: int,
-                    start: Optional[Array] = None, polish: bool = False) -> NewtonResult:
+                    start: Optional[Array] = None, polish: bool = False,
+                    linear_solver: LinearSolver = DIRECT) -> NewtonResult:
     """Solve G(u, p) = 0, b . (x - x_target) = 0 by Newton from x_target, or from `start` (a
     prediction on the hyperplane b . (x - x_target) = 0). polish: update at least once, so that
     a start already within tol ends as accurate as a corrector from afar (a function of the
@@ -66,13 +67,15 @@ def bordered_newton(problem: Problem, x_target: Array, border: Array, tol: float
     the first update and exactly at the start), or, for a problem with `rounding` > 0, when
     max|G| <= rounding * term_size: where G is as close to zero as its evaluation rounds.
     Fails on max_iter updates without convergence (saying what G rounds to there,
-    NewtonResult.failure), a non-finite residual or a singular bordered matrix.
+    NewtonResult.failure), a non-finite residual or a singular bordered matrix. The bordered
+    matrices are factorized by linear_solver.
     """
-    return factored_newton(problem, x_target, border, tol, max_iter, start, polish)[0]
+    return factored_newton(problem, x_target, border, tol, max_iter, start, polish, linear_solver)[0]
 
 
 def factored_newton(problem: Problem, x_target: Array, border: Array, tol: float, max_iter: int,
-                    start: Optional[Array] = None, polish: bool = False):
+                    start: Optional[Array] = None, polish: bool = False,
+                    linear_solver: LinearSolver = DIRECT):
     """bordered_newton's (result, the factorization of its last update's bordered matrix, or
     None where it made none): for chord_newton at points nearby."""
     x = np.array(x_target if start is None else start, dtype=float)
@@ -91,7 +94,7 @@ def factored_newton(problem: Problem, x_target: Array, border: Array, tol: float
             return NewtonResult(x, max_iter, r, False, ROUNDING * term_size(M, x)), lu
         rhs = np.append(G, border @ (x - x_target))
         try:
-            lu = factorize(M, problem.factor_options)
+            lu = linear_solver.factorize(M)
             x = x - lu.solve(rhs)
         except SingularMatrix:
             return NewtonResult(x, it, r, False), None
@@ -136,22 +139,25 @@ def term_size(M, x: Array) -> float:
     return float(np.max(size, initial=0.0))
 
 
-def fixed_p_newton(problem: Problem, u0: Array, p: float, tol: float, max_iter: int) -> NewtonResult:
+def fixed_p_newton(problem: Problem, u0: Array, p: float, tol: float, max_iter: int,
+                   linear_solver: LinearSolver = DIRECT) -> NewtonResult:
     """Solve G(u, p) = 0 at fixed p from u0 (the border is e_p)."""
-    return factored_fixed_p(problem, u0, p, tol, max_iter)[0]
+    return factored_fixed_p(problem, u0, p, tol, max_iter, linear_solver)[0]
 
 
-def factored_fixed_p(problem: Problem, u0: Array, p: float, tol: float, max_iter: int):
+def factored_fixed_p(problem: Problem, u0: Array, p: float, tol: float, max_iter: int,
+                     linear_solver: LinearSolver = DIRECT):
     """fixed_p_newton's (result, near): near = (the factorization of its last update's
     bordered matrix, the border e_p), None where it made no update: for tangent(near=...)."""
     x0 = np.append(np.asarray(u0, dtype=float), p)
     e_p = np.zeros_like(x0)
     e_p[-1] = 1.0
-    res, lu = factored_newton(problem, x0, e_p, tol, max_iter)
+    res, lu = factored_newton(problem, x0, e_p, tol, max_iter, linear_solver=linear_solver)
     return res, (None if lu is None else (lu, e_p))
 
 
-def tangent(problem: Problem, x: Array, border: Array, near: Optional[tuple] = None) -> Array:
+def tangent(problem: Problem, x: Array, border: Array, near: Optional[tuple] = None,
+            linear_solver: LinearSolver = DIRECT) -> Array:
     """Unit tangent t of the branch at x: [[G_u, G_p], [b^T]] t = e_(n+1), t / |t|.
 
     b . t > 0, so passing the previous tangent as b keeps the orientation.
@@ -167,11 +173,12 @@ def tangent(problem: Problem, x: Array, border: Array, near: Optional[tuple] = N
     """
     rhs = np.zeros(x.size)
     rhs[-1] = 1.0
-    t = _tangent_system(problem, x, border, near).solve(rhs)
+    t = _tangent_system(problem, x, border, near, linear_solver).solve(rhs)
     return t / np.linalg.norm(t)
 
 
-def _tangent_system(problem: Problem, x: Array, border: Array, near: Optional[tuple]) -> RefinedSolve:
+def _tangent_system(problem: Problem, x: Array, border: Array, near: Optional[tuple],
+                    linear_solver: LinearSolver) -> RefinedSolve:
     """The bordered matrix at x with border b as a RefinedSolve on near = (lu, b_lu) (tangent)."""
     u, p = x[:-1], x[-1]
     G_u, G_p = problem.jacobian(u, p), problem.dG_dp(u, p)
@@ -181,8 +188,8 @@ def _tangent_system(problem: Problem, x: Array, border: Array, near: Optional[tu
         if not np.array_equal(b_lu, border):
             lu = _Rebordered.of(lu, b_lu, border)
     return RefinedSolve(lambda: bordered(G_u, G_p, border[:-1], border[-1]),
-                   lambda y: np.append(G_u @ y[:-1] + G_p * y[-1], border @ y), None, lu,
-                   problem.factor_options)
+                        lambda y: np.append(G_u @ y[:-1] + G_p * y[-1], border @ y), None, lu,
+                        linear_solver.options)
 
 
 class _Rebordered:

@@ -33,6 +33,7 @@ from typing import Callable, Optional
 
 import numpy as np
 
+from diskfriction.continuation.linalg.solves import DIRECT, LinearSolver
 from diskfriction.continuation.stepping.newton import chord_newton, factored_newton
 from diskfriction.continuation.problem import Problem
 
@@ -65,7 +66,8 @@ class Segment:
     method from the factorization kept at the nearest point Newton solved (newton.chord_newton;
     the last CHORD_KEPT are kept), Newton where that does not converge fast; for the collision
     scans only (scans.run_scan): the continuation's own event and fold points move the branch
-    after them if they move by rounding."""
+    after them if they move by rounding. linear_solver: the run's, for the bordered systems of
+    its points and their tangents (Segment.near)."""
 
     problem: Problem
     x_a: Array
@@ -77,6 +79,7 @@ class Segment:
     polish: bool = True
     root: Optional[float] = None
     chord: bool = False
+    linear_solver: LinearSolver = DIRECT
     _known: dict = field(default_factory=dict, compare=False, repr=False)
     _factors: dict = field(default_factory=dict, compare=False, repr=False)
 
@@ -162,7 +165,7 @@ class Segment:
             res = chord_newton(self.problem, target, self.sigma, self.tol, near[0], start, self.polish)
         if res is None:
             res, lu = factored_newton(self.problem, target, self.sigma, self.tol, self.max_iter, start,
-                                      self.polish)
+                                      self.polish, self.linear_solver)
             if lu is not None:
                 self._factors[s] = lu
                 if len(self._factors) > CHORD_KEPT:

@@ -60,14 +60,8 @@ class Weighted(Problem):
     def stability_matrix(self, y, p):
         return self.inner.stability_matrix(self.u(y), p)
 
-    def eigensystem(self, y, p, vectors: bool = False):
-        return self.inner.eigensystem(self.u(y), p, vectors)
-
-    def dense_spectra(self) -> bool:
-        return self.inner.dense_spectra()
-
-    def stability_blocks(self, y, p):
-        return self.inner.stability_blocks(self.u(y), p)
+    def stability_structure(self, y, p):
+        return self.inner.stability_structure(self.u(y), p)
 
     def derivative_step(self, x: Array) -> float:
         """The inner step at (u, p / p_scale), times s: a unit direction in y moves u by up to

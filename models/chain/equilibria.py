@@ -1,7 +1,8 @@
-"""Equilibria of the disk chain as a continuation problem, with the tangential history carried.
+"""Equilibria of the disk chain as a continuation problem, with the tangential history carried
+(the base it shares with a packing's: models/equilibria.py).
 
-u = q (docs/model.md#history layout), p = F_x. The committed state (q_c, xi_c) is the last accepted point.
-The residual of a trial q is the quasistatic step from it:
+u = q (docs/model.md#history layout) [length, rad], p = F_x [force]. The committed state (q_c,
+xi_c) is the last accepted point. The residual of a trial q is the quasistatic step from it:
 
     G(q, F_x) = F(q, xi(q); F_x),  xi(q) = history rule from (q_c, xi_c) to q, Coulomb cap included,
 
@@ -36,11 +37,12 @@ overlaps of rounding size, which open and close under Newton's updates and whose
 k_n delta^(1/2) (1e-4 of the substrate's) is set by rounding, not by the load: below delta_join
 an overlap is noise, and such a disk is treated as free (its dropped equation has a residual of
 at most the pair forces, k_n delta_join^(3/2) ~ 1e-17). The stability
-matrix keeps the physical J; its spectrum is the coupled chain's plus each free disk's block
-(eigensystem), and the free disks' modes are excluded from collision detection (decoupled, they
-cannot form a complex pair with anything; identical free disks even share their eigenvalues).
-A free disk joins the chain when one of its pairs reaches delta_join (a join event); its gauge
-row is dropped. The number of free disks falls as the load spreads (tests/test_free_disks.py).
+matrix keeps the physical J; its spectrum is the coupled chain's plus each free disk's block,
+which the problem declares decoupled (stability_structure), and the free disks' modes are
+excluded from collision detection (decoupled, they cannot form a complex pair with anything;
+identical free disks even share their eigenvalues). A free disk joins the chain when one of its
+pairs reaches delta_join (a join event); its gauge row is dropped. The number of free disks
+falls as the load spreads (tests/test_detection.py).
 """
 from __future__ import annotations
 
@@ -49,12 +51,11 @@ from dataclasses import dataclass, replace
 import numpy as np
 import scipy.sparse as sp
 
-from diskfriction.continuation.linalg.solves import SingularMatrix, dense, solve
-from diskfriction.continuation.problem import Problem
-from diskfriction.continuation.spectra.tracking import Eigensystem, eigensystem
-from diskfriction.continuation.linalg.block_tridiagonal import PeriodicBlocks, block_major
-from diskfriction.continuation.spectra.window import Window, sized, widened, window_eigensystem
+from diskfriction.continuation.linalg.block_tridiagonal import block_major
+from diskfriction.continuation.linalg.solves import SingularMatrix, solve
+from diskfriction.continuation.spectra.structure import StructuredMatrix
 from diskfriction.matrices import Matrix
+from diskfriction.models.equilibria import Equilibria, GaugeRows
 from diskfriction.symbolic import System
 
 SPARSE_FROM = 240
@@ -64,10 +65,6 @@ SuperLU; below, dense LAPACK is faster (benchmarks/scaling.py)."""
 DELTA_JOIN_ULPS = 8
 """A pair overlap of at most this many units in the last place of the ring length is rounding:
 a disk whose two pairs are that small is free (module docstring)."""
-
-DERIVATIVE_STEP = (1e-11, 1e-7)
-"""Range of the finite-difference length along the branch (samples.matrix_derivative,
-locate.py): 0.1 of the smallest active overlap, within these bounds [length]."""
 
 
 class EquilibriumError(RuntimeError):
@@ -103,22 +100,22 @@ def free_modes(w: np.ndarray, friction: bool, disk: int, dofs: np.ndarray, kappa
     return FreeDisk(disk, dofs, modes, np.array(rows, dtype=int), kappa)
 
 
-class DiskEquilibria(Problem):
-    """The continuation problem of one System (see the module docstring)."""
+class DiskEquilibria(Equilibria):
+    """The continuation problem of one System (see the module docstring). sparse: J as a CSR
+    matrix (SuperLU's solves; a spectral window's shift-invert needs it) or dense (LAPACK's);
+    None: sparse from SPARSE_FROM degrees of freedom."""
 
     def __init__(self, system: System, q: np.ndarray, xi: np.ndarray, F_x: float,
                  matrix: str | None = None, newton_tol: float = 1e-11, sparse: bool | None = None,
-                 window: Window | None = None, gauge: bool = True):
+                 gauge: bool = True):
         self.system = system
         self.gauge = gauge  # False: no disk is treated as free (relax: its mass term regularises)
         self.matrix = Matrix(matrix or system.scene.matrix)
         self.newton_tol = newton_tol
-        self.window = window
-        self.sparse = (system.ndof >= SPARSE_FROM or window is not None) if sparse is None else sparse
+        self.sparse = system.ndof >= SPARSE_FROM if sparse is None else sparse
         self._pattern = _pattern(system.rows, system.cols, system.ndof, self.sparse)
         self.e_x1 = np.zeros(system.ndof)
         self.e_x1[0] = 1.0
-        self._last = (None, None, None)  # (q bytes, xi, (F, J values) or None) of the last trial q
         s = system.scene
         self.delta_join = DELTA_JOIN_ULPS * np.finfo(float).eps * s.L
         w = np.empty(2 * system.kernels.D)
@@ -129,24 +126,19 @@ class DiskEquilibria(Problem):
         self._free_template = free_modes(self._wall_w, bool(system.kernels.WALL_FRICTION), 0,
                                          np.arange(D), self._kappa)
         self._set_committed(q, xi, F_x)
-        if window is not None and window.k == 0:  # sized once, here, at the start state
-            self.window = sized(window, self.stability_matrix(q, F_x))
-
-    def widen_window(self) -> bool:
-        """Size the window anew at the committed state (spectral_window.widened), where it
-        crowded; False without a window."""
-        if self.window is None:
-            return False
-        self.window = widened(self.window, self.stability_matrix(self.q_c, self.F_c))
-        return True
 
     # -- the committed state
     def _set_committed(self, q: np.ndarray, xi: np.ndarray, F_x: float) -> None:
-        self.q_c, self.xi_c, self.F_c = q.copy(), xi.copy(), float(F_x)
-        self._last = (None, None, None)
+        self.q_c, self.xi_c, self.p_c = q.copy(), xi.copy(), float(F_x)
+        self._forget_trial()
         self.free = self._free_disks(q) if self.gauge else ()
-        self._gauge_rows = _GaugeRows.of(self.free, self.system.rows, self.system.cols, self.system.ndof,
-                                         self.sparse) if self.free else None
+        self.gauge_rows = _FreeDiskRows.of(self.free, self.system.rows, self.system.cols, self.system.ndof,
+                                           self.sparse) if self.free else None
+
+    @property
+    def F_c(self) -> float:
+        """The committed load F_x [force]."""
+        return self.p_c
 
     def _free_disks(self, q: np.ndarray) -> tuple[FreeDisk, ...]:
         """Disks (other than disk 1, which carries F_x) whose pairs both have delta <= delta_join."""
@@ -164,23 +156,19 @@ class DiskEquilibria(Problem):
         return sum(d.modes.shape[1] for d in self.free)
 
     # -- the history and its stiffness at a trial q
-    def trial(self, q: np.ndarray, cap: bool = True) -> tuple[np.ndarray, np.ndarray]:
-        """History at q reached by a straight step from the committed state, and slid flags."""
+    def trial(self, q: np.ndarray, F_x: float | None = None, cap: bool = True) -> tuple[np.ndarray, np.ndarray]:
+        """History at q reached by a straight step from the committed state, and slid flags (the
+        chain's history rule does not depend on the load F_x)."""
         return self.system.history_step(self.q_c, q, self.xi_c, cap=cap)
 
     def _xi(self, q: np.ndarray) -> np.ndarray:
         """Trial history at q, kept for the last q (Newton asks residual then jacobian)."""
-        key = q.tobytes()
-        if self._last[0] != key:
-            self._last = (key, self.trial(q)[0], None)
-        return self._last[1]
+        return self._at_trial(q, None, "xi", lambda: self.trial(q)[0])
 
     def _values(self, q: np.ndarray) -> np.ndarray:
         """Values of the physical J = -dF/dq at q (pattern system.rows, system.cols)."""
         xi = self._xi(q)
-        if self._last[2] is None:
-            self._last = (self._last[0], xi, self.system.jacobian_values(q, xi))
-        return self._last[2]
+        return self._at_trial(q, None, "J", lambda: self.system.jacobian_values(q, xi))
 
     def _physical(self, q: np.ndarray, xi: np.ndarray | None = None, row_scale=None):
         """The physical J at q (trial history unless xi is given), dense or sparse; with
@@ -190,17 +178,13 @@ class DiskEquilibria(Problem):
 
     # -- Problem protocol
     def residual(self, q, F_x):
-        G = self.system.forces(q, self._xi(q), F_x)
-        if self._gauge_rows is not None:
-            g = self._gauge_rows
-            G[g.rows] = np.einsum("fkd,fd->fk", g.weights, q[g.dofs] - self.q_c[g.dofs])
-        return G
+        return self._gauged(self.system.forces(q, self._xi(q), F_x), q)
 
     def jacobian(self, q, F_x):
         """dG/dq = -J with the free disks' gauge rows."""
         vals = -self._values(q)
-        if self._gauge_rows is not None:
-            return self._gauge_rows.jacobian(vals)
+        if self.gauge_rows is not None:
+            return self.gauge_rows.jacobian(vals)
         return self._pattern.matrix(vals)
 
     def dG_dp(self, q, F_x):
@@ -210,67 +194,25 @@ class DiskEquilibria(Problem):
         """J or M^-1 J of the physical J (no gauge rows)."""
         return self._physical(q, row_scale=None if self.matrix is Matrix.J else 1.0 / self.system.mass_diagonal())
 
-    def eigensystem(self, q, F_x, vectors: bool = False) -> Eigensystem:
-        """The coupled chain's eigensystem and each free disk's block, the latter excluded; or,
-        with a spectral window, the window's eigenvalues (_window_eigensystem). Only the coupled
-        chain's modes carry vectors (n x n_c, Eigensystem.columns): a free disk's modes are
-        never in a collision, and n x n vectors would make every sample of a long chain at
-        eps = 0 as large as a full one (N = 1000: 288 MB, with 970 disks free)."""
-        if self.window is not None:
-            return self._window_eigensystem(q, F_x, vectors)
+    def stability_structure(self, q, F_x) -> StructuredMatrix:
+        """The stability matrix with its structure: each free disk's D x D block decoupled (its
+        modes excluded from collision detection: decoupled, they cannot form a complex pair
+        with anything; only the coupled chain's modes carry vectors, so that a sample of a long
+        chain at eps = 0 is not as large as a full one); without free disks and from N = 3,
+        periodic block-tridiagonal with one D x D block per disk (each disk couples to its
+        neighbours, disk N to disk 1: symbolic/system.py), for refined full spectra."""
         A = self.stability_matrix(q, F_x)
-        if not self.free:
-            return eigensystem(dense(A), vectors)
-        n = A.shape[0]
-        blocks = np.stack([d.dofs for d in self.free])  # (free disks, D) dofs
-        coupled = np.setdiff1d(np.arange(n), blocks.ravel())
-        chain = eigensystem(dense(A[coupled][:, coupled] if sp.issparse(A) else A[np.ix_(coupled, coupled)]),
-                            vectors)
-        values, excluded = np.empty(n, complex), np.zeros(n, bool)
-        values[coupled] = chain.values
-        D = blocks.shape[1]
-        entries = [np.asarray(A[blocks[:, i], blocks[:, j]]).ravel() for i in range(D) for j in range(D)]
-        values[blocks] = np.linalg.eigvals(np.stack(entries, axis=1).reshape(-1, D, D))
-        excluded[blocks] = True
-        if not vectors:
-            return Eigensystem(values, excluded=excluded)
-        right = np.zeros((n, coupled.size), complex)
-        left = np.zeros((coupled.size, n), complex)
-        right[coupled], left[:, coupled] = chain.right, chain.left
-        columns = np.full(n, -1)
-        columns[coupled] = np.arange(coupled.size)
-        return Eigensystem(values, right, left, excluded, columns=columns)
-
-    def dense_spectra(self) -> bool:
-        """Dense spectra unless a spectral window is tracked (eigensystem)."""
-        return self.window is None
-
-    def stability_blocks(self, q, F_x) -> PeriodicBlocks | None:
-        """The stability matrix as periodic blocks, one D x D block per disk (each disk couples
-        to its neighbours, disk N to disk 1: symbolic/system.py), for refined full spectra
-        (continuation/spectra/refinement.py); None with a spectral window, a free disk (its modes are
-        excluded from the spectrum) or N < 3."""
+        if self.free:
+            return StructuredMatrix(A, decoupled=np.stack([d.dofs for d in self.free]))
         N = self.system.scene.N
-        if self.window is not None or self.free or N < 3:
-            return None
+        if N < 3:
+            return StructuredMatrix(A)
         D = self.system.ndof // N
-        return PeriodicBlocks.from_matrix(self.stability_matrix(q, F_x), D, block_major(N, D))
+        return StructuredMatrix(A, block_size=D, block_order=block_major(N, D))
 
-    def _window_eigensystem(self, q, F_x, vectors: bool) -> Eigensystem:
-        """The spectral window's eigenvalues (spectral_window.py; its k fixed at the start state,
-        __init__); the modes of free disks (right vectors on their dofs alone) also excluded."""
-        found = window_eigensystem(self.stability_matrix(q, F_x), self.window, vectors)
-        if not self.free or found.right is None:
-            return found
-        free_dofs = np.concatenate([d.dofs for d in self.free])
-        on_free = np.sum(np.abs(found.right[free_dofs]) ** 2, axis=0) / np.sum(np.abs(found.right) ** 2, axis=0)
-        return replace(found, excluded=found.excluded | (on_free > 0.999))
-
-    def derivative_step(self, x) -> float:
-        delta = self.system.overlaps(x[:-1])
-        active = delta[delta > 0]
-        h = 0.1 * float(active.min()) if active.size else DERIVATIVE_STEP[1]
-        return min(max(h, DERIVATIVE_STEP[0]), DERIVATIVE_STEP[1])
+    def acting_overlaps(self, x) -> np.ndarray:
+        """Every contact's overlap at x = (q, F_x): pairs, then substrate."""
+        return self.system.overlaps(x[:-1])
 
     def event_functions(self, q, F_x):
         """Per contact: delta, then t* - |xi| of the uncapped history of active contacts (1 for
@@ -292,7 +234,7 @@ class DiskEquilibria(Problem):
 
     def state(self) -> tuple:
         """(q, xi, F_x) committed."""
-        return self.q_c.copy(), self.xi_c.copy(), self.F_c
+        return self.q_c.copy(), self.xi_c.copy(), self.p_c
 
     def restore(self, snapshot: tuple) -> None:
         self._set_committed(*snapshot)
@@ -307,20 +249,17 @@ class DiskEquilibria(Problem):
 
 
 @dataclass(frozen=True)
-class _GaugeRows:
+class _FreeDiskRows(GaugeRows):
     """The free disks' gauge rows, stacked once per set of free disks (a chain of 1000 disks
     has up to 999): the disks' dofs (f, D), the equation rows their null directions replace
     (f, k), the gauge rows' coefficients kappa m^T (f, k, D); and dG/dq's pattern: the entries
     of -J outside those rows (keep, a mask over J's pattern) followed by the gauge rows'."""
 
-    dofs: np.ndarray
-    rows: np.ndarray
-    weights: np.ndarray
     keep: np.ndarray
     pattern: object
 
     @classmethod
-    def of(cls, free: tuple, j_rows: np.ndarray, j_cols: np.ndarray, n: int, sparse: bool) -> "_GaugeRows":
+    def of(cls, free: tuple, j_rows: np.ndarray, j_cols: np.ndarray, n: int, sparse: bool) -> "_FreeDiskRows":
         dofs = np.stack([d.dofs for d in free])
         rows = np.stack([d.dofs[d.rows] for d in free])
         weights = np.stack([d.kappa * d.modes.T for d in free])

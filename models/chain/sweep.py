@@ -24,7 +24,7 @@ import numpy as np
 from diskfriction.continuation.api import Options, solve_in_runs
 from diskfriction.continuation.branch import Branch, Piece, column_of
 from diskfriction.models.chain.equilibria import DiskEquilibria, relax
-from diskfriction.continuation.spectra.window import Window, block_columns
+from diskfriction.continuation.spectra.window import SpectralWindow, block_columns
 from diskfriction.continuation.spectra.tracking import count_complex_pairs, match_eigenvalues
 from diskfriction.matrices import EIGENVALUE_UNITS, Matrix
 from diskfriction.symbolic import System
@@ -97,8 +97,9 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
     ds_max = params.ds_max or span / SWEEP_STEPS_PER_SPAN
     F_1 = min(START_FRACTION * system.scene.F_y, 0.5 * legs[0][2])
     q, xi = relax(system, *system.rest_state(), F_1)
-    window = None if params.window is None else Window(*params.window)
-    problem = DiskEquilibria(system, q, xi, F_1, matrix, params.newton_tol, window=window)
+    window = None if params.window is None else SpectralWindow(*params.window)
+    problem = DiskEquilibria(system, q, xi, F_1, matrix, params.newton_tol, sparse=None if window is None else True)
+    eigensolver = params.eigensolver if window is None else window  # sized at the first leg's start
 
     def record(F_x, q_k):  # the point's columns (branch.Record)
         xi_k = problem.trial(q_k)[0]
@@ -116,9 +117,10 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
     for leg, _, b in legs:
         b = max(b, F_1)  # unloading ends where loading started: F_x = 0 is the singular rest state
         ds = min(F_1, ds_max) if leg == legs[0][0] else ds_max / 2  # graded away from rest
-        options = replace(params, ds_max=ds_max, ds=ds, ds_min=min(params.ds_min, ds))
+        options = replace(params, ds_max=ds_max, ds=ds, ds_min=min(params.ds_min, ds), eigensolver=eigensolver)
         first, base = len(F_x_all), max(blocks_used - 1, 0)  # a leg continues the last block
-        runs, widened = solve_in_runs(problem, problem.q_c, (F_start, b), options, callback_of, record)
+        runs, widened, eigensolver = solve_in_runs(problem, problem.q_c, (F_start, b), options, callback_of,
+                                                   record, problem.committed)
         for run, branch in enumerate(runs):  # a run after the first follows a widened window
             skip = int(run > 0 or first > 0)  # its first point is the last one recorded
             if run == 0 and first > 0:

@@ -1,27 +1,42 @@
-"""Sparse matrices of one committed state, assembled from the kernels' Jacobian values by a
-fixed linear map (docs/packings.md, Shear: the stop-37 benchmark).
+"""Sparse matrices of one committed state of a sheared packing, assembled from the kernels'
+Jacobian values by fixed linear maps (models/packing/equilibria.py).
 
 Within a committed state the contact rows, the gauge and the masses are fixed, so every matrix
-the continuation asks of the network (dG/dq, A_red, A_g: models/packing/equilibria.py) is
+the continuation asks of the network (dG/dq, A_red, A_g and the deflation's A: StateMaps) is
 
     A(v) = L J(v) R + C,   J(v) = sum_e v_e e_(r_e) e_(c_e)^T,
 
 linear in the values v of J's pattern (r, c) (duplicates summed), with constant sparse L, R
-and C. Assembly precomputes A's pattern (CSR, sorted indices) and the sparse map S with
-A.data = S v + C.data, so each call costs one sparse product of length nnz(S) instead of a
-chain of general sparse products and their index bookkeeping (each of which re-sorts and
-re-checks its indices). The pattern keeps the entries that happen to be zero at some v (an
-open contact's), so it is the same at every point of the state.
+and C (GaugeMaps: those fixed by the gauge alone). Assembly precomputes A's pattern (CSR,
+sorted indices) and the sparse map S with A.data = S v + C.data, so each call costs one sparse
+product of length nnz(S) instead of a chain of general sparse products and their index
+bookkeeping. The pattern keeps the entries that happen to be zero at some v (an open
+contact's), so it is the same at every point of the state. NetworkMatrix is A_g at a trial
+point with the structure the eigensolvers read.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from functools import cached_property
 
 import numba
 import numpy as np
+import scipy.linalg as sla
 import scipy.sparse as sp
 
+from diskfriction.continuation.linalg.solves import book
+from diskfriction.continuation.spectra.nearest import Deflated
+from diskfriction.continuation.spectra.structure import StructuredMatrix
+from diskfriction.continuation.spectra.tracking import Eigensystem
+from diskfriction.matrices import Matrix
+
 Array = np.ndarray
+
+PARKED = 2.0
+"""The gauge rows' diagonal in the tracked matrix A_g is -PARKED times A_red's largest absolute
+row sum at the committed state: below every eigenvalue of A_red (Gershgorin), so that a
+shift-invert near the tracked spectrum (a partial sample near a fold's zero eigenvalue) never
+meets the gauge rows, and constant along a step, so that dA/dgamma is zero there."""
 
 
 @dataclass(frozen=True)
@@ -139,3 +154,154 @@ def _linear_map(rows, cols, Lp, Li, Lx, Rp, Ri, Rx, Crow, Ccol, Cdata, m, k):
     for c in range(Crow.size):
         constant[slot_of[count + c]] += Cdata[c]
     return indptr, indices[:nnz].copy(), s_indptr, s_indices, s_data, constant
+
+
+@dataclass(frozen=True)
+class StateMaps:
+    """A committed state's matrices as fixed linear maps of J's values: J's pattern (rows,
+    cols), dG/dq, A_red, A_g and the deflation's parts (the assembly of its matrix, and a
+    nearest.Deflated without its matrix) (models/packing/equilibria.py)."""
+
+    pattern: tuple
+    dG_dq: Assembly
+    reduced: Assembly
+    stability: Assembly
+    deflation: tuple
+
+
+@dataclass(frozen=True)
+class GaugeMaps:
+    """The constant sparse factors of a state's maps that depend on its gauge alone (n = 3N
+    dofs, kept: A_red's): -1 on the non-gauge diagonal and the gauge rows' pattern (dG/dq),
+    the identity, M^-1 (or I for J), P M^-1 and the kept columns E (A_red = P A E), the map
+    to A_g's coordinates (relative = embed P) times M^-1 and E embed^T (A_g), T and U (the
+    translations and total forces of the network) and the map of left vectors to A_g's."""
+
+    minus_kept: sp.dia_array
+    gauge_diagonal: sp.dia_array
+    identity: sp.dia_array
+    inverse_mass: sp.dia_array
+    reduce: sp.csr_array
+    E: sp.csr_array
+    relative: sp.csr_array
+    relative_reduce: sp.csr_array
+    E_embed: sp.csr_array
+    T: np.ndarray
+    U: np.ndarray
+    left_map: sp.csr_array
+
+    @classmethod
+    def of(cls, g, N: int, mass: np.ndarray, matrix: Matrix) -> "GaugeMaps":
+        """The factors of gauge g (equilibria.Gauge) of N disks with masses diag(M) = mass."""
+        n = mass.size
+        keep, gauge = np.ones(n), np.zeros(n)
+        keep[g.rows], gauge[g.rows] = 0.0, 1.0
+        inverse_mass = sp.diags_array(np.ones(n) if matrix is Matrix.J else 1.0 / mass)
+        E = sp.eye_array(n, format="csr")[:, g.kept]
+        embed = sp.csr_array((np.ones(g.kept.size), (g.kept, np.arange(g.kept.size))),
+                             shape=(n, g.kept.size))
+        relative = sp.csr_array(embed @ g.P)  # q -> A_g's coordinates
+        T = np.zeros((n, 2))
+        T[:N, 0], T[N:2 * N, 1] = ~g.loose, ~g.loose
+        U = T if matrix is Matrix.J else T * mass[:, None]
+        return cls(sp.diags_array(-keep), sp.diags_array(gauge), sp.eye_array(n), inverse_mass,
+                   g.P @ inverse_mass, E, relative, relative @ inverse_mass, E @ embed.T, T, U,
+                   sp.csr_array(embed @ E.T))
+
+
+def state_maps(pattern: tuple, fixed: GaugeMaps, g, N: int, kappa: float, values) -> StateMaps:
+    """The maps of a committed state whose J has the pattern (rows, cols), gauge g
+    (equilibria.Gauge) of N disks with the factors `fixed` and gauge rows kappa (q - q_c) = 0
+    (kappa [force / length]); values(): J's values at the committed point, which fix the gauge
+    rows' PARKED diagonal of A_g. The deflation's matrix is A (J or M^-1 J) with the loose
+    disks' dofs (and without tangential forces every rotation) parked on its diagonal, its null
+    spaces without them the x and y translations T and the total x and y forces U = M T (U = T
+    for J)."""
+    rows, cols = pattern
+    n = fixed.T.shape[0]
+    dG_dq = Assembly.of(rows, cols, fixed.minus_kept, fixed.identity, fixed.gauge_diagonal * kappa)
+    reduced = Assembly.of(rows, cols, fixed.reduce, fixed.E)
+    A = reduced(values())
+    parked = np.zeros(n)
+    parked[g.rows] = -PARKED * max(float(np.abs(A).sum(axis=1).max(initial=0.0)), 1.0)
+    stability = Assembly.of(rows, cols, fixed.relative_reduce, fixed.E_embed, sp.diags_array(parked))
+    gauged = np.zeros(n, bool)
+    gauged[g.rows] = True
+    gauged[[g.ref, N + g.ref]] = False  # the reference disk is in the network
+    full = Assembly.of(rows, cols, fixed.inverse_mass, fixed.identity,
+                       sp.diags_array(np.where(gauged, parked[g.rows[0]], 0.0)))
+    return StateMaps(pattern, dG_dq, reduced, stability,
+                     (full, Deflated(None, fixed.T, fixed.U, fixed.relative, fixed.left_map)))
+
+
+class NetworkMatrix(StructuredMatrix):
+    """The tracked matrix A_g of a packing's committed state (problem: its PackingEquilibria) at a
+    trial (q, gamma) with its structure (equilibria.py's module docstring;
+    continuation/spectra/structure.py), each part computed at its
+    first use: A_g (matrix); A_red on the kept dofs (coupled; the gauge rows' modes are zeros
+    and excluded); the deflation (deflated: A, J or M^-1 J, with the loose disks parked, to
+    shift-invert in place of A_g: the same spectrum but for its two translation zeros, which
+    the shift-invert projects out, and a sparser LU than A_g's, whose rows each carry the
+    reference disk's); A_g without its PARKED diagonal (spectrum_matrix: a constant of the
+    committed state, which changes no eigenvalue); without tangential forces, the symmetric
+    form of A_red (symmetric: SymmetricNetwork)."""
+
+    def __init__(self, problem, q: np.ndarray, gamma: float):
+        self.maps = problem.maps
+        self.values = problem._evaluate(q, gamma)[1]
+        self.problem, self.q, self.gamma = problem, q, gamma
+        self.kept = problem.gauge.kept
+
+    @cached_property
+    def matrix(self) -> sp.csr_array:
+        return self.maps.stability(self.values)
+
+    @cached_property
+    def coupled(self) -> sp.csr_array:
+        return self.maps.reduced(self.values)
+
+    @cached_property
+    def deflated(self):
+        full, deflation = self.maps.deflation
+        return replace(deflation, matrix=full(self.values))
+
+    @cached_property
+    def spectrum_matrix(self) -> sp.csr_array:
+        return self.maps.stability(self.values, constant=False)
+
+    @cached_property
+    def symmetric(self):
+        return None if self.problem.network.frictional else SymmetricNetwork(self)
+
+
+class SymmetricNetwork:
+    """A_red without tangential forces as a symmetric eigenproblem (structure.SymmetricForm):
+    on the network's positions V (the kept dofs and the reference disk's x, y) J_V is the
+    Hessian of the Hertz energy, symmetric, and A = W^-1 J_V with W = diag(M) on V (W = I for
+    J); with Q an orthonormal basis of the complement of W^1/2 T (T: the x and y translations,
+    J_V T = 0), S = Q^T W^-1/2 J_V W^-1/2 Q is symmetric with A_red's spectrum, and S's
+    eigenvectors (columns of Y) give A's right vectors r = W^-1/2 Q Y and left ones l = W^1/2
+    Q Y, l^T r = 1, l^T T = 0; A_red's are then P r and l at the kept dofs (l^T = l_kept^T P
+    since l^T T = 0). A real spectrum: no complex pair arises from rounding."""
+
+    def __init__(self, network_matrix: NetworkMatrix):
+        self.of = network_matrix
+
+    def eigensystem(self, vectors: bool) -> Eigensystem:
+        """A_red's eigensystem from S (one dense spectrum, booked as such)."""
+        book("spectra")
+        problem, values = self.of.problem, self.of.values
+        g, N, n = problem.gauge, problem.network.N, self.of.q.size
+        V = np.union1d(g.kept, [g.ref, N + g.ref])
+        J = sp.csr_array((values, self.of.maps.pattern), shape=(n, n))
+        w = np.ones(V.size) if problem.matrix is Matrix.J else problem.mass[V]
+        T = np.stack([V < N, V >= N], axis=1).astype(float)
+        Q = np.linalg.qr(np.sqrt(w)[:, None] * T, mode="complete")[0][:, 2:]
+        WQ = Q / np.sqrt(w)[:, None]  # W^-1/2 Q
+        S = WQ.T @ (J[V][:, V] @ WQ)
+        if not vectors:
+            return Eigensystem(sla.eigh(S, eigvals_only=True, check_finite=False).astype(complex))
+        eigenvalues, Y = sla.eigh(S, check_finite=False)
+        right, left = np.zeros((n, Y.shape[1])), np.zeros((n, Y.shape[1]))
+        right[V], left[V] = WQ @ Y, (Q * np.sqrt(w)[:, None]) @ Y
+        return Eigensystem(eigenvalues.astype(complex), g.P @ right, left[g.kept].T.copy())

@@ -1,9 +1,10 @@
 """Equilibria of a sheared packing as a continuation problem, with the tangential history carried
 (docs/packings.md#shear).
 
-u = q = (x, y, theta) of every disk (models/packing/network.py), p = gamma, the Lees-Edwards strain.
-The committed state (q_c, xi_c, gamma_c) is the last accepted point; the residual of a trial
-(q, gamma) is the quasistatic step from it, as for the chain (models/chain/equilibria.py):
+u = q = (x, y, theta) of every disk (models/packing/network.py) [length, rad], p = gamma, the
+Lees-Edwards strain [1]. The committed state (q_c, xi_c, gamma_c) is the last accepted point; the
+residual of a trial (q, gamma) is the quasistatic step from it, as for the chain
+(models/equilibria.py, the base both share):
 
     G(q, gamma) = F(q, xi(q, gamma); gamma),  xi = history rule from the committed state,
 
@@ -13,11 +14,12 @@ image and its history while it lasts, and the rows are found again at every comm
 carried over by (i, j, cx, cy)); a pair that was not a row cannot close within one step
 (commit checks that it did not).
 
-Three kinds of exact zero modes are handled explicitly:
+Three kinds of exact zero modes are handled explicitly, their equations replaced by gauge rows
+kappa (q - q_c) = 0 (kappa the Hertz stiffness at the median overlap [force / length]):
 - **Translations.** A uniform shift of every disk changes no force: J T = 0 for T = the x and y
   translations, and the forces sum to zero (Newton's third law), so two equations are
   redundant. The reference disk (the one with most contacts) has its x and y equations
-  replaced by gauge rows kappa (x - x_c) = 0, kappa (y - y_c) = 0.
+  replaced by gauge rows.
 - **Loose disks** (rattlers): a disk with fewer than LOOSE_BELOW contacts that hold it
   (delta > delta_hold, LOOSE_OVERLAP of the median overlap at the start) with disks that are
   not loose themselves (Gauge.of) carries no load. Its contacts are left out of the forces
@@ -29,63 +31,54 @@ Three kinds of exact zero modes are handled explicitly:
   dropped.
 - **Rotations without tangential forces** (mu = 0, or the tangential law "none":
   Network.frictional). No torque acts on a disk, so every theta is a zero mode: the rotations'
-  equations are gauge rows kappa (theta - theta_c) = 0, and the unknowns are the positions. J on
-  them is the Hessian of the Hertz energy, symmetric, and the tracked spectrum of M^-1 J is
-  real (similar to M^-1/2 J M^-1/2): it is computed by a symmetric eigensolver
-  (_symmetric_eigensystem), so no complex pair can arise from rounding. No history is charged
-  (Network.history_step) and no contact slides. Loose disks follow the frictional rule
-  (LOOSE_BELOW).
+  equations are gauge rows, and the unknowns are the positions. J on them is the Hessian of the
+  Hertz energy, symmetric, and the tracked spectrum of M^-1 J is real (similar to M^-1/2 J
+  M^-1/2): its StructuredMatrix has a symmetric form (SymmetricNetwork), so no complex pair can
+  arise from rounding. No history is charged (Network.history_step) and no contact slides.
+  Loose disks follow the frictional rule (LOOSE_BELOW).
 
 The tracked matrix is the network's stability matrix A (J or M^-1 J) in coordinates relative to
 the reference disk, A_g: with P the map q -> (q_k - q_ref for x and y dofs, theta as it is) on
 the kept dofs (not the reference's x, y, not a loose disk's, and without tangential forces no
 rotation) and E the kept columns, A_red = P A E has exactly the spectrum of A without its two
 translation zeros (and the rotations' zeros) (A T = 0 makes A block triangular in the basis
-(T, E)); A_g (stability_matrix, sparse) is A_red at the kept dofs
-and a constant far below A_red's spectrum on the gauge rows' diagonal (PARKED), so that every
-sample has n eigenvalues; those of the gauge rows are reported as 0 and excluded from detection.
-With a spectral window (continuation/spectra/window.py) only the k eigenvalues of A_red nearest
-the window's centre are computed, by sparse shift-invert: the translations and loose disks never
-crowd a window at 0. The shift-invert factorizes A itself, the loose disks' dofs parked on its
-diagonal, and projects its two translation zeros out (deflated, nearest.Deflated): A_red's rows
-each carry the reference disk's too, and its LU fills a third more; the eigenvectors found are
-mapped to A_g's (right: P, left: the kept dofs), on which the Rayleigh-Ritz projection is taken. Within a committed state dG/dq, A_red and A_g are fixed linear maps of J's
-values (models/packing/assembly.py), set up at every commit.
+(T, E)); A_g (stability_matrix, sparse) is A_red at the kept dofs and a constant far below
+A_red's spectrum on the gauge rows' diagonal (assembly.PARKED), so that every sample has n
+eigenvalues; those of the gauge rows are reported as 0 and excluded from detection. The problem
+declares this to the eigensolvers (stability_structure, NetworkMatrix): A_red is the coupled
+part; a spectral window (continuation/spectra/window.py) takes the k eigenvalues of A_red
+nearest its centre by sparse shift-invert (the translations and loose disks never crowd a
+window at 0), and for their vectors factorizes A itself, the loose disks' dofs parked on its
+diagonal, with its two translation zeros projected out (the deflation, nearest.Deflated); the
+eigenvectors found are mapped to A_g's (right: P, left: the kept dofs), on which the
+Rayleigh-Ritz projection is taken. Within a committed state dG/dq, A_red, A_g and the
+deflation's A are fixed linear maps of J's values (models/packing/assembly.py), set up at the
+first use after a commit.
 """
 from __future__ import annotations
 
 import hashlib
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
 
-from diskfriction.continuation.linalg.solves import book
-from diskfriction.continuation.spectra.nearest import Deflated
-from diskfriction.continuation.problem import Problem
+from diskfriction.continuation.linalg.solves import LinearSolver
 from diskfriction.errors import OneLineError
-from diskfriction.continuation.spectra.tracking import Eigensystem, eigensystem
-from diskfriction.continuation.spectra.window import (Window, sized, widened,
-                                                       window_eigensystem)
 from diskfriction.matrices import Matrix
-from diskfriction.models.packing.assembly import Assembly
+from diskfriction.models.equilibria import Equilibria, GaugeRows
+from diskfriction.models.packing.assembly import GaugeMaps, NetworkMatrix, StateMaps, state_maps
 from diskfriction.models.packing.network import D, Network
 
 REACH = 0.1
 """Pairs within this fraction of the small radius R of touching are contact rows [R]."""
 
 LOOSE_BELOW = 2
-"""A disk with fewer contacts than this is loose: with friction two contacts hold a disk. So
-does the frictionless rule: with one contact a disk carries no force in equilibrium, while two
-facing contacts can carry the load of a force chain, which the network's equations must not
-drop. (Three, the preparation's rattler rule, made a disk loose when the third of its contacts
-unloaded to delta_hold: 32 frictionless disks, seed 1, at gamma = 0.04056, where its two
-facing contacts carried 0.4 of a median overlap; without their forces no equilibrium was near,
-and every relaxation led back to the same state, a plastic event every 1e-7 of strain until
-the shear stopped. Held by two, the disk buckles
-out across them once the third contact's stiffness falls below their F / r, and the branch is
-lost there: a plastic event, at gamma = 0.040587 in that run.)"""
+"""A disk with fewer holding contacts than this is loose: with friction two contacts hold a
+disk, and so does the frictionless rule: with one contact a disk carries no force in
+equilibrium, while two facing contacts can carry the load of a force chain, which the network's
+equations must not drop (held by two, a disk buckles out across them once a third contact's
+stiffness falls below their F / r: the branch is lost there, a plastic event)."""
 
 LOOSE_OVERLAP = 1e-3
 """A contact counts towards holding its disks when its overlap exceeds this fraction of the
@@ -105,21 +98,12 @@ RELEASE_PASSES = 50
 a disk caught in a cage by a loose disk is freed once that one moved. 24 disks, seed 3, at mu =
 0.3 and 1 took up to 8 and 18 passes (a disk and a loose neighbour giving way by turns)."""
 
-PARKED = 2.0
-"""The gauge rows' diagonal in the tracked matrix A_g is -PARKED times A_red's largest absolute
-row sum at the committed state: below every eigenvalue of A_red (Gershgorin), so that a
-shift-invert near the tracked spectrum (a partial sample near a fold's zero eigenvalue) never
-meets the gauge rows, and constant along a step, so that dA/dgamma is zero there."""
-
 WINDOW_MARGIN, WINDOW_EXTRA = 1.2, 4
-"""A spectral window's k at the start of a segment: WINDOW_MARGIN times the eigenvalues within
-its reach there, plus WINDOW_EXTRA (the chain keeps spectral_window.MARGIN and EXTRA, 1.5 and
-8). Where shear softens the low spectrum and the window crowds, it is sized anew and the run
-goes on (models/packing/shear.py). The cost of a window sample grows about as k: 256 disks (window
-[-3, 8]) to gamma = 1e-3 inline, the same 60 points and 53 collisions, took 15.8 s with 1.2
-and 4 (k = 31) against 18.3 s with 1.5 and 8 (k = 42), and 16.3 s with 1.1 and 4; with 2 and
-16 (k = 68 against 47 then) 188.5 s to gamma = 2e-3 against 135.0 s. A smaller margin crowds
-more often: to gamma = 0.01 on two workers 3 widenings against none (docs/packings.md)."""
+"""A shear's spectral window's k at the start of a segment: WINDOW_MARGIN times the eigenvalues
+within its reach there, plus WINDOW_EXTRA (window.SpectralWindow's margin and extra; the
+chain's are 1.5 and 8): a window sample costs about as k, and where shear softens the low
+spectrum and the window crowds, it is sized anew and the run goes on (models/packing/shear.py;
+docs/notes)."""
 
 SLIP_BAND = 1e-3
 """A contact that the cap held at a commit is sliding while its history lies within this
@@ -131,9 +115,11 @@ step they slid through (64 disks at mu = 0.3 advanced 1e-12 in strain per step).
 band the smoothed law's force is within 2 b^2 = 2e-6 of mu F_n (it peaks at the cap); the
 linear law's within b."""
 
-DERIVATIVE_STEP = (1e-11, 1e-7)
-"""Range of the finite-difference length along the branch, 0.1 of the smallest active overlap
-[length], as the chain's."""
+LINEAR_SOLVER = LinearSolver("MMD_AT_PLUS_A")
+"""How a shear's bordered systems are solved (ShearParams.linear_solver): SuperLU's LU ordered
+by minimum degree on the pattern of A + A^T (the contact network's Jacobian is structurally
+symmetric), with partial pivoting: about half the fill of its default ordering (COLAMD) on the
+corrector's matrices (docs/notes)."""
 
 
 class NotJammed(OneLineError):
@@ -193,73 +179,12 @@ class Gauge:
         return cls(ref, loose, rows, kept, P)
 
 
-@dataclass(frozen=True)
-class _Maps:
-    """A committed state's matrices as fixed linear maps of J's values (models/packing/assembly.py):
-    J's pattern (rows, cols), dG/dq, A_red, A_g and the deflation's parts (full, Deflated
-    without its matrix: PackingEquilibria._deflation_of)."""
-
-    pattern: tuple
-    dG_dq: Assembly
-    reduced: Assembly
-    stability: Assembly
-    deflation: tuple
-
-
-@dataclass(frozen=True)
-class _GaugeMaps:
-    """The constant sparse factors of a state's maps that depend on its gauge alone (n = 3N
-    dofs, kept: A_red's): -1 on the non-gauge diagonal and the gauge rows' pattern (dG/dq),
-    the identity, M^-1 (or I for J), P M^-1 and the kept columns E (A_red = P A E), the map
-    to A_g's coordinates (relative = embed P) times M^-1 and E embed^T (A_g), T and U (the
-    translations and total forces of the network) and the map of left vectors to A_g's."""
-
-    minus_kept: sp.dia_array
-    gauge_diagonal: sp.dia_array
-    identity: sp.dia_array
-    inverse_mass: sp.dia_array
-    reduce: sp.csr_array
-    E: sp.csr_array
-    relative: sp.csr_array
-    relative_reduce: sp.csr_array
-    E_embed: sp.csr_array
-    T: np.ndarray
-    U: np.ndarray
-    left_map: sp.csr_array
-
-    @classmethod
-    def of(cls, g: "Gauge", network: Network, mass: np.ndarray, matrix: Matrix) -> "_GaugeMaps":
-        n, N = network.ndof, network.N
-        keep, gauge = np.ones(n), np.zeros(n)
-        keep[g.rows], gauge[g.rows] = 0.0, 1.0
-        inverse_mass = sp.diags_array(np.ones(n) if matrix is Matrix.J else 1.0 / mass)
-        E = sp.eye_array(n, format="csr")[:, g.kept]
-        embed = sp.csr_array((np.ones(g.kept.size), (g.kept, np.arange(g.kept.size))),
-                             shape=(n, g.kept.size))
-        relative = sp.csr_array(embed @ g.P)  # q -> A_g's coordinates
-        T = np.zeros((n, 2))
-        T[:N, 0], T[N:2 * N, 1] = ~g.loose, ~g.loose
-        U = T if matrix is Matrix.J else T * mass[:, None]
-        return cls(sp.diags_array(-keep), sp.diags_array(gauge), sp.eye_array(n), inverse_mass,
-                   g.P @ inverse_mass, E, relative, relative @ inverse_mass, E @ embed.T, T, U,
-                   sp.csr_array(embed @ E.T))
-
-
-class PackingEquilibria(Problem):
+class PackingEquilibria(Equilibria):
     """The continuation problem of a packing's Network in the strain (module docstring)."""
-
-    factor_options = dict(permc_spec="MMD_AT_PLUS_A")
-    """The bordered systems' LU ordered by minimum degree on the pattern of A + A^T (the contact
-    network's Jacobian is structurally symmetric), with SuperLU's partial pivoting. 256 sheared
-    disks (n + 1 = 769), the corrector's matrix against SuperLU's default (COLAMD): factorized
-    in 1.44 against 2.08 ms with the ordering kept (1.71 against 2.52 ms without), nnz(L + U)
-    45 676 against 89 190, substitution 46 against 91 us, backward errors 2.6e-17 against
-    3.7e-17 (benchmarks/solve_speed.py, 2026-11-28). The collision locator fails as often with
-    it (docs/packings.md, stop 45)."""
 
     def __init__(self, network: Network, q: np.ndarray, xi: np.ndarray, rows: np.ndarray,
                  gamma: float, mass: np.ndarray, matrix: str = "M^-1 J",
-                 newton_tol: float = 1e-11, window: Window | None = None):
+                 newton_tol: float = 1e-11):
         self.network, self.mass = network, mass
         self.matrix = Matrix(matrix)
         self.newton_tol = newton_tol
@@ -271,25 +196,13 @@ class PackingEquilibria(Problem):
         self._kept: dict = {}
         self._fixed = None
         self._set_committed(q, xi, rows, gamma)
-        self.window = window
-        if window is not None and window.k == 0:  # sized once, here, at the start state
-            self.window = sized(window, self.reduced(q, gamma), WINDOW_MARGIN, WINDOW_EXTRA)
-
-    def widen_window(self) -> bool:
-        """Size the window anew at the committed state (spectral_window.widened); False
-        without a window."""
-        if self.window is None:
-            return False
-        self.window = widened(self.window, self.reduced(self.q_c, self.gamma_c), WINDOW_MARGIN,
-                              WINDOW_EXTRA)
-        return True
 
     # -- the committed state
     def _set_committed(self, q, xi, rows, gamma, sliding=None) -> None:
         """Commit (q, xi, rows, gamma). sliding: the rows capped at this commit or sliding at the
         last one (a contact approaching its cap from inside is not sliding), or None where the
         state is all there is (a start): every row within the band of its cap."""
-        self.q_c, self.xi_c, self.rows_c, self.gamma_c = q.copy(), xi.copy(), rows, float(gamma)
+        self.q_c, self.xi_c, self.rows_c, self.p_c = q.copy(), xi.copy(), rows, float(gamma)
         delta = self.network.overlaps(q, rows, gamma)
         self.gauge = Gauge.of(self.network.N, rows[delta > self.delta_hold, :2],
                               self.network.frictional)
@@ -301,67 +214,47 @@ class PackingEquilibria(Problem):
         self._band = np.where(self.sliding, SLIP_BAND * t_star, 0.0)
         scale = np.median(delta[delta > 0]) if (delta > 0).any() else self.network.constants[0]
         self.kappa = float(self.network.kernels.normal_stiffness(scale, self.network.constants[1]))
-        self._last = (None, None)
+        self.gauge_rows = GaugeRows.diagonal(self.gauge.rows, self.kappa)
+        self._forget_trial()
         self._maps = None
-        self._key = _digest((self.q_c, self.xi_c, self.rows_c, self.gamma_c, self.sliding))
+        self._key = _digest((self.q_c, self.xi_c, self.rows_c, self.p_c, self.sliding))
         self._keep(self._key)
+
+    @property
+    def gamma_c(self) -> float:
+        """The committed strain."""
+        return self.p_c
 
     def _keep(self, key: bytes) -> None:
         """Remember the committed state's derived part under its snapshot's digest (the most
         recent KEPT_STATES): the continuation restores the states of pending steps (to record a
-        point, or after a failed scan), and assembling one anew took 10 ms, 5.4 s of the
-        continuation's 49 s for 256 sheared disks to gamma = 2e-3 (502 states set, 180 commits)."""
+        point, or after a failed scan), and assembling one anew costs as much as a few
+        corrector steps."""
         self._kept[key] = tuple(getattr(self, name) for name in _DERIVED)
         while len(self._kept) > KEPT_STATES:
             del self._kept[next(iter(self._kept))]
 
     @property
-    def maps(self) -> "_Maps":
-        """The committed state's matrices as fixed linear maps of J's values, assembled at their
-        first use after the state is set (_assemble): a state restored only to record a point
-        (arclength._record) needs none."""
+    def maps(self) -> StateMaps:
+        """The committed state's matrices as fixed linear maps of J's values (assembly.py),
+        assembled at their first use after the state is set: a state restored only to record a
+        point (arclength._record) needs none."""
         if self._maps is None:
-            self._maps = self._assemble()
+            fixed = self._gauge_maps()
+            pattern = self.network.jacobian_pattern(self.rows_c[self.active])
+            self._maps = state_maps(pattern, fixed, self.gauge, self.network.N, self.kappa,
+                                    lambda: self._evaluate(self.q_c, self.p_c)[1])
             if self._key in self._kept:
                 self._kept[self._key] = tuple(getattr(self, name) for name in _DERIVED)
         return self._maps
 
-    def _assemble(self) -> "_Maps":
-        """The committed state's matrices as fixed linear maps of J's values
-        (models/packing/assembly.py): dG/dq, A_red and A_g (module docstring), and the deflation's
-        parts (_deflation_of); those fixed by the gauge alone come from _GaugeMaps."""
-        g, n, fixed = self.gauge, self.network.ndof, self._gauge_maps()
-        rows, cols = pattern = self.network.jacobian_pattern(self.rows_c[self.active])
-        dG_dq = Assembly.of(rows, cols, fixed.minus_kept, fixed.identity, fixed.gauge_diagonal * self.kappa)
-        reduced = Assembly.of(rows, cols, fixed.reduce, fixed.E)
-        A = reduced(self._evaluate(self.q_c, self.gamma_c)[1])
-        parked = np.zeros(n)
-        parked[g.rows] = -PARKED * max(float(np.abs(A).sum(axis=1).max(initial=0.0)), 1.0)
-        stability = Assembly.of(rows, cols, fixed.relative_reduce, fixed.E_embed, sp.diags_array(parked))
-        return _Maps(pattern, dG_dq, reduced, stability,
-                     self._deflation_of(rows, cols, fixed, parked[g.rows[0]]))
-
-    def _gauge_maps(self) -> "_GaugeMaps":
-        """_GaugeMaps of the committed gauge, kept for the last one (it changes only where a
+    def _gauge_maps(self) -> GaugeMaps:
+        """GaugeMaps of the committed gauge, kept for the last one (it changes only where a
         disk turns loose or the reference disk changes)."""
         key = (self.gauge.ref, self.gauge.loose.tobytes())
         if self._fixed is None or self._fixed[0] != key:
-            self._fixed = (key, _GaugeMaps.of(self.gauge, self.network, self.mass, self.matrix))
+            self._fixed = (key, GaugeMaps.of(self.gauge, self.network.N, self.mass, self.matrix))
         return self._fixed[1]
-
-    def _deflation_of(self, rows, cols, fixed: "_GaugeMaps", parked: float) -> tuple:
-        """The parts of deflated() fixed by the committed state: the assembly of A (J or
-        M^-1 J) with the loose disks' dofs (and without tangential forces every rotation)
-        parked on its diagonal, and a Deflated without its matrix: A's null spaces without the
-        parked dofs (the x and y translations T; the total x and y forces U = M T, U = T for J)
-        and the maps from A's eigenvectors to A_g's (module docstring)."""
-        g = self.gauge
-        gauged = np.zeros(self.network.ndof, bool)
-        gauged[g.rows] = True
-        gauged[[g.ref, self.network.N + g.ref]] = False  # the reference disk is in the network
-        full = Assembly.of(rows, cols, fixed.inverse_mass, fixed.identity,
-                           sp.diags_array(np.where(gauged, parked, 0.0)))
-        return full, Deflated(None, fixed.T, fixed.U, fixed.relative, fixed.left_map)
 
     def coulomb_limit(self, delta: np.ndarray) -> np.ndarray:
         """t* of every row at overlaps delta (0 where open) [length]."""
@@ -371,25 +264,21 @@ class PackingEquilibria(Problem):
     def trial(self, q, gamma, cap: bool = True) -> tuple[np.ndarray, np.ndarray]:
         """History of every row at (q, gamma), reached by a straight step from the committed
         state, and the rows the cap acted on."""
-        return self.network.history_step(self.q_c, q, self.gamma_c, gamma, self.xi_c,
+        return self.network.history_step(self.q_c, q, self.p_c, gamma, self.xi_c,
                                          self.rows_c, cap=cap)
 
     def _evaluate(self, q, gamma):
         """(F, J's values on its pattern, dF/dgamma) of the active rows at the trial (q, gamma),
         kept for the last one."""
-        key = (q.tobytes(), gamma)
-        if self._last[0] != key:
+        def evaluated():
             xi = self.trial(q, gamma)[0]
-            self._last = (key, self.network.evaluate_values(q, xi[self.active],
-                                                            self.rows_c[self.active], gamma))
-        return self._last[1]
+            return self.network.evaluate_values(q, xi[self.active], self.rows_c[self.active], gamma)
+        return self._at_trial(q, gamma, "F, J, dF/dgamma", evaluated)
 
     # -- Problem protocol
     def residual(self, q, gamma):
-        G = self._evaluate(q, gamma)[0].copy()
-        g = self.gauge.rows
-        G[g] = self.kappa * (q[g] - self.q_c[g])
-        return G
+        """The network's forces, the gauge rows kappa (q - q_c) in place of theirs."""
+        return self._gauged(self._evaluate(q, gamma)[0].copy(), q)
 
     def jacobian(self, q, gamma):
         """dG/dq = -J with the gauge rows (sparse)."""
@@ -415,81 +304,15 @@ class PackingEquilibria(Problem):
         gauge rows' diagonal, zeros elsewhere (module docstring)."""
         return self.maps.stability(self._evaluate(q, gamma)[1])
 
-    def deflated(self, q, gamma) -> Deflated:
-        """A (J or M^-1 J) with the loose disks parked, to shift-invert in place of A_g: the same
-        spectrum but for A's two translation zeros, which the shift-invert projects out, and
-        the reference disk's rows of A_g coupled to no other row (nearest.Deflated): nnz(L + U)
-        38 600 against 54 900 at 256 disks."""
-        full, deflation = self.maps.deflation
-        return replace(deflation, matrix=full(self._evaluate(q, gamma)[1]))
+    def stability_structure(self, q, gamma) -> NetworkMatrix:
+        """A_g with its structure (NetworkMatrix): the coupled part A_red on the kept dofs, the
+        gauge rows' zero modes, the deflation and, without tangential forces, the symmetric
+        form."""
+        return NetworkMatrix(self, q, gamma)
 
-    def spectrum_matrix(self, q, gamma) -> sp.csr_array:
-        """A_red at the kept dofs, zeros elsewhere (A_g without the gauge rows' PARKED diagonal,
-        a constant of the committed state): what eigensystem() is computed from."""
-        return self.maps.stability(self._evaluate(q, gamma)[1], constant=False)
-
-    def dense_spectra(self) -> bool:
-        """Dense spectra unless a spectral window is tracked (eigensystem)."""
-        return self.window is None
-
-    def eigensystem(self, q, gamma, vectors: bool = False) -> Eigensystem:
-        """A_red's eigensystem at the kept dofs, the gauge rows' zeros excluded, without
-        vectors; or with a spectral window, the window's k eigenvalues of A_red. Without
-        tangential forces the spectrum is real (module docstring): dense, by a symmetric
-        eigensolver (_symmetric_eigensystem); in a window, the shift-invert's eigenvalues
-        with their imaginary parts, rounding, dropped."""
-        kept, n = self.gauge.kept, q.size
-        if self.window is not None:
-            if not vectors:
-                found = window_eigensystem(self.reduced(q, gamma), self.window, vectors)
-            else:
-                found = window_eigensystem(self.stability_matrix(q, gamma), self.window, vectors,
-                                           self.deflated(q, gamma))
-            return found if self.network.frictional else replace(found, values=found.values.real + 0j)
-        found = (eigensystem(self.reduced(q, gamma).toarray(), vectors) if self.network.frictional
-                 else self._symmetric_eigensystem(q, gamma, vectors))
-        values, excluded = np.zeros(n, complex), np.ones(n, bool)
-        values[kept], excluded[kept] = found.values, False
-        if not vectors:
-            return Eigensystem(values, excluded=excluded)
-        right = np.zeros((n, kept.size), complex)
-        right[kept] = found.right
-        left = np.zeros((kept.size, n), complex)
-        left[:, kept] = found.left
-        columns = np.full(n, -1)
-        columns[kept] = np.arange(kept.size)
-        return Eigensystem(values, right, left, excluded, columns=columns)
-
-    def _symmetric_eigensystem(self, q, gamma, vectors: bool) -> Eigensystem:
-        """A_red's eigensystem without tangential forces, from a symmetric matrix (one dense
-        spectrum, booked as such). On the network's positions V (the kept dofs and the
-        reference disk's x, y) J_V is symmetric and A = W^-1 J_V with W = diag(M) on V (W = I
-        for J); with Q an orthonormal basis of the complement of W^1/2 T (T: the x and y
-        translations, J_V T = 0), S = Q^T W^-1/2 J_V W^-1/2 Q is symmetric with A_red's
-        spectrum, and S's eigenvectors (columns of Y) give A's right vectors r = W^-1/2 Q Y and
-        left ones l = W^1/2 Q Y, l^T r = 1, l^T T = 0. A_red's are then P r and l at the kept
-        dofs (l^T = l_kept^T P since l^T T = 0)."""
-        book("spectra")
-        g, N, n = self.gauge, self.network.N, q.size
-        V = np.union1d(g.kept, [g.ref, N + g.ref])
-        J = sp.csr_array((self._evaluate(q, gamma)[1], self.maps.pattern), shape=(n, n))
-        w = np.ones(V.size) if self.matrix is Matrix.J else self.mass[V]
-        T = np.stack([V < N, V >= N], axis=1).astype(float)
-        Q = np.linalg.qr(np.sqrt(w)[:, None] * T, mode="complete")[0][:, 2:]
-        WQ = Q / np.sqrt(w)[:, None]  # W^-1/2 Q
-        S = WQ.T @ (J[V][:, V] @ WQ)
-        if not vectors:
-            return Eigensystem(sla.eigh(S, eigvals_only=True, check_finite=False).astype(complex))
-        values, Y = sla.eigh(S, check_finite=False)
-        right, left = np.zeros((n, Y.shape[1])), np.zeros((n, Y.shape[1]))
-        right[V], left[V] = WQ @ Y, (Q * np.sqrt(w)[:, None]) @ Y
-        return Eigensystem(values.astype(complex), g.P @ right, left[g.kept].T.copy())
-
-    def derivative_step(self, x) -> float:
-        delta = self.network.overlaps(x[:-1], self.rows_c[self.active], float(x[-1]))
-        active = delta[delta > 0]
-        h = 0.1 * float(active.min()) if active.size else DERIVATIVE_STEP[1]
-        return min(max(h, DERIVATIVE_STEP[0]), DERIVATIVE_STEP[1])
+    def acting_overlaps(self, x) -> np.ndarray:
+        """The overlaps of the active rows at x = (q, gamma)."""
+        return self.network.overlaps(x[:-1], self.rows_c[self.active], float(x[-1]))
 
     def event_functions(self, q, gamma):
         """Per active row: delta (a contact of the network opening or closing), delta -
@@ -516,7 +339,7 @@ class PackingEquilibria(Problem):
         return np.concatenate([np.ones(m, bool), np.zeros(2 * m, bool)])
 
     def state(self) -> tuple:
-        return self.q_c.copy(), self.xi_c.copy(), self.rows_c.copy(), self.gamma_c, self.sliding
+        return self.q_c.copy(), self.xi_c.copy(), self.rows_c.copy(), self.p_c, self.sliding
 
     def restore(self, snapshot: tuple) -> None:
         """Back to a state() snapshot: its derived part (gauge, matrices' assemblies) from the
@@ -527,10 +350,11 @@ class PackingEquilibria(Problem):
             self._set_committed(*snapshot)
             return
         q, xi, rows, gamma, _ = snapshot
-        self.q_c, self.xi_c, self.rows_c, self.gamma_c = q.copy(), xi.copy(), rows, float(gamma)
+        self.q_c, self.xi_c, self.rows_c, self.p_c = q.copy(), xi.copy(), rows, float(gamma)
         for name, value in zip(_DERIVED, kept):
             setattr(self, name, value)
-        self._last, self._key = (None, None), key
+        self._forget_trial()
+        self._key = key
         self._keep(key)
 
     def commit(self, q_old, gamma_old, q_new, gamma_new) -> bool:
@@ -619,7 +443,7 @@ class PackingEquilibria(Problem):
 
 KEPT_STATES = 6
 """Committed states whose derived part PackingEquilibria keeps for restore."""
-_DERIVED = ("gauge", "active", "sliding", "_band", "kappa", "_maps")
+_DERIVED = ("gauge", "active", "sliding", "_band", "kappa", "gauge_rows", "_maps")
 """What _set_committed derives from a state (q, xi, rows, gamma, sliding)."""
 
 

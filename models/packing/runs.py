@@ -20,6 +20,7 @@ import numpy as np
 from diskfriction.continuation.spectra.tracking import count_complex_pairs
 from diskfriction.models.packing.dynamics import (LINEAR_RANGE, GrowthFit, PackingRun, distance,
                                             fastest_pair, fit_growth, no_fit, simulate, time_step)
+from diskfriction.continuation.spectra.eigensolvers import DenseSpectra
 from diskfriction.models.packing.equilibria import PackingEquilibria, row_keys
 from diskfriction.models.packing.network import Network
 from diskfriction.models.packing.plastic import RelaxationFailed, relax
@@ -86,7 +87,7 @@ def linearized(branch: Branch, k: int, network: Network, mass: np.ndarray) -> Li
     disk)."""
     q, gamma = branch.q[k], float(branch.gamma[k])
     problem = PackingEquilibria(network, q, branch.xi[k], branch.rows[k], gamma, mass, "M^-1 J")
-    system = problem.eigensystem(q, gamma, vectors=True)
+    system = DenseSpectra().eigensystem(problem, q, gamma, vectors=True)
     i, _ = fastest_pair(system.values)
     pairs = count_complex_pairs(system.values)
     if i < 0:

@@ -12,10 +12,11 @@ import numpy as np
 from diskfriction.continuation.api import Options, solve_in_runs
 from diskfriction.continuation.branch import Branch, Piece, StopCode, column_of
 from diskfriction.continuation.spectra.tracking import count_complex_pairs
-from diskfriction.continuation.spectra.window import Window, block_columns
+from diskfriction.continuation.linalg.solves import LinearSolver
+from diskfriction.continuation.spectra.window import SpectralWindow, block_columns
 from diskfriction.matrices import EIGENVALUE_UNITS, Matrix
-from diskfriction.models.packing.equilibria import (NotJammed, PackingEquilibria, largest_force,
-                                              mass_diagonal, start)
+from diskfriction.models.packing.equilibria import (LINEAR_SOLVER, WINDOW_EXTRA, WINDOW_MARGIN, NotJammed,
+                                                    PackingEquilibria, largest_force, mass_diagonal, start)
 from diskfriction.models.packing.network import Network
 from diskfriction.models.packing.plastic import PlasticEvent, drag_rate, past_fold
 from diskfriction.models.packing.prepare import Packing
@@ -43,7 +44,8 @@ class ShearParams(Options):
     newton_tol in force units (residual_scale 1), and the run ends at a
     fold in gamma (stop_at_fold): the saddle-node where quasistatic shear loses the branch is a
     plastic event; beyond it the branch of unstable states it would follow back is no state
-    the packing passes through."""
+    the packing passes through. linear_solver: SuperLU ordered by minimum degree on A + A^T
+    (equilibria.LINEAR_SOLVER: the network's Jacobian is structurally symmetric)."""
 
     newton_tol: float = 1e-11
     max_steps: int = 20_000
@@ -52,6 +54,7 @@ class ShearParams(Options):
     theta: Optional[float] = None
     p_scale: Optional[float] = 1.0
     residual_scale: Optional[float] = 1.0
+    linear_solver: LinearSolver = LINEAR_SOLVER
 
 
 RAGGED = ("rows", "xi")
@@ -146,8 +149,9 @@ def shear_segment(network: Network, mass: np.ndarray, scene: PackingScene, optio
     range is applied when the segments are joined); its window runs are numbered from `base`
     (a window is sized again for every segment: its columns start anew there)."""
     q, xi, rows, gamma_start = begin
-    problem = PackingEquilibria(network, q, xi, rows, gamma_start, mass, scene.matrix,
-                                options.newton_tol, None if window is None else Window(*window))
+    problem = PackingEquilibria(network, q, xi, rows, gamma_start, mass, scene.matrix, options.newton_tol)
+    if window is not None:  # sized at the segment's start
+        options = replace(options, eigensolver=SpectralWindow(*window, margin=WINDOW_MARGIN, extra=WINDOW_EXTRA))
 
     def record(gamma, q_k):  # the point's columns (branch.Record)
         xi_all = problem.trial(q_k, gamma)[0]
@@ -161,8 +165,8 @@ def shear_segment(network: Network, mass: np.ndarray, scene: PackingScene, optio
     def callback_of(run):
         return None if progress is None else (lambda k, gamma, q_k, eigvals: progress(gamma))
 
-    runs, widened = solve_in_runs(problem, q, (gamma_start, scene.gamma_range[1]), options,
-                                  callback_of, record)
+    runs, widened, _ = solve_in_runs(problem, q, (gamma_start, scene.gamma_range[1]), options,
+                                     callback_of, record, problem.committed)
     gamma, qs, residual, columns, eig, kappas, blocks, collisions = [], [], [], {}, [], [], [], []
     continued, pieces, events = {}, [], 0
     for run, branch in enumerate(runs):  # a run after the first follows a widened window
@@ -186,7 +190,7 @@ def shear_segment(network: Network, mass: np.ndarray, scene: PackingScene, optio
         eig, condition = np.array(eig), np.array(kappas)
         n_complex = np.array([count_complex_pairs(e[e != 0], rel_tol) for e in eig])
     else:  # the pairs in the window; collisions with their double eigenvalue there
-        band = Window(*window)
+        band = SpectralWindow(*window)
         n_complex = np.array([count_complex_pairs(e[band.inside(e)], rel_tol) for e in eig])
         collisions = [c for c in collisions if band.lo <= c.eigenvalue <= band.hi]
         eig, condition = block_columns(eig, np.array(blocks), continued, band, kappas)

@@ -78,7 +78,7 @@ def locate(scan, idx: int, i: int, j: int, kind: Kind) -> Optional[Collision]:
     try:
         found = locate_double_eigenvalue(
             scan.problem, x0, float(certify.cubic_at(mean, t0)), right, left.conj(),
-            segment.sigma, params.tol_p, segment.tol, params.locator_iterations)
+            segment.sigma, params.tol_p, segment.tol, params.locator_iterations, segment.linear_solver)
     except LocatorFailed as err:
         scan.warnings.append(f"step {scan.step}: locator: {err}; splitting")
         return None
