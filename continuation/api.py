@@ -11,7 +11,8 @@ scipy.integrate.solve_ivp's conventions: one front-end function (solve_branch), 
 object checked at the door (Options), one result object of arrays and located points
 (BranchResult). Problems come from plain callables (problem_from_functions), from sympy
 expressions compiled to cached numba kernels (problem_from_sympy), or from any subclass of
-the core's Problem (problem.py: a history carried alongside u, events, a sparse Jacobian).
+the core's Problem (problem.py: a history carried alongside u, events, a sparse Jacobian);
+the builders and the checks at the door are builders.py's.
 A problem file for `diskfriction bifurcate --problem` exports a BifurcationProblem: the
 problem with its starting guess, its parameter's name and units and its matrix's name.
 The reference with a worked example is docs/api.md.
@@ -20,30 +21,30 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from typing import Callable, Mapping, Optional, Sequence, Union
+from typing import Callable, Optional, Sequence, Union
 
 import numpy as np
-import scipy.sparse as sp
 
-from diskfriction.errors import OneLineError
-
-from diskfriction.continuation.stepping.arclength import Callback, ContinuationError, ContinuationParams, continuation
-from diskfriction.continuation.detection.bifurcations import (CONSERVATIVE, SpecialPoint, branch_point_brackets, conservative,
-                           locate_branch_points, locate_folds, locate_hopf, other_direction)
 from diskfriction.continuation.branch import Branch, Record, StopCode, recorded
+from diskfriction.continuation.builders import (ProblemError, check_problem, evaluated, problem_from_functions,
+                                                problem_from_sympy, span_of)
+from diskfriction.continuation.detection.bifurcations import (CONSERVATIVE, SpecialPoint, branch_point_brackets, conservative,
+                                                              locate_branch_points, locate_folds, locate_hopf,
+                                                              other_direction)
 from diskfriction.continuation.detection.collisions import Collision, DetectionParams
-from diskfriction.continuation.stepping.differences import (METHODS, ParameterDerivative, StateDerivative, check_complex_step,
-                          warn_differences)
-from diskfriction.continuation.stepping.newton import bordered_matrix, bordered_newton, term_size
-from diskfriction.continuation.problem import FunctionProblem, Problem
-from diskfriction.continuation.stepping.weighting import Weighted, scale_of, unweighted
-from diskfriction.continuation.stepping.segment import SegmentSolveError
 from diskfriction.continuation.linalg.solves import DIRECT, LinearSolver
+from diskfriction.continuation.problem import Problem
 from diskfriction.continuation.spectra.eigensolvers import DEFAULT, Eigensolver
 from diskfriction.continuation.spectra.window import WIDENINGS, WindowCrowded
+from diskfriction.continuation.stepping.arclength import Callback, ContinuationError, ContinuationParams, continuation
+from diskfriction.continuation.stepping.newton import bordered_matrix, bordered_newton, term_size
+from diskfriction.continuation.stepping.segment import SegmentSolveError
+from diskfriction.continuation.stepping.weighting import Weighted, scale_of, unweighted
+
+__all__ = ["BifurcationProblem", "BranchResult", "Options", "ProblemError", "check_problem",
+           "problem_from_functions", "problem_from_sympy", "solve_branch", "solve_in_runs", "switch_branch"]
 
 Array = np.ndarray
-Function = Callable[[Array, float], Array]
 
 STEPS_PER_SPAN = 50
 """Default largest step: the span of p over this many steps (arclength in x = (u, p))."""
@@ -59,43 +60,6 @@ P_RESOLUTION = 1000 * np.finfo(float).eps
 """The detection's tol_p is at least P_RESOLUTION max(|p_start|, |p_stop|) (2.2e-13 of it): the
 collision locator stops at |dp| <= tol_p / 100, which p resolves (it rounds to eps |p|) only
 above that; with p in units where it is 1e6, tol_p = 1e-10 ended a run ("the branch jumps")."""
-
-
-class ProblemError(OneLineError):
-    """A problem that cannot be continued as given (a function fails, returns the wrong shape
-    or non-finite values at the start): one line naming what is wrong, exit code 2."""
-
-    exit_code = 2
-
-
-def problem_from_functions(G: Function, *, dG_du: Optional[Function] = None,
-                           dG_dp: Optional[Function] = None, A: Optional[Function] = None,
-                           differences: str = "central") -> FunctionProblem:
-    """The problem G(u, p) = 0 from plain callables of (u, p): u a float array (n,), p a float.
-
-    G -> (n,); dG_du -> (n, n); dG_dp -> (n,); A -> (m, m), the matrix whose spectrum is
-    tracked (e.g. M^-1 K(p) for M u'' + K(p) u = 0; default dG/du). A missing dG_du or dG_dp
-    is computed by `differences` ("central" or "complex-step", continuation/stepping/differences.py)
-    and a DerivativeWarning states its accuracy."""
-    if differences not in METHODS:
-        raise ValueError(f"differences must be one of {METHODS}, got {differences!r}")
-    missing = [name for name, f in (("dG/du", dG_du), ("dG/dp", dG_dp)) if f is None]
-    warn_differences(missing, differences)
-    return FunctionProblem(G, dG_du or StateDerivative(G, differences),
-                           dG_dp or ParameterDerivative(G, differences), A)
-
-
-def problem_from_sympy(G: Sequence, u: Sequence, p, *, A=None,
-                       values: Optional[Mapping] = None) -> FunctionProblem:
-    """The problem G(u, p) = 0 from sympy expressions: G a sequence of n expressions in the
-    symbols u (n of them), p and the constants given in `values` ({symbol: number}); A an
-    m x m sympy Matrix of the tracked matrix (default dG/du). dG/du and dG/dp are derived
-    exactly; every function is printed after cse as a numba kernel of a module cached by the
-    hash of the expressions (symbolic/problems.py), so the second run compiles nothing."""
-    from diskfriction.symbolic.problems import compile_problem
-
-    kernels = compile_problem(G, u, p, A, values or {})
-    return FunctionProblem(kernels.residual, kernels.jacobian, kernels.dG_dp, kernels.stability)
 
 
 SPECIAL_POINTS = ("fold", "branch", "hopf")
@@ -236,66 +200,6 @@ class BranchResult:
         return str(self.branch.status)
 
 
-def _span(p_span) -> tuple[float, float]:
-    """(p_start, p_stop): two finite, different numbers."""
-    try:
-        a, b = (float(v) for v in p_span)
-    except (TypeError, ValueError):
-        raise ValueError(f"p_span must be two numbers (p_start, p_stop), got {p_span!r}") from None
-    if not (math.isfinite(a) and math.isfinite(b)) or a == b:
-        raise ValueError(f"p_span must be two finite, different numbers, got {p_span!r}")
-    return a, b
-
-
-def _evaluated(what: str, call: Callable[[], object], p: float):
-    """call(), or a ProblemError naming `what` and the exception it raised."""
-    try:
-        return call()
-    except Exception as error:  # noqa: BLE001 - the user's code may raise anything
-        line = (str(error).splitlines() or [""])[0]
-        raise ProblemError(f"{what} raised {type(error).__name__} at p = {p:g}: {line}") from None
-
-
-def _check_matrix(what: str, M, rows: int) -> None:
-    """A square (rows x rows; any size if rows < 0) dense or sparse matrix of finite numbers."""
-    shape = tuple(np.shape(M))
-    if len(shape) != 2 or shape[0] != shape[1] or (rows >= 0 and shape[0] != rows):
-        need = f"({rows}, {rows})" if rows >= 0 else "square"
-        raise ProblemError(f"{what} returned shape {shape}, expected {need}")
-    if not np.all(np.isfinite(M.data if sp.issparse(M) else np.asarray(M))):
-        raise ProblemError(f"{what} returned non-finite values")
-
-
-def check_problem(problem: Problem, u0, p: float) -> Array:
-    """u0 as a float array, after checking the problem at (u0, p): G -> (n,), dG/du -> (n, n),
-    dG/dp -> (n,), the tracked matrix square, all finite, n = u0.size, and derivatives by the
-    complex step valid for G (differences.check_complex_step). Else a ProblemError."""
-    try:
-        u0 = np.asarray(u0, dtype=float)
-    except (TypeError, ValueError):
-        raise ProblemError(f"u0 is not an array of numbers (got {type(u0).__name__})") from None
-    if u0.ndim != 1 or u0.size == 0 or not np.all(np.isfinite(u0)):
-        raise ProblemError(f"u0 must be a non-empty 1-D array of finite numbers (got shape {u0.shape})")
-    n = u0.size
-    for what, f, shape in (("G(u, p)", problem.residual, (n,)), ("dG/dp", problem.dG_dp, (n,))):
-        value = np.asarray(_evaluated(what, lambda: f(u0, p), p))
-        if value.shape != shape:
-            raise ProblemError(f"{what} returned shape {value.shape}, expected {shape} (u0 has {n} entries)")
-        if not np.all(np.isfinite(value)):
-            raise ProblemError(f"{what} returned non-finite values at p = {p:g}")
-    _check_matrix("dG/du", _evaluated("dG/du", lambda: problem.jacobian(u0, p), p), n)
-    A = _evaluated("the tracked matrix A", lambda: problem.stability_matrix(u0, p), p)
-    _check_matrix("the tracked matrix A", A, -1)
-    differenced = (getattr(problem, "G_u", None), getattr(problem, "G_p", None))
-    if any(isinstance(f, (StateDerivative, ParameterDerivative)) and f.method == "complex-step"
-           for f in differenced):
-        try:
-            check_complex_step(problem.G, u0, p)
-        except ValueError as error:
-            raise ProblemError(str(error)) from None
-    return u0
-
-
 def _stateless(problem: Problem) -> bool:
     """The problem carries no state alongside u (its commit hook is the base class's)."""
     return type(problem).commit is Problem.commit
@@ -378,7 +282,7 @@ def solve_branch(problem: Problem, u0, p_span, options: Options = Options(), *,
     its "residual", the point's residual).
     Bad input (span, options, a problem whose functions fail or return wrong shapes at the
     start) raises ValueError or ProblemError before anything is computed."""
-    p_start, p_stop = _span(p_span)
+    p_start, p_stop = span_of(p_span)
     u0 = check_problem(problem, u0, p_start)
     p_scale, residual_scale = _units(options, problem, u0, p_start, p_stop)
     params = options.params(p_start, p_stop, residual_scale)
@@ -550,15 +454,15 @@ class BifurcationProblem:
             raise ValueError(f"parameter must be a name such as P, F_x or I (it keys the output "
                              f"files), got {self.parameter!r}")
         if self.p_span is not None:
-            _span(self.p_span)
+            span_of(self.p_span)
 
     def start(self, p: float):
         """The guess of the state at p (checked by solve_branch); a ProblemError if u0(p) fails."""
-        return _evaluated("u0(p)", lambda: self.u0(p), p) if callable(self.u0) else self.u0
+        return evaluated("u0(p)", lambda: self.u0(p), p) if callable(self.u0) else self.u0
 
     def solve(self, p_span=None, options: Optional[Options] = None, *,
               callback: Optional[Callback] = None) -> BranchResult:
         """solve_branch over p_span (default self.p_span) with options (default self.options)."""
-        span = _span(p_span if p_span is not None else self.p_span)
+        span = span_of(p_span if p_span is not None else self.p_span)
         return solve_branch(self.problem, self.start(span[0]), span, options or self.options,
                             callback=callback)

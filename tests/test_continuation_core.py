@@ -111,7 +111,7 @@ def test_fold_of_scalar_equation_is_passed_and_located():
 def test_stop_at_fold_ends_the_run_before_p_turns_back():
     """The same fold with stop_at_fold: the step that passes the fold (p falling, the tangent
     pointing back in p) is cut where the tangent's p-component changes sign, bracketed to
-    ds_min (arclength._before_fold), so the run ends (Stop "fold", located on the step)
+    ds_min (step.before_fold), so the run ends (Stop "fold", located on the step)
     within ds_min of the fold (u <= 1e-9, |p| <= 1e-12, the residual tolerance) in 10 points
     (halving the step until below ds_min took 22), and every point has u > 0 (the branch
     never went round)."""

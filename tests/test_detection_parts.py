@@ -15,8 +15,9 @@ from diskfriction.continuation.stepping.newton import tangent
 from diskfriction.continuation.detection.partial_splits import (PARTIAL_CLUSTERS, PARTIAL_EXTRA, ROWS_PER_CLUSTER,
                                                       certificates_survive, clusters, most_clusters,
                                                       partial_allowed)
-from diskfriction.continuation.detection.samples import (Sample, claimed_outside, continuation_perm, label_gaps, nearest_predicted,
-                                               predicted_match, prediction_cost, sample_at)
+from diskfriction.continuation.detection.labels import (claimed_outside, continuation_perm, nearest_predicted,
+                                                       predicted_match, prediction_cost)
+from diskfriction.continuation.detection.samples import Sample, label_gaps, sample_at
 from diskfriction.continuation.stepping.segment import Segment
 from diskfriction.continuation.detection.verdicts import Verdict, judge_exhaustive, judge_fast
 
@@ -265,7 +266,7 @@ def test_free_modes_are_matched_among_themselves_and_give_no_gaps_to_the_chain()
 def test_order_match_leaves_out_the_surplus_of_the_longer_list():
     """Sorted lists whose sizes differ: the pairs keep the order and minimise the total
     distance; the values the other list lacks (1.5), or one of each tie, are left out."""
-    from diskfriction.continuation.detection.samples import order_match
+    from diskfriction.continuation.detection.labels import order_match
 
     a, b = np.array([1.0, 1.0, 1.0, 2.0, 2.0, 2.0, 5.0]), np.array([1.0, 1.0, 2.0, 2.0, 5.0])
     i_a, i_b = order_match(a, b)

@@ -9,7 +9,8 @@ import pytest
 from diskfriction.continuation.spectra import window as spectral_window
 from diskfriction.continuation.detection.collisions import certified_tracked
 from diskfriction.continuation.detection.detectors import fast
-from diskfriction.continuation.detection.samples import Sample, continuation_perm
+from diskfriction.continuation.detection.labels import continuation_perm
+from diskfriction.continuation.detection.samples import Sample
 from diskfriction.continuation.spectra.window import SpectralWindow, window_columns
 from diskfriction.continuation.detection.verdicts import beyond_band
 from diskfriction.models.chain.sweep import SweepParams, sweep

@@ -52,7 +52,8 @@ from diskfriction.continuation.stepping.newton import residual_norm, tangent
 from diskfriction.continuation.detection.partial_splits import certificates_survive, clusters, most_clusters, partial_allowed
 from diskfriction.continuation.problem import Problem
 from diskfriction.continuation.detection.root_ends import scan_ends
-from diskfriction.continuation.detection.samples import Sample, claimed_outside, continuation_perm, known, partial_sample_at, sample_at
+from diskfriction.continuation.detection.labels import claimed_outside, continuation_perm, known
+from diskfriction.continuation.detection.samples import Sample, partial_sample_at, sample_at
 from diskfriction.continuation.stepping.segment import Segment, SegmentSolveError
 from diskfriction.continuation.spectra.eigensolvers import DEFAULT, Eigensolver
 from diskfriction.continuation.spectra.tracking import DEFAULT_REL_TOL
@@ -69,15 +70,14 @@ class BranchJump(SegmentSolveError):
     interval is min_ds wide): the branch between the step's ends is not one curve across the
     step's hyperplanes (it turns back in p and forth again, S-shaped), so the step passed over
     folds. Its scan fails, and the continuation tries the step shorter (scans.run_scan), as
-    for a corrector that fails. 256 sheared disks (seed 1) at gamma = 0.00135: p went back by
-    1e-5 across 1e-14 of s, and the scan, after 240 samples, reported two births and two
-    deaths in that interval as located (stop 43)."""
+    for a corrector that fails (a scan that went on bisecting would report the collisions of
+    both pieces as located in an interval of s too narrow to hold them)."""
 
 
 JUMP_RATIO = 1e3
 """An interval whose ends lie this many times farther apart than their tangents carry the
-branch across it is a jump (StepScan.jumped), known before it is bisected down to min_ds: the
-scan of 256 disks' jump (BranchJump) took 242 samples and 24 s, 1e-14 of s at its end."""
+branch across it is a jump (StepScan.jumped), known before it is bisected down to min_ds
+(hundreds of samples)."""
 
 
 @dataclass(frozen=True)
@@ -140,10 +140,9 @@ class DetectionParams:
 
 SCAN_MEMORY = 1 << 30
 """Bytes of inner samples' eigenvectors a scan keeps in memory; beyond, the samples farthest
-from its work go to disk (StepScan._spill): 3 full samples of the chain of 1000 disks, the
-whole step at N = 300 (26 MB a sample). Twice this (stop 56) took the chain of 1000 disks from
-912.0 and 913.5 s to 878.9 s (58 GB of spilled vectors written against 93 GB) but its three
-processes together to 16.4 GB on a 24 GB machine: not kept (docs/continuation.md, Stop 56)."""
+from its work go to disk (StepScan._spill): 3 full samples of the chain of 1000 disks (288 MB
+a sample), the whole step at N = 300 (26 MB a sample). A larger budget spills less but lets
+the continuation and its two scan workers hold three times it together."""
 
 
 class _Budget(Exception):
@@ -253,7 +252,7 @@ class StepScan:
     def _insert_partial(self, idx: int, s: float, labels: Array) -> bool:
         """Split samples[idx], samples[idx + 1] at s with a partial sample of `labels`; False if
         it cannot be made (too many eigenvalues, not covered), if a label it did not compute
-        continues one of its eigenvalues into a full right neighbour (samples.claimed_outside),
+        continues one of its eigenvalues into a full right neighbour (labels.claimed_outside),
         or if it relabels its right neighbour in a way a certificate does not survive
         (partial_splits.certificates_survive)."""
         l, r = self.samples[idx], self.samples[idx + 1]

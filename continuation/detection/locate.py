@@ -69,10 +69,8 @@ class Located:
 BORDER_SCALE = 1e-6
 """The borders b, c are unit vectors times BORDER_SCALE max(1, max|A_ij|) at the first iterate:
 far below A's entries, SuperLU's partial pivoting never takes a border entry before the last
-pivot, which keeps the fill of the two dense borders to their own row and column. At a located
-collision of N = 100 (n = 301): 4455 entries in L + U against 23 020 with unit borders, the
-factorization 0.34 against 0.73 ms; on benchmarks/solve_speed.py's matrix the same fill, 243
-against 408 us (N = 100) and 4.3 against 5.2 ms (N = 1000). g and h scale with the borders;
+pivot, which keeps the fill of the two dense borders to their own row and column (unit
+borders fill L + U several times over: benchmarks/solve_speed.py). g and h scale with the borders;
 their zeros, and so the Newton steps in (x, lambda), do not."""
 
 

@@ -24,7 +24,8 @@ from typing import Callable, Optional
 import numpy as np
 
 from diskfriction.continuation.detection import certify
-from diskfriction.continuation.detection.samples import Sample, known
+from diskfriction.continuation.detection.labels import known
+from diskfriction.continuation.detection.samples import Sample
 from diskfriction.continuation.stepping.segment import Segment
 from diskfriction.continuation.detection.verdicts import Verdict, VerdictKind, active_labels, event_labels, scaled_slopes
 
@@ -44,9 +45,9 @@ this many rows of the stability matrix (most_clusters)."""
 def partial_allowed(a: Sample, b: Sample, labels: Optional[Array], partial_from: int) -> bool:
     """A partial sample may split [a, b] (fast detection) for `labels`: a stability matrix of
     size n >= partial_from, labels known at both ends, and no excluded mode at either end
-    unless a spectral window is tracked (free disks' spectrum is computed block by block and is
-    cheap when they are many: at eps = 0, N = 100 partial samples took 15.3 s against 13.5 s,
-    71 disks still free at F_x = 0.12; a window's excluded labels, beyond its guard bands, are
+    unless a spectral window is tracked (decoupled blocks' spectra are computed block by block
+    and are cheap when they are many, where partial samples are not; a window's excluded
+    labels, beyond its guard bands, are
     never in trouble, and a partial sample keeps its left neighbour's excluded and guard flags
     for the labels it does not compute)."""
     window = a.guard is not None and b.guard is not None
@@ -60,11 +61,8 @@ def most_clusters(sample: Sample) -> int:
     the full sample would be a spectral window's (a shift-invert itself: 5 clusters gained
     nothing on 256 sheared disks, docs/packings.md), else n // ROWS_PER_CLUSTER if that is
     more. A whole spectrum costs O(n^2) refined or O(n^3) decomposed, a cluster's
-    shift-invert O(n): at the chain of 400 disks (n = 1200) a full sample took 0.30 s and a
-    partial one 0.011 s, and 427 of 479 full split samples had been taken because the labels
-    in trouble (16 at the median, 61 at the 90th percentile) fell into more than 3 clusters.
-    Whole sweeps from rest to 0.12 (two workers): N = 400 with 3, 12, 24, 40 clusters 129.9,
-    100.3, 107.9, 113.0 s; N = 200 with 3, 6, 12 24.6, 24.0, 25.8 s (docs/continuation.md)."""
+    shift-invert O(n): the labels in trouble of a long chain fall into more than a few
+    clusters, and each cluster is cheap beside a full sample (docs/notes)."""
     if sample.guard is not None:
         return PARTIAL_CLUSTERS
     return max(PARTIAL_CLUSTERS, sample.eigvals.size // ROWS_PER_CLUSTER)

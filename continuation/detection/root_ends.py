@@ -4,9 +4,8 @@ A Hertz contact's stiffness goes as delta^(1/2) (dF_n / d delta = 3/2 k_n delta^
 Mindlin's k_t delta^(1/2)), so where a step ends on the event delta = 0 of a contact
 (Problem.root_events), the stability matrix goes as A_0 + (s_e - s)^(1/2) A_1 + O(s_e - s)
 near the event's place s_e, and the eigenvalues with it: their slopes along the branch
-diverge there, and no cubic Hermite model in s follows them (the scans of 256 sheared disks
-took 6.8 full split samples per step ending where a contact opens, 0.7 per step ending on no
-event: docs/continuation.md, Square-root ends).
+diverge there, and no cubic Hermite model in s follows them (a scan splits such a step over
+and over).
 
 - Opening (g > 0 along the step, just below 0 at its end x_b): the scan addresses the step
   by w, s = s_e (1 - (1 - w)^2) (Segment.root), in which (s_e - s)^(1/2) = s_e^(1/2) (1 - w)

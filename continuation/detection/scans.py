@@ -15,8 +15,7 @@ WorkerScans forks worker processes that each hold a copy of the problem as it wa
 restore the job's state, scan and send back the ScanResult with what it cost (linalg.book).
 Fork, not spawn: a worker inherits the compiled kernels instead of compiling them again. Jobs
 go to idle workers in order of submission; results are taken in any order and kept until asked
-for. On 2 cores, the paper scene with N = 100 (n = 300): the 74 scans took 13.1 s one after
-another and 7.7 s on two workers (2026-11-24, docs/continuation.md).
+for.
 """
 from __future__ import annotations
 
@@ -46,16 +45,12 @@ from diskfriction.continuation.spectra.window import WindowCrowded
 Array = np.ndarray
 
 PARALLEL_FROM = 60
-"""Stability matrix size from which scans go to workers by default: N = 20 with rotation, where
-two workers made the sweep 0.43 s against 0.53 s inline; at N = 10 (the paper's scene, n = 30)
-they gain nothing (0.23-0.26 s either way) and its sweeps stay bit for bit version 0.1's
-detection (docs/continuation.md)."""
+"""Stability matrix size from which scans go to workers by default (N = 20 disks with rotation):
+below it a scan costs less than shipping it, and the paper's scene (n = 30) is scanned inline."""
 WORKER_NICENESS = 10
 """Scan workers run this much nicer than the continuation: the continuation's steps are the
 run's critical path (each needs the last one's committed state), the scans fill the cores
-around them. On 2 cores, 256 sheared disks to gamma = 2e-3 on two workers: 47.8 s against
-50.3 s at equal priority, when the continuation had waited 1.7 s in all for scans (7.7 s now:
-the scans no longer take its core); three workers took 48.4 s."""
+around them."""
 PENDING_BYTES = 2 ** 30
 """Eigenvectors the continuation may hold in steps whose scans are pending (pending_full)."""
 
@@ -179,8 +174,7 @@ def pending_full(workers: int, ends: list) -> bool:
     (with their matrix derivatives),
     counted as they are (a sample at eps = 0 grows as the load reaches more disks). A deep
     queue lets the continuation run ahead through quiet steps while the workers are on crowded
-    ones: at N = 100 (2.9 MB a sample) 4, 8 and unbounded pending steps took 9.8, 9.5 and
-    9.1 s (docs/continuation.md)."""
+    ones."""
     return len(ends) > 2 * workers and sum(_vector_bytes(end) for end in ends if end is not None) > PENDING_BYTES
 
 

@@ -7,10 +7,8 @@ pressure (clean file pages, unlike the process's own memory).
 Inside files_kept() (the continuation runs in it, arclength.continuation) a file whose mapping
 is gone is kept, idle, and the next spill overwrites it in place instead of writing a new one.
 Pages the kernel hands out afresh are slow to touch where the host of a virtual machine takes
-back the memory its guest frees: on the 2-core test machine a first fill of 2 GiB ran at
-0.6 GB/s, the next ones at 7.1-9.5 GB/s but one at 2.8 (2026-11-29). A new file for each spill
-of the chain of 1000 disks (288 MB a sample, 93 GB a sweep) put 7.8 % of the sweep's CPU
-samples in the kernel's copy into fresh page-cache pages (perf, docs/continuation.md, Stop 57). An idle file keeps its
+back the memory its guest frees, and a new file for each spill of the chain of 1000 disks (288
+MB a sample) would copy every spill into fresh page-cache pages. An idle file keeps its
 pages. Files still mapped when the process forks are never reused (a child's inherited mapping
 must keep its values): they are closed when their mapping is gone, as outside files_kept.
 """

@@ -36,7 +36,8 @@ from typing import Optional
 import numpy as np
 
 from diskfriction.continuation.detection import certify
-from diskfriction.continuation.detection.samples import Sample, known, pair_coupling
+from diskfriction.continuation.detection.labels import known
+from diskfriction.continuation.detection.samples import Sample, pair_coupling
 from diskfriction.continuation.stepping.segment import Segment
 from diskfriction.continuation.spectra.tracking import Kind, conjugate_pairing
 

@@ -11,10 +11,8 @@ of the same elimination: with partial pivoting they are bit for bit the factors 
 ordering gives; with SymmetricMode they agree to rounding (1e-13 relative in a solve, the same
 nonzeros), so there a new pattern, once ordered, is factorized the same way as a repeat: the
 factors never depend on what the process factorized before (a scan worker's history, a shear
-resumed after its finished segments), at the cost of a second factorization per new pattern. On
-matrices of 256 sheared disks (taken from a run, timed once) the bordered corrector matrix
-takes 1.7 ms against 2.4 ms and the shift-invert's A - sigma I 1.3 ms against 2.9 ms;
-benchmarks/solve_speed.py --packing 256 prints the latter.
+resumed after its finished segments), at the cost of a second factorization per new pattern.
+benchmarks/solve_speed.py --packing 256 times both.
 
 `Reordered` shows the factors of the permuted matrix as factors of M (solve, transposed solve,
 L, U, perm_r, perm_c with the permutations composed), so callers and the compiled substitution

@@ -11,16 +11,15 @@ block-tridiagonal K with periodic corners, fill-in stays O(n)). Both factorizati
 the matrix and with its transpose (left null vectors of the locator).
 
 BLAS threads. OpenBLAS starts a thread per core even for 30 x 30 matrices, and on a machine
-where anything else runs, threads that wait for each other cost far more than they give:
-measured on the 2-core machine of docs/continuation.md while another process ran, the full
-eigendecomposition (values and both vectors) of a 600 x 600 matrix took 1.6 s on one thread and
-6.5 s on two, 1200 x 1200 6.5 s and 70 s. `blas_threads()` therefore runs the core on one BLAS
+where anything else runs, threads that wait for each other cost far more than they give (a
+dense eigendecomposition several times slower on two threads than on one). `blas_threads()`
+therefore runs the core on one BLAS
 thread (threadpoolctl) whatever the size; the other core stays free for another job (a dask
 worker, a second sweep).
 
 Memory. A continuation runs inside `heap_kept()`: glibc keeps the memory the process frees
 and hands it out again, instead of unmapping every large block and having the kernel zero
-fresh pages for the next one (23 % of a sweep of 1000 disks' CPU time before, stop 56).
+fresh pages for the next one.
 """
 from __future__ import annotations
 
@@ -122,9 +121,8 @@ def bordered(K: Matrix, c: Array, b: Array, d: float = 0.0) -> Matrix:
         M[n, n] = d
         return M
     # CSC built directly by one compiled pass over K's CSR arrays: every column of K gains the
-    # border entry b_j in row n, then the column [c; d] (the COO round trip it replaced cost
-    # about as much as SuperLU's factorization at n = 300; scipy's CSC conversion, sum of
-    # duplicates and inserts then took 0.35 ms at n = 769, a quarter of the factorization)
+    # border entry b_j in row n, then the column [c; d] (a COO round trip, or scipy's CSC
+    # conversion with its sum of duplicates and inserts, costs a good part of a factorization)
     K = K if K.format == "csr" else sp.csr_array(K)
     data, indices, indptr = _bordered_csc(K.indptr, K.indices, K.data, np.asarray(c, dtype=float),
                                           np.asarray(b, dtype=float), float(d), n)
@@ -208,8 +206,8 @@ class Factorization:
         elif self.sparse:
             x = self.lu.solve(np.ascontiguousarray(rhs, dtype=float), trans="T" if transpose else "N")
         else:
-            # LAPACK's getrs directly: scipy's lu_solve wrapper costs ~40 us a call, 10x the
-            # solve itself at n = 30 (benchmarks/continuation_speed.py)
+            # LAPACK's getrs directly: scipy's lu_solve wrapper costs several times the solve
+            # itself at n = 30 (benchmarks/continuation_speed.py)
             x, _ = _getrs(*self.lu, rhs, trans=1 if transpose else 0)
         if not np.all(np.isfinite(x)):
             raise SingularMatrix("solve produced non-finite values")
@@ -297,8 +295,7 @@ def solve_near(lu, apply, rhs: Array, transpose: bool = False) -> Optional[Array
     of the solution, or where the corrections stop shrinking within REFINE_FLOOR of it (the
     rounding floor). Returns None where the first correction is above REFINE_RATE |x_0|, where
     REFINE_STEPS do not converge or a solve is not finite (the caller then factorizes M). No
-    factorization: a solve and a product per correction against SuperLU's LU (1.3 ms at
-    n = 769)."""
+    factorization: a solve and a product per correction against SuperLU's LU."""
     try:
         x = lu.solve(rhs, transpose)
     except SingularMatrix:
@@ -349,8 +346,7 @@ class RefinedSolve:
 
 def _empty_line(M: sp.csc_array) -> Optional[str]:
     """"row" or "column" if the sparse M has one without a nonzero value (exactly singular),
-    else None. O(nnz), one compiled pass, no sparse copies (1.5 ms at n = 770 took a quarter
-    of an LU; numpy's masks and repeats 0.11 ms, 1.4 % of 256 sheared disks' shear)."""
+    else None. O(nnz), one compiled pass, no sparse copies."""
     return (None, "column", "row")[_empty_kind(M.indptr, M.indices, M.data, M.shape[0])]
 
 
@@ -442,9 +438,8 @@ def heap_kept():
     (M_TRIM_THRESHOLD); on leaving, glibc's defaults (65536 mappings, 128 KiB) and the free
     memory returned (malloc_trim). By default glibc maps each allocation above 32 MiB on its
     own and unmaps it when freed, so the next one comes as fresh pages that the kernel zeroes:
-    a full sample of 1000 disks allocates 288 MB of eigenvectors, and a sweep from rest to
-    0.12 spent 23 % of its CPU time in the kernel (488 of 2142 s, 2026-11-29), most of it
-    zeroing pages (docs/continuation.md, Stop 56). The resident memory then stays at its peak
+    a full sample of 1000 disks allocates 288 MB of eigenvectors, and a sweep would spend a
+    fifth of its time in the kernel zeroing pages. The resident memory then stays at its peak
     until the context ends. Elsewhere than glibc: nothing changes. Forked scan workers inherit
     the setting."""
     libc = _glibc()
@@ -482,6 +477,6 @@ def outermost(depth: list, enter: Callable[[], None], leave: Callable[[], None])
 
 def row_norms(a: Array) -> Array:
     """|a_i| of each row of the 2-d array a, real or complex, without the temporary copy of a
-    complex a that np.linalg.norm(a, axis=1) makes (its conjugate: 0.23 of 0.26 s for the left
-    vectors at n = 3000). Column norms: row_norms(a.T)."""
+    complex a that np.linalg.norm(a, axis=1) makes (its conjugate, most of its cost). Column
+    norms: row_norms(a.T)."""
     return np.sqrt(np.einsum("ij,ij->i", a.real, a.real) + np.einsum("ij,ij->i", a.imag, a.imag))

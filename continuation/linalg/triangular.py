@@ -8,11 +8,10 @@ triangular (both CSC), i.e. A = Pr^T L U Pc^T with (Pr b)[perm_r[i]] = b[i] and
     A^T x = b:    d[perm_c[i]] = b[i],   U^T L^T v = d,   x[i] = v[perm_r[i]].
 
 SuperLU's own solve spends most of its time around the substitution (work arrays,
-supernode bookkeeping). benchmarks/solve_speed.py, on the bordered chain matrix: SuperLU's
-solve 35 us (transposed 18 us) at n = 301 and 346 us (173 us) at n = 3001, the substitution
-below 10.5 us and 110-120 us either way. Copying the factors costs 138 us and 1.2 ms, four to
-seven of SuperLU's solves, so linalg.Factorization copies them only for a factorization solved
-with repeatedly (ARPACK's shift-invert, the locator's bordered matrix).
+supernode bookkeeping): the substitution takes a fraction of it (benchmarks/solve_speed.py).
+Copying the factors costs four to seven of SuperLU's solves, so linalg.Factorization copies
+them only for a factorization solved with repeatedly (ARPACK's shift-invert, the locator's
+bordered matrix).
 """
 from __future__ import annotations
 

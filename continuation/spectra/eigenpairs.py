@@ -34,8 +34,7 @@ NEAR_REAL = 1e-9
 spectral radius (the complex status threshold, spectra.py) is refined in real arithmetic, from
 its vectors made real (Guesses.made_real): complex arithmetic leaves a real eigenvalue's vectors
 with a complex phase and its value with an imaginary part of rounding size, and without this
-the pair would stay in complex arithmetic, four times dearer, at every later refinement (on the
-chain of 400 disks, 251 of 1200 pairs after 150 s of a sweep)."""
+the pair would stay in complex arithmetic, four times dearer, at every later refinement."""
 
 LARGEST_CLUSTER = 16
 """Largest group of pairs refined again together (refine_eigenpairs, refinement_groups); a
@@ -44,9 +43,8 @@ larger one is left as it is, to the certificate."""
 PARTNERS = 2
 """Pairs whose guesses are nearest a pair still above the tolerance, refined again with it
 (refinement_groups). With one, the two real guesses of a pair born inside the step (a complex
-pair now) were each grouped with a third eigenvalue nearer it than its partner, and neither
-group spans the pair: 20 of the 36 refinements declined on the chain of 400 disks from rest to
-0.12 (2026-11-28)."""
+pair now) may each be grouped with a third eigenvalue nearer it than its partner, and neither
+group spans the pair."""
 
 PARTNER_REACH = 4.0
 """A partner beyond the nearest joins only within this many times the nearest one's distance

@@ -32,12 +32,9 @@ ARPACK_TOL = 1e-10
 """ARPACK's stopping tolerance (Ritz estimates relative to the eigenvalues of the shift-inverted
 operator; scipy's default 0 asks for the machine precision). The two-sided Rayleigh-Ritz
 projection on A that follows (_two_sided) gives the eigenvalues to second order in the
-vectors' error. At 256 sheared disks (k = 31, n = 768) each ARPACK run took 96 operator
-applications against 98-114 at the default, the residuals of the vectors after the projection
-at most 1.4e-10 against 1.1e-10 (29 captured matrices); the shear to gamma = 3e-3 (inline) took
-81.5 against 89.8 s with the same 399 collisions (locations within 7e-16), and the chain's
-reference sweeps came out within 1e-12 (benchmarks/reference_sweeps.py; docs/packings.md,
-Stop 48). 1e-12 took 84.7 s."""
+vectors' error, so that the vectors' residuals after it stay near 1e-10 and the located
+collisions are those of the machine precision's to rounding, for fewer operator
+applications."""
 KRYLOV_EXTRA = 60
 """Most Arnoldi vectors ARPACK keeps beyond the k wanted (module docstring)."""
 
@@ -45,10 +42,8 @@ KRYLOV_EXTRA = 60
 def krylov_size(k: int, n: int) -> int:
     """ARPACK's ncv for k eigenvalues of an n x n matrix: scipy's default max(2k + 1, 20), but at
     most k + KRYLOV_EXTRA. Each Arnoldi step orthogonalises against all ncv vectors and each
-    restart costs O(n ncv^2), so for large k a Krylov space nearer 1.4 k is cheaper although it
-    restarts more: at n = 3000, k = 164 (the spectral window of N = 1000), both sides took
-    0.90 s with ncv = 222 against 1.23 s with 329; for k = 8, 16 and 22 at n = 300 the default
-    was the fastest Krylov size tried or within 5% of it (docs/continuation.md)."""
+    restart costs O(n ncv^2), so for large k (a long chain's spectral window) a Krylov space
+    nearer 1.4 k is cheaper although it restarts more; for small k scipy's default is."""
     return min(n, max(20, min(2 * k + 1, k + KRYLOV_EXTRA)))  # ARPACK: k + 1 < ncv <= n
 
 
@@ -56,15 +51,13 @@ SHIFT_INVERT_ORDERING = dict(permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.01,
                              options=dict(SymmetricMode=True))
 """SuperLU's ordering and pivoting for A - sigma I: minimum degree on the pattern of A + A^T,
 the diagonal pivot kept where it is at least 0.01 of its column's largest entry, as for a
-structurally symmetric matrix (the chain's and the contact networks' Jacobians).
-benchmarks/solve_speed.py, nnz(L + U) against SuperLU's default (COLAMD, partial pivoting):
-256 sheared disks (n = 733) 56 400 against 106 200, solves twice as fast; the chain of 1000
-disks 47 800 against 57 900. Backward errors about 1e-14 against 1e-15: harmless here, where
-the Rayleigh-Ritz projection takes A itself (eigenvalue errors second order in the vectors'),
-but not for the tangents of linalg.factorize's other callers (the Brusselator chain's
-decoupled modes then looked coupled: 162 spectra for 57 points against 85 allowed). With the
-threshold at 0.1 (or partial pivoting) minimum degree lost its order to off-diagonal pivots on
-the chain: 1.02 million."""
+structurally symmetric matrix (the chain's and the contact networks' Jacobians): about half
+the fill of SuperLU's default (COLAMD, partial pivoting; benchmarks/solve_speed.py). Its
+backward errors, about 1e-14 against 1e-15, are harmless here, where the Rayleigh-Ritz
+projection takes A itself (eigenvalue errors second order in the vectors'), but not for the
+tangents of the other bordered solves (a LinearSolver's ordering keeps partial pivoting). A
+threshold of 0.1 (or partial pivoting) lets off-diagonal pivots undo the minimum degree
+order."""
 
 
 def start_vector(n: int) -> Array:
@@ -85,8 +78,8 @@ class Deflated:
     side), on which B's null space has eigenvalue 0, never among the largest, so that the
     eigenvalues found nearest sigma are A's (models/packing/equilibria.py: the
     network's M^-1 J, whose translations T and total forces U are its null spaces, against
-    A_g, whose coordinates relative to a reference disk couple every row to that disk's:
-    nnz(L + U) 38 600 against 54 900 at 256 disks)."""
+    A_g, whose coordinates relative to a reference disk couple every row to that disk's and
+    fill its LU more)."""
 
     matrix: object
     right_null: Array
@@ -107,7 +100,7 @@ class Deflated:
 @numba.njit(cache=True)
 def _project(x: Array, T: Array, C: Array, U: Array) -> Array:
     """x - T C U^T x in place (T, U: n x r, C: r x r); returns x. Compiled: four numpy calls
-    took about 5 us a solve at n = 768, a tenth of the solve."""
+    cost a good part of a solve."""
     n, r = T.shape
     u = np.zeros(r)
     for i in range(n):
@@ -132,8 +125,7 @@ def _shift_inverted(B: Matrix, sigma: float):
 def nearest_values(A: Matrix, sigma: float, k: int) -> Array:
     """The k eigenvalues of A nearest sigma, without vectors: ARPACK on the shift-invert with
     A - sigma I factorized as nearest_eigensystem factorizes it (SHIFT_INVERT_ORDERING; scipy's
-    own eigs takes COLAMD, about twice the fill: a packing's window of 256 disks sized at its
-    start state in 39.6 against 54.2 ms, medians of 5)."""
+    own eigs takes COLAMD, about twice the fill)."""
     return spla.eigs(A, k=k, sigma=sigma, OPinv=_shift_inverted(A, sigma)[1], v0=start_vector(A.shape[0]),
                      return_eigenvectors=False)
 
@@ -180,10 +172,9 @@ def _two_sided(A: Matrix, V: Array, W: Array) -> Eigensystem:
     vectors l, l^H A = lambda l^H; module docstring): eigenvalues with right and left vectors,
     l_i^H r_i = 1. The k x k pencil (M, B) = (W^H A V, W^H V) is taken as the standard problem
     B^-1 M, whose right vectors are the pencil's and whose left vectors z give the pencil's as
-    B^-H z: half the time of the QZ algorithm (8 against 16 ms at k = 68, 256 sheared disks),
-    the same eigenvalues to 1e-14 relative. ARPACK's two subspaces hold the same eigenvalues,
-    so B is well conditioned (reciprocal condition 0.57 there); where it is not (at least
-    B_RCOND), the pencil goes to QZ."""
+    B^-H z: half the time of the QZ algorithm, the same eigenvalues to 1e-14 relative.
+    ARPACK's two subspaces hold the same eigenvalues, so B is well conditioned; where it is not
+    (its reciprocal condition below B_RCOND), the pencil goes to QZ."""
     M, B = W.conj().T @ (A @ V), W.conj().T @ V
     lu, piv, info = _getrf(B)
     rcond = _gecon(lu, np.linalg.norm(B, 1))[0] if info == 0 else 0.0

@@ -12,8 +12,7 @@ reference sample is carried to the new point x:
                 together with its neighbours where it did not converge or its error disc
                 meets another's (eigenpairs.refinement_groups),
 
-O(n^2 b^2) for the n = N b pairs against LAPACK's O(n^3): 6.7 times faster at n = 3000 on one
-core (2.45 against 16.5 s; docs/continuation.md, Eigenpair continuation).
+O(n^2 b^2) for the n = N b pairs against LAPACK's O(n^3).
 
 The result is used only when it is certified. Where it is not, the pairs that fail (a
 residual above RESIDUAL R, a pair found twice, a nearly defective pair among meeting discs)
@@ -58,13 +57,9 @@ Array = np.ndarray
 
 REFINE_FROM = 600
 """Smallest n at which a full spectrum with vectors is refined from the previous sample rather
-than decomposed (not where the spectra run on a GPU, spectra.on_gpu, which is faster still).
-Measured on whole sweeps from rest to 0.12 with every full spectrum refined where certified
-against every one decomposed (benchmarks/scaling.py --refine-from default,0, two workers,
-2026-11-27 15:55): N = 300 (n = 900) 98.8 against 177.3 s, N = 200 (n = 600) 36.3 against
-52.4 s, the same collisions within 5.6e-11 in F_x; N = 100 (n = 300) 8.1 against 8.2 s, and
-N = 40 1.5 against 1.0 s, where LAPACK's spectra are cheap and the refinement's Python
-overhead and its declined samples weigh more."""
+than decomposed (not where the spectra run on a GPU, tracking.on_gpu, which is faster still):
+below it LAPACK's spectra are cheap and the refinement's overhead and its declined samples
+weigh more (benchmarks/scaling.py --refine-from compares the two)."""
 
 ITERATIONS = 6
 """Rayleigh quotient steps at most per pair (cubic convergence: 2 or 3 suffice for a step of
@@ -78,9 +73,7 @@ TOLERANCE = 5e-13
 stops (eigenpairs.refine_eigenpairs: below it a pair is converged, above it it goes on
 to the pivoted LU and the groups): half of RESIDUAL. Most pairs converge far below it (median
 3e-15 R); it decides the pairs whose iteration stalls in the blocks' LU (pivot growth) at 1e-13
-to 1e-12 R. On the captured matrix of 1000 disks (docs/continuation.md, Stop 56) 250 pairs
-stalled above 1e-13 R and went to the pivoted LU (0.28 s), 131 above 5e-13 R; with 5e-13 the
-refinement sends 119 there (0.15 s). Until stop 56 it was 1e-13."""
+to 1e-12 R, which go on to the pivoted LU only above it."""
 
 TRACE = 10.0
 """Slack of the trace identities over their error bounds."""

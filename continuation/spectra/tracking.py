@@ -280,10 +280,8 @@ def condition_numbers(system: Eigensystem) -> Array:
 
 
 SLOPE_COLUMNS = 256
-"""Vectors per block in eigenvalue_slopes: dA r for all n vectors at once was an n x n temporary
-(144 MB at n = 3000); by blocks the same values, bit for bit. The chain of 1000 disks at rest
-(LAPACK's vectors, its sparse stability matrix as dA): 0.118 against 0.166-0.171 s (medians of
-5; the first unblocked call 0.35 s)."""
+"""Vectors per block in eigenvalue_slopes: dA r for all n vectors at once is an n x n temporary
+(144 MB at n = 3000); by blocks the same values, bit for bit."""
 
 
 def eigenvalue_slopes(system: Eigensystem, dA: Array) -> Array:

@@ -28,7 +28,7 @@ models/packing/shear.py); the certificate covers exactly the window.
 The set of the k nearest changes along the branch: an eigenvalue beyond the guard band leaves
 the disc and another enters it. Labels are matched so that every eigenvalue present at both
 samples keeps its label and the label of one that left takes one that entered
-(samples.window_match). Such a label then holds another eigenvalue, so the stored spectrum
+(labels.window_match). Such a label then holds another eigenvalue, so the stored spectrum
 is not the labels but columns (window_columns): a label continues its column from one
 accepted point to the next only where it is certified to hold the same eigenvalue (it stayed
 in the tracked set throughout the step, where the detection certified its continuity, or
@@ -52,19 +52,17 @@ from diskfriction.continuation.spectra.tracking import Eigensystem
 Array = np.ndarray
 
 GUARD = 0.15
-"""Width of each guard band, as a fraction of the window's width (0.25 until the labels beyond
-the certified band were checked against their cubic models, verdicts.beyond_band:
-docs/continuation.md)."""
+"""Width of each guard band, as a fraction of the window's width: the band an eigenvalue
+crosses to join or leave the tracked set (module docstring)."""
 
 MARGIN = 1.5
-"""k is set at the first sample to MARGIN times the eigenvalues within reach, plus EXTRA."""
+"""A window's k is sized at the start of a run as MARGIN times the eigenvalues within reach,
+plus EXTRA (SpectralWindow's margin and extra, by default)."""
 EXTRA = 8
 CERTIFIED = 0.5
 """The certified band: W widened by this fraction of the guard band on each side (module
-docstring). The outer rest of the guard band is watched, not certified: 256 sheared disks (to
-gamma = 5e-4, window [-3, 8]) located 65 collisions for the 31 in W, 34 of them beyond 8, and
-took 32.3 s; with the outer half watched, 31 for 31 (one at 8.018), 26.2 s, the same 31
-collisions to 3e-17 (docs/continuation.md)."""
+docstring). The outer rest of the guard band is watched, not certified: certifying all of it
+would locate collisions beyond W that are not reported."""
 WIDENING = 1.5
 """Where a window crowds, a caller may size it anew (widened) with k at least this factor
 times the old k."""
@@ -137,9 +135,7 @@ class SpectralWindow(Eigensolver):
         """Distance from sigma that the guard bands reach, for eigenvalues with the |Im| of
         those of `values` in them: the corner of the rectangle [lo - g, hi + g] x [-Im, Im],
         hypot((hi - lo) / 2 + g, Im) (a complex pair far outside the band says nothing of the
-        band: 256 sheared disks had one with |Im| 13 beside a window 11 wide). Until stop 42
-        the sum (hi - lo) / 2 + g + Im, which is farther than any point of the rectangle:
-        |Im| = 1.6 there made k 75 where 65 gives the rectangle the same margin."""
+        band)."""
         band = values[self.tracked(values)]
         height = float(np.max(np.abs(band.imag), initial=0.0))
         return math.hypot(0.5 * (self.hi - self.lo) + self.guard, height)

@@ -14,9 +14,7 @@ side (the ends and every point solved or remembered since): the cubic Hermite in
 where both carry tangents, else the straight line between them. Both lie on the hyperplane at
 s (sigma . x is linear in s along the branch). A bracket refined to 1e-13 then costs its late
 points one Newton update each instead of the three or four a start from the secant point
-needs (docs/continuation.md). (Choosing the Hermite interpolant of farther points with
-tangents where a curvature estimate favoured it took 2.1 Newton updates per point against 1.7
-on 256 disks sheared to 1e-3: a bracket's nearest points are the better guide.)
+needs; a bracket's nearest points are a better guide than farther ones with tangents.
 
 A segment with a root end (Segment.root = s_e: a contact opens at s_e, just before 1, and the
 stability matrix goes as the square root of the distance to it; root_ends.py) is addressed by
