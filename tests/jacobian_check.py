@@ -1,5 +1,5 @@
 """Random admissible states of small chains and the Jacobian error against the 50-digit
-reference: shared by tests/test_symbolic.py and benchmarks/jacobian_accuracy.py."""
+reference: shared by tests/symbolic/test_symbolic.py and benchmarks/jacobian_accuracy.py."""
 from __future__ import annotations
 
 import itertools
@@ -129,7 +129,7 @@ def worst_errors(effects: Effects, states: int, seed: int = 20200124) -> dict[st
     contact block restricted to contacts at delta ~ 1e-10 ("tiny", and how many: "tiny_contacts").
 
     Reference: central differences of reference_model's forces in 50-digit arithmetic with xi
-    following q (midpoint increments), step h = 1e-8 min(delta > 0); see tests/test_symbolic.py."""
+    following q (midpoint increments), step h = 1e-8 min(delta > 0); see tests/symbolic/test_symbolic.py."""
     kernels = load_kernels(effects)
     rng = np.random.default_rng(seed)
     worst = {"assembled": 0.0, "contact": 0.0, "tiny": 0.0, "tiny_contacts": 0}

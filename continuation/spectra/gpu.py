@@ -11,7 +11,7 @@ R becomes singular, as LAPACK's left vectors from the Schur form do (the tests f
 condition numbers and slopes within 1e-9).
 
 decompose() takes the array module as an argument: cupy on a GPU, numpy in the tests that
-check the formulas on a machine without one (tests/test_gpu_spectra.py).
+check the formulas on a machine without one (tests/continuation/spectra/test_gpu_spectra.py).
 """
 from __future__ import annotations
 

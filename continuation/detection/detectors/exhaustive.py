@@ -1,4 +1,4 @@
-"""The exhaustive detection (version 0.1's, kept to check the fast one: tests/test_detection.py):
+"""The exhaustive detection (version 0.1's, kept to check the fast one: tests/continuation/detection/test_detection.py):
 samples without slopes; intervals certified by the three-sample quadratic of every pair's
 discriminant and the motion of every real eigenvalue against its gap (certify.curvature_too_large,
 certify.outruns_gaps), the third sample the nearest beyond the interval with the status of the

@@ -14,7 +14,7 @@ from diskfriction.cli.main import main
 
 pytestmark = pytest.mark.slow  # whole runs of commands or examples: the slow tier (README, Tests)
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 TINY = 'name = "tiny"\n[disks]\nN = 3\n[load]\nF_x = [0.0, 0.05]\n'
 OPAQUE = {"scene"}
 """Objects not descended into: a scene's physics fields are the scene schema's (README)."""

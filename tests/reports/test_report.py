@@ -19,7 +19,7 @@ from diskfriction.scenes import Scene
 
 pytestmark = pytest.mark.slow  # whole runs of commands or examples: the slow tier (README, Tests)
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 TINY = Scene(N=3, name="tiny")
 # Short runs and small grids: the whole report in well under a minute.
 QUICK = Settings(inertias=(0.5,), eps_values=(0.0, 1e-4), accuracy_divisions=(30, 60),

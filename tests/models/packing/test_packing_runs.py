@@ -18,7 +18,7 @@ from diskfriction.models.packing.shear import network_of
 from diskfriction.scenes.packing import PackingScene
 
 SCENE = PackingScene(N=24, seed=3, gamma_range=(0.0, 0.002))
-"""The 24-disk shear of tests/test_packing_dynamics.py (conftest.sheared computes it once)."""
+"""The 24-disk shear of tests/models/packing/test_packing_dynamics.py (conftest.sheared computes it once)."""
 
 
 @pytest.fixture(scope="module")

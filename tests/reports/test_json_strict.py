@@ -1,7 +1,7 @@
 """Every JSON the tool writes is strict JSON (docs/outputs.md: a value that is not finite is
 null): commands that write JSON run on tiny inputs, chains (3 disks) and packings (16 disks),
 and every .json under their output directories, and what --json prints, is read by a parser
-that refuses NaN and Infinity (tests/test_outputs.py does the same for the chain's simulate,
+that refuses NaN and Infinity (tests/reports/test_outputs.py does the same for the chain's simulate,
 ensemble, verify and map). diskfriction.files.save_json and json_text are where they all go
 through."""
 from __future__ import annotations
@@ -19,7 +19,7 @@ from diskfriction.files import json_text, save_json
 
 pytestmark = pytest.mark.slow  # whole runs of commands or examples: the slow tier (README, Tests)
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 CHAIN = 'name = "tiny"\n[disks]\nN = 3\n[load]\nF_x = [0.0, 0.05]\n'
 PACKING = ('geometry = "packing"\nname = "p16"\n[packing]\nN = 16\nseed = 1\n'
            '[shear]\ngamma = [0.0, 0.001]\n')
@@ -71,7 +71,7 @@ COMMANDS = {
                                     "--amplitude", "1e-6"],
     "verify-packing": ["verify", "PACKING", "--t-end", "5"],
 }
-"""The commands that write JSON, on tiny inputs, but those whose every JSON tests/test_outputs.py
+"""The commands that write JSON, on tiny inputs, but those whose every JSON tests/reports/test_outputs.py
 already reads strictly (a chain's simulate, ensemble, verify and map) and map on a packing
 (half a minute for one cell, its local cluster's start: its files, map.json and cells/*.json,
 are written by save_json as a chain's map's are). The packing's simulate and verify include

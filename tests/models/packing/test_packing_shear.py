@@ -508,7 +508,7 @@ def test_a_window_that_crowds_is_widened_and_finds_the_same_collisions(packing, 
     anew, wider, at the last certified state and the shear goes on; the collisions equal a
     generous window's within 1e-9, and each strain is recorded once. The crowding comes before
     the collisions here: the steps after the restart differ, and the history makes the branch
-    depend on its steps (measured 1.2e-10; the chain's 5.9e-10, tests/test_detection.py)."""
+    depend on its steps (measured 1.2e-10; the chain's 5.9e-10, tests/continuation/detection/test_detection.py)."""
     from diskfriction.models.packing import shear as shearing
 
     window = (0.0, 40.0)

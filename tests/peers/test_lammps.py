@@ -107,7 +107,7 @@ def test_exported_deck_round_trips_and_its_first_step_forces_are_ours(lammps, tm
     bit for bit, and its forces and torques at step 0 (normal forces only: zero histories)
     and after one step (tangential forces and torques too) equal ours to 1e-12 of the force
     scale (the largest force, and F_y, the size of the contact forces that cancel in a net
-    force near equilibrium; as tests/test_symbolic.py)."""
+    force near equilibrium; as tests/symbolic/test_symbolic.py)."""
     scene_file = tmp_path / "linear.toml"
     scene_file.write_text(format_scene(PAPER_LINEAR))
     out = tmp_path / "deck"

@@ -13,7 +13,7 @@ from diskfriction.scenes.load import PACKING_SCHEMA
 from diskfriction.scenes.packing import PackingScene
 from diskfriction.scenes.scene import SceneValueError
 
-PACKAGED = Path(__file__).resolve().parents[1] / "scenes" / "packing.toml"
+PACKAGED = Path(__file__).resolve().parents[2] / "scenes" / "packing.toml"
 
 
 def write(tmp_path: Path, text: str) -> Path:

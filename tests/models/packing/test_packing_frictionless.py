@@ -117,7 +117,7 @@ def test_bifurcate_shears_the_frictionless_copy_of_the_packing_scene(tmp_path, c
     "no equilibrium found"): exit 0, the whole range written, every eigenvalue real."""
     from diskfriction.cli.main import main
 
-    text = (Path(__file__).resolve().parents[1] / "scenes" / "packing.toml").read_text()
+    text = (Path(__file__).resolve().parents[3] / "scenes" / "packing.toml").read_text()
     for old, new in (("N = 256 ", "N = 32 "), ("mu = 10.0 ", "mu = 0.0 "),
                      ("gamma = [0.0, 0.05]", "gamma = [0.0, 0.01]")):
         assert old in text
