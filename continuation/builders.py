@@ -91,10 +91,29 @@ def _check_matrix(what: str, M, rows: int) -> None:
         raise ProblemError(f"{what} returned non-finite values")
 
 
+REMOVED_HOOKS = {
+    "eigensystem": "Options(eigensolver=DenseSpectra() | RefinedSpectra() | SpectralWindow(...))",
+    "spectrum": "Options(eigensolver=...)",
+    "dense_spectra": "Options(eigensolver=DenseSpectra(device))",
+    "widen_window": "Options(eigensolver=SpectralWindow(lo, hi, ...)), widened by the run itself",
+    "stability_blocks": "stability_structure(u, p) -> StructuredMatrix(A, block_size=...)",
+    "spectrum_matrix": "stability_structure(u, p) -> StructuredMatrix(A, spectrum_matrix=...)",
+    "deflated": "stability_structure(u, p) -> StructuredMatrix(A, deflated=...)",
+    "factor_options": "Options(linear_solver=LinearSolver(ordering))",
+}
+"""Hooks a Problem no longer has, and what does their work now (docs/api.md): a subclass that
+still defines one is refused, since the core would silently ignore it."""
+
+
 def check_problem(problem: Problem, u0, p: float) -> Array:
-    """u0 as a float array, after checking the problem at (u0, p): G -> (n,), dG/du -> (n, n),
-    dG/dp -> (n,), the tracked matrix square, all finite, n = u0.size, and derivatives by the
-    complex step valid for G (differences.check_complex_step). Else a ProblemError."""
+    """u0 as a float array, after checking the problem at (u0, p): no hook the core no longer
+    calls (REMOVED_HOOKS), G -> (n,), dG/du -> (n, n), dG/dp -> (n,), the tracked matrix
+    square, all finite, n = u0.size, and derivatives by the complex step valid for G
+    (differences.check_complex_step). Else a ProblemError."""
+    for name, instead in REMOVED_HOOKS.items():
+        if any(name in vars(cls) for cls in type(problem).__mro__ if cls is not Problem):
+            raise ProblemError(f"{type(problem).__name__}.{name}: a Problem no longer has this hook "
+                               f"and the core would ignore it; use {instead} (docs/api.md)")
     try:
         u0 = np.asarray(u0, dtype=float)
     except (TypeError, ValueError):

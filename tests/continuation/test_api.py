@@ -126,3 +126,16 @@ def test_sympy_kernels_equal_the_expressions_and_one_module_serves_every_constan
     assert len(modules) == 1 and "hash: " + modules[0].stem.split("_")[1] in modules[0].read_text()
     with pytest.raises(ValueError, match="no value given for the symbols lambda"):
         problem_from_sympy(G, [x, y], p)
+
+
+@pytest.mark.parametrize("hook", ["eigensystem", "stability_blocks", "widen_window"])
+def test_a_problem_defining_a_removed_hook_is_refused_in_one_line(hook):
+    """A subclass written for the hooks Problem had (the core no longer calls them) would have
+    them silently ignored: check_problem names the hook and what does its work now."""
+    base = problem_from_functions(lambda u, p: u - p, A=lambda u, p: np.eye(1))
+    Old = type("Old", (type(base),), {hook: lambda self, *args: None})
+    old = Old.__new__(Old)
+    old.__dict__.update(base.__dict__)
+    with pytest.raises(ProblemError, match=rf"^Old\.{hook}: a Problem no longer has this hook.*docs/api\.md\)$"):
+        check_problem(old, np.array([0.0]), 0.0)
+    check_problem(base, np.array([0.0]), 0.0)  # the same problem without the hook passes
