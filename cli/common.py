@@ -3,9 +3,12 @@ computed (the output directory, the memory a sweep needs), and bad input as one 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import math
+import signal
 import sys
+import threading
 from pathlib import Path
 from typing import Optional
 
@@ -209,12 +212,13 @@ def run_command(args: argparse.Namespace) -> int:
     while handling it (interrupted); a MemoryError one line and exit 1."""
     command = getattr(args, "command", "diskfriction")
     try:
-        try:
-            return args.run(args)
-        except Exception as error:
-            if interrupted(error):
-                raise KeyboardInterrupt from error
-            raise
+        with ctrl_c_noted() as noted:
+            try:
+                return args.run(args)
+            except Exception as error:
+                if noted.seen or interrupted(error):
+                    raise KeyboardInterrupt from error
+                raise
     except SceneError as error:
         print(error, file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -236,6 +240,36 @@ RESUMES = "interrupted: the finished {what} are kept in {where}; rerun the same 
 STARTS_OVER = "interrupted: {command} does not resume; run it again to get its results"
 NONE_KEPT = ("interrupted before any of the {what} was finished: nothing is kept; rerun the same "
              "command to start again")
+
+
+class CtrlC:
+    """Whether Ctrl-C (SIGINT) arrived during a command (ctrl_c_noted)."""
+
+    seen = False
+
+
+@contextlib.contextmanager
+def ctrl_c_noted():
+    """Note every SIGINT while the block runs, then raise KeyboardInterrupt as Python's own
+    handler does. Library code may swallow that KeyboardInterrupt and fail later with an error
+    that does not chain to it (numba saving a compiled function to its cache, interrupted,
+    then 'no compiled object yet'): run_command still reads that as Ctrl-C. Where SIGINT is not
+    Python's default handler, or off the main thread, nothing is installed."""
+    noted = CtrlC()
+
+    def note(signum, frame):
+        noted.seen = True
+        raise KeyboardInterrupt
+
+    installed = (threading.current_thread() is threading.main_thread()
+                 and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
+    if installed:
+        signal.signal(signal.SIGINT, note)
+    try:
+        yield noted
+    finally:
+        if installed:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def interrupted(error: BaseException) -> bool:

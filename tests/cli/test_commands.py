@@ -435,3 +435,31 @@ def test_the_scene_command_imports_no_numerical_library():
             " if m in sys.modules))")
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
     assert run.stdout.strip() == "[]", run.stderr
+
+
+@pytest.mark.parametrize("ctrl_c", [True, False])
+def test_ctrl_c_swallowed_by_a_library_still_ends_the_command_as_ctrl_c(ctrl_c, capsys):
+    """numba, interrupted while it saves a compiled function to its cache, swallows the
+    KeyboardInterrupt and fails later with a RuntimeError that does not chain to it: the command
+    still ends as Ctrl-C does (one line, 130). Without a Ctrl-C that error is not one."""
+    import argparse
+
+    from diskfriction.cli.common import EXIT_INTERRUPTED, run_command
+
+    def run(args):
+        if ctrl_c:
+            try:
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(1.0)  # the handler runs here
+            except KeyboardInterrupt:
+                pass  # swallowed, as numba's cache save does
+        raise RuntimeError("no compiled object yet")
+
+    args = argparse.Namespace(command="bifurcate", run=run)
+    if not ctrl_c:
+        with pytest.raises(RuntimeError):
+            run_command(args)
+        return
+    assert run_command(args) == EXIT_INTERRUPTED
+    assert capsys.readouterr().err.startswith("interrupted: bifurcate does not resume")
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
