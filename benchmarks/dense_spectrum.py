@@ -1,12 +1,13 @@
 """What one full spectrum costs: LAPACK's dgeev on the chain's stability matrix, the floor
-under the fast detection's cost (issue 8; docs/continuation.md, Cost), and cuSOLVER's geev on a
-GPU (issue 26; --spectra cpu,gpu).
+under the fast detection's cost (docs/notes/chain-performance.md, "N = 100 in 10 s: where the
+time goes"), and cuSOLVER's geev on a GPU (--spectra cpu,gpu; docs/notes/core-spectra.md, "Dense
+spectra on a GPU").
 
 For each N: the dense J (n = 3N) of the paper's scene with N disks at F_x = 0.002 (eps = 1e-4),
 and the median time of its eigenvalues alone, with right vectors, and with left and right
-vectors (what a full sample computes: spectra.eigensystem), one BLAS thread. Every accepted
+vectors (what a full sample computes: tracking.eigensystem), one BLAS thread. Every accepted
 point and every full split sample costs one of the last. With gpu among --spectra, also
-spectra.eigensystem's eigenvalues alone and with both vectors on the GPU (copies to and from the
+tracking.eigensystem's eigenvalues alone and with both vectors on the GPU (copies to and from the
 device included), the CPU's time over the GPU's, and the largest distance of the GPU's
 eigenvalues from LAPACK's over the spectral radius. Run:
 python benchmarks/dense_spectrum.py [--N 10,100,200] [--repeat 7] [--spectra cpu,gpu]

@@ -1,6 +1,6 @@
-"""Dynamics benchmark (issue #4): microseconds per disk-step of the velocity-Verlet loop.
+"""Dynamics benchmark: microseconds per disk-step of the velocity-Verlet loop.
 
-Run: python benchmarks/dynamics.py [--repeat 7]. Prints medians over repeats, measured in this run.
+Run: python benchmarks/dynamics_speed.py [--repeat 7]. Prints medians over repeats, measured in this run.
 
 A step is everything the integrator does per step: two kicks, the drift, the midpoint history
 increment of every contact, the history rule (reset, first contact, Coulomb cap), forces and the

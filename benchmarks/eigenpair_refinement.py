@@ -1,8 +1,8 @@
-"""Eigenpair refinement against a dense spectrum (issue 26 item 1): what continuing every
+"""Eigenpair refinement against a dense spectrum: what continuing every
 eigenpair of the chain's J from one point to the next costs, and how accurate it is.
 
 For each N: the paper's scene with N disks and eps = 1e-4 relaxed from rest to F_x = 0.002,
-its eigensystem by LAPACK (spectra.eigensystem, one BLAS thread; the time is the median of
+its eigensystem by LAPACK (tracking.eigensystem, one BLAS thread; the time is the median of
 --repeat); then one quasistatic step to 0.002 + dF and every eigenpair of the new J refined
 from the old ones (eigenvalues predicted to first order, lambda + l^H dA r, as the slopes do;
 vectors the old ones) by two-sided Rayleigh quotient iteration on the periodic block-tridiagonal

@@ -1,4 +1,4 @@
-"""Ensemble benchmark (issue #4): 25 realizations x 3 F_x on this machine's cores via dask.
+"""Ensemble benchmark: 25 realizations x 3 F_x on this machine's cores via dask.
 
 Run: python benchmarks/ensemble_speed.py [--t-end 600] [--realizations 25]
 t_end = 600 raw = 26 800 tau covers what the paper's figures need: the breach and sliding

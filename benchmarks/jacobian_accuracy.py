@@ -1,4 +1,4 @@
-"""Accuracy of the generated Jacobian (issue #2): worst row-relative error against the 50-digit
+"""Accuracy of the generated Jacobian: worst row-relative error against the 50-digit
 finite-difference reference, per effect combination, and the cost of one F + J against one
 double-precision central-difference Jacobian (2n force evaluations).
 

@@ -1,4 +1,4 @@
-"""Kernel benchmark (issue #2): cold derive + codegen + compile, cached start, F + J cost.
+"""Kernel benchmark: cold derive + codegen + compile, cached start, F + J cost.
 
 Run: python benchmarks/kernels.py [--repeat 7]. Prints medians over repeats, measured in this run.
 Cold and cached starts run in fresh processes against a fresh cache directory.

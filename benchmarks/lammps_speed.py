@@ -1,4 +1,4 @@
-"""Speed against LAMMPS (issue 10): microseconds per disk-step, ours and LAMMPS's, one run.
+"""Speed against LAMMPS: microseconds per disk-step, ours and LAMMPS's, one run.
 
 Run: python benchmarks/lammps_speed.py [--repeat 5]. Needs diskfriction[lammps]. Prints, for
 N = 10, 100, 1000, 10000, the median over repeats of the time per disk-step of each code and

@@ -1,4 +1,4 @@
-"""Parameter-map benchmark (issue 11): the cost of a cell, and the speed-up from 1 to 2 workers.
+"""Parameter-map benchmark: the cost of a cell, and the speed-up from 1 to 2 workers.
 
 Run: python benchmarks/map_speed.py [--cells 6] [--t-end 1000] [--matrix "M^-1 J"]
 The map: the paper's scene (N = 10, eps = 0) with contacts.mu from 5 to 20 in --cells values,

@@ -1,5 +1,5 @@
 """How often a sheared packing's equilibria carry complex pairs, and how fast they grow, against
-the friction coefficient mu and the pressure P (issue 25, docs/packings.md#what-the-tool-finds).
+the friction coefficient mu and the pressure P (docs/packings.md#what-the-tool-finds).
 
 For each (mu, P) and seed: prepare N disks at P, shear with friction from gamma = 0 to
 GAMMA_END (P / 0.1)^(2/3) passing every plastic event (every eigenvalue tracked, dense spectra):

@@ -1,4 +1,4 @@
-"""The relaxations after plastic events (issue 25, models/packing/plastic.py): a packing is sheared
+"""The relaxations after plastic events (models/packing/plastic.py): a packing is sheared
 (window LO:HI, as `bifurcate --window`, scans inline) until it has passed EVENTS plastic events,
 and the state at each fold is relaxed again here with each rule:
 - "fire": FIRE with plastic.time_step (dt_max from the state's ||J||_inf, the default);

@@ -1,4 +1,4 @@
-"""Packing preparation benchmark (issue 25): seconds to prepare the default packing scene's
+"""Packing preparation benchmark: seconds to prepare the default packing scene's
 packing at N disks with the generated kernels (models/packing/prepared.py), the FIRE steps and
 relaxations it took, phi and z. One line per N, measured in this run; the kernels are compiled
 (or loaded) before the clock starts.

@@ -1,4 +1,4 @@
-"""Spectra per point on a problem with many close real eigenvalues (issue 27 item 5): the
+"""Spectra per point on a problem with many close real eigenvalues: the
 Brusselator reaction-diffusion chain of examples/brusselator_chain.py, its homogeneous
 equilibrium followed in B (n = 2N unknowns, sparse dG/du; one 2 x 2 block per Fourier mode,
 so real eigenvalues of different modes cross each other without interacting while each mode's

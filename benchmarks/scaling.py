@@ -1,4 +1,4 @@
-"""Continuation cost against N (issue 8): the paper's scene with N disks, F_x 0 -> 0.12, J.
+"""Continuation cost against N: the paper's scene with N disks, F_x 0 -> 0.12, J.
 
 For every N: wall time of the sweep (warm kernels), full spectra computed and partial ones (the
 shift-inverts of split samples: continuation/spectra/nearest.py), LU factorizations and solves,

@@ -1,4 +1,4 @@
-"""Quasistatic shear of packings (issue 25): for each N and seed, the seconds to prepare and to
+"""Quasistatic shear of packings: for each N and seed, the seconds to prepare and to
 shear with friction from gamma = 0 to GAMMA_END (or to where the branch ends), the accepted
 points, the contact events, the collisions located, how often an accepted state has complex
 pairs and how many, the largest force residual, how the branch ended (p_end; fold: the

@@ -1,5 +1,5 @@
-"""``diskfriction prepare [FILE] --out DIR``: prepare a packing scene's packing (issue 25,
-docs/packings.md): packing.npz (every field of packings.prepare.Packing, loads back bit for
+"""``diskfriction prepare [FILE] --out DIR``: prepare a packing scene's packing (
+docs/packings.md): packing.npz (every field of models.packing.prepare.Packing, loads back bit for
 bit) and packing.json (what it is: N, L, phi, the pressure reached, contacts, rattlers), both
 naming the scene (reports/packing_outputs.scene_record); a DIR holding another scene's files is
 refused."""

@@ -22,7 +22,7 @@ class StopCode(StrEnum):
     branch folded and left the span on its starting side, the step limit, a step that had to
     shrink below ds_min, a commit (Problem.commit) after which no equilibrium was found,
     (with stop_at_fold) a step that would have turned p back, or a spectral window that no
-    longer holds every eigenvalue its guard bands reach (spectral_window.WindowCrowded: the
+    longer holds every eigenvalue its guard bands reach (spectra.window.WindowCrowded: the
     branch ends at the last point whose step was certified; a caller may size the window
     anew there and go on)."""
 
@@ -135,10 +135,10 @@ class Branch:
     Per point: p (m,) [units]; u (m, n) the state; eigenvalues (m, n_A) complex, tracked: column
     i is one eigenvalue followed along the branch (with a spectral window, one column per
     eigenvalue that passed through the window or its guard bands: window.block_columns, nan
-    where it was not tracked); n_complex (m,): complex pairs (spectra.count_complex_pairs; in the
+    where it was not tracked); n_complex (m,): complex pairs (tracking.count_complex_pairs; in the
     window, with one); residual (m,): max|G| at the stored point (a model may record its own:
     a chain's or a packing's max|F| over the disks); condition (m, n_A): each tracked
-    eigenvalue's condition number |l| |r| / |l^H r| (spectra.condition_numbers; nan where the
+    eigenvalue's condition number |l| |r| / |l^H r| (tracking.condition_numbers; nan where the
     point's sample holds no vectors: exhaustive detection, no spectra, a free disk's mode);
     columns: {name: Column} from a record hook (Record: a chain's xi, free; a packing's rows,
     xi, contacts, loose, stress).
@@ -264,7 +264,7 @@ def recorded(branch: Branch, records: Sequence[Mapping[str, Any]]) -> Branch:
 
 class BranchRecorder:
     """Accumulates the accepted points of a run (arclength.continuation) and builds the Branch:
-    rel_tol, the complex-pair threshold (spectra.count_complex_pairs); rho, the certification
+    rel_tol, the complex-pair threshold (tracking.count_complex_pairs); rho, the certification
     margin of a spectral window's label continuity (samples.continued_labels); callback(k, p,
     u, eigenvalues), called for every point recorded."""
 

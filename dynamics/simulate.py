@@ -1,7 +1,7 @@
 """Runs from a branch point: simulate(...) -> Trajectory, summarize(...) -> dict.
 
     system = System.from_scene(scene)
-    eq = equilibrium_at(system, F_x)                # disks.equilibrium: exactly at F_x
+    eq = equilibrium_at(system, F_x)                # models.chain.equilibrium: exactly at F_x
     traj = simulate(system, eq.q, eq.xi, F_x, t_end=2000.0,
                     perturbation=Perturbation("eigenvector", 1e-6))
     summary = summarize(traj)

@@ -52,7 +52,7 @@ class Perturbation:
 class Spectrum:
     """Eigen-decomposition of M^-1 J at a state. eigenvalues (n,) [1 / time^2], vectors (n, n)
     columns; pairs: indices of the upper (Im > 0) members of the complex pairs, largest sigma
-    first (classification of continuation.spectra, rel_tol DEFAULT_REL_TOL)."""
+    first (classification of continuation.spectra.tracking, rel_tol DEFAULT_REL_TOL)."""
 
     eigenvalues: np.ndarray
     vectors: np.ndarray
@@ -80,7 +80,7 @@ class Spectrum:
 
 def growth_rates(eigenvalues: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(upper, sigma): the indices of the upper members (Im > 0) of the complex pairs among
-    `eigenvalues` of M^-1 J [1 / time^2] (continuation.spectra's classification, rel_tol
+    `eigenvalues` of M^-1 J [1 / time^2] (continuation.spectra.tracking's classification, rel_tol
     DEFAULT_REL_TOL), and their growth rates sigma = |Im sqrt(lambda)| [1 / time]."""
     upper = np.flatnonzero(eigen_status(eigenvalues, DEFAULT_REL_TOL) == 1)
     return upper, np.abs(np.sqrt(eigenvalues[upper].astype(complex)).imag)

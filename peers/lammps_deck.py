@@ -134,7 +134,7 @@ class Start:
 
 def start_state(system: System, F_x: float, kind: str) -> Start:
     """"rest": the F_x = 0 equilibrium (docs/model.md#history), the load F_x switched on at t = 0.
-    "branch": the equilibrium on the branch from rest at F_x (continuation.equilibrium_at,
+    "branch": the equilibrium on the branch from rest at F_x (models.chain.equilibrium.equilibrium_at,
     which raises NoEquilibrium past the branch's end) with zero histories: LAMMPS cannot be
     given tangential histories, so unless F_x = 0 it is not an equilibrium there."""
     if kind not in STARTS:

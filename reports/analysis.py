@@ -35,7 +35,7 @@ def max_imag(eigenvalues: np.ndarray) -> np.ndarray:
 
 
 def eigen_status_rows(eigenvalues: np.ndarray) -> np.ndarray:
-    """continuation.spectra.eigen_status of every row (+1 upper member of a pair, -1, 0 real),
+    """continuation.spectra.tracking.eigen_status of every row (+1 upper member of a pair, -1, 0 real),
     over the row's finite entries: a nan entry (a windowed branch's eigenvalue outside the
     window and its guard bands) is 0 and does not enter the threshold."""
     eigenvalues = np.atleast_2d(eigenvalues)

@@ -93,7 +93,7 @@ def headline(reason: str, width: int = 150) -> str:
 def draw_bands(ax, y: float, record: dict, params: MapParams) -> None:
     """One cell's row at height y: its branch's extent (grey line, x where it ended), complex
     windows (orange), windows whose run slid (red, thinner; adjacent ones merged as complex
-    windows are, disks.windows.complex_spans) and those whose run is not resolved
+    windows are, models.chain.windows.complex_spans) and those whose run is not resolved
     (slid None: grey, hatched), F_slide (black triangle); a failed or ended cell says why."""
     s = record["summary"]
     if s["status"] == "failed":

@@ -1,4 +1,4 @@
-"""A packing's shear branch as files and a figure (issue 25, docs/packings.md#shear):
+"""A packing's shear branch as files and a figure (docs/packings.md#shear):
 packing.npz, branch.npz, collisions.json, plastic.json and diagram.png of `diskfriction
 bifurcate PACKING_SCENE`, written as one set (save_packing_outputs), every file naming the
 scene it belongs to (scene_record, scene_arrays; other_scene finds a directory's files of

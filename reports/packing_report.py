@@ -1,4 +1,4 @@
-"""The packing section of the report (issue 25, docs/packings.md#report): `diskfriction report
+"""The packing section of the report (docs/packings.md#report): `diskfriction report
 PACKING_SCENE` shears the scene's packing, runs the dynamics from two of its states and writes
 report.md with four figures:
 

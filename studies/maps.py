@@ -7,7 +7,7 @@ combination is a cell: the base scene with those values, checked as a scene file
 (scenes.load.with_values), before anything runs (map_cells). Each cell (map_cell, in a dask
 worker, raw units):
   * sweeps F_x from F_from to F_to with every collision of `matrix` located, exactly as
-    `bifurcate` does (disks.sweep, default SweepParams): the collisions, the windows
+    `bifurcate` does (models.chain.sweep, default SweepParams): the collisions, the windows
     between them (studies.verify.windows), the F_x where the first complex window starts,
     and sigma_max = max |Im sqrt(lambda)| over the complex pairs of M^-1 J at the branch's
     points (the growth rate of the fastest oscillatory instability, [1 / time]);
@@ -23,7 +23,7 @@ worker, raw units):
     a = 1e-10) cannot be seen to slide, so F_slide is an upper bound that can fall as t_end
     grows (docs/maps.md measures by how much).
   * status: "ok" (the branch reached F_to), "ended" (it stopped before F_to; `reason` says
-    where and why, as disks.equilibrium does), or "failed" (no branch at all, e.g. no
+    where and why, as models.chain.equilibrium does), or "failed" (no branch at all, e.g. no
     sticking equilibrium at small mu; `reason` is the continuation's own line).
 Results do not depend on which worker ran a cell or when: a cell is a pure function of its
 scene and the map's parameters, and a map's table is assembled in grid order.
@@ -106,7 +106,7 @@ the same 24 collisions at every N, so 25 windows."""
 
 
 def cell_seconds(scene: Scene, params: MapParams) -> float:
-    """Rough wall time of one cell in its worker [s]: the sweep (disks.cost) and, with
+    """Rough wall time of one cell in its worker [s]: the sweep (models.chain.cost) and, with
     slide runs, per window the sweep to its midpoint and the run's steps (dynamics.simulate:
     SECONDS_PER_DISK_STEP, dt = DT_FRACTION 2 / omega_max). Within a factor of 2 of the cells
     of N = 10 .. 40 timed for docs/maps.md; for the estimate `map` prints before it starts."""

@@ -21,7 +21,7 @@ from diskfriction.words import count
 
 
 def windows(branch: Branch) -> list[Window]:
-    """The windows of a swept branch's requested leg (disks.windows.leg_windows)."""
+    """The windows of a swept branch's requested leg (models.chain.windows.leg_windows)."""
     return leg_windows(branch.F_x, branch.n_complex, branch.leg, [(c.p, c.kind) for c in branch.collisions])
 
 

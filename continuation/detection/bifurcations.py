@@ -165,7 +165,7 @@ below any real part a physical spectrum would call small."""
 
 def real_signs(eigvals: Array, rel_tol: float = DEFAULT_REL_TOL) -> Array:
     """Per eigenvalue: +1 if Re > thr, -1 if Re < -thr, 0 on the imaginary axis up to rounding,
-    thr = rel_tol max|lambda| (the threshold that tells complex from real, spectra.py)."""
+    thr = rel_tol max|lambda| (the threshold that tells complex from real, spectra/tracking.py)."""
     return status_at(1j * np.asarray(eigvals), imag_threshold(eigvals, rel_tol))  # Im(i lambda) = Re lambda
 
 

@@ -3,9 +3,9 @@
 A *birth* is a point where two real eigenvalues of the stability matrix A meet and leave the
 real axis as a conjugate pair (as the branch is followed in its direction); a *death* is the
 reverse. Integer test function: the status of every tracked eigenvalue (0 real, +1 / -1 upper /
-lower member of a complex pair, spectra.eigen_status); the number of complex pairs is the count
+lower member of a complex pair, tracking.eigen_status); the number of complex pairs is the count
 of +1. Smooth test function of one pair (i, j): its discriminant D_ij = (lambda_i - lambda_j)^2
-(spectra.pair_discriminant), > 0 for two real eigenvalues, < 0 for a conjugate pair.
+(tracking.pair_discriminant), > 0 for two real eigenvalues, < 0 for a conjugate pair.
 
 Detection on one step x_a -> x_b (before the step is committed) works on samples (samples.py):
 branch points x(s), s in [0, 1], on the step's secant segment (segment.py), with tracked spectra.
@@ -83,12 +83,12 @@ branch across it is a jump (StepScan.jumped), known before it is bisected down t
 @dataclass(frozen=True)
 class DetectionParams:
     """mode: a name in DETECTORS, "fast" or "exhaustive" (module docstring); rel_tol: status threshold
-    |Im| > rel_tol * max|lambda| (spectra.py); tol_p: |dp| to which a collision is located (the
+    |Im| > rel_tol * max|lambda| (tracking.py); tol_p: |dp| to which a collision is located (the
     fast locator's last Newton correction, or the exhaustive bracket); rho: certification margin
     (0 < rho < 1, certify.py); max_solves: samples allowed per step; enabled: False skips
     detection (spectra are still computed, tracked and counted, unless spectra is False: then
     no eigenvalue is computed at all, for a caller that needs only the equilibria, e.g.
-    disks.equilibrium); min_ds: the narrowest interval in s (the segment coordinate's
+    models.chain.equilibrium); min_ds: the narrowest interval in s (the segment coordinate's
     resolution, 100 ulp of 1): one that is still not narrow in p and x is a BranchJump;
     locator_iterations: Newton iterations of the fast locator before it falls back to a split;
     partial_from: matrix size n from which a split sample of the fast detection is partial
@@ -142,7 +142,8 @@ SCAN_MEMORY = 1 << 30
 """Bytes of inner samples' eigenvectors a scan keeps in memory; beyond, the samples farthest
 from its work go to disk (StepScan._spill): 3 full samples of the chain of 1000 disks (288 MB
 a sample), the whole step at N = 300 (26 MB a sample). A larger budget spills less but lets
-the continuation and its two scan workers hold three times it together."""
+the continuation and its two scan workers hold three times it together
+(docs/notes/core-refinement.md, "Tried and not adopted")."""
 
 
 class _Budget(Exception):
@@ -376,8 +377,8 @@ class StepScan:
         unsettled interval first, until those held in memory are at most SCAN_MEMORY. The
         intervals right of the one the scan works on wait with both ends' vectors: at the
         chain of 1000 disks a step of 45 collisions held 40 samples' vectors, 6.1 GB, and the
-        steps grow (docs/continuation.md, Eigenpair continuation). Where the disk refuses (no
-        space, no temporary directory) the samples stay in memory, as before spilling."""
+        steps grow (docs/notes/core-refinement.md, "Memory at N = 1000"). Where the disk
+        refuses (no space, no temporary directory) the samples stay in memory."""
         S = self.samples
         inner = range(self._start + 1, len(S) - 1)
         held = sum(S[k].vectors_in_memory for k in inner)

@@ -2,7 +2,7 @@
 
 Matching the labels of a new sample uses the eigenvalues' slopes along the branch: label i goes
 to the eigenvalue nearest to the trapezoid prediction lambda_i + (slope_i + slope_new) ds / 2
-(predicted_match: the assignment of least total distance, spectra.match_eigenvalues on the
+(predicted_match: the assignment of least total distance, tracking.match_eigenvalues on the
 predicted values), which follows a fast eigenvalue through a cluster; without slopes, to the
 nearest eigenvalue. Excluded modes (decoupled blocks, outside a spectral window) are matched
 among themselves in order of value (order_match). A spectral window's samples hold the k
@@ -99,7 +99,7 @@ def window_match(left: "Sample", right: "Sample", ds_left: float, ds_right: floa
     `right` would have to be off for it to lie outside that disc), eigenvalue j entering
     max(0, radius_left - |lambda_j - ds_right slope_j - sigma|) alike; a tracked eigenvalue
     (not excluded: in the window or its guard bands) never leaves or enters (the disc reaches
-    beyond the guard bands, spectral_window.py). The assignment of least total cost (leaving
+    beyond the guard bands, spectra/window.py). The assignment of least total cost (leaving
     and entering as dummy partners) keeps every eigenvalue present at both ends on its label;
     the labels left free take the entered eigenvalues (in the order of least prediction_cost):
     new eigenvalues on them, not continuations. A plain assignment over the pairs alone has
@@ -130,7 +130,7 @@ def window_match(left: "Sample", right: "Sample", ds_left: float, ds_right: floa
 
 def continuation_perm(left: Sample, right: Sample, slopes: Optional[tuple[Array, Array]] = None) -> Array:
     """Labels of `right` continuing `left`: by prediction if both carry slopes, else by the
-    nearest eigenvalue (spectra.match_eigenvalues). With a partial sample only the labels known
+    nearest eigenvalue (tracking.match_eigenvalues). With a partial sample only the labels known
     at both are matched (the others keep theirs). Free disks' modes (excluded, outside a
     spectral window), as many at both ends, are matched among themselves in order of (Re, Im)
     (the optimal match of real values; identical free disks share their eigenvalues, and an
@@ -175,8 +175,9 @@ def claimed_outside(left: Sample, right: Sample, slopes: Optional[tuple[Array, A
     on a label that `left` did not compute. continuation_perm matches only the labels known at
     both, so it would give that label another eigenvalue, and the interval between the two
     would never be certified: a scan of 256 disks split it 70 times, each partial sample
-    continuing the last one's labels, down to 7e-11 in strain (docs/continuation.md). slopes:
-    as continuation_perm's."""
+    continuing the last one's labels, down to 7e-11 in strain (docs/notes/core-detection.md,
+    "Partial samples declined where their labels would be claimed outside"). slopes: as
+    continuation_perm's."""
     dlam_left, dlam_right, ds_left, ds_right = _prediction_terms(left, right, slopes)
     mine = np.flatnonzero(known(left))
     nearest = nearest_predicted(left.eigvals[mine], dlam_left[mine], right.eigvals, dlam_right, ds_left, ds_right)

@@ -35,8 +35,8 @@ PARTIAL_EXTRA = 6
 """Eigenvalues a partial sample computes beyond those expected near its labels."""
 PARTIAL_CLUSTERS = 3
 """Shift-inverts a partial sample may take at least (each costs about 1/5 of a full spectrum at
-n = 300; more did not pay at N = 100, docs/continuation.md), and always where the full sample is
-a spectral window's (most_clusters)."""
+n = 300; more did not pay at N = 100: docs/notes/core-detection.md, "How many clusters a partial
+sample may take"), and always where the full sample is a spectral window's (most_clusters)."""
 ROWS_PER_CLUSTER = 100
 """Where the full sample is the whole spectrum, a partial sample may take one shift-invert per
 this many rows of the stability matrix (most_clusters)."""
@@ -59,10 +59,11 @@ def partial_allowed(a: Sample, b: Sample, labels: Optional[Array], partial_from:
 def most_clusters(sample: Sample) -> int:
     """The shift-inverts a partial sample next to `sample` may take: PARTIAL_CLUSTERS where
     the full sample would be a spectral window's (a shift-invert itself: 5 clusters gained
-    nothing on 256 sheared disks, docs/packings.md), else n // ROWS_PER_CLUSTER if that is
-    more. A whole spectrum costs O(n^2) refined or O(n^3) decomposed, a cluster's
-    shift-invert O(n): the labels in trouble of a long chain fall into more than a few
-    clusters, and each cluster is cheap beside a full sample (docs/notes)."""
+    nothing on 256 sheared disks, docs/notes/packings-speed.md, "Tried and left"), else
+    n // ROWS_PER_CLUSTER if that is more. A whole spectrum costs O(n^2) refined or O(n^3)
+    decomposed, a cluster's shift-invert O(n): the labels in trouble of a long chain fall into
+    more than a few clusters, and each cluster is cheap beside a full sample
+    (docs/notes/core-detection.md, "How many clusters a partial sample may take")."""
     if sample.guard is not None:
         return PARTIAL_CLUSTERS
     return max(PARTIAL_CLUSTERS, sample.eigvals.size // ROWS_PER_CLUSTER)

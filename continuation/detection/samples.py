@@ -2,11 +2,11 @@
 
 A sample is a point x = (u, p) of the branch at coordinate s of the step's segment (segment.py),
 its eigenvalues in tracked order (label i continues label i of the neighbouring sample), their
-status (spectra.eigen_status) and, for the fast detection, their slopes along the branch:
+status (tracking.eigen_status) and, for the fast detection, their slopes along the branch:
 
     d lambda_i / d tau = l_i^H (dA/dtau) r_i,      tau the arclength along the unit tangent t,
 
-from the normalised left and right eigenvectors (spectra.eigenvalue_slopes), with dA/dtau
+from the normalised left and right eigenvectors (tracking.eigenvalue_slopes), with dA/dtau
 from finite differences of the stability matrix along t (matrix_derivative). On a segment of
 length L with unit normal sigma, x'(s) = t L / (sigma . t), so d lambda / ds follows (slopes).
 The labels of a new sample continue its neighbour's by these slopes (labels.py:
@@ -220,7 +220,7 @@ def make_sample(s: float, x: Array, system: Eigensystem, rel_tol: float,
                 reference: Optional[Sample] = None, tangent: Optional[Array] = None,
                 dlam: Optional[Array] = None, dA=None) -> Sample:
     """Sample at s, labels continuing `reference` when given (by prediction when both carry
-    slopes, else by nearest eigenvalue: spectra.match_eigenvalues); dA: the matrix derivative
+    slopes, else by nearest eigenvalue: tracking.match_eigenvalues); dA: the matrix derivative
     that gave the slopes."""
     values = np.asarray(system.values, dtype=complex)
     excluded = system.excluded if system.excluded is not None else np.zeros(values.size, bool)

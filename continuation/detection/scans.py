@@ -12,7 +12,7 @@ committed at the step's start, and the scans of later steps are dropped.
 
 InlineScans scans at once, in this process (the problem is still in the step's start state).
 WorkerScans forks worker processes that each hold a copy of the problem as it was at the fork,
-restore the job's state, scan and send back the ScanResult with what it cost (linalg.book).
+restore the job's state, scan and send back the ScanResult with what it cost (solves.book).
 Fork, not spawn: a worker inherits the compiled kernels instead of compiling them again. Jobs
 go to idle workers in order of submission; results are taken in any order and kept until asked
 for.
@@ -80,7 +80,7 @@ class ScanJob:
 @dataclass(frozen=True)
 class ScanOutcome:
     """A scan's result, or why it failed (failure: the step is rejected, as when its corrector
-    fails); spent: the linalg.Work counts the scan spent (linalg.measured); crowded: the
+    fails); spent: the solves.Work counts the scan spent (solves.measured); crowded: the
     failure is a spectral window that no longer covers its guard bands (WindowCrowded: the run
     ends at the step's start, a shorter step would not help)."""
 

@@ -3,7 +3,7 @@
 A verdict says what the interval still needs (collisions.py acts on it):
   events  eigenvalues whose status goes 0 -> +-1 (births, paired at b) or +-1 -> 0 (deaths,
           paired at a), paired by conjugacy and continuity of the pair's mean
-          (spectra.conjugate_pairing): the interval holds collisions to locate;
+          (tracking.conjugate_pairing): the interval holds collisions to locate;
   split   a status change the events do not explain, or a pair that could collide and is not
           certified: a new sample is needed, at split_at; for the fast detection also the
           labels in trouble, the only ones a partial sample there must compute;
@@ -62,7 +62,7 @@ class VerdictKind(StrEnum):
 
 @dataclass(frozen=True)
 class Verdict:
-    """kind: a VerdictKind; events [(i, j, spectra.Kind)]; consistent:
+    """kind: a VerdictKind; events [(i, j, tracking.Kind)]; consistent:
     whether the events explain the status change; split_at: where to sample next (in s);
     labels: for a split of the fast detection, the mask of labels in trouble (the only ones a
     partial sample there needs), or None if the next sample must be a full spectrum."""
@@ -111,7 +111,7 @@ def beyond_band(a: Sample, b: Sample, d_a: Array, d_b: Array, doubt: float) -> A
     """Labels beyond the certified band on the same side at both ends of [a, b] whose cubic
     Hermite model of Re lambda (slopes d_a, d_b per unit of the interval) stays beyond it in
     between, by the doubt margin of the model's cubic term: no collision of theirs inside the
-    interval lies in the window (spectral_window.py), so none is certified or located. A label
+    interval lies in the window (spectra/window.py), so none is certified or located. A label
     whose model dips into the band takes part in the certificates."""
     side = band_side(a)
     beyond = (side != 0) & (side == band_side(b))
@@ -193,7 +193,8 @@ def hermite_split(a: Sample, b: Sample, d_a: Array, d_b: Array, events: list, ac
     labels in trouble, or None if the next sample must be full). The trouble is the union of
     every test's refusals, with the event pairs and conjugate partners: a partial split computes
     only those labels and rests on every other being certified on [a, b] (partial_splits.py;
-    the first test's labels alone lost a pair of the chain of 400 disks, docs/continuation.md)."""
+    the first test's labels alone lost a pair of the chain of 400 disks:
+    docs/notes/core-detection.md, "A split holds every label any test refuses")."""
     if _enters_past_guard(a, b).any():
         return 0.5, None
     real, upper, partner = _fast_candidates(a, b, active)

@@ -9,7 +9,7 @@ triangular (both CSC), i.e. A = Pr^T L U Pc^T with (Pr b)[perm_r[i]] = b[i] and
 
 SuperLU's own solve spends most of its time around the substitution (work arrays,
 supernode bookkeeping): the substitution takes a fraction of it (benchmarks/solve_speed.py).
-Copying the factors costs four to seven of SuperLU's solves, so linalg.Factorization copies
+Copying the factors costs four to seven of SuperLU's solves, so solves.Factorization copies
 them only for a factorization solved with repeatedly (ARPACK's shift-invert, the locator's
 bordered matrix).
 """

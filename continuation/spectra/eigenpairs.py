@@ -31,7 +31,7 @@ def close_pairs(points: Array, radius: float) -> tuple[Array, Array]:
 
 NEAR_REAL = 1e-9
 """A guess without a conjugate partner whose imaginary part is within this many times the
-spectral radius (the complex status threshold, spectra.py) is refined in real arithmetic, from
+spectral radius (the complex status threshold, tracking.py) is refined in real arithmetic, from
 its vectors made real (Guesses.made_real): complex arithmetic leaves a real eigenvalue's vectors
 with a complex phase and its value with an imaginary part of rounding size, and without this
 the pair would stay in complex arithmetic, four times dearer, at every later refinement."""
@@ -56,7 +56,7 @@ def refine_eigenpairs(blocks: PeriodicBlocks, values: Array, right: Array, left:
                       iterations: int = 6, tol: float = 0.0, columns: Optional[Array] = None
                       ) -> tuple[Array, Array, Array, Array]:
     """Every eigenpair of `blocks`' matrix refined from the guesses: values (n,), right vectors
-    as columns and left vectors as rows l_i^H (l_i^H r_i = 1: spectra.Eigensystem's layout) in
+    as columns and left vectors as rows l_i^H (l_i^H r_i = 1: tracking.Eigensystem's layout) in
     the matrix's own order (PeriodicBlocks.order takes block unknowns to it), pair i's in column
     (and row) columns[i] (None: i). Each pair alone by at most `iterations` two-sided Rayleigh
     quotient steps (fewer once its residual is <= tol): in real arithmetic where guess and

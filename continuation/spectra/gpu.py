@@ -5,7 +5,7 @@ implemented), so the left vectors are the rows of R^-1: with A R = R Lambda,
 
     R^-1 A = Lambda R^-1,      row i of R^-1 = l_i^H,      l_i^H r_j = delta_ij,
 
-the normalisation spectra.Eigensystem asks for, exact for the computed R. Its error is
+the normalisation tracking.Eigensystem asks for, exact for the computed R. Its error is
 eps cond(R) |l_i|: it grows like the eigenvalues' condition numbers towards a collision, where
 R becomes singular, as LAPACK's left vectors from the Schur form do (the tests find the same
 condition numbers and slopes within 1e-9).

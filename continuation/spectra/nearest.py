@@ -1,6 +1,6 @@
 """The k eigenvalues of A nearest a real shift sigma, with left and right vectors: shift-invert.
 
-One LU factorization of A - sigma I (linalg.factorize: SuperLU for a sparse A, LAPACK for a
+One LU factorization of A - sigma I (solves.factorize: SuperLU for a sparse A, LAPACK for a
 dense one) serves both sides: ARPACK (scipy.sparse.linalg.eigs) iterates with (A - sigma I)^-1
 for the k right vectors V and with (A - sigma I)^-T for the k left vectors W; the eigenvalues
 of (A - sigma I)^-1 of largest modulus are those of A nearest sigma. A two-sided Rayleigh-Ritz
@@ -8,8 +8,9 @@ projection on the two subspaces (the k x k pencil (W^H A V, W^H V)) pairs left w
 vectors and normalises l_i^H r_i = 1. Completeness: the k eigenvalues returned are the k
 nearest sigma, so every eigenvalue with |lambda - sigma| < radius = max_i |lambda_i - sigma|
 is among them. Cost at n = 300 (the chain of 100 disks), k = 8: about 1/5 of a full dense
-eigendecomposition with both vectors (docs/continuation.md). ARPACK's Krylov space is at most
-KRYLOV_EXTRA vectors larger than k (krylov_size).
+eigendecomposition with both vectors (docs/notes/core-detection.md, "Partial split samples").
+ARPACK's Krylov space is at most KRYLOV_EXTRA vectors larger than k (krylov_size; measured in
+docs/notes/core-spectra.md, "ARPACK's Krylov size and compiled substitution").
 """
 from __future__ import annotations
 
@@ -140,7 +141,7 @@ def nearest_eigensystem(A: Matrix, sigma: float, k: int,
     vectors, radius: the largest |lambda - sigma| among them); every eigenvalue of A strictly
     closer to sigma than radius is among the k. With `deflated`, its matrix is shift-inverted
     and its vectors mapped to A's (Deflated). Raises ShiftInvertFailed. The caller books it
-    (linalg.book)."""
+    (solves.book)."""
     n = A.shape[0]
     if not 0 < k < n - 1:
         raise ShiftInvertFailed(f"k = {k} must lie in 1..{n - 2} for an {n} x {n} matrix")

@@ -19,7 +19,7 @@ residual above RESIDUAL R, a pair found twice, a nearly defective pair among mee
 are repaired by shift-invert near their guesses (repaired: ARPACK's k eigenpairs nearest a
 real shift on the sparse matrix, nearest.py, those not held by a certified pair given to the
 failing ones) and the whole is certified again; otherwise (None) the caller takes the dense
-spectrum. The work ledger counts the outcomes (linalg.Work: spectra_refined, of them
+spectrum. The work ledger counts the outcomes (solves.Work: spectra_refined, of them
 refinements_repaired, and refinements_declined). Certificate, with rho_i = |A r_i - lambda_i
 r_i| (|r_i| = 1), kappa_i = |l_i| |r_i| / |l_i^H r_i| and R = max|lambda| of the reference:
   - every rho_i <= RESIDUAL R (a backward error, relative to the spectral radius);

@@ -211,8 +211,9 @@ class SpectraDevice(StrEnum):
 
 GPU_FROM = 1000
 """Matrix size from which "auto" takes dense spectra on a GPU (benchmarks/dense_spectrum.py
---spectra cpu,gpu; docs/continuation.md, Dense spectra on a GPU: one spectrum 4.6 times faster
-on an H100 at n = 1002, while at n = 600 two CPU scan workers match the GPU's inline sweep)."""
+--spectra cpu,gpu; docs/notes/core-spectra.md, "Dense spectra on a GPU": one spectrum 4.6 times
+faster on an H100 at n = 1002, while at n = 600 two CPU scan workers match the GPU's inline
+sweep)."""
 
 _DEVICE = [SpectraDevice.AUTO]
 
@@ -250,7 +251,7 @@ def eigensystem(A: Array, vectors: bool, device: Optional[SpectraDevice] = None)
     """All eigenvalues of the dense matrix A (LAPACK dgeev, or cuSOLVER's geev where on_gpu on
     `device`, None: spectra_on's: gpu.py; LAPACK where the GPU's right vectors are singular or
     its memory is too small), with left and right vectors normalised to l_i^H r_i = 1 if
-    `vectors`; booked as a full spectrum (linalg.book)."""
+    `vectors`; booked as a full spectrum (solves.book)."""
     book("spectra")
     if on_gpu(A.shape[0], device) and (arrays := gpu_spectra.eigensystem_arrays(A, vectors)) is not None:
         return Eigensystem(*arrays)

@@ -163,12 +163,12 @@ def tangent(problem: Problem, x: Array, border: Array, near: Optional[tuple] = N
     b . t > 0, so passing the previous tangent as b keeps the orientation.
     near = (lu, b_lu): the factorization of the bordered matrix with border b_lu at a point
     nearby (the corrector's last update: Newton's penultimate iterate). If it is sparse, t is
-    then refined on it (linalg.solve_near; a change of border by Sherman-Morrison,
+    then refined on it (solves.solve_near; a change of border by Sherman-Morrison,
     _Rebordered), and factorized afresh only where that does not converge: the same tangent
     to rounding for a solve and a product per correction instead of an LU. A dense near is
     not used: the dense matrices (the chain's, n < 240) keep their sweeps bit for bit, and
     cost little either way.
-    Raises linalg.SingularMatrix (a numpy.linalg.LinAlgError) if the bordered matrix is singular.
+    Raises solves.SingularMatrix (a numpy.linalg.LinAlgError) if the bordered matrix is singular.
     """
     rhs = np.zeros(x.size)
     rhs[-1] = 1.0

@@ -1,10 +1,13 @@
 """Rough wall time of a disk sweep 0 .. 0.12, for the estimate long commands print first.
 
-From one machine (2 cores, docs/continuation.md, Cost, and the cells timed in docs/maps.md):
-with full spectra (eps > 0) the paper's diagram takes 0.22 s at N = 10 and time grows as
-N^2.1 (16 s at N = 100 inline, 112 s at N = 200); at eps = 0 only the disks the load reached
-take spectra, 2.8 s at N = 100 growing as N^0.8. A sweep's step is span / 60 whatever the span,
-so the span does not enter. Good to a factor of about 2: enough to tell seconds from days.
+Calibrated on the sweeps of N = 10 .. 3000 on the project's 2-core machine (2026-11-24, 81ecb24
+and 8ecca05; docs/notes/chain-performance.md, "Against N"; docs/notes/maps-cost.md, "The
+estimate printed first"): with full spectra (eps > 0) the paper's diagram took 0.22 s at N = 10
+and time grew as N^2.1; at eps = 0 only the disks the load reached take spectra, 2.8 s at
+N = 100 growing as N^0.8. A sweep's step is span / 60 whatever the span, so the span does not
+enter. Good to a factor of about 2 on those sweeps: enough to tell seconds from days. Full
+spectra have been faster since (N = 400 in 74-83 s on 2026-11-29, b7fb09a, where the rule says
+510 s): at large N the estimate errs high.
 """
 from __future__ import annotations
 

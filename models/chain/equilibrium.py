@@ -2,7 +2,7 @@
 
 Every command that starts from an equilibrium (simulate, verify, ensembles, the report) gets it
 here. Because the tangential history depends on the path, "the equilibrium at F_x" means the
-one reached quasistatically from rest (F_x = 0, xi = 0) by loading: disks.sweep from 0
+one reached quasistatically from rest (F_x = 0, xi = 0) by loading: sweep.sweep from 0
 to F_x, which ends exactly on F_x when the branch reaches it. When it does not, the branch has
 ended short of F_x, and NoEquilibrium says where and why, in one line, from the branch itself:
 the sweep's status, and the contacts of its last point that are open (delta <= 0) or at their

@@ -13,12 +13,13 @@ the dense part counts once per process.
 
 The estimate is a lower bound, so the guard refuses only what cannot fit: the fast detection
 keeps the full samples of a step whose intervals are not yet settled while it scans it, each
-with 4 n^2 doubles of eigenvectors and n^2 of its matrix derivative dA/dtau (kept since
-2026-11-26 for the certifier's coupling test, certify.decoupled), and with scan workers each
-of the three processes holds such samples, so a full-spectrum sweep peaks higher: at N = 200 678 MB inline, 963 + 2 x 587
-MB (resident, shared pages counted in each) with two workers; within the first 10 minutes at
-N = 1000, 3.2 + 2 x 3.2 GB (docs/continuation.md, Cost). A spectral window's samples hold n x k
-vectors, and at eps = 0 only the disks the load reached carry vectors.
+with 4 n^2 doubles of eigenvectors and n^2 of its matrix derivative dA/dtau (for the
+certifier's coupling test, certify.decoupled), and with scan workers each of the three
+processes holds such samples, so a full-spectrum sweep peaks higher: at N = 200 678 MB inline,
+587 MB in each of two workers (docs/notes/core-scans.md, "Settled samples release their
+vectors"); at N = 1000 up to 7.4 GB in one process (docs/notes/core-refinement.md, "Memory at
+N = 1000"). A spectral window's samples hold n x k vectors, and at eps = 0 only the disks the
+load reached carry vectors.
 """
 from __future__ import annotations
 

@@ -8,11 +8,12 @@ unloading back to 0, so both legs together show the hysteresis.
 The rest state with eps = 0 is a singular point (pairs touching at delta = 0, N free rolling
 modes: J is singular, no tangent exists). The branch therefore starts at F_1 = START_FRACTION
 times F_y (the scene's force scale; at most half the first target), reached from the rest state
-in one quasistatic step by pseudo-transient relaxation (disks.relax); an unloading leg to 0 ends
-at F_1 too. Collisions between 0 and F_1 are not resolved; complex pairs present at F_1 are
+in one quasistatic step by pseudo-transient relaxation (equilibria.relax); an unloading leg to
+0 ends at F_1 too. Collisions between 0 and F_1 are not resolved; complex pairs present at F_1 are
 counted in the branch's first row. On the paper's scene the collisions above F_x = 0.006 agree
-to all printed digits for F_1 = 1e-5, 1e-4 and 1e-3 (docs/continuation.md); below ~1e-7 the
-branch is still numerically singular.
+to all printed digits for F_1 = 1e-5, 1e-4 and 1e-3 (docs/chain.md, "The equilibrium branch";
+docs/notes/chain-performance.md, "The start at rest"); below ~1e-7 the branch is still
+numerically singular.
 """
 from __future__ import annotations
 
@@ -32,7 +33,8 @@ from diskfriction.symbolic import System
 START_FRACTION = 1e-4
 SWEEP_STEPS_PER_SPAN = 60
 """A sweep's largest step is its span over this (api.STEPS_PER_SPAN is 50 for other problems):
-version 0.1's choice, kept so that every disk sweep and its timings stay as documented."""
+the chain's reference sweeps (benchmarks/reference_sweeps.py) and the timings in docs/notes are
+taken with it."""
 
 
 @dataclass(frozen=True)
@@ -47,13 +49,13 @@ class SweepParams(Options):
     the corrector must hold the contacts' forces well below the Coulomb limit's resolution),
     max_steps 20 000 (N = 1000 takes up to 6000 points), and no special points (the disk
     problem carries history: its folds cannot be located after the run), theta None: steps in
-    the Euclidean arclength of (q, F_x), as before the weighted metric (Options: theta = 1, the
-    mesh-independent metric of a discretised problem), p_scale and residual_scale 1: steps,
+    the Euclidean arclength of (q, F_x) (Options: theta = 1, the mesh-independent metric of a
+    discretised problem), p_scale and residual_scale 1: steps,
     tolerances in F_x and newton_tol in raw units (Options: relative to the span and to the
     size of F at the start). workers (Options):
     processes scanning steps while the sweep goes on (None: automatic; 0: inline). window:
     (lo, hi) of Re lambda [the matrix's raw units] to track instead of the whole spectrum
-    (spectral_window.py); None: every eigenvalue.
+    (continuation/spectra/window.py); None: every eigenvalue.
     """
 
     ds_min: Optional[float] = 1e-10
@@ -167,7 +169,7 @@ def _continue_leg(before: np.ndarray, branch: Branch) -> Branch:
     """A leg after another starts at that one's last point, whose eigenvalues are `before`, with
     its labels in order of value (arclength._sorted): its branch relabelled to continue the last
     point's labels, the same eigenvalues at the same point matched by value
-    (spectra.match_eigenvalues), and the branch's collision pairs, window columns
+    (tracking.match_eigenvalues), and the branch's collision pairs, window columns
     (Branch.continued) and condition numbers with them."""
     perm = match_eigenvalues(before, branch.eigenvalues[0])  # new label i holds old perm[i]
     of_label = np.argsort(perm)

@@ -20,7 +20,7 @@ class Window(NamedTuple):
 def complex_windows(F_start: float, F_stop: float, pairs_at_start: int,
                     collisions: Iterable[tuple[float, str]]) -> list[Window]:
     """The intervals of a leg from F_start to F_stop cut at its collisions ((F_x, kind) in
-    branch order, kind a spectra.Kind or its name): the pair count starts at pairs_at_start
+    branch order, kind a tracking.Kind or its name): the pair count starts at pairs_at_start
     and changes by +1 at a birth, -1 at a death (Kind.sign)."""
     collisions = list(collisions)
     edges = [float(F_start)] + [float(p) for p, _ in collisions] + [float(F_stop)]

@@ -1,4 +1,4 @@
-"""The packing problem (issue 25): N bidisperse frictional disks in a periodic box sheared with
+"""The packing problem: N bidisperse frictional disks in a periodic box sheared with
 Lees-Edwards boundaries, no substrate. Preparation (FIRE to a target pressure or packing
 fraction, then friction switched on), the contact network found with a cell list, forces and
 the sparse Jacobian from the generated kernels (docs/packings.md). A sibling of models/chain/ on the

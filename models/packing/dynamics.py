@@ -1,4 +1,4 @@
-"""Newtonian dynamics of a packing from a state of its shear branch (issue 25,
+"""Newtonian dynamics of a packing from a state of its shear branch (
 docs/packings.md#dynamics): velocity Verlet with the Coulomb cap, the contact rows found again
 every few steps (the history carried by row), the strain held fixed.
 

@@ -1,4 +1,4 @@
-"""Frictionless preparation of a packing (issue 25): N bidisperse disks at random in a periodic
+"""Frictionless preparation of a packing: N bidisperse disks at random in a periodic
 square box, relaxed by FIRE (fire.py) at a packing fraction, or at the packing fraction where
 the measured pressure is the target. Friction is switched on afterwards, not here.
 

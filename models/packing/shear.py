@@ -79,7 +79,7 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
     from each relaxed state as a new segment. window: (lo, hi) of Re lambda tracked by sparse
     shift-invert (continuation/spectra/window.py; its k sized at the start of every segment,
     and where it crowds sized anew, wider, at the last certified state:
-    spectral_window.widened), or None: every eigenvalue, a dense spectrum per sample.
+    spectra.window.widened), or None: every eigenvalue, a dense spectrum per sample.
     done: the finished segments of an interrupted run with the same inputs (models/packing/segments.py):
     the run goes on where the next one starts, with the same result as a run never
     interrupted; on_segment(segment) is told each segment finished here once it is passed.

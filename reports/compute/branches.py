@@ -16,7 +16,7 @@ def _system(scene: Scene):
 
 def _sweep(scene: Scene, F_from: float, F_to: float, matrix: str, ds_max=None, detection=True,
            tol_p=None):
-    """disks.sweep with the report's failures turned into ComputationFailed."""
+    """models.chain.sweep with the report's failures turned into ComputationFailed."""
     from diskfriction.continuation.stepping.arclength import ContinuationError
     from diskfriction.continuation.detection.collisions import DetectionParams
     from diskfriction.models.chain.equilibria import EquilibriumError
@@ -30,14 +30,14 @@ def _sweep(scene: Scene, F_from: float, F_to: float, matrix: str, ds_max=None, d
 
 
 def sweep_span(scene: Scene) -> float:
-    """The span disks.sweep scales its steps with: max(|F_to - F_from|, F_from)."""
+    """The span models.chain.sweep scales its steps with: max(|F_to - F_from|, F_from)."""
     a, b = scene.F_x_range
     return max(abs(b - a), a)
 
 
 @computation("branch")
 def branch(scene: Scene, matrix: str, ds_divisions: int, tol_p: float | None = None) -> dict:
-    """The branch over the scene's F_x range with every collision located (disks.sweep,
+    """The branch over the scene's F_x range with every collision located (models.chain.sweep,
     ds_max = span / ds_divisions). Rows: F_x, tracked eigenvalues of `matrix` [raw], n_complex,
     leg; condition: each tracked eigenvalue's condition number (nan without vectors);
     collisions: F_x, kind, double eigenvalue [raw], resolved; status: how each leg ended, in

@@ -1,6 +1,6 @@
-"""Non-normality: the condition number of every complex pair against F_x (issue 26 item 3).
+"""Non-normality: the condition number of every complex pair against F_x.
 
-kappa = |l| |r| / |l^H r| of an eigenvalue (spectra.condition_numbers) bounds how far a
+kappa = |l| |r| / |l^H r| of an eigenvalue (tracking.condition_numbers) bounds how far a
 perturbation of the matrix moves it, |d lambda| <= kappa |dA|, and the transient growth a
 perturbation can show before the eigenvalues take over grows with it (the giant-amplification
 literature: Charan, Gendelman, Procaccia, Sheffer, arXiv:2001.06862). It is 1 for a normal

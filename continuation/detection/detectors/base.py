@@ -53,7 +53,7 @@ class Collision:
 
 
 def sample_discriminant(sample: Sample, i: int, j: int) -> float:
-    """D_ij at a sample (spectra.pair_discriminant); nan if i, j cannot collide there."""
+    """D_ij at a sample (tracking.pair_discriminant); nan if i, j cannot collide there."""
     ev, st = sample.eigvals, sample.status
     return float(pair_discriminant(ev[i], ev[j], st[i], st[j]))
 
@@ -65,7 +65,7 @@ class Detector:
     needs slopes); stencil_from_previous: it judges an interval with a third sample, which at a
     step's start may be a sample of the previous step, so its scans run in order, inline;
     parallel: the scans of different steps are independent and may run on workers (scans.py);
-    window: it can follow a spectral window (spectral_window.py; needs slopes).
+    window: it can follow a spectral window (spectra/window.py; needs slopes).
     Methods act on a StepScan `scan` (collisions.py) and its samples."""
 
     name: str = ""
