@@ -6,10 +6,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from core_problems import (P0, TOL_P, assert_count_changes_only_at_collisions, block_diag, blocks_family,
+                           brusselator, bubble_problem, fast_eigenvalue_through_a_cluster, located, pair_block,
+                           run, spectrum)
 
-from core_problems import (TOL_P, block_diag, pair_block, blocks_family, run, spectrum, located, assert_count_changes_only_at_collisions, brusselator, P0, bubble_problem, fast_eigenvalue_through_a_cluster)
 from diskfriction.continuation import (ContinuationParams, DetectionParams, FunctionProblem, continuation,
-                          count_complex_pairs)
+                                       count_complex_pairs)
 from diskfriction.continuation.branch import StopCode
 from diskfriction.continuation.detection.detectors import DETECTORS, Kind
 from diskfriction.continuation.detection.detectors.fast import Fast
