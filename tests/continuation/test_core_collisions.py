@@ -157,9 +157,10 @@ class Bisecting(Fast):
 
 
 def test_a_detector_added_by_one_registry_entry_finds_the_collisions(monkeypatch):
-    """Adding a detector is one class and one DETECTORS entry (docs/continuation.md): the
-    scan drives it, and it brackets the bubble of a fast eigenvalue passing a cluster (steps
-    250 times its width) to tol_p, where the fast detection's Newton locator puts it."""
+    """Adding a detector is one class and one DETECTORS entry (docs/continuation.md, Adding a
+    detector): the scan drives it, and it brackets the bubble of a fast eigenvalue passing a
+    cluster (steps 250 times its width) to tol_p, where the fast detection's Newton locator
+    puts it."""
     monkeypatch.setitem(DETECTORS, Bisecting.name, Bisecting())
     problem, (p1, p2) = fast_eigenvalue_through_a_cluster()
     par = ContinuationParams(ds=0.1, ds_min=1e-9, ds_max=0.1, newton_tol=1e-12, p_min=0.0, p_max=0.4)

@@ -15,7 +15,7 @@ from diskfriction.continuation.detection.bifurcations import locate_folds, locat
 def test_fold_of_scalar_equation_is_passed_and_located():
     """G = u^2 + p from (u, p) = (1, -1): the branch turns at the fold (0, 0) and lands on
     p = -1 again at u = -1, the side it started from, short of p_max = 1: its status says it
-    turned back (issue 23: it said "p_end"). Fold located to |x - x_fold| <= 1e-9, on the
+    turned back, not that it reached p_end. Fold located to |x - x_fold| <= 1e-9, on the
     branch within the corrector's residual (|u^2 + p| <= 1e-12: with the bracket's points
     corrected to that residual, p carries it even where u = 0 exactly)."""
     problem = FunctionProblem(G=lambda u, p: np.array([u[0] ** 2 + p]), G_u=lambda u, p: np.array([[2 * u[0]]]),

@@ -57,8 +57,8 @@ def test_parameters_are_validated_at_the_door():
 
 
 def test_a_stop_prints_its_status_line_and_says_its_reason_without_the_location():
-    """Branch.status is a Stop; its line (MESSAGES) is the text the status had as a string,
-    and sentence() is what stop_reason parsed back out of it by regex before."""
+    """Branch.status is a Stop: str() is its status line (MESSAGES: the code, the reason and
+    where the run ended), sentence() the reason alone, without the location."""
     failed = Stop(StopCode.DS_MIN, "corrector failed (residual 1.63e-11)", 5.0997512345678)
     assert str(failed) == "ds_min: corrector failed (residual 1.63e-11) at p=5.09975123457"
     assert failed.sentence(7) == "corrector failed (residual 1.63e-11)" and not failed.reached

@@ -17,7 +17,8 @@ pytestmark = pytest.mark.slow  # whole runs of commands or examples: the slow ti
 REPO = Path(__file__).resolve().parents[2]
 TINY = 'name = "tiny"\n[disks]\nN = 3\n[load]\nF_x = [0.0, 0.05]\n'
 OPAQUE = {"scene"}
-"""Objects not descended into: a scene's physics fields are the scene schema's (README)."""
+"""Objects not descended into: a scene's physics fields are the scene schema's (docs/chain.md,
+Scenes)."""
 
 
 def documented() -> dict[str, tuple[set[str], set[str]]]:

@@ -14,7 +14,7 @@ from diskfriction.scenes import Scene
 from diskfriction.symbolic import System
 
 
-AGREE = 1e-9  # the issue's tolerance between the two detections
+AGREE = 1e-9  # the largest distance in p allowed between the two detections' locations
 
 
 def locations(branch):
@@ -32,7 +32,8 @@ def assert_same_collisions(fast, exhaustive):
 @pytest.mark.slow
 def test_fast_detection_finds_the_exhaustive_collisions(scene, matrix, count, chain_sweep):
     """Same kinds in the same order, locations within 1e-9, on one branch (the detection does
-    not change the steps); the counts are the version 0.1 lists (docs/continuation.md)."""
+    not change the steps); the counts are the measured ones (docs/notes/core-detection.md,
+    The fast detection against the exhaustive one)."""
     runs = {mode: chain_sweep(scene, matrix, params=SweepParams(detection=DetectionParams(mode=mode)))[0]
             for mode in ("fast", "exhaustive")}  # conftest: run once, shared with the tests below
     assert np.array_equal(runs["fast"].F_x, runs["exhaustive"].F_x)
@@ -155,8 +156,8 @@ def test_settled_samples_drop_their_vectors_and_the_scan_finds_the_same(monkeypa
     """A scan drops the eigenvectors of inner samples whose two intervals are settled (clean,
     narrow or with every event located; full neighbours): at the end of every scan of the
     N = 20 sweep no inner sample between two full ones holds vectors (an interval with a
-    located collision kept them to the scan's end until stop 40), and without the release
-    (monkeypatched away) the branch and its collisions are exactly the same."""
+    located collision included), and without the release (monkeypatched away) the branch and
+    its collisions are exactly the same."""
     from diskfriction.continuation.detection.collisions import StepScan
 
     system = System.from_scene(Scene(N=20, eps=1e-4))
@@ -234,12 +235,10 @@ def test_a_failing_locator_costs_partial_samples_and_finds_the_same_collisions(m
     pairs' labels (with partial samples forced, partial_from = 0): with every locator call
     failing, the N = 10 sweep brackets each collision to tol_p and reports the same collisions
     within 1e-9, with at most 3 full spectra per collision beyond the sweep whose locator
-    works. (With full splits, as until stop 40, it took 1225 full spectra against 95 at N = 20,
-    and 572 against 116 here, about 22 more for each of its 21 collisions; a partial sample of the first event pair's labels alone missed
-    a death: the labels split for must be all the events' with their partners. Until stop 55
-    the bound was 1.5 times the working sweep's spectra, 135 against 91; a split's labels then
-    became the union of every refusing test's (verdicts.hermite_split), which took the working
-    sweep to 84 and the failing one to 138, 2.6 more per collision for 21.)"""
+    works. The labels split for are every event's with their partners and every refusing
+    test's (verdicts.hermite_split): a sample of the failed pair's labels alone would miss a
+    death of another event pair at N = 20 (docs/notes/core-detection.md, The locator; A split
+    holds every label any test refuses)."""
     from diskfriction.continuation.detection.detectors import fast
     from diskfriction.continuation.detection.locate import LocatorFailed
 
@@ -264,10 +263,10 @@ def test_a_failing_locator_costs_partial_samples_and_finds_the_same_collisions(m
 @pytest.mark.slow
 def test_a_chain_window_that_crowds_is_widened_and_finds_the_same_collisions(monkeypatch):
     """N = 20, eps = 1e-4, window [0, 0.02] k_n sized with one eigenvalue to spare: it crowds
-    along the sweep, is sized anew, wider, at the last certified point and the sweep goes on
-    (before: an exception that lost the sweep). The same 20 collisions as a generous window, of
-    the same kinds, within 1e-9: the steps after the restart differ, and the history makes the
-    branch depend on its steps by up to 5.9e-10 (docs/continuation.md)."""
+    along the sweep, is sized anew, wider, at the last certified point and the sweep goes on.
+    The same 20 collisions as a generous window, of the same kinds, within 1e-9: the steps after
+    the restart differ, and the history makes the branch depend on its steps by up to 5.9e-10
+    (docs/notes/core-stepping.md, Step dependence of the chain's branch)."""
     from diskfriction.continuation.spectra import window as spectral_window
     from diskfriction.models.chain.sweep import SweepParams, sweep
 

@@ -495,7 +495,8 @@ def test_a_split_holds_every_label_a_later_test_refuses():
     members (1 and 3, real at the start) have a real eigenvalue between them (2: the event
     pair's clearance refuses it), the split's labels hold that eigenvalue too. A partial split
     computes only those labels and rests on every other being certified; with the first test's
-    labels alone, the chain of 400 disks lost a short-lived pair (docs/continuation.md, Stop 54)."""
+    labels alone, the chain of 400 disks lost a short-lived pair (docs/notes/core-detection.md, A
+    split holds every label any test refuses)."""
     from diskfriction.continuation.spectra.tracking import Kind
     from diskfriction.continuation.detection.verdicts import hermite_split
 

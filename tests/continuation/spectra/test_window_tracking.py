@@ -168,9 +168,9 @@ def test_an_eigenvalue_leaving_the_disc_frees_its_label_and_shifts_no_other():
 
 def _located_collisions(monkeypatch, certified: float) -> tuple[list, list]:
     """The paper's scene, window 0.06:0.07 of Re lambda / k_n, scans inline, with CERTIFIED =
-    `certified` of a guard band GUARD = 0.25 (the default until stop 41: with 0.15 no collision
-    falls in the outer half of the guard band here): (every double eigenvalue the locator
-    found, the sweep's collisions)."""
+    `certified` of a guard band GUARD = 0.25 (with the default 0.15 no collision falls in the
+    outer half of the guard band here): (every double eigenvalue the locator found, the sweep's
+    collisions)."""
     found = []
     locate = fast.locate
 
@@ -191,7 +191,7 @@ def _located_collisions(monkeypatch, certified: float) -> tuple[list, list]:
 
 @pytest.mark.slow
 def test_collisions_beyond_the_certified_band_are_not_located(monkeypatch):
-    """With the whole guard band certified (CERTIFIED = 1, before) the paper's window
+    """With the whole guard band certified (CERTIFIED = 1) the paper's window
     0.06:0.07 locates a collision beyond the band's inner half, outside W, which is then not
     reported; with the outer half only watched it is not located, and the sweep reports the
     same collisions at the same F_x."""

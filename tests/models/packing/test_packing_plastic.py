@@ -86,7 +86,7 @@ def test_a_relaxation_that_stalls_near_its_tolerance_is_finished_by_newton(passe
     """FIRE after a plastic event made to stop short, within 50 times the tolerance (as 256
     disks stalled at 2.5e-11 against 1e-11): the next segment's first Newton solve finishes it
     and the shear goes on to the end, every point in force balance, the first plastic event
-    where it was; one that stops 1e4 times above the tolerance still fails in one line."""
+    where it was; one that ends 1e4 times above the tolerance still fails in one line."""
     from diskfriction.models.packing import plastic
 
     scene, packing, whole, _ = passed_run
