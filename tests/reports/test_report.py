@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from commandline import run_main
 
 from diskfriction.reports.builder import build_report
 from diskfriction.reports.cache import ResultCache, cache_key
@@ -17,9 +16,6 @@ from diskfriction.reports.sections import SECTIONS
 from diskfriction.reports.settings import SettingError, Settings, with_setting
 from diskfriction.scenes import Scene
 
-pytestmark = pytest.mark.slow  # whole runs of commands or examples: the slow tier (README, Tests)
-
-ROOT = Path(__file__).resolve().parents[2]
 TINY = Scene(N=3, name="tiny")
 # Short runs and small grids: the whole report in well under a minute.
 QUICK = Settings(inertias=(0.5,), eps_values=(0.0, 1e-4), accuracy_divisions=(30, 60),
@@ -57,12 +53,15 @@ def one_local_cluster():
 
 @pytest.fixture(scope="module")
 def first(tmp_path_factory):
+    """The whole report of TINY built once (QUICK): the tests that read it are the slow tier's
+    (README, Tests); the others check parts, in-process."""
     root = tmp_path_factory.mktemp("report")
     with one_local_cluster():
         log, lines = build(root / "out", root / "cache")
     return root, log, lines
 
 
+@pytest.mark.slow
 def test_builder_writes_every_figure_and_the_table(first):
     root, log, _ = first
     report = (root / "out" / "report.md").read_text()
@@ -77,6 +76,7 @@ def test_builder_writes_every_figure_and_the_table(first):
     assert not [e for e in log if "failed" in e.status]
 
 
+@pytest.mark.slow
 def test_progress_line_per_computation_and_shared_ones_computed_once(first):
     _, log, lines = first
     computed = [e for e in log if e.status == "computed"]
@@ -85,6 +85,7 @@ def test_progress_line_per_computation_and_shared_ones_computed_once(first):
     assert any(line.startswith("cached    paper/branch[J]") for line in lines)
 
 
+@pytest.mark.slow
 def test_second_run_hits_the_cache_and_recomputes_nothing(first):
     root, log, _ = first
     again, lines = build(root / "out2", root / "cache")
@@ -93,6 +94,7 @@ def test_second_run_hits_the_cache_and_recomputes_nothing(first):
     assert all(line.startswith(("cached", "skipped")) for line in lines)
 
 
+@pytest.mark.slow
 def test_changed_parameter_recomputes_only_what_depends_on_it(first):
     root, log, _ = first
     changed = dataclasses.replace(QUICK, mode_F_x=0.05)
@@ -102,6 +104,7 @@ def test_changed_parameter_recomputes_only_what_depends_on_it(first):
     assert {e.computation for e in again if e.status == "computed"} == {"shear_mode"}
 
 
+@pytest.mark.slow
 def test_only_builds_one_section(first):
     root, _, _ = first
     log, _ = build(root / "only", root / "cache", only=("fig6",))
@@ -148,8 +151,7 @@ def test_setting_parses_lists_and_numbers():
     (["--bogus"], "diskfriction: error: unrecognized arguments: --bogus"),
 ])
 def test_bad_input_gets_one_line_and_exit_2(tmp_path, args, says):
-    run = subprocess.run([sys.executable, "-m", "diskfriction", "report", *args, "--out", str(tmp_path / "o")],
-                         capture_output=True, text=True, cwd=ROOT)
+    run = run_main("report", *args, "--out", str(tmp_path / "o"))
     assert run.returncode == 2
     assert run.stderr.count("\n") == 1 and run.stderr.startswith(says), run.stderr
     assert not (tmp_path / "o").exists()
