@@ -42,7 +42,7 @@ which the problem declares decoupled (stability_structure), and the free disks' 
 excluded from collision detection (decoupled, they cannot form a complex pair with anything;
 identical free disks even share their eigenvalues). A free disk joins the chain when one of its
 pairs reaches delta_join (a join event); its gauge row is dropped. The number of free disks
-falls as the load spreads (tests/continuation/detection/test_detection.py).
+falls as the load spreads (tests/continuation/detection/test_free_disks.py).
 """
 from __future__ import annotations
 

@@ -5,7 +5,7 @@ prepared packing, or the state past a fold: models/packing/plastic.py) and is a 
 state, the scene and the run's options alone (its window is sized at its start, its scans and
 its labels are its own). So a run resumed after its finished segments, from the state where
 the next one starts, gives the same branch as a run that was never interrupted, value for
-value (tests/models/packing/test_packing_shear.py). A segment is a Branch of one segment piece
+value (tests/models/packing/test_packing_plastic.py). A segment is a Branch of one segment piece
 (shear.shear_segment) whose plastic event, passed at its end, holds that state; its file is
 the branch's complete arrays (continuation/records.complete_arrays: ragged columns and the
 collisions' vectors flat with offsets), the plastic event's numbers and state, and a key, read
