@@ -143,8 +143,9 @@ def _load_range(value: Any) -> tuple[float, float]:
 GAMMA_MAX = 1.0
 """The largest shear strain a packing scene asks for. Quasistatic shear to order-one strain
 already takes a jammed packing through its transient to steady plastic flow, and past it the
-analysis is hours to days: 32 disks cost 20 to 40 minutes of full spectra per unit strain, 64
-disks two hours, 256 disks with a window [-3, 8] about 1.7 hours (docs/packings.md, Shear);
+analysis is hours to days: a unit of strain takes 32 disks 6 to 12 minutes with full spectra,
+64 disks 50 to 90 minutes (2026-12-02, 9b7bcfe), 256 disks with a window [-3, 8] about 1.6
+hours (2026-11-29, 856a534; docs/packings.md, What the tool finds, Cost and limits);
 the longest shear the tool was checked on is 256 disks to gamma = 0.05, and the 1000 plastic
 events a command passes last 32 disks at mu = 10 a strain of 0.4 (P = 0.01) to 5 (P = 0.1)."""
 

@@ -40,8 +40,12 @@ PACKING_COLUMNS = ("status", "gamma_end", "states", "complex_fraction", "pairs_m
 (no branch; no growth rate for J or without complex pairs)."""
 
 SECONDS_PER_STRAIN_N2 = 3.4
-"""A cell's shear costs about this times N^2 seconds per unit strain with full spectra (32
-disks: 21-51 s, 64 disks: 129-161 s to gamma = 0.01 at mu = 10, P = 0.1, docs/packings.md)."""
+"""A cell's shear (full spectra, scans inline) is estimated at this times N^2 seconds per unit
+strain, fitted to the shears of 2026-11-26 (d376047: 32 disks to gamma = 0.01 at mu = 10,
+P = 0.1 in 21-51 s, 64 disks in 129-161 s; the rule gives 35 and 139 s). The same shears took
+2 to 4 times less on 2026-12-02 (a18432b, inline: 9.0-17.4 s and 51-52 s): the estimate errs
+high (docs/notes/packings-speed.md, "The time estimates against the shears they were fitted
+on")."""
 
 CELL_START_SECONDS = 4.0
 """What a cell costs besides its strain: loading the kernels in a fresh worker, the preparation,

@@ -1,20 +1,20 @@
 """Rough wall time of a packing command's parts, for the estimate each prints before it starts
 (models/packing/commands.check_packing), and a run's time steps, known before any work.
 
-From the shared 2-core machine (docs/packings.md), good to a factor of 2 to 3: enough to tell
-minutes from days.
-- The preparation: 1.04 s at 256 disks, 11.6 s at 1024 (docs/packings.md, Preparation), its
-  FIRE steps growing as N^0.75 and each step as N: PREPARE_SECONDS_N1024 (N / 1024)^1.75 (4096
-  disks took 326 s on the machine busy, the rule says 131 s).
+Rules fitted to runs on the project's 2-core machine, good to a factor of 2 to 3 on those runs:
+enough to tell minutes from days (what each was fitted on, and the shears since:
+docs/notes/packings-speed.md, "The time estimates against the shears they were fitted on").
+- The preparation: PREPARE_SECONDS_N1024 (N / 1024)^1.75, its FIRE steps growing as N^0.75 and
+  each step as N; fitted to 1.04 s at 256 disks and 11.6 s at 1024
+  (docs/notes/packings-preparation.md, "Cost").
 - The shear with every eigenvalue (dense spectra; two scan workers, as bifurcate runs it):
-  DENSE_SECONDS_PER_STRAIN N^2.5 per unit strain. 32 disks to gamma = 0.01 took 12 to 25 s, 64
-  disks 74 to 86 s (docs/packings.md, Shear), 128 disks to 0.005 541 s with the machine busy
-  (about twice its quiet time); the rule gives 17, 98 and 278 s. The first 2e-3 of strain from
-  the isotropic start costs less: 256 disks took 48 s, the rule says 629 s.
-- With a spectral window, WINDOW_SECONDS_PER_STRAIN N^2.5: 256 disks to 0.05 with the window
-  [-3, 8] in about 5 minutes, 1024 disks at 4.7e5 to 5.9e5 s per unit strain ([-3, 2] to
-  0.0085, [-3, 8] to 8.4e-4); the rule gives 525 s and 3.4e5 s per unit strain. A window costs
-  more the more eigenvalues it holds.
+  SHEAR_START_SECONDS + DENSE_SECONDS_PER_STRAIN N^2.5 per unit strain, fitted to the shears of
+  2026-11-27 (d253925: 32 disks to gamma = 0.01 in 12 to 25 s, 64 disks in 74 to 86 s; the rule
+  gives 17 and 98 s besides its start). The shears of 2026-12-02 (9b7bcfe) are 2 to 5 times
+  faster, 3.3 to 7.4 s for 32 disks and 29.6 to 53.4 s for 64: this estimate errs high.
+- With a spectral window, WINDOW_SECONDS_PER_STRAIN N^2.5, fitted to 256 disks to 0.05 with the
+  window [-3, 8] in about 5 minutes (the rule: 525 s) and 1024 disks at 4.7e5 to 5.9e5 s per
+  unit strain (the rule: 3.4e5 s). A window costs more the more eigenvalues it holds.
 - A dynamics run from a state (models/packing/dynamics.py): SECONDS_PER_DISK_STEP per disk and step,
   with dt = STABLE_FRACTION 2 / omega_max and omega_max = OMEGA_MAX_OVER_OMEGA_0 omega_0
   (PackingScene.omega_0: one small disk on one contact at the typical overlap).
