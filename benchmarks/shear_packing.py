@@ -17,7 +17,8 @@ shift-invert (bifurcate --window): "collisions" and "complex" then count the win
 
 Memory: "MB" is this process's peak resident size so far and "worker MB" the largest of its
 scan workers' (both from getrusage, so a later run's figure is never below an earlier one's:
-run one N per invocation to measure its memory; the issue asks 4 GB at N = 1024).
+run one N per invocation to measure its memory; 1024 disks: docs/notes/packings-speed.md, "1024
+disks: out of reach on two cores").
 
 Run: python benchmarks/shear_packing.py [--workers K] [--progress S] [N:SEEDS:GAMMA_END[:LO:HI] ...]
      (default: 32:3:0.01 64:3:0.01)

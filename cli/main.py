@@ -61,7 +61,8 @@ def main(argv: list[str] | None = None) -> int:
     Without argv (the program itself, which exits next) every object left is frozen out of
     the garbage collector first: the interpreter's last collections would walk all the run
     made (numba's, sympy's, matplotlib's objects): the README's first command took 0.8-1.4 s
-    from its return to its exit, 0.12-0.16 s frozen (a shared 2-core machine)."""
+    from its return to its exit, 0.12-0.16 s frozen (docs/notes/chain-performance.md, "The
+    first command")."""
     code = run_command(build_parser().parse_args(argv))
     if argv is None:
         gc.freeze()

@@ -82,7 +82,8 @@ def save_json(path: Path, data) -> None:
 def save_npz(path: Path, **arrays) -> None:
     """numpy arrays as an .npz, written atomically (read back with allow_pickle=False). Not
     compressed: zlib shrank a run's floats by 23 % (trajectory.npz of --t-end 40000, 880 -> 680
-    MB) and took 42 s of the run's 50, against about 1 s to write them as they are."""
+    MB) and took 42 s of the run's 50, against about 2 s to write them as they are
+    (docs/notes/chain-dynamics.md, "Cost")."""
     import numpy as np
 
     def write(tmp: Path) -> None:

@@ -39,7 +39,8 @@ SECONDS_PER_DISK_STEP = 3.5e-8
 (benchmarks/dynamics_speed.py): what RunPlan.seconds and run_seconds estimate a run with."""
 SECONDS_PER_FRAME = 3.8e-6
 """Summary, trajectory.npz and run.png per recorded frame at N = 10: 1.7, 1.9 and 1.7 s, 5.3 s
-in all, for the 1.4e6 frames of a run to t = 40000 at F_x = 0.09 (2 busy cores)."""
+in all, for the 1.4e6 frames of a run to t = 40000 at F_x = 0.09 (2 busy cores;
+docs/notes/chain-dynamics.md, "Cost")."""
 OMEGA_MAX_OVER_Y = 1.7
 """omega_max of M^-1 J over the substrate's y-mode sqrt(3/2 k_n delta_w^(1/2) / m), which sets
 a run's step: 17.8 against 10.5 on the paper's branch at N = 10 .. 100."""

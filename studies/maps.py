@@ -109,7 +109,8 @@ def cell_seconds(scene: Scene, params: MapParams) -> float:
     """Rough wall time of one cell in its worker [s]: the sweep (models.chain.cost) and, with
     slide runs, per window the sweep to its midpoint and the run's steps (dynamics.simulate:
     SECONDS_PER_DISK_STEP, dt = DT_FRACTION 2 / omega_max). Within a factor of 2 of the cells
-    of N = 10 .. 40 timed for docs/maps.md; for the estimate `map` prints before it starts."""
+    of N = 10 .. 40 timed on 2026-11-24 (docs/notes/maps-cost.md, "The estimate printed
+    first"); for the estimate `map` prints before it starts."""
     from diskfriction.models.chain.cost import sweep_seconds
     from diskfriction.dynamics.simulate import run_seconds
 

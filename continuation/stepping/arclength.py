@@ -389,7 +389,7 @@ def _moved(problem: Problem, end: Sample, x: Array, t: Optional[Array]) -> Sampl
     """The end sample at x, where the matrix its spectrum is computed from is the same (a
     commit that changed the state but not that matrix: a packing's loose disks giving way, a
     capped history): its spectrum kept, with the slopes along t (None: a sample without
-    slopes) on the side of the next step (docs/continuation.md, Stepping, "Commit";
+    slopes) on the side of the next step (docs/continuation.md, Stepping;
     docs/notes/core-stepping.md, "Re-solving after a commit only where the matrix changed")."""
     if t is None:
         return end.moved(x)

@@ -103,7 +103,7 @@ WINDOW_MARGIN, WINDOW_EXTRA = 1.2, 4
 within its reach there, plus WINDOW_EXTRA (window.SpectralWindow's margin and extra; the
 chain's are 1.5 and 8): a window sample costs about as k, and where shear softens the low
 spectrum and the window crowds, it is sized anew and the run goes on (models/packing/shear.py;
-docs/notes)."""
+measured in docs/notes/packings-speed.md, "What made the shear faster")."""
 
 SLIP_BAND = 1e-3
 """A contact that the cap held at a commit is sliding while its history lies within this
@@ -119,7 +119,7 @@ LINEAR_SOLVER = LinearSolver("MMD_AT_PLUS_A")
 """How a shear's bordered systems are solved (ShearParams.linear_solver): SuperLU's LU ordered
 by minimum degree on the pattern of A + A^T (the contact network's Jacobian is structurally
 symmetric), with partial pivoting: about half the fill of its default ordering (COLAMD) on the
-corrector's matrices (docs/notes)."""
+corrector's matrices (docs/notes/packings-speed.md, "What made the shear faster")."""
 
 
 class NotJammed(OneLineError):

@@ -3,8 +3,8 @@ PRL 97, 170201 (2006)): damped molecular dynamics that steers the velocity towar
 and restarts from rest whenever it goes uphill. Generic over plain numpy arrays; the force is
 any Python callable. The step itself is compiled (fire_update, max_row_force): with numpy,
 max_row_force alone took 5.7 microseconds and each of the step's sums about 2 at 256 sheared
-disks, whose relaxation step now takes 48 microseconds in all (74 before, with the separate
-kernel calls that models/packing/plastic.py has merged since).
+disks, whose relaxation step takes 48 microseconds in all (docs/notes/packings-plastic-events.md,
+"FIRE's time step from the state's stiffest mode").
 
 One step, with unit masses (semi-implicit Euler, the velocity mixed before the drift):
     P = F . v

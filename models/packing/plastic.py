@@ -47,8 +47,9 @@ FIRE's step is semi-implicit Euler, stable for omega dt < 2. The preparation's d
 (prepare.first_time_step, sized for the overlaps of a random start) made it about 0.75 after
 the plastic events of 256 sheared disks (seed 1): their first 30 relaxations took 456 344
 steps with it, one of them failing (stuck at max |F| = 9.8e-6), against 159 271 with this
-rule, none failing (docs/notes/packings-plastic-events.md; the two rules alone, on
-the same compiled step: benchmarks/plastic_relaxations.py)."""
+rule, none failing (docs/notes/packings-plastic-events.md, "FIRE's time step from the state's
+stiffest mode"; the two rules alone, on the same compiled step:
+benchmarks/plastic_relaxations.py)."""
 
 ATTEMPTS = 3
 """Relaxations tried from the same state, each with half the last one's time step, before

@@ -109,8 +109,8 @@ def render(ctx):
                     f"(h = {j['steps'][best[2]]:g}, order 2) and {j['fd4_error'][best[4]]:.1e} "
                     f"(h = {j['steps'][best[4]]:g}, order 4), at {np.median(j['fd2_seconds']) * 1e3:.1f} "
                     f"and {np.median(j['fd4_seconds']) * 1e3:.1f} ms. Reference: the generated J, "
-                    f"itself within 3e-10 of a 50-digit reference (README, "
-                    f"benchmarks/jacobian_accuracy.py). Steps larger than an overlap cross the "
+                    f"itself within 3e-10 of a 50-digit reference (docs/chain.md, What you can "
+                    f"rely on; benchmarks/jacobian_accuracy.py). Steps larger than an overlap cross the "
                     f"contact's opening, where F is not smooth.\n")
     d = ctx.get("dynamics")
     if d is not None:

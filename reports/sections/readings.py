@@ -88,7 +88,8 @@ def render(ctx):
     text.append(table(header, rows))
     text.append("c enters only M^-1 J (I = c m R^2), so J is listed once per eps. eps = 0 starts "
                 "the branch at the singular rest state (pairs at delta = 0, N rolling modes), "
-                "eps > 0 at a regular one with every pair compressed (docs/continuation.md). "
+                "eps > 0 at a regular one with every pair compressed (docs/chain.md, The "
+                "equilibrium branch). "
                 "'Second pair' reads: a pair present at 0.083 was born after 0.04 (tracked "
                 "eigenvalue followed back to where it was last real). Im claims: within a factor "
                 f"{A.FACTOR:g} of the paper's value, in each matrix's paper unit.\n")
