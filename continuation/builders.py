@@ -97,7 +97,7 @@ REMOVED_HOOKS = {
     "dense_spectra": "Options(eigensolver=DenseSpectra(device))",
     "widen_window": "Options(eigensolver=SpectralWindow(lo, hi, ...)), widened by the run itself",
     "stability_blocks": "stability_structure(u, p) -> StructuredMatrix(A, block_size=...)",
-    "spectrum_matrix": "stability_structure(u, p) -> StructuredMatrix(A, spectrum_matrix=...)",
+    "spectrum_matrix": "stability_structure(u, p) -> a StructuredMatrix subclass whose spectrum_matrix property gives it",
     "deflated": "stability_structure(u, p) -> StructuredMatrix(A, deflated=...)",
     "factor_options": "Options(linear_solver=LinearSolver(ordering))",
 }
