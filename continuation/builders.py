@@ -95,7 +95,7 @@ REMOVED_HOOKS = {
     "eigensystem": "Options(eigensolver=DenseSpectra() | RefinedSpectra() | SpectralWindow(...))",
     "spectrum": "Options(eigensolver=...)",
     "dense_spectra": "Options(eigensolver=DenseSpectra(device))",
-    "widen_window": "Options(eigensolver=SpectralWindow(lo, hi, ...)), widened by the run itself",
+    "widen_window": "Options(eigensolver=SpectralWindow(lo, hi, ...)); solve_in_runs widens a crowded one",
     "stability_blocks": "stability_structure(u, p) -> StructuredMatrix(A, block_size=...)",
     "spectrum_matrix": "stability_structure(u, p) -> a StructuredMatrix subclass whose spectrum_matrix property gives it",
     "deflated": "stability_structure(u, p) -> StructuredMatrix(A, deflated=...)",
