@@ -1,18 +1,22 @@
-"""verify.png: which windows of the bifurcation diagram slide, and the growth rates measured
-against the spectrum's (`diskfriction verify`, rows of studies.verify.window_run).
+"""What `diskfriction verify` shows: verify.png, which windows of the bifurcation diagram slide
+and the growth rates measured against the spectrum's (rows of studies.verify.window_run), and
+verify.md, the table of a chain's windows or of a packing's runs.
 
 Paper units (reports/units.py): eigenvalues of the windows' matrix in its paper unit, growth
-rates in 1/tau, F_x as the paper quotes it. Plots only: no physics.
+rates in 1/tau, F_x as the paper quotes it; the tables in raw units. Plots and tables only: no
+physics.
 """
 from __future__ import annotations
 
+import collections
+import math
 from pathlib import Path
 
 import numpy as np
 
 from diskfriction.continuation.branch import Branch
 from diskfriction.reports.bifurcation import draw_spectrum
-from diskfriction.reports.figures import (OUTCOME_STYLE, legend, new_figure, outcome_patches,
+from diskfriction.reports.figures import (OUTCOME_STYLE, legend, new_figure, outcome_patches, slid_word,
                                           save_figure)
 from diskfriction.reports.units import F_X_LABEL, PaperUnits
 from diskfriction.scenes import Scene
@@ -96,3 +100,50 @@ def plot_verify(branch: Branch, rows: list[dict], scene: Scene, t_end: float,
     legend(top, handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     fig.subplots_adjust(left=0.08, right=0.68, bottom=0.08, top=0.95, hspace=0.08)
     save_figure(fig, path)
+
+
+def verify_table(rows: list[dict], matrix: str) -> str:
+    """Markdown table of a chain's verify rows (raw units); slid reads yes, no or not resolved."""
+    fmt = lambda v: "-" if v is None else f"{v:.4g}"
+    lines = [f"Windows of {matrix}; sigma from M^-1 J (raw 1/time); M in raw length^2.", "",
+             "| window F_x | pairs | F_x | sigma predicted | sigma measured | max M | slid |",
+             "|---|---|---|---|---|---|---|"]
+    for r in rows:
+        a, b = r["window"]
+        lines.append(f"| {a:.5f} .. {b:.5f} | {r['complex_pairs']} | {r['F_x']:.5f} | "
+                     f"{fmt(r['sigma_predicted'])} | {fmt(r['sigma_measured'])} | {fmt(r['M_max'])} | "
+                     f"{slid_word(r['slid'])} |")
+    return "\n".join(lines) + "\n"
+
+
+def packing_verify_table(rows: list[dict]) -> str:
+    """Markdown table of a packing's verify runs (raw units)."""
+    lines = ["Runs from states of the shear branch; sigma = |Im sqrt(lambda)| of M^-1 J (raw "
+             "1/time); distance mass-weighted, raw.", "",
+             "| gamma | pairs | perturbation | sigma predicted | sigma measured | distance at "
+             "the end | slid | at rest: d sigma_xy / sigma_xy | at rest: largest move [R] | "
+             "at rest: contacts opened / formed | outcome |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines += [f"| {r['gamma']:.6g} | {r['complex_pairs']} | {r['perturbation']} | "
+              f"{r['sigma_predicted']:.4g} | {shown(r['sigma_measured'], '.4g')} | {r['distance_end']:.3g} | "
+              f"{'yes' if r['slid'] else 'no'} | {shown(r['stress_change_at_rest'], '.2e')} | "
+              f"{shown(r['moved_at_rest'], '.2e')} | {opened_formed(r)} | {r['outcome']} |" for r in rows]
+    lines.append("")
+    for kind, label in (("eigenvector", "complex pairs"), ("random-velocity", "real states")):
+        outcomes = collections.Counter(r["outcome"] for r in rows if r["perturbation"] == kind)
+        if outcomes:
+            lines.append(f"Runs from {label}: " + ", ".join(
+                f"{n} {what}" for what, n in sorted(outcomes.items())) + ".")
+    return "\n".join(lines) + "\n"
+
+
+def shown(value, spec: str) -> str:
+    """A number of the table in `spec`, '-' for none (None or nan)."""
+    return "-" if value is None or math.isnan(value) else format(value, spec)
+
+
+def opened_formed(row: dict) -> str:
+    """'opened / formed' at rest, '-' where the relaxation failed."""
+    if row["contacts_opened_at_rest"] is None:
+        return "-"
+    return f"{row['contacts_opened_at_rest']} / {row['contacts_formed_at_rest']}"

@@ -280,7 +280,7 @@ def verify(args: argparse.Namespace, scene: Scene) -> int:
     from diskfriction.dynamics.stepper import load_stepper
     from diskfriction.studies.verify import verify_windows
     from diskfriction.files import save_json, save_text
-    from diskfriction.reports.verify import plot_verify
+    from diskfriction.reports.verify import plot_verify, verify_table
     from diskfriction.symbolic import System
 
     progress = Progress("verify")
@@ -292,7 +292,7 @@ def verify(args: argparse.Namespace, scene: Scene) -> int:
                                           progress.part("windows"))
         except (EquilibriumError, ContinuationError) as error:  # the branch cannot start
             raise CommandError(f"verify error: {scene.source}: {error}", EXIT_FAILED) from None
-        table = format_table(rows, matrix)
+        table = verify_table(rows, matrix)
         progress.stage(f"writing {out}/verify.json, verify.md, verify.png")
         save_json(out / "verify.json", rows)
         save_text(out / "verify.md", table)
@@ -302,22 +302,6 @@ def verify(args: argparse.Namespace, scene: Scene) -> int:
     print(table, end="")
     print(f"wrote {out}/verify.json, verify.md, verify.png")
     return 0
-
-
-def format_table(rows: list[dict], matrix: str) -> str:
-    """Markdown table of the verify rows (raw units); slid reads yes, no or not resolved."""
-    from diskfriction.reports.figures import slid_word
-
-    fmt = lambda v: "-" if v is None else f"{v:.4g}"
-    lines = [f"Windows of {matrix}; sigma from M^-1 J (raw 1/time); M in raw length^2.", "",
-             "| window F_x | pairs | F_x | sigma predicted | sigma measured | max M | slid |",
-             "|---|---|---|---|---|---|---|"]
-    for r in rows:
-        a, b = r["window"]
-        lines.append(f"| {a:.5f} .. {b:.5f} | {r['complex_pairs']} | {r['F_x']:.5f} | "
-                     f"{fmt(r['sigma_predicted'])} | {fmt(r['sigma_measured'])} | {fmt(r['M_max'])} | "
-                     f"{slid_word(r['slid'])} |")
-    return "\n".join(lines) + "\n"
 
 
 def report(args: argparse.Namespace, files: list, scenes: list) -> int:

@@ -11,9 +11,7 @@ and a DIR holding another scene's files is refused."""
 from __future__ import annotations
 
 import argparse
-import collections
 import dataclasses
-import math
 import shutil
 import sys
 import time
@@ -282,6 +280,7 @@ def verify(args: argparse.Namespace, scene: PackingScene) -> int:
     from diskfriction.models.packing.runs import linearized, run_from_state
     from diskfriction.models.packing.shear import ShearParams
     from diskfriction.reports.packing_outputs import scene_record
+    from diskfriction.reports.verify import packing_verify_table
 
     progress = Progress("verify")
     try:
@@ -320,39 +319,6 @@ def verify(args: argparse.Namespace, scene: PackingScene) -> int:
         print(line, file=sys.stderr)
     print(f"wrote {out}/verify.json, verify.md")
     return 0
-
-
-def packing_verify_table(rows: list[dict]) -> str:
-    """Markdown table of a packing's verify runs (raw units)."""
-    lines = ["Runs from states of the shear branch; sigma = |Im sqrt(lambda)| of M^-1 J (raw "
-             "1/time); distance mass-weighted, raw.", "",
-             "| gamma | pairs | perturbation | sigma predicted | sigma measured | distance at "
-             "the end | slid | at rest: d sigma_xy / sigma_xy | at rest: largest move [R] | "
-             "at rest: contacts opened / formed | outcome |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
-    lines += [f"| {r['gamma']:.6g} | {r['complex_pairs']} | {r['perturbation']} | "
-              f"{r['sigma_predicted']:.4g} | {shown(r['sigma_measured'], '.4g')} | {r['distance_end']:.3g} | "
-              f"{'yes' if r['slid'] else 'no'} | {shown(r['stress_change_at_rest'], '.2e')} | "
-              f"{shown(r['moved_at_rest'], '.2e')} | {opened_formed(r)} | {r['outcome']} |" for r in rows]
-    lines.append("")
-    for kind, label in (("eigenvector", "complex pairs"), ("random-velocity", "real states")):
-        outcomes = collections.Counter(r["outcome"] for r in rows if r["perturbation"] == kind)
-        if outcomes:
-            lines.append(f"Runs from {label}: " + ", ".join(
-                f"{n} {what}" for what, n in sorted(outcomes.items())) + ".")
-    return "\n".join(lines) + "\n"
-
-
-def shown(value, spec: str) -> str:
-    """A number of the table in `spec`, '-' for none (None or nan)."""
-    return "-" if value is None or math.isnan(value) else format(value, spec)
-
-
-def opened_formed(row: dict) -> str:
-    """'opened / formed' at rest, '-' where the relaxation failed."""
-    if row["contacts_opened_at_rest"] is None:
-        return "-"
-    return f"{row['contacts_opened_at_rest']} / {row['contacts_formed_at_rest']}"
 
 
 def sheared(scene: PackingScene, progress: Progress, asked: float | None = None):

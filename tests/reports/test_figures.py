@@ -142,11 +142,11 @@ def test_verify_figure_shades_each_window_by_its_runs_outcome(axes):
 
 
 def test_slid_none_reads_not_resolved():
-    from diskfriction.models.chain.commands import format_table
+    from diskfriction.reports.verify import verify_table
     from diskfriction.reports.figures import slid_word
 
     assert [slid_word(s) for s in (True, False, None)] == ["yes", "no", "not resolved"]
-    lines = format_table(verify_rows(), "J").splitlines()
+    lines = verify_table(verify_rows(), "J").splitlines()
     assert [line.rsplit("|", 2)[1].strip() for line in lines[4:]] == ["no", "yes", "not resolved", "yes"]
 
 
