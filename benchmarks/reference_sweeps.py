@@ -3,9 +3,11 @@
 Run: python benchmarks/reference_sweeps.py --save FILE   (before a change)
      python benchmarks/reference_sweeps.py --compare FILE (after it)
 Each case is the installed `diskfriction bifurcate` as a user runs it (so that moving modules
-does not move the harness), with scans inline (--workers 0: bit-for-bit reproducible). Saved per
-case: every collision (F_x or p, kind, lambda) and the branch's F_x, n_complex and eigenvalue
-arrays. --compare prints, per case, whether the counts are equal and the largest differences of
+does not move the harness), with scans inline (--workers 0: bit-for-bit reproducible): nine
+sweeps of chains, two problems of the gallery and two packing shears (32 disks with every
+eigenvalue through 3 plastic events; 64 disks with a spectral window). Saved per case: every
+collision (p, kind, lambda) and the branch's parameter (F_x, gamma or p), n_complex and
+eigenvalue arrays. --compare prints, per case, whether the counts are equal and the largest differences of
 the collision locations and of the eigenvalues relative to max|lambda| (by label, and as each
 point's set: which real eigenvalue continues which label after a collision may rest on
 rounding), then a verdict: bit for bit, within 1e-12 (as sets: the labels that differ are
@@ -29,7 +31,9 @@ COMMAND = Path(sys.executable).with_name("diskfriction")
 TOLERANCE = 1e-12
 SCENES = {"N20-eps1e-4": "[disks]\nN = 20\neps = 1e-4\n",
           "N100": "[disks]\nN = 100\n",
-          "N100-eps1e-4": "[disks]\nN = 100\neps = 1e-4\n"}
+          "N100-eps1e-4": "[disks]\nN = 100\neps = 1e-4\n",
+          "packing-32": 'geometry = "packing"\n[packing]\nN = 32\n[shear]\ngamma = [0.0, 0.01]\n',
+          "packing-64": 'geometry = "packing"\n[packing]\nN = 64\nseed = 2\n[shear]\ngamma = [0.0, 0.004]\n'}
 CASES = {
     "paper J": ["scenes/paper.toml"],
     "paper M^-1J": ["scenes/paper.toml", "--matrix", "M^-1J"],
@@ -42,6 +46,8 @@ CASES = {
     "N = 100, eps = 1e-4": ["@N100-eps1e-4"],
     "Ziegler": ["--problem", "examples/ziegler.py"],
     "Beck": ["--problem", "examples/beck.py"],
+    "packing 32 to gamma 0.01": ["@packing-32"],
+    "packing 64 to gamma 0.004, window -3:8": ["@packing-64", "--window=-3:8"],
 }
 
 
