@@ -262,6 +262,45 @@ def recorded(branch: Branch, records: Sequence[Mapping[str, Any]]) -> Branch:
     return replace(branch, columns=columns, residual=residual)
 
 
+class JoinedRuns:
+    """The rows of runs (branches of solve_in_runs, a model's legs or segments) joined into one
+    branch, in order: the per-point lists, the columns, each row's block (its run's number,
+    for a windowed branch's block_columns), {block: its rows' Branch.continued}, the
+    collisions with their rows renumbered, and the contact events."""
+
+    def __init__(self) -> None:
+        self.p, self.u, self.residual, self.eigenvalues, self.condition = [], [], [], [], []
+        self.columns: dict[str, list] = {}
+        self.blocks: list[int] = []
+        self.continued: dict[int, list] = {}
+        self.collisions: list = []
+        self.events = 0
+
+    def __len__(self) -> int:
+        return len(self.p)
+
+    def add(self, run: Branch, block: int, skip: int, collisions: bool = True,
+            continued: bool = True) -> int:
+        """Append `run`'s rows from `skip` (1 where its first point is the last one kept) as
+        `block`; its collisions unless not `collisions`, its continued rows unless not
+        `continued`. Returns the row offset: the run's row k is the joined row offset + k."""
+        offset = len(self.p) - skip
+        self.p += list(run.p[skip:])
+        self.u += list(run.u[skip:])
+        self.residual += list(run.residual[skip:])
+        for name, column in run.columns.items():
+            self.columns.setdefault(name, []).extend(column[skip:])
+        self.eigenvalues += list(run.eigenvalues[skip:])
+        self.condition += list(run.condition[skip:])
+        self.blocks += [block] * (len(run) - skip)
+        if continued:
+            self.continued.setdefault(block, []).extend(run.continued[skip:])
+        if collisions:
+            self.collisions += [replace(c, step=offset + c.step) for c in run.collisions]
+        self.events += run.events
+        return offset
+
+
 class BranchRecorder:
     """Accumulates the accepted points of a run (arclength.continuation) and builds the Branch:
     rel_tol, the complex-pair threshold (tracking.count_complex_pairs); rho, the certification

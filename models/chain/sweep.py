@@ -23,7 +23,7 @@ from typing import Callable, Optional
 import numpy as np
 
 from diskfriction.continuation.api import Options, solve_in_runs
-from diskfriction.continuation.branch import Branch, Piece, column_of
+from diskfriction.continuation.branch import Branch, JoinedRuns, Piece, column_of
 from diskfriction.models.chain.equilibria import DiskEquilibria, relax
 from diskfriction.continuation.spectra.window import SpectralWindow, block_columns
 from diskfriction.continuation.spectra.tracking import count_complex_pairs, match_eigenvalues
@@ -111,44 +111,31 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
     def callback_of(run):  # progress once per point: a later leg's first is the last one's
         if progress is None:
             return None
-        return lambda k, F_x, q_k, eigvals: None if k == 0 and F_x_all else progress(F_x)
+        return lambda k, F_x, q_k, eigvals: None if k == 0 and len(rows) else progress(F_x)
 
-    F_x_all, q_all, residual, columns, eig, condition, blocks = [], [], [], {}, [], [], []
-    collisions, continued, pieces, ended, events, widenings, blocks_used = [], {}, [], {}, 0, 0, 0
+    rows, pieces, ended, widenings, blocks_used = JoinedRuns(), [], {}, 0, 0
     F_start = F_1
     for leg, _, b in legs:
         b = max(b, F_1)  # unloading ends where loading started: F_x = 0 is the singular rest state
         ds = min(F_1, ds_max) if leg == legs[0][0] else ds_max / 2  # graded away from rest
         options = replace(params, ds_max=ds_max, ds=ds, ds_min=min(params.ds_min, ds), eigensolver=eigensolver)
-        first, base = len(F_x_all), max(blocks_used - 1, 0)  # a leg continues the last block
+        first, base = len(rows), max(blocks_used - 1, 0)  # a leg continues the last block
         runs, widened, eigensolver = solve_in_runs(problem, problem.q_c, (F_start, b), options, callback_of,
                                                    record, problem.committed)
         for run, branch in enumerate(runs):  # a run after the first follows a widened window
-            skip = int(run > 0 or first > 0)  # its first point is the last one recorded
             if run == 0 and first > 0:
-                branch = _continue_leg(eig[first - 1], branch)
-            offset = len(F_x_all) - skip  # the run's row k is the branch's row offset + k
-            F_x_all += list(branch.p[skip:])
-            q_all += list(branch.u[skip:])
-            residual += list(branch.residual[skip:])
-            for name, column in branch.columns.items():
-                columns.setdefault(name, []).extend(column[skip:])
-            eig += list(branch.eigenvalues[skip:])
-            condition += list(branch.condition[skip:])
-            blocks += [base + run] * (len(branch) - skip)
+                branch = _continue_leg(rows.eigenvalues[first - 1], branch)
+            # its first point is the last one recorded; the preparation leg's collisions are not the sweep's
+            rows.add(branch, base + run, skip=int(run > 0 or first > 0), collisions=leg == 1,
+                     continued=window is not None)
             ended[base + run] = branch.status
-            if window is not None:
-                continued.setdefault(base + run, []).extend(branch.continued[skip:])
-            events += branch.events
-            if leg == 1:
-                collisions += [replace(c, step=offset + c.step) for c in branch.collisions]
         blocks_used, widenings, status = base + len(runs), widenings + widened, runs[-1].status
-        pieces.append(Piece("leg", leg, first, len(F_x_all), status))
+        pieces.append(Piece("leg", leg, first, len(rows), status))
         F_start = float(runs[-1].p[-1])
         if not status.reached:
             break  # a leg that ended short: the next would start from a load never asked for
-    columns = {name: column_of(values) for name, values in columns.items()}
-    blocks = np.array(blocks)
+    columns = {name: column_of(values) for name, values in rows.columns.items()}
+    blocks, eig, condition, collisions = np.array(rows.blocks), rows.eigenvalues, rows.condition, rows.collisions
     pieces += [Piece("run", int(b), int(on[0]), int(on[-1]) + 1, ended[b])
                for b in np.unique(blocks) for on in [np.flatnonzero(blocks == b)]]
     rel_tol = params.detection.rel_tol
@@ -158,9 +145,9 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
     else:  # the pairs in the window; collisions with their double eigenvalue there
         n_complex = np.array([count_complex_pairs(e[window.inside(e)], rel_tol) for e in eig])
         collisions = [c for c in collisions if window.lo <= c.eigenvalue <= window.hi]
-        eig, condition = block_columns(eig, blocks, continued, window, condition)
-    return Branch(np.array(F_x_all), np.array(q_all), eig, n_complex, np.array(residual), tuple(collisions),
-                  status, condition, columns, tuple(pieces), events=events, window=params.window,
+        eig, condition = block_columns(eig, blocks, rows.continued, window, condition)
+    return Branch(np.array(rows.p), np.array(rows.u), eig, n_complex, np.array(rows.residual), tuple(collisions),
+                  status, condition, columns, tuple(pieces), events=rows.events, window=params.window,
                   widenings=widenings, parameter="F_x", units="force", state="q", matrix=matrix,
                   eigenvalue_units=EIGENVALUE_UNITS[matrix])
 

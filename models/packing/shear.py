@@ -10,7 +10,7 @@ from typing import Callable, Optional, Sequence
 import numpy as np
 
 from diskfriction.continuation.api import Options, solve_in_runs
-from diskfriction.continuation.branch import Branch, Piece, StopCode, column_of
+from diskfriction.continuation.branch import Branch, JoinedRuns, Piece, StopCode, column_of
 from diskfriction.continuation.spectra.tracking import count_complex_pairs
 from diskfriction.continuation.linalg.solves import LinearSolver
 from diskfriction.continuation.spectra.window import SpectralWindow, block_columns
@@ -167,24 +167,13 @@ def shear_segment(network: Network, mass: np.ndarray, scene: PackingScene, optio
 
     runs, widened, _ = solve_in_runs(problem, q, (gamma_start, scene.gamma_range[1]), options,
                                      callback_of, record, problem.committed)
-    gamma, qs, residual, columns, eig, kappas, blocks, collisions = [], [], [], {}, [], [], [], []
-    continued, pieces, events = {}, [], 0
+    rows, pieces = JoinedRuns(), []
     for run, branch in enumerate(runs):  # a run after the first follows a widened window
         skip = int(run > 0)  # its first point is the last one's
-        offset = len(gamma) - skip  # the run's row k is the segment's row offset + k
-        gamma += list(branch.p[skip:])
-        qs += list(branch.u[skip:])
-        residual += list(branch.residual[skip:])
-        for name, column in branch.columns.items():
-            columns.setdefault(name, []).extend(column[skip:])
-        eig += list(branch.eigenvalues[skip:])
-        kappas += list(branch.condition[skip:])
-        blocks += [base + run] * (len(branch) - skip)
-        continued[base + run] = branch.continued if run == 0 else branch.continued[1:]
-        pieces.append(Piece("run", base + run, offset + skip, len(gamma), branch.status))
-        collisions += [replace(c, step=offset + c.step) for c in branch.collisions]
-        events += branch.events
-    columns = {name: column_of(values, name in RAGGED) for name, values in columns.items()}
+        offset = rows.add(branch, base + run, skip, continued=window is not None)
+        pieces.append(Piece("run", base + run, offset + skip, len(rows), branch.status))
+    columns = {name: column_of(values, name in RAGGED) for name, values in rows.columns.items()}
+    eig, kappas, collisions = rows.eigenvalues, rows.condition, rows.collisions
     rel_tol = options.detection.rel_tol
     if window is None:
         eig, condition = np.array(eig), np.array(kappas)
@@ -193,12 +182,12 @@ def shear_segment(network: Network, mass: np.ndarray, scene: PackingScene, optio
         band = SpectralWindow(*window)
         n_complex = np.array([count_complex_pairs(e[band.inside(e)], rel_tol) for e in eig])
         collisions = [c for c in collisions if band.lo <= c.eigenvalue <= band.hi]
-        eig, condition = block_columns(eig, np.array(blocks), continued, band, kappas)
+        eig, condition = block_columns(eig, np.array(rows.blocks), rows.continued, band, kappas)
     status = runs[-1].status
     matrix = Matrix(scene.matrix)
-    return Branch(np.array(gamma), np.array(qs), eig, n_complex, np.array(residual), tuple(collisions), status,
-                  condition, columns, (Piece("segment", index, 0, len(gamma), status), *pieces),
-                  {"plastic": ()}, events=events, window=window, widenings=widened,
+    return Branch(np.array(rows.p), np.array(rows.u), eig, n_complex, np.array(rows.residual), tuple(collisions),
+                  status, condition, columns, (Piece("segment", index, 0, len(rows), status), *pieces),
+                  {"plastic": ()}, events=rows.events, window=window, widenings=widened,
                   parameter="gamma", units="", state="q", matrix=matrix,
                   eigenvalue_units=EIGENVALUE_UNITS[matrix])
 
