@@ -128,6 +128,16 @@ class Piece:
 
 
 @dataclass(frozen=True)
+class EventPoint:
+    """A point of a branch where a step was cut at an event of the problem
+    (Problem.event_functions: for the disks, a contact opening or closing, starting or ending
+    to hold its disk, reaching its Coulomb cap or sticking again): p there, and its row."""
+
+    p: float
+    row: int
+
+
+@dataclass(frozen=True)
 class Branch:
     """Accepted points k = 0..m-1 of a branch G(u, p) = 0: one record for every problem (a run
     of the core, a chain's sweep in F_x, a packing's shear in gamma, a problem file's).
@@ -153,9 +163,11 @@ class Branch:
     Labelled points, in branch order: collisions (Collision: the located births and deaths of
     complex pairs; with a window, those with the double eigenvalue in it; step, the row that
     starts the step holding it), and labelled {label: records with a location p or gamma}:
-    a packing's "plastic" events (models/packing/plastic.PlasticEvent), a problem's "fold",
-    "branch" and "hopf" points (bifurcations.SpecialPoint); events: how many steps were cut at
-    an event of the problem (a contact opening, closing or reaching the Coulomb cap).
+    "event", the points where a step was cut at an event of the problem (EventPoint: for the
+    disks a contact event), a packing's "plastic" events (models/packing/plastic.PlasticEvent),
+    a problem's "fold", "branch" and "hopf" points (bifurcations.SpecialPoint); events: how
+    many steps were cut at an event (one per "event" point, and a last step whose commit found
+    no equilibrium).
     The run: status, why it stopped (a Stop; a joined branch's last piece's); warnings; window
     (lo, hi) of Re lambda tracked, or None (every eigenvalue); widenings: how often the window
     crowded and was sized anew.
@@ -266,7 +278,7 @@ class JoinedRuns:
     """The rows of runs (branches of solve_in_runs, a model's legs or segments) joined into one
     branch, in order: the per-point lists, the columns, each row's block (its run's number,
     for a windowed branch's block_columns), {block: its rows' Branch.continued}, the
-    collisions with their rows renumbered, and the contact events."""
+    collisions and event points with their rows renumbered, and the count of events."""
 
     def __init__(self) -> None:
         self.p, self.u, self.residual, self.eigenvalues, self.condition = [], [], [], [], []
@@ -274,6 +286,7 @@ class JoinedRuns:
         self.blocks: list[int] = []
         self.continued: dict[int, list] = {}
         self.collisions: list = []
+        self.event_points: list[EventPoint] = []
         self.events = 0
 
     def __len__(self) -> int:
@@ -297,6 +310,8 @@ class JoinedRuns:
             self.continued.setdefault(block, []).extend(run.continued[skip:])
         if collisions:
             self.collisions += [replace(c, step=offset + c.step) for c in run.collisions]
+        self.event_points += [EventPoint(e.p, offset + e.row) for e in run.labelled.get("event", ())
+                              if e.row >= skip]
         self.events += run.events
         return offset
 
@@ -314,6 +329,7 @@ class BranchRecorder:
         self.warnings: list = []
         self.events = 0
         self.continued: list[Array] = []
+        self.event_rows: list[int] = []
         self.last: Optional[Sample] = None
 
     @property
@@ -321,13 +337,16 @@ class BranchRecorder:
         return len(self.rows) - 1
 
     def add(self, sample: Sample, ds: float, newton: NewtonResult, t: Array, solves: int,
-            tracked: Optional[Array] = None) -> None:
-        """Record an accepted point (with a spectral window, Branch.continued too)."""
+            tracked: Optional[Array] = None, event: bool = False) -> None:
+        """Record an accepted point (with a spectral window, Branch.continued too); event: its
+        step was cut at an event of the problem."""
         u, p = sample.x[:-1].copy(), float(sample.x[-1])
         kappa = (np.full(sample.eigvals.size, np.nan) if sample.system is None
                  else condition_numbers(sample.system))
         self.rows.append((p, u, sample.eigvals, count_complex_pairs(sample.eigvals, self.rel_tol),
                           ds, newton.iterations, newton.residual, t, solves, kappa))
+        if event:
+            self.event_rows.append(len(self.rows) - 1)
         if sample.disc is not None:
             self.continued.append(continued_labels(self.last, sample, tracked, self.rho))
             self.last = sample.without_vectors()
@@ -341,5 +360,6 @@ class BranchRecorder:
                       newton_iterations=np.array(cols[5]), residual=np.array(cols[6]),
                       tangent=np.array(cols[7]), detection_solves=np.array(cols[8]),
                       collisions=tuple(self.collisions), status=status, warnings=tuple(self.warnings),
+                      labelled={"event": tuple(EventPoint(float(cols[0][k]), k) for k in self.event_rows)},
                       events=self.events, continued=np.array(self.continued) if self.continued else None,
                       condition=np.array(cols[9]))

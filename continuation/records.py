@@ -16,7 +16,7 @@ from typing import Any, Optional, Sequence
 
 import numpy as np
 
-from diskfriction.continuation.branch import Branch, Piece, Stop, StopCode
+from diskfriction.continuation.branch import Branch, EventPoint, Piece, Stop, StopCode
 from diskfriction.continuation.detection.detectors import Collision
 from diskfriction.continuation.spectra.tracking import Kind
 from diskfriction.files import save_json, save_npz
@@ -188,8 +188,8 @@ def complete_arrays(branch: Branch) -> dict[str, Array]:
     """The branch as arrays that branch_of reads back value for value (no pickle): branch_arrays,
     the columns whose points differ in shape (flat, "ragged_NAME" with offsets
     "ragged_NAME_at"), the pieces (piece_*), the collisions (collision_*: the Jordan chain and
-    the state u of each too), the status, events and widenings. The labelled points are the
-    model's to write (their records are its own)."""
+    the state u of each too), the event points' rows, the status, events and widenings. The other
+    labelled points are the model's to write (their records are its own)."""
     arrays = branch_arrays(branch)
     arrays["column_names"] = np.array([n for n, c in branch.columns.items()
                                        if isinstance(c, np.ndarray)], dtype=str)
@@ -209,12 +209,15 @@ def complete_arrays(branch: Branch) -> dict[str, Array]:
         arrays[f"collision_{name}"] = np.array([getattr(c, name) for c in C])
     for name in _COLLISION_VECTORS:
         arrays[f"collision_{name}"], arrays[f"collision_{name}_at"] = _flat([getattr(c, name) for c in C])
+    if "event" in branch.labelled:
+        arrays["event_rows"] = np.array([e.row for e in branch.event], dtype=np.int64)
     arrays["events"], arrays["widenings"] = np.array(branch.events), np.array(branch.widenings)
     return arrays
 
 
 def branch_of(d: dict[str, Array], labelled: Optional[dict] = None) -> Branch:
-    """The Branch complete_arrays wrote, its labelled points `labelled` (the model's); a
+    """The Branch complete_arrays wrote, its event points and the labelled points `labelled` (the
+    model's); a
     KeyError, IndexError or ValueError for arrays that are not such a branch's."""
     parameter, state = str(d["parameter"]), str(d["state"])
     columns = {str(name): d[str(name)] for name in d["column_names"]}
@@ -237,6 +240,13 @@ def branch_of(d: dict[str, Array], labelled: Optional[dict] = None) -> Branch:
     window = tuple(float(w) for w in d["window"])
     return Branch(d[parameter], d[state], d["eigenvalues"], d["n_complex"], d["residual"], collisions,
                   _stops(d["stop"][None], d["stop_p"][None])[0], d.get("condition"), columns, pieces,
-                  labelled or {}, events=int(d["events"]), window=None if np.isnan(window).all() else window,
+                  _event_points(d, parameter) | (labelled or {}), events=int(d["events"]), window=None if np.isnan(window).all() else window,
                   widenings=int(d["widenings"]), parameter=parameter, units=str(d["units"]), state=state,
                   matrix=str(d["matrix"]), eigenvalue_units=str(d["eigenvalue_units"]))
+
+
+def _event_points(d: dict[str, Array], parameter: str) -> dict[str, tuple]:
+    """{"event": the EventPoints complete_arrays wrote}, or {} for a branch without them."""
+    if "event_rows" not in d:
+        return {}
+    return {"event": tuple(EventPoint(float(d[parameter][k]), int(k)) for k in d["event_rows"])}

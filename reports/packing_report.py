@@ -17,9 +17,9 @@ report.md with four figures:
 
 The two states (quiet_state): the state with complex pairs, and the state with every eigenvalue
 real, farthest in strain from the ends of its interval (the collisions where such states begin
-and end, a plastic event, the start or end of the shear) and from every contact event
-(contact_events) inside it. Near a fold the saddle-node's eigenvalue, going to zero, mixes into
-the dynamics, and at a contact event a contact sits at delta = 0, where its Hertz stiffness
+and end, a plastic event, the start or end of the shear) and from every contact event inside
+it (Branch.event: where a step of the shear was cut at one). Near a fold the saddle-node's
+eigenvalue, going to zero, mixes into the dynamics, and at a contact event a contact sits at delta = 0, where its Hertz stiffness
 vanishes; neither is the instability of the complex pair. A branch without one kind of state
 has no run of that kind, and report.md says so.
 """
@@ -36,7 +36,6 @@ from diskfriction.files import save_text
 from diskfriction.matrices import Matrix
 from diskfriction.models.packing.dynamics import (fastest_pair, mean_squared_displacement, simulate,
                                             time_step)
-from diskfriction.models.packing.equilibria import PackingEquilibria
 from diskfriction.models.packing.runs import linearized
 from diskfriction.models.packing.shear import shear_scene
 from diskfriction.reports.figures import new_figure, save_figure
@@ -85,9 +84,7 @@ def build_packing_report(scene: PackingScene, out: Path, plastic_events: int,
     say = progress or (lambda line: None)
     branch, network, mass = shear_scene(scene, plastic_events, say)
     sigma = np.array([fastest_pair(e)[1] for e in branch.eigenvalues])
-    say("contact events along the branch")
-    events = np.concatenate([contact_events(branch, network, mass),
-                             [e.gamma for e in branch.plastic]])
+    events = np.array([e.p for e in branch.event] + [e.gamma for e in branch.plastic])
     bounds = [c.p for c in branch.collisions]
     runs, linear = [], {}
     for label, chosen in (("complex", branch.n_complex > 0), ("real", branch.n_complex == 0)):
@@ -119,25 +116,6 @@ def build_packing_report(scene: PackingScene, out: Path, plastic_events: int,
     plot_msd(runs, scene, out / "msd.png")
     save_text(out / "report.md", report_text(scene, branch, sigma, runs))
     return ["report.md", "stress.png", "spectrum.png", "snapshot.png", "msd.png"]
-
-
-def contact_events(branch: Branch, network, mass: np.ndarray) -> np.ndarray:
-    """The strains of the states where a step of the shear ended at a contact event (a contact
-    closing or opening, starting or ending to hold its disk, reaching its Coulomb limit or
-    sticking again): an event function of the state before (PackingEquilibria.event_functions)
-    changes sign between it and the next state of its segment, and the shear cuts its step
-    exactly there."""
-    found = []
-    for k in range(1, len(branch)):
-        if branch.segment[k] != branch.segment[k - 1]:
-            continue
-        before = PackingEquilibria(network, branch.q[k - 1], branch.xi[k - 1], branch.rows[k - 1],
-                                   float(branch.gamma[k - 1]), mass)
-        g0 = before.event_functions(branch.q[k - 1], float(branch.gamma[k - 1]))
-        g1 = before.event_functions(branch.q[k], float(branch.gamma[k]))
-        if np.any(((g0 > 0) & (g1 <= 0)) | ((g0 < 0) & (g1 > 0))):
-            found.append(float(branch.gamma[k]))
-    return np.array(found)
 
 
 def quiet_state(gamma: np.ndarray, chosen: np.ndarray, segment: np.ndarray, bounds,

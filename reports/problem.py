@@ -39,10 +39,12 @@ def parameter_label(spec: BifurcationProblem) -> str:
 
 def problem_branch(result: BranchResult, spec: BifurcationProblem) -> Branch:
     """The run's branch with the problem's names (parameter, units, matrix, eigenvalue_units)
-    and its special points labelled: "fold", "branch_point", "hopf" (SPECIAL)."""
+    and its special points labelled beside its event points: "fold", "branch_point", "hopf"
+    (SPECIAL)."""
     return replace(result.branch, parameter=spec.parameter, units=spec.units, matrix=spec.matrix,
                    eigenvalue_units=spec.eigenvalue_units,
-                   labelled={label: tuple(getattr(result, name)) for label, name in SPECIAL.items()})
+                   labelled={**result.branch.labelled,
+                             **{label: tuple(getattr(result, name)) for label, name in SPECIAL.items()}})
 
 
 def special_point_record(point: SpecialPoint) -> dict:

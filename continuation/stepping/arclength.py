@@ -333,7 +333,7 @@ def _record(problem: Problem, rec: "BranchRecorder", item: _Pending, end: Sample
     now = problem.state() if after is not None and rec.callback is not None else None
     if now is not None:
         problem.restore(after)
-    rec.add(end, item.start.ds, item.step.newton, item.step.tangent, solves, tracked)
+    rec.add(end, item.start.ds, item.step.newton, item.step.tangent, solves, tracked, item.step.event)
     if now is not None:
         problem.restore(now)
 

@@ -147,7 +147,8 @@ def sweep(system: System, F_from: float, F_to: float, matrix: Optional[str] = No
         collisions = [c for c in collisions if window.lo <= c.eigenvalue <= window.hi]
         eig, condition = block_columns(eig, blocks, rows.continued, window, condition)
     return Branch(np.array(rows.p), np.array(rows.u), eig, n_complex, np.array(rows.residual), tuple(collisions),
-                  status, condition, columns, tuple(pieces), events=rows.events, window=params.window,
+                  status, condition, columns, tuple(pieces), {"event": tuple(rows.event_points)},
+                  events=rows.events, window=params.window,
                   widenings=widenings, parameter="F_x", units="force", state="q", matrix=matrix,
                   eigenvalue_units=EIGENVALUE_UNITS[matrix])
 

@@ -10,7 +10,7 @@ from typing import Callable, Optional, Sequence
 import numpy as np
 
 from diskfriction.continuation.api import Options, solve_in_runs
-from diskfriction.continuation.branch import Branch, JoinedRuns, Piece, StopCode, column_of
+from diskfriction.continuation.branch import Branch, EventPoint, JoinedRuns, Piece, StopCode, column_of
 from diskfriction.continuation.spectra.tracking import count_complex_pairs
 from diskfriction.continuation.linalg.solves import LinearSolver
 from diskfriction.continuation.spectra.window import SpectralWindow, block_columns
@@ -133,7 +133,7 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
         event = PlasticEvent(gamma_last, float(segment.stress[-1][2]), float(after),
                              float(np.linalg.norm(q - q_last)), steps, str(segment.status.code),
                              after=(q, xi, rows, gamma_start))
-        segments[-1] = segment = replace(segment, labelled={"plastic": (event,)})
+        segments[-1] = segment = replace(segment, labelled={**segment.labelled, "plastic": (event,)})
         if on_segment is not None:
             on_segment(segment)
         begin = event.after
@@ -187,7 +187,8 @@ def shear_segment(network: Network, mass: np.ndarray, scene: PackingScene, optio
     matrix = Matrix(scene.matrix)
     return Branch(np.array(rows.p), np.array(rows.u), eig, n_complex, np.array(rows.residual), tuple(collisions),
                   status, condition, columns, (Piece("segment", index, 0, len(rows), status), *pieces),
-                  {"plastic": ()}, events=rows.events, window=window, widenings=widened,
+                  {"event": tuple(rows.event_points), "plastic": ()}, events=rows.events, window=window,
+                  widenings=widened,
                   parameter="gamma", units="", state="q", matrix=matrix,
                   eigenvalue_units=EIGENVALUE_UNITS[matrix])
 
@@ -213,7 +214,9 @@ def joined(segments: Sequence[Branch], scene: PackingScene) -> Branch:
                    n_complex=np.concatenate([s.n_complex for s in segments]),
                    residual=np.concatenate([s.residual for s in segments]), collisions=tuple(kept),
                    status=segments[-1].status, columns=columns, pieces=pieces,
-                   labelled={"plastic": tuple(e for s in segments for e in s.plastic)},
+                   labelled={"event": tuple(EventPoint(e.p, int(start) + e.row)
+                                            for s, start in zip(segments, starts) for e in s.event),
+                             "plastic": tuple(e for s in segments for e in s.plastic)},
                    events=sum(s.events for s in segments),
                    widenings=sum(s.widenings for s in segments))
 

@@ -48,6 +48,19 @@ def test_contact_events_are_located_on_the_branch_to_1e_12(recorded):
     assert max(ends) <= 1e-12, ends
 
 
+def test_the_branch_records_where_its_steps_were_cut_at_contact_events(recorded):
+    """Branch.event: one point per step cut at an event (the count the run reports), in branch
+    order across segments and window runs, each at its row's strain; branch.npz holds their
+    strains (event_gamma)."""
+    from diskfriction.continuation.records import branch_arrays
+
+    branch, _ = recorded
+    rows = [e.row for e in branch.event]
+    assert len(rows) == branch.events >= 2 and rows == sorted(set(rows))
+    assert all(branch.gamma[e.row] == e.p for e in branch.event)
+    assert np.array_equal(branch_arrays(branch)["event_gamma"], [e.p for e in branch.event])
+
+
 @pytest.mark.slow
 def test_a_contact_sliding_through_steps_fires_no_event_at_their_start():
     """mu = 0.3, 24 disks, to gamma = 0.0015: contacts slide over many steps. At every commit,
