@@ -18,6 +18,13 @@ from diskfriction.scenes.rules import MAX_OVERLAP, NORMAL_LAWS, PACKING_RULES
 from diskfriction.scenes.scene import Effects, SceneValueError, _check_fields
 
 
+SPECTRA_BY_N = ((64, "full"), (256, "sample:0.0005"), (None, "none"))
+"""A packing scene's spectra "auto" by N: (most disks, choice), the first that holds. Chosen so
+that the default scene (256 disks to gamma = 0.05) finishes in minutes on 2 cores: every
+collision located costs 64 disks under a minute to gamma = 0.01 and 256 disks hours
+(docs/notes/packings-speed.md, "Spectra as a choice of the run")."""
+
+
 @dataclass(frozen=True)
 class PackingScene:
     """A packing of N disks: round(N fraction_small) of radius R, the rest of radius
@@ -28,7 +35,9 @@ class PackingScene:
     k_n delta^p with one k_n for every pair, smoothed Mindlin with k_t and mu; Effects) with
     lever arms R_i, R_j; the disks rotate. After a plastic event the packing relaxes by
     `relaxation` (models/packing/plastic.py): FIRE, or Newtonian dynamics with a drag of rate
-    damping omega_0 (omega_0: PackingScene.omega_0; `damping` is read only then)."""
+    damping omega_0 (omega_0: PackingScene.omega_0; `damping` is read only then). `spectra`
+    says what the shear computes of the spectrum of `matrix` (scenes/rules.py SPECTRA; "auto":
+    chosen from N, resolved_spectra)."""
 
     geometry: ClassVar[str] = "packing"
     """The scene file's top-level ``geometry`` (Scene.geometry)."""
@@ -48,6 +57,7 @@ class PackingScene:
     relaxation: str = "fire"
     damping: float = 0.1
     matrix: str = "M^-1 J"
+    spectra: str = "auto"
     effects: Effects = Effects(wall_friction=False)
     name: str = "packing"
     source: str = "<defaults>"
@@ -63,6 +73,10 @@ class PackingScene:
         if self.effects.conventions != "model":
             raise SceneValueError("PackingScene", ("effects",), (self.effects,),
                                   'a packing takes conventions "model" only')
+        if self.sample_spacing is not None and self.sample_spacing > self.gamma_range[1] - self.gamma_range[0]:
+            raise SceneValueError(
+                "PackingScene", ("spectra", "gamma_range"), (self.spectra, self.gamma_range),
+                "the sample grid's spacing is wider than the strain range: no two samples in it")
         try:
             overlap = self.delta_0 / self.R
         except OverflowError:
@@ -82,6 +96,20 @@ class PackingScene:
         pair = self.effects.pair_friction and self.mu > 0.0 and self.effects.tangential != "none"
         return dataclasses.replace(self.effects, pair_friction=pair, wall_friction=False,
                                    tangential=self.effects.tangential if pair else "none")
+
+    @property
+    def resolved_spectra(self) -> str:
+        """spectra with "auto" resolved from N (SPECTRA_BY_N): "none", "full" or
+        "sample:DGAMMA"."""
+        if self.spectra != "auto":
+            return self.spectra
+        return next(choice for most, choice in SPECTRA_BY_N if most is None or self.N <= most)
+
+    @property
+    def sample_spacing(self) -> float | None:
+        """DGAMMA of spectra "sample:DGAMMA" (resolved), else None."""
+        kind, _, every = self.resolved_spectra.partition(":")
+        return float(every) if kind == "sample" else None
 
     @property
     def ndof(self) -> int:

@@ -177,6 +177,31 @@ def _strain_range(value: Any) -> tuple[float, float]:
     return (start, stop)
 
 
+SPECTRA = ("auto", "none", "full", "sample:DGAMMA")
+"""What a packing's shear computes of the spectrum (PackingScene.spectra, docs/packings.md,
+Spectra): chosen from N (auto), nothing (none: equilibria, contact and plastic events, stress),
+the spectrum on the strain grid gamma = k DGAMMA (sample:DGAMMA: counts and growth rates there,
+no collision located) or at every accepted state with every collision located (full)."""
+
+
+def spectra_choice(value: Any) -> str:
+    """A packing's spectra: "auto", "none", "full" or "sample:DGAMMA" with DGAMMA a finite
+    number > 0 (stored as written, DGAMMA as repr(float))."""
+    text = expect(value, str, "a string")
+    kind, colon, every = text.partition(":")
+    if kind == "sample" and colon:
+        try:
+            spacing = float(every)
+        except ValueError:
+            spacing = math.nan
+        if not (math.isfinite(spacing) and spacing > 0.0):
+            raise Invalid(f"sample:DGAMMA needs DGAMMA a finite number > 0, not {every!r}")
+        return f"sample:{spacing!r}"
+    if text not in SPECTRA[:3]:
+        raise Invalid(f"must be one of {' | '.join(SPECTRA)}")
+    return text
+
+
 def _seed(value: Any) -> int:
     """A seed: an integer >= 0 (numpy's generators take no negative seed)."""
     seed = int(expect(value, numbers.Integral, "an integer"))
@@ -241,6 +266,7 @@ PACKING_RULES: dict[str, Rule] = {
     "relaxation": _one_of(RELAXATIONS, "relaxation"),
     "damping": POSITIVE,
     "matrix": _one_of(MATRICES, "stability matrix"),
+    "spectra": Rule(spectra_choice, " | ".join(SPECTRA)),
     "name": TEXT,
     "source": TEXT,
 }

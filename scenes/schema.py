@@ -109,6 +109,7 @@ PACKING_FIELDS = {
     "relaxation": "shear.relaxation",
     "damping": "shear.damping",
     "matrix": "stability.matrix",
+    "spectra": "stability.spectra",
 }
 PACKING_EFFECTS = {"normal": "effects.normal", "tangential": "effects.tangential"}
 PACKING_SCHEMA: dict[str, Key] = {
@@ -136,6 +137,8 @@ PACKING_SCHEMA: dict[str, Key] = {
     "effects.friction": Key(Rule(packing_friction, "[] or [\"disk-disk\"]"),
                              "where the tangential law acts"),
     "stability.matrix": SCHEMA["stability.matrix"],
+    "stability.spectra": Key(PACKING_RULES["spectra"], "what the shear computes of the spectrum "
+                                                       "(auto: chosen from N)"),
 }
 PACKING_KEYS = {**PACKING_FIELDS, **PACKING_EFFECTS}
 SCHEMAS = {"chain": SCHEMA, "packing": PACKING_SCHEMA}

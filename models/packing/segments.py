@@ -22,6 +22,7 @@ from diskfriction.continuation.branch import Branch
 from diskfriction.continuation.records import branch_of, complete_arrays
 from diskfriction.files import save_npz
 from diskfriction.models.packing.plastic import PlasticEvent
+from diskfriction.models.packing.sampled import SpectrumSample
 
 _PLASTIC_NUMBERS = ("gamma", "stress_before", "stress_after", "displacement", "steps")
 
@@ -32,10 +33,35 @@ def save_segment(path: Path, segment: Branch, key: str) -> None:
     refuses another)."""
     event, = segment.plastic
     q, xi, rows, gamma = event.after
-    save_npz(path, **complete_arrays(segment), key=np.array(key),
+    save_npz(path, **complete_arrays(segment), **_sample_arrays(segment), key=np.array(key),
              plastic=np.array([getattr(event, name) for name in _PLASTIC_NUMBERS], dtype=float),
              plastic_kind=np.array(event.kind), next_q=q, next_xi=xi, next_rows=rows,
              next_gamma=np.array(gamma))
+
+
+def _sample_arrays(segment: Branch) -> dict[str, np.ndarray]:
+    """A segment's samples (its labelled "sample", models/packing/sampled.py) as arrays: their
+    pair counts, residuals, and their eigenvalues flat with offsets (their strains are
+    complete_arrays' sample_gamma); {} without."""
+    if "sample" not in segment.labelled:
+        return {}
+    samples = segment.sample
+    offsets = np.cumsum([0] + [x.eigenvalues.size for x in samples])
+    values = [x.eigenvalues for x in samples]
+    return {"sample_n_complex": np.array([x.n_complex for x in samples], dtype=int),
+            "sample_residual": np.array([x.residual for x in samples], dtype=float),
+            "sample_offsets": offsets,
+            "sample_values": np.concatenate(values) if values else np.zeros(0, complex)}
+
+
+def _samples_of(d: dict[str, np.ndarray]) -> dict[str, tuple]:
+    """{"sample": the samples} that _sample_arrays wrote, or {}."""
+    if "sample_n_complex" not in d:
+        return {}
+    o = d["sample_offsets"]
+    return {"sample": tuple(SpectrumSample(float(g), d["sample_values"][o[i]:o[i + 1]], int(n), float(r))
+                            for i, (g, n, r) in enumerate(zip(d["sample_gamma"], d["sample_n_complex"],
+                                                               d["sample_residual"])))}
 
 
 class SegmentFileError(ValueError):
@@ -59,6 +85,6 @@ def load_segment(path: Path, key: str) -> Branch:
         after = (d["next_q"], d["next_xi"], d["next_rows"], float(d["next_gamma"]))
         event = PlasticEvent(**{**numbers, "steps": int(numbers["steps"])},
                              kind=str(d["plastic_kind"]), after=after)
-        return branch_of(d, {"plastic": (event,)})
+        return branch_of(d, {"plastic": (event,), **_samples_of(d)})
     except (KeyError, IndexError, ValueError, TypeError) as error:
         raise SegmentFileError(f"{path}: incomplete ({error})") from None

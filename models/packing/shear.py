@@ -21,6 +21,7 @@ from diskfriction.models.packing.network import Network
 from diskfriction.models.packing.plastic import PlasticEvent, drag_rate, past_fold
 from diskfriction.models.packing.prepare import Packing
 from diskfriction.models.packing.prepared import prepare_scene
+from diskfriction.models.packing.sampled import sampled_spectra, with_samples
 from diskfriction.scenes.packing import PackingScene
 
 PLASTIC = (StopCode.FOLD, StopCode.COMMIT, StopCode.DS_MIN, StopCode.TURNED_BACK)
@@ -106,7 +107,13 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
     ds_max = params.ds_max or STEP_IN_STRAIN * affine
     options = replace(params, ds_max=ds_max, ds=params.ds or ds_max / 4,
                       ds_min=params.ds_min or 1e-8 * ds_max)
-    if not network.frictional and window is None:
+    every = scene.sample_spacing
+    tracked = scene.resolved_spectra == "full"
+    if window is not None and scene.resolved_spectra == "none":
+        raise ValueError("a spectral window needs spectra \"full\" or \"sample:DGAMMA\", not \"none\"")
+    if not tracked:  # no spectrum at the accepted states: the equilibria and their events only
+        options = replace(options, detection=replace(options.detection, enabled=False, spectra=False))
+    elif not network.frictional and window is None:
         # a real spectrum (J symmetric): no collision to look for (a window's label continuity
         # is certified by the detection's scans, so they stay on there)
         options = replace(options, detection=replace(options.detection, enabled=False))
@@ -114,14 +121,19 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
     begin = segments[-1].plastic[0].after if segments else (*start(network, packing.positions), 0.0)
     while True:
         try:
-            segment = shear_segment(network, mass, scene, options, window, begin, len(segments),
-                                    sum(len(s.of_kind("run")) for s in segments), progress)
+            segment = shear_segment(network, mass, scene, options, window if tracked else None, begin,
+                                    len(segments), sum(len(s.of_kind("run")) for s in segments), progress)
         except NotJammed as error:  # at the start of a segment after a plastic event
             if not segments or error.where != "the packing":
                 raise
             raise NotJammed(error.reason, f"after the plastic event at gamma = "
                                           f"{segments[-1].plastic[0].gamma:.9g} the packing relaxed "
                                           f"into a state that") from None
+        if every is not None:
+            sampled = [x.gamma for s in segments for x in s.sample]
+            segment = with_samples(segment, sampled_spectra(
+                network, mass, segment, every, window, scene.matrix, options.newton_tol,
+                options.detection.rel_tol, sampled[-1] if sampled else -np.inf))
         segments.append(segment)
         if segment.status.code not in PLASTIC or len(segments) > plastic_events:
             break
@@ -175,7 +187,10 @@ def shear_segment(network: Network, mass: np.ndarray, scene: PackingScene, optio
     columns = {name: column_of(values, name in RAGGED) for name, values in rows.columns.items()}
     eig, kappas, collisions = rows.eigenvalues, rows.condition, rows.collisions
     rel_tol = options.detection.rel_tol
-    if window is None:
+    if not options.detection.spectra:  # none computed: no pair counted
+        eig, condition = np.zeros((len(rows), 0), complex), np.zeros((len(rows), 0))
+        n_complex = np.full(len(rows), -1)
+    elif window is None:
         eig, condition = np.array(eig), np.array(kappas)
         n_complex = np.array([count_complex_pairs(e[e != 0], rel_tol) for e in eig])
     else:  # the pairs in the window; collisions with their double eigenvalue there
@@ -216,7 +231,9 @@ def joined(segments: Sequence[Branch], scene: PackingScene) -> Branch:
                    status=segments[-1].status, columns=columns, pieces=pieces,
                    labelled={"event": tuple(EventPoint(e.p, int(start) + e.row)
                                             for s, start in zip(segments, starts) for e in s.event),
-                             "plastic": tuple(e for s in segments for e in s.plastic)},
+                             "plastic": tuple(e for s in segments for e in s.plastic),
+                             **({"sample": tuple(x for s in segments for x in s.sample)}
+                                if "sample" in first.labelled else {})},
                    events=sum(s.events for s in segments),
                    widenings=sum(s.widenings for s in segments))
 
