@@ -25,8 +25,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "rounding for the linear Mindlin law with [effects] conventions = "
                     "\"lammps\" (docs/lammps.md). Raw units.")
     add_scene_argument(lammps)
-    lammps.add_argument("--fx", type=float, required=True, metavar="F", help="load on disk 1, raw force")
-    lammps.add_argument("--t-end", type=float, required=True, metavar="T", help="duration, raw time")
+    lammps.add_argument("--fx", type=float, metavar="F", help="load on disk 1, raw force (required)")
+    lammps.add_argument("--t-end", type=float, metavar="T", help="duration, raw time (required)")
     add_start_argument(lammps, "rest")
     lammps.add_argument("--dt", type=float, default=None,
                         help="largest time step: T is split into equal steps of at most DT "
@@ -35,12 +35,18 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="steps between compared frames (default: about 1000 frames)")
     lammps.add_argument("--out", metavar="DIR",
                         help="output directory (default: out/crosscheck/SCENE)")
-    lammps.set_defaults(run=run)
+    lammps.set_defaults(run=run, usage=lammps)
 
 
 def run(args: argparse.Namespace) -> int:
+    """The scene's crosscheck: a scene of another geometry is refused first (one line), then a
+    missing --fx or --t-end as argparse refuses a missing required option (exit 2)."""
     scene = scene_from_args(args)
-    return front_for("crosscheck", scene)(args, scene)
+    front = front_for("crosscheck", scene)
+    missing = [flag for flag, value in (("--fx", args.fx), ("--t-end", args.t_end)) if value is None]
+    if missing:
+        args.usage.error(f"the following arguments are required: {', '.join(missing)}")
+    return front(args, scene)
 
 
 def shortened(dt, steps) -> str:

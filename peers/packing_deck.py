@@ -133,9 +133,9 @@ def time_step(scene: PackingScene) -> float:
     return DT_FRACTION * 2.0 / (OMEGA_MAX_OVER_OMEGA_0 * scene.omega_0)
 
 
-def run_steps(gamma_end: float, rate: float, dt: float) -> int:
-    """The deck's steps to gamma_end: ceil(gamma_end / (rate dt)), as LAMMPS computes them."""
-    return math.ceil(gamma_end / (rate * dt))
+def run_steps(strain: float, rate: float, dt: float) -> int:
+    """The deck's steps over `strain`: ceil(strain / (rate dt)), as LAMMPS computes them."""
+    return math.ceil(strain / (rate * dt))
 
 
 @dataclass(frozen=True)
@@ -268,7 +268,7 @@ def input_deck(scene: PackingScene, sizes: tuple[float, ...], L: float, rate: fl
         f"variable dt index {number(dt)}     # time step [time]",
         f"variable gamma_end index {number(gamma_end)}     # the strain the run ends at",
         f"variable samples index {SAMPLES}     # rows of stress.txt",
-        "variable steps equal ceil(v_gamma_end/(v_rate*v_dt))",
+        "variable steps equal ceil((v_gamma_end-xy/ly)/(v_rate*v_dt))   # from the box's tilt as read",
         f"variable nrepeat equal ternary(v_steps>={SAMPLE_EVERY}*v_samples,floor(v_steps/({SAMPLE_EVERY}*v_samples)),1)",
         f"variable every equal {SAMPLE_EVERY}*v_nrepeat",
         "",
@@ -329,25 +329,65 @@ def input_deck(scene: PackingScene, sizes: tuple[float, ...], L: float, rate: fl
     return "\n".join(lines) + "\n"
 
 
-def shear_deck(scene: PackingScene, positions: np.ndarray, radii: np.ndarray, L: float,
-               rate: float = DEFAULT_RATE, damping: Optional[float] = None,
-               gamma_end: Optional[float] = None) -> ShearDeck:
-    """The data file and input deck shearing the packing (positions (N, 2), radii (N,), box side
-    L: models/packing/prepare.Packing's) at `rate` [1 / time] with the drag damping omega_0
-    (default: the scene's damping) to gamma_end (default: the scene's gamma_range[1]).
-    Raises Unrepresentable (check_representable)."""
+def check_run(scene: PackingScene, rate: float, gamma_end: Optional[float] = None) -> None:
+    """Raise TooManySteps (one line, exit 2) where the run to gamma_end (default: the scene's
+    gamma_range[1]) at `rate` takes more time steps than LAMMPS's `run` takes (MAX_STEPS)."""
+    gamma_end = scene.gamma_range[1] if gamma_end is None else gamma_end
+    dt = time_step(scene)
+    steps = run_steps(gamma_end, rate, dt)
+    if steps > MAX_STEPS:
+        raise TooManySteps(f"--rate: the run to gamma = {gamma_end:g} takes {steps:.3g} time steps "
+                           f"of dt = {dt:.4g} ({DT_FRACTION:g} of the stability limit), more than "
+                           f"the {MAX_STEPS} LAMMPS runs at once; the slowest rate it takes is "
+                           f"{gamma_end / (MAX_STEPS * dt):.3g} (got {rate!r})")
+
+
+class TooManySteps(OneLineError):
+    """A rate too slow for one LAMMPS run; str() names --rate and its value."""
+
+    exit_code = 2
+
+
+def shear_deck(scene: PackingScene, packing, rate: float, damping: Optional[float] = None,
+               gamma_end: Optional[float] = None, gamma: float = 0.0) -> ShearDeck:
+    """The data file and input deck shearing `packing` (models/packing/prepare.Packing: its
+    positions (N, 2), radii (N,) and box side L) at `rate` [1 / time] with the drag damping
+    omega_0 (default: the scene's damping) to gamma_end (default: the scene's gamma_range[1]),
+    starting from the box tilted by `gamma` (the positions as they are there). Raises
+    Unrepresentable (check_representable)."""
     import diskfriction
 
     check_representable(scene)
     damping = scene.damping if damping is None else damping
     gamma_end = scene.gamma_range[1] if gamma_end is None else gamma_end
     eta, dt = drag_rate(scene, damping), time_step(scene)
+    positions, radii, L = packing.positions, packing.radii, packing.L
     _, sizes = radius_types(radii)
     note = law_note(scene)
-    return ShearDeck(data_file(scene, positions, radii, L, rate),
+    return ShearDeck(data_file(scene, positions, radii, L, rate, gamma),
                      input_deck(scene, sizes, L, rate, eta, dt, gamma_end, diskfriction.__version__,
                                 note),
-                     rate, damping, eta, dt, gamma_end, run_steps(gamma_end, rate, dt), sizes, note)
+                     rate, damping, eta, dt, gamma_end,
+                     run_steps(gamma_end - gamma, rate, dt), sizes, note)
+
+
+def summary(deck: ShearDeck, paths: list[Path]) -> list[str]:
+    """What `export lammps` prints for a packing: the run, the drag, what the deck changes in
+    the scene's law, the output, the files and how to run them."""
+    run = (f"deck: the prepared packing sheared at rate {deck.rate:g} to "
+           f"gamma = {deck.gamma_end:g}: {deck.steps} steps of dt = {deck.dt:.6g} (t = "
+           f"{deck.gamma_end / deck.rate:.6g}); drag {deck.damping:g} omega_0 = {deck.eta:.6g} "
+           f"relative to the flow")
+    lines = [run]
+    if deck.note is not None:
+        lines.append(f"note: {deck.note}")
+    lines += ["approximates the quasistatic branch (bifurcate) up to rate effects, the drag and "
+              "LAMMPS's O(delta/R) conventions (docs/lammps.md, Packings)",
+              f"LAMMPS writes {STRESS_FILE}: {', '.join(STRESS_COLUMNS)} ([force / length], "
+              f"bifurcate's sign: sigma_ab = -P_ab without the kinetic part)",
+              f"wrote {', '.join(str(p) for p in paths)}; run: cd {paths[0].parent} && lmp -in "
+              f"{paths[1].name} [-var rate R] [-var gamma_end G]"]
+    return lines
 
 
 @dataclass(frozen=True)

@@ -563,3 +563,25 @@ def map_kernels(cells, params, progress: Progress) -> str:
     g1 = cells[0].scene.gamma_range[1]
     inside = "" if params.window is None else f", Re lambda in {params.window[0]:g}:{params.window[1]:g}"
     return f"prepare and shear gamma 0 -> {g1:g} ({params.matrix}{inside})"
+
+
+def export(args: argparse.Namespace, scene: PackingScene) -> int:
+    """export lammps: the prepared packing and a deck shearing it by damped MD at --rate with
+    the drag --damping to [shear] gamma (peers/packing_deck.py; cli/export_cmd.py checked both)."""
+    from diskfriction.models.packing.prepared import prepare_scene
+    from diskfriction.peers import packing_deck
+
+    packing_deck.check_representable(scene)
+    packing_deck.check_run(scene, args.rate)
+    out = output_dir("export", args.out, Path("out") / "export" / scene.name)
+    check_packing("export", scene)
+    progress = Progress("export")
+    try:
+        progress.stage(f"prepare {scene.N} disks to pressure {scene.pressure:g}")
+        deck = packing_deck.shear_deck(scene, prepare_scene(scene, progress.part("relax")),
+                                       args.rate, args.damping)
+        paths = deck.save(out)
+    finally:
+        progress.close()
+    print("\n".join(packing_deck.summary(deck, paths)))
+    return 0

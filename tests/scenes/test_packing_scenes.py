@@ -97,7 +97,7 @@ def test_the_packing_scene_checks_its_effects():
     assert set(PACKING_SCHEMA) >= {"packing.N", "packing.pressure", "shear.gamma"}
 
 
-@pytest.mark.parametrize("command", [["export", "lammps"],
+@pytest.mark.parametrize("command", [["crosscheck", "lammps"],
                                      ["crosscheck", "lammps", "--fx", "0", "--t-end", "1"]])
 def test_commands_without_packings_refuse_a_packing_scene_in_one_line(tmp_path, command):
     result = run_main(*command[:2], str(PACKAGED), *command[2:], "--out", str(tmp_path / "out"))
