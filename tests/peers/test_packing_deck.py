@@ -243,3 +243,45 @@ def test_lammps_forces_and_stress_at_a_sheared_state_are_ours(lammps, tmp_path):
     np.testing.assert_allclose(theirs, ours[:3], rtol=1e-12)
     assert ours[0] < 0 and ours[1] < 0  # compression negative, in both
     assert abs(ours[2]) > 1e-3  # a shear stress there to compare
+
+
+BAND = 0.05
+"""How far LAMMPS's mean shear stress over gamma in [0.001, 0.003] may lie from the branch's,
+relative. Measured (docs/notes/packings-lammps.md): 1.8 % below at rates 1e-5 and 1e-6 alike
+and 1.6 % at 1e-4, so not a rate effect but the tangential law (the branch's smoothed law is
+stiffer by 1 + u - u^2 than the deck's linear one) and LAMMPS's O(delta / R) lever arms; one
+contact stiffness for every pair of radii instead of k_n / sqrt(R_eff) per pair gives 8.7 %
+above, outside the band."""
+
+
+@needs_lammps
+@pytest.mark.slow
+def test_lammps_damped_shear_follows_the_quasistatic_branch_before_its_first_large_drop(lammps, tmp_path):
+    """64 disks (seed 1, P = 0.1, mu = 10) sheared to gamma = 0.003, through the branch's small
+    plastic events (stress drops below 1 %) and before the first large stress drop of either
+    code (beyond gamma = 0.0035): LAMMPS at rate 1e-5 with the drag 0.1 omega_0, against our branch with
+    the scene's smoothed law and no spectra. The mean of sigma_xy over [0.001, 0.003] agrees to
+    BAND, LAMMPS's below ours (its linear law is the softer one while contacts stick); both start
+    from the same stress at gamma = 0."""
+    from diskfriction.models.packing.shear import shear
+
+    scene = dataclasses.replace(TINY, N=64, gamma_range=(0.0, 0.003), spectra="none", name="p64")
+    packing = prepare_scene(scene)
+    branch = shear(scene, packing, plastic_events=10)
+    gamma, sigma = np.asarray(branch.gamma), np.asarray(branch.stress)[:, 2]
+    assert gamma[-1] == pytest.approx(0.003)
+    assert all(e.stress_before - e.stress_after < 0.01 * e.stress_before for e in branch.plastic)
+    deck = shear_deck(scene, packing, 1e-5)
+    deck.save(tmp_path)
+    lammps.run(tmp_path, {})
+    curve = read_stress(tmp_path / STRESS_FILE)
+    every = curve.step[1] - curve.step[0]  # steps a row averages over
+    assert every % SAMPLE_EVERY == 0 and curve.step[-1] > deck.steps - every
+    assert curve.gamma[-1] >= 0.003 - 1e-5 * deck.dt * every  # the run reached gamma_end
+    assert curve.sigma_xy[0] == pytest.approx(sigma[0], abs=2e-4)  # one interval in: R t << 1e-5
+    window = (curve.gamma >= 0.001) & (curve.gamma <= 0.003)
+    assert window.sum() > 100
+    theirs, ours = curve.sigma_xy[window].mean(), np.interp(curve.gamma[window], gamma, sigma).mean()
+    assert ours > 0.02  # sheared well beyond the stress at gamma = 0 (-0.01)
+    assert abs(theirs - ours) <= BAND * ours, (theirs, ours)
+    assert theirs < ours
