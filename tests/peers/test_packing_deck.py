@@ -285,3 +285,38 @@ def test_lammps_damped_shear_follows_the_quasistatic_branch_before_its_first_lar
     assert ours > 0.02  # sheared well beyond the stress at gamma = 0 (-0.01)
     assert abs(theirs - ours) <= BAND * ours, (theirs, ours)
     assert theirs < ours
+
+
+@needs_lammps
+def test_the_drag_damps_motion_relative_to_the_flow_and_spin_at_the_rate_eta(lammps, tmp_path):
+    """Two free disks (radii 0.5 and 0.7, no contact) in the sheared box, each moving off the
+    flow v_x = R (y - L/2) and spinning: after t = 1 every velocity relative to the flow and
+    every spin has decayed as exp(-eta t), eta = damping omega_0, to within eta dt in the
+    rate (the drag acts on velocity Verlet's half-step velocities). A drag to rest in the lab
+    frame, or one torque coefficient for both radii, would be off by far more."""
+    from types import SimpleNamespace
+
+    from diskfriction.peers.lammps_run import read_dump
+
+    L, rate = 10.0, 1e-3
+    free = SimpleNamespace(positions=np.array([[2.0, 3.0], [7.0, 6.5]]), radii=np.array([0.5, 0.7]), L=L)
+    deck = shear_deck(TINY, free, rate, damping=0.5, gamma_end=1e-3)
+    kick = np.array([[1e-3, -2e-3, 3e-3], [-1e-3, 1.5e-3, -2e-3]])  # v_x - flow, v_y, omega_z
+    lines = deck.data.split("\n")
+    first = lines.index("Velocities") + 2
+    for k in range(2):
+        flow = rate * (free.positions[k, 1] - L / 2)
+        lines[first + k] = (f"{k + 1} {float(flow + kick[k, 0])!r} {float(kick[k, 1])!r} 0 0 0 "
+                            f"{float(kick[k, 2])!r}")
+    dump = "dump v all custom ${steps} v.txt id y vx vy omegaz\ndump_modify v sort id format float %.17g\n"
+    deck = dataclasses.replace(deck, data="\n".join(lines),
+                               inputs=deck.inputs.replace("run ${steps}", dump + "run ${steps}"))
+    deck.save(tmp_path)
+    lammps.run(tmp_path, {})
+    end = read_dump(tmp_path / "v.txt")
+    t = deck.steps * deck.dt
+    assert 1.0 <= t < 1.0 + deck.dt
+    after = np.column_stack([end["vx"][-1] - rate * (end["y"][-1] - L / 2), end["vy"][-1],
+                             end["omegaz"][-1]])
+    decay_rate = -np.log(after / kick) / t
+    assert np.all(np.abs(decay_rate / deck.eta - 1) <= deck.eta * deck.dt), decay_rate / deck.eta
