@@ -20,13 +20,15 @@ two-sided Rayleigh-Ritz projection on (Q, P) (the m x m pencil (P^T A Q, P^T Q))
 eigenvalues with right and left vectors, l_i^H r_i = 1. A start block near the wanted
 subspace (the previous point's basis along a branch) needs fewer iterations.
 
-Convergence: every Ritz value inside the circle with both residuals ||A r - lambda r||,
-||l^H A - lambda l^H|| at most tol ||A||_1 (r, l of unit norm). The count certificate: the
-number of such eigenvalues, and `certified` when it is smaller than the subspace's size m,
-so that the subspace had room for an eigenvalue inside the circle it did not hold (the
-argument of ARPACK's k nearest: generic start blocks converge to the dominant subspace of F,
-and every eigenvalue inside the circle dominates every one farther out than the Ritz values
-the subspace holds outside).
+Convergence: every Ritz value in the disc |lambda - c| < within (within <= r) with both
+residuals ||A r - lambda r||, ||l^H A - lambda l^H|| at most tol ||A||_1 (r, l of unit norm);
+a disc smaller than the circle converges faster, its eigenvalues having
+|f| >= 1 / (1 + (within / r)^N). The count: the eigenvalues found in the disc; `certified`
+where the count is smaller than the subspace's size m. That is the argument of ARPACK's k
+nearest, not a proof: a generic start block converges to the dominant invariant subspace of
+F, and a subspace with room to spare holds every eigenvalue whose |f| exceeds that of the
+eigenvalues it left out, which holds for the disc unless eigenvalues just outside the circle,
+near a node (where |f| is large), crowd it.
 
 A deflation (nearest.Deflated: a matrix B with the same eigenvalues as A off its null space,
 B T = 0, U^T B = 0, and maps from B's vectors to A's) is factorized in place of A, the
@@ -88,9 +90,10 @@ class ContourEigensystem:
     with right vectors (columns of `right`) and left vectors (rows of `left`, l^H A = lambda
     l^H), l_i^H r_i = 1, in A's coordinates; the real orthonormal bases (n x m, in the
     factorized matrix's coordinates) of the last filtered subspaces, right and left, to start
-    a nearby problem from; count: the eigenvalues found inside; certified: count < m, the
-    subspace's size (module docstring); residual: the largest of both residuals over `values`, relative to ||A||_1;
-    iterations, factorizations, solves (right-hand sides solved, both sides)."""
+    a nearby problem from; count: the eigenvalues found in the disc; certified: count < m,
+    the subspace's size (module docstring); residual: the largest of both residuals over
+    `values`, relative to ||A||_1; iterations, factorizations, solves (columns solved, both
+    sides)."""
 
     values: Array
     right: Array
