@@ -362,8 +362,12 @@ def slepc_runner(args):
     python = args.slepc_python or "/usr/bin/python3"
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(SLEPC_PATHS), OMP_NUM_THREADS="1",
                OPENBLAS_NUM_THREADS="1")
-    probe = subprocess.run([python, "-c", "import slepc4py, petsc4py"], env=env, capture_output=True)
-    if probe.returncode:
+    try:
+        missing = subprocess.run([python, "-c", "import slepc4py, petsc4py"], env=env,
+                                 capture_output=True).returncode
+    except OSError:
+        missing = True
+    if missing:
         print(f"slepc left out: {python} cannot import slepc4py and petsc4py", flush=True)
         return None
     scratch = Path(tempfile.mkdtemp(prefix="slepc-"))
