@@ -25,7 +25,6 @@ Run: python benchmarks/packing_lammps.py [--sizes 64 256 1024] [--rates 1e-5 1e-
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import os
 import subprocess
 import tempfile
@@ -104,7 +103,7 @@ def plot(path: Path, N: int, curves: dict, gamma: float) -> None:
     ax.set_xlim(0, gamma)
     ax.set_xlabel("shear strain gamma")
     ax.set_ylabel("sigma_xy [force / length]")
-    ax.set_title(f"{N} disks, seed 1, P = 0.1, mu = 10: quasistatic branch and LAMMPS damped shear")
+    ax.set_title(f"{N} disks (seed 1, P = 0.1, mu = 10): our branch, LAMMPS damped shear", fontsize=10)
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=130)
@@ -124,7 +123,8 @@ def main() -> None:
     ap.add_argument("--law-too", default="",
                     help="a second law of ours in the figure, untimed (default: none)")
     ap.add_argument("--figure", type=Path, default=Path("packing_lammps.png"))
-    ap.add_argument("--keep", type=Path, default=None, help="keep LAMMPS's files in DIR")
+    ap.add_argument("--keep", type=Path, default=None,
+                    help="keep LAMMPS's files and both codes' curves (N<N>_curves.npz) in DIR")
     args = ap.parse_args()
 
     lammps = find_lammps()
@@ -149,6 +149,10 @@ def main() -> None:
                 print(f"  LAMMPS rate {rate:g}: loop {r['loop']:.1f} s, wall {r['wall']:.1f} s, "
                       f"{r['steps']} steps; load {load()}", flush=True)
             rows.append((N, mine, runs))
+            if args.keep:
+                np.savez(root / f"N{N}_curves.npz", ours_gamma=mine["gamma"], ours_sigma_xy=mine["sigma_xy"],
+                         **{f"lammps_{rate:g}_{key}": runs[rate][key] for rate in args.rates
+                            for key in ("gamma", "sigma_xy")})
             if index == 0:
                 curves = {f"ours, {args.law} (quasistatic)": (mine["gamma"], mine["sigma_xy"], "k-")}
                 if args.law_too:
