@@ -16,7 +16,7 @@ Run: python benchmarks/scaling.py [--N 10,20,40,100,200,400,1000] [--budget 600]
                                   [--spectra cpu|gpu|auto[,...]] [--refine-from n|inf[,...]]
                                   [--progress SECONDS]
 With --window-N, also a run tracking only that spectral window (bifurcate --window; lambda / k_n)
-at each of those N. --spectra: where the dense spectra run (bifurcate --spectra; default auto);
+at each of those N. --spectra: where the dense spectra run (bifurcate --device; default auto);
 with several, each fast run is repeated for each and compared with the first. --refine-from:
 the n from which full spectra are refined from the previous sample's (continuation/spectra/refinement.py;
 inf: never), several compared the same way; "refined (repaired) + declined" counts the full

@@ -1,5 +1,5 @@
 """``diskfriction bifurcate [SCENE] [--fx A:B] [--matrix J|M^-1J] [--detection fast|exhaustive]
-[--out DIR] [--json]``, or ``diskfriction bifurcate --problem FILE.py[:NAME] [--p A:B] ...``
+[--spectra none|sample:DGAMMA|full] [--window LO:HI] [--device cpu|gpu|auto] [--out DIR] [--json]``, or ``diskfriction bifurcate --problem FILE.py[:NAME] [--p A:B] ...``
 for any problem (cli/problem_cmd.py)."""
 from __future__ import annotations
 
@@ -52,7 +52,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              "shift-invert, for chains and packings too large for full spectra; "
                              "collisions are certified and listed in the window only (fast "
                              "detection)")
-    parser.add_argument("--spectra", default="auto", metavar="cpu|gpu|auto",
+    parser.add_argument("--spectra", metavar="none|sample:DGAMMA|full",
+                        help="a packing scene: what the shear computes of the spectrum: none "
+                             "(the equilibria, contact and plastic events, stress), "
+                             "sample:DGAMMA (the spectrum at the strains k DGAMMA, or its "
+                             "--window; no collision located), full (every collision, in the "
+                             "--window if one) (default: the scene's [stability] spectra, auto: "
+                             "chosen from N). A chain's sweep is always full")
+    parser.add_argument("--device", default="auto", metavar="cpu|gpu|auto",
                         help="where dense spectra run: cpu (LAPACK), gpu (CuPy's cuSOLVER; "
                              "scans then run inline), auto (the GPU from n = 1000 where CuPy "
                              "and a CUDA device are present; the default)")
@@ -103,18 +110,18 @@ def parse_window(text: str, command: str = "bifurcate") -> tuple[float, float]:
 
 
 def run(args: argparse.Namespace) -> int:
-    """bifurcate with its dense spectra where --spectra says (continuation/spectra/tracking.py)."""
+    """bifurcate with its dense spectra where --device says (continuation/spectra/tracking.py)."""
     from diskfriction.continuation.spectra.tracking import NoGpu, SpectraDevice, spectra_on
 
     names = [device.value for device in SpectraDevice]
-    if args.spectra not in names:
-        raise CommandError(f"bifurcate error: --spectra: must be {', '.join(names[:-1])} or "
-                           f"{names[-1]} (got {args.spectra!r})")
+    if args.device not in names:
+        raise CommandError(f"bifurcate error: --device: must be {', '.join(names[:-1])} or "
+                           f"{names[-1]} (got {args.device!r})")
     try:
-        with spectra_on(args.spectra):
+        with spectra_on(args.device):
             return _run(args)
     except NoGpu as err:
-        raise CommandError(f"bifurcate error: --spectra gpu: {err}") from None
+        raise CommandError(f"bifurcate error: --device gpu: {err}") from None
 
 
 def _run(args: argparse.Namespace) -> int:

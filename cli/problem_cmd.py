@@ -107,7 +107,8 @@ def run_problem(args: argparse.Namespace) -> int:
     """The --problem form of `bifurcate` (module docstring); exit 0 if the branch reached the
     end of the span, 1 if it stopped before (what was reached is written and said)."""
     given = [option for option, value in (("SCENE", args.scene), ("--fx", args.fx),
-                                          ("--matrix", args.matrix), ("--window", args.window))
+                                          ("--matrix", args.matrix), ("--window", args.window),
+                                          ("--spectra", args.spectra))
              if value is not None]
     if given:
         raise CommandError(f"bifurcate error: --problem: takes no {', '.join(given)} "

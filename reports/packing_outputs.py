@@ -14,7 +14,7 @@ from typing import Optional
 import numpy as np
 
 from diskfriction.continuation.branch import Branch
-from diskfriction.continuation.records import save_branch, save_collisions
+from diskfriction.continuation.records import collisions_json, save_branch
 from diskfriction.continuation.spectra.window import SpectralWindow
 from diskfriction.files import json_values, save_json
 from diskfriction.matrices import Matrix
@@ -71,11 +71,11 @@ def recorded_scene(path: Path) -> Optional[dict]:
 
 def scene_differences(record: dict, scene: PackingScene) -> list[str]:
     """How the scene `record` names differs from `scene`: "KEY THERE there, HERE here" for
-    its name and each physics field, the matrix left out (an option of the analysis,
-    bifurcate --matrix, not of the scene)."""
+    its name and each physics field, the matrix and spectra left out (options of the analysis,
+    bifurcate --matrix and --spectra, not of the packing)."""
     mine = scene_record(scene)
     there, here = ({"name": r["name"], **r["physics"]} for r in (record, mine))
-    keys = ["name"] + sorted((set(there) | set(here)) - {"name", "matrix"})
+    keys = ["name"] + sorted((set(there) | set(here)) - {"name", "matrix", "spectra"})
     return [f"{key} {json.dumps(there.get(key))} there, {json.dumps(here.get(key))} here"
             for key in keys if there.get(key) != here.get(key)]
 
@@ -97,25 +97,33 @@ def plastic_records(branch: Branch) -> list[dict]:
     relaxation's steps; and the complex pairs at the last equilibrium before it (the fold, at
     gamma; in the window, with one): their count (n_complex there) and the fastest growth rate
     sigma = |Im sqrt(lambda)| among them [1 / time] (models/packing/dynamics.fastest_pair; of M^-1
-    J only, None with J, and None without a pair)."""
+    J only, None with J, and None without a pair); both None where the shear took no spectrum
+    at its states (spectra none or sample)."""
     from diskfriction.models.packing.dynamics import fastest_pair
 
     records = []
     for k, event in enumerate(branch.plastic):
         last = int(np.flatnonzero(branch.segment == k)[-1])  # event k ends segment k
         pairs = int(branch.n_complex[last])
+        if pairs < 0:  # no spectrum at the states (spectra none or sample)
+            records.append(plastic_record(event, None, None))
+            continue
         lam = branch.eigenvalues[last]
         lam = lam[np.isfinite(lam)]
         if branch.window is not None:
             lam = lam[SpectralWindow(*branch.window).inside(lam)]
         growth = (fastest_pair(lam)[1] if pairs and branch.matrix == Matrix.M_INV_J else None)
-        records.append({"gamma": event.gamma, "kind": event.kind,
-                        "sigma_xy_before": event.stress_before,
-                        "sigma_xy_after": event.stress_after,
-                        "drop": event.stress_before - event.stress_after,
-                        "displacement": event.displacement, "relaxation_steps": event.steps,
-                        "complex_pairs": pairs, "growth_rate": growth})
+        records.append(plastic_record(event, pairs, growth))
     return records
+
+
+def plastic_record(event, pairs: Optional[int], growth: Optional[float]) -> dict:
+    """plastic.json's record of one plastic event (plastic_records), its complex pairs and
+    fastest growth rate given."""
+    return {"gamma": event.gamma, "kind": event.kind, "sigma_xy_before": event.stress_before,
+            "sigma_xy_after": event.stress_after, "drop": event.stress_before - event.stress_after,
+            "displacement": event.displacement, "relaxation_steps": event.steps,
+            "complex_pairs": pairs, "growth_rate": growth}
 
 
 def save_packing_branch(out: Path, branch: Branch, scene: PackingScene) -> None:
@@ -123,9 +131,16 @@ def save_packing_branch(out: Path, branch: Branch, scene: PackingScene) -> None:
     branch, raw units, the contact rows and histories left out, the segments and window runs
     as labels, plastic_gamma; and scene_arrays), collisions.json (records.save_collisions)
     and plastic.json (plastic_records), each naming the scene (scene_record)."""
-    save_branch(out / "branch.npz", branch, **scene_arrays(scene))
+    spectral = spectral_points(branch)
+    samples = ({} if spectra_of(branch) != "sample" else
+               {"sample_n_complex": spectral[1], "sample_eigenvalues": spectral[2]})
+    save_branch(out / "branch.npz", branch, **scene_arrays(scene), spectra=np.array(scene.resolved_spectra),
+                **samples)
     record = scene_record(scene)
-    save_collisions(out / "collisions.json", branch, scene=record)
+    collisions = collisions_json(branch, scene=record, spectra=scene.resolved_spectra)
+    if spectra_of(branch) != "full":  # none looked for: not an empty list
+        collisions["collisions"] = None
+    save_json(out / "collisions.json", collisions)
     save_json(out / "plastic.json", {"scene": record, "matrix": str(branch.matrix),
                                      "events": plastic_records(branch)})
 
@@ -164,6 +179,31 @@ def strain_lines(ax, strains, **style):
                              autolim=False)
 
 
+def spectra_of(branch: Branch) -> str:
+    """What a shear's branch holds of the spectrum: "sample" (labelled samples,
+    models/packing/sampled.py), "none" (no state's pairs counted: n_complex -1) or "full"."""
+    if "sample" in branch.labelled:
+        return "sample"
+    return "none" if branch.n_complex.size and (branch.n_complex < 0).all() else "full"
+
+
+def spectral_points(branch: Branch):
+    """(gamma, n_complex, eigenvalues, window) of what the shear computed of the spectrum: every
+    accepted state's (spectra full: the branch's columns), the grid strains' (sample: the
+    samples' eigenvalues, rows padded with nan), or None (none)."""
+    computed = spectra_of(branch)
+    if computed == "none":
+        return None
+    if computed == "full":
+        return branch.gamma, branch.n_complex, branch.eigenvalues, branch.window
+    samples = branch.sample
+    lam = np.full((len(samples), max((x.eigenvalues.size for x in samples), default=0)), np.nan + 0j)
+    for row, x in zip(lam, samples):
+        row[:x.eigenvalues.size] = x.eigenvalues
+    return (np.array([x.gamma for x in samples]), np.array([x.n_complex for x in samples], dtype=int),
+            lam, branch.window)
+
+
 def plot_packing_diagram(branch: Branch, scene: PackingScene, path: Path) -> None:
     """Three panels against the shear strain gamma: the shear stress sigma_xy [force / length]
     with every collision as a thin line (red: a complex pair born, blue: one dying), the number
@@ -171,13 +211,22 @@ def plot_packing_diagram(branch: Branch, scene: PackingScene, path: Path) -> Non
     (eigenvalue_unit; for M^-1 J also in units of omega_0^2, omega_0 = PackingScene.omega_0, on
     the right). With a spectral window only what lies in it, lo <= Re lambda <= hi: the guard
     bands' eigenvalues are tracked, not counted (the window is named in the title). Plastic
-    events: black dashed lines over everything in every panel, a triangle above the stress."""
+    events: black dashed lines over everything in every panel, a triangle above the stress.
+    What the shear computed of the spectrum (spectra_of) decides the rest: with sampled
+    spectra the pairs and eigenvalues at the grid strains (no collision lines); without
+    spectra the stress panel alone."""
     from matplotlib.collections import LineCollection
     from matplotlib.lines import Line2D
 
     from diskfriction.words import count
 
-    fig, (stress, pairs, im) = new_figure(3, 1, figsize=(7, 8.4), sharex=True)
+    spectral = spectral_points(branch)
+    if spectral is None:  # spectra none: the stress alone
+        fig, stress = new_figure(figsize=(7, 3.6))
+        panels = (stress,)
+    else:
+        fig, panels = new_figure(3, 1, figsize=(7, 8.4), sharex=True)
+        stress, pairs, im = panels
     gamma, window = branch.gamma, branch.window
     strain = r"shear strain $\gamma$"
     stress.add_collection(LineCollection(
@@ -189,30 +238,47 @@ def plot_packing_diagram(branch: Branch, scene: PackingScene, path: Path) -> Non
     strain_lines(stress, [c.p for c in branch.collisions], colors=colors, linewidths=0.4,
                  alpha=0.45, zorder=1)
     folds = [e.gamma for e in branch.plastic]
-    for ax in (stress, pairs, im):
+    for ax in panels:
         strain_lines(ax, folds, **PLASTIC_STYLE)
     if folds:  # (an empty line in axis coordinates breaks tight_layout)
         stress.plot(folds, np.ones(len(folds)), "v", color="k", ms=6, zorder=6, clip_on=False,
                     transform=stress.get_xaxis_transform())
     stress.set_ylabel(r"$\sigma_{xy}$ [force / length]")
-    stress.legend(handles=[Line2D([], [], color="tab:red", lw=1, label="birth of a complex pair"),
-                           Line2D([], [], color="tab:blue", lw=1, label="death of a complex pair"),
+    located = [Line2D([], [], color="tab:red", lw=1, label="birth of a complex pair"),
+               Line2D([], [], color="tab:blue", lw=1, label="death of a complex pair")]
+    stress.legend(handles=[*(located if spectra_of(branch) == "full" else []),
                            Line2D([], [], color="k", ls=(0, (4, 2)), lw=1.3, marker="v",
                                   label="plastic event (fold)")],
                   fontsize=7, loc="upper left", framealpha=0.9).set_zorder(7)
-    pairs.step(gamma, branch.n_complex, where="post", color="k", lw=1)
-    pairs.set_ylim(-0.05 * max(1, branch.n_complex.max()), 1.05 * max(1, branch.n_complex.max()))
-    pairs.set_ylabel("complex pairs" + (" in the window" if window is not None else ""))
-    lam = branch.eigenvalues
+    title = (f"{scene.name}: N = {scene.N}, P = {scene.pressure:g}, mu = {scene.mu:g}; "
+             f"{count(len(branch.plastic), 'plastic event')}")
+    if spectral is None:
+        stress.set_xlabel(strain)
+        stress.set_title(f"{title}\nspectra none: no eigenvalue computed", fontsize=9, pad=10)
+        fig.tight_layout()
+        save_figure(fig, path)
+        return
+    gamma, n_complex, lam, window = spectral
+    sampled = spectra_of(branch) == "sample"
+    if sampled:
+        pairs.plot(gamma, n_complex, ".-", color="k", lw=0.6, ms=3)
+    else:
+        pairs.step(gamma, n_complex, where="post", color="k", lw=1)
+    pairs.set_ylim(-0.05 * max(1, n_complex.max(initial=0)), 1.05 * max(1, n_complex.max(initial=0)))
+    pairs.set_ylabel("complex pairs" + (" in the window" if window is not None else "")
+                     + (" (grid strains)" if sampled else ""))
     tracked = np.isfinite(lam)
     if window is not None:  # nan: a window column not tracked at that state
         tracked &= SpectralWindow(*window).inside(np.nan_to_num(lam, nan=np.inf))
-    shown = tracked & (lam.imag > 1e-12 * np.nanmax(np.abs(lam)))  # one per pair
+    shown = tracked & (lam.imag > 1e-12 * np.nanmax(np.abs(lam), initial=0.0))  # one per pair
     g = np.broadcast_to(gamma[:, None], lam.shape)
     unit = eigenvalue_unit(branch.matrix)
     inside = "" if window is None else r", Re $\lambda$ in the window"
     if shown.any():
-        im.plot(g[shown], lam.imag[shown], ".", ms=1.5, color="tab:purple", zorder=6)
+        im.plot(g[shown], lam.imag[shown], ".", ms=1.5 if not sampled else 3, color="tab:purple", zorder=6)
+        part = "Im"
+    elif not tracked.any():  # a window that held nothing
+        im.text(0.02, 0.92, "no eigenvalue in the window", transform=im.transAxes, fontsize=8, va="top")
         part = "Im"
     else:  # a real spectrum (a frictionless packing): its softest mode, which vanishes at a fold
         positive = np.where(tracked & (lam.real > 1e-12 * np.nanmax(np.abs(lam))), lam.real, np.inf)
@@ -226,9 +292,8 @@ def plot_packing_diagram(branch: Branch, scene: PackingScene, path: Path) -> Non
         im.secondary_yaxis("right", functions=(lambda v: v / w2, lambda v: v * w2)).set_ylabel(
             rf"{part} $\lambda / \omega_0^2$")
     im.set_xlabel(strain)
-    title = (f"{scene.name}: N = {scene.N}, P = {scene.pressure:g}, mu = {scene.mu:g}; "
-             f"{count(len(branch.collisions), 'collision')}, "
-             f"{count(len(branch.plastic), 'plastic event')}")
+    title += (f"; spectra sampled at {count(gamma.size, 'grid strain')}, no collision located" if sampled
+              else f"; {count(len(branch.collisions), 'collision')}")
     if window is not None:
         title += (f"\nwindow {window[0]:g} <= Re lambda <= {window[1]:g} {unit}: its complex "
                   f"pairs and collisions only")

@@ -25,6 +25,8 @@ has no run of that kind, and report.md says so.
 """
 from __future__ import annotations
 
+import dataclasses
+
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Optional
@@ -82,7 +84,8 @@ def build_packing_report(scene: PackingScene, out: Path, plastic_events: int,
                          progress: Optional[Callable[[str], None]] = None) -> list[str]:
     """Shear, run, draw and write out/report.md; returns the files written."""
     say = progress or (lambda line: None)
-    branch, network, mass = shear_scene(scene, plastic_events, say)
+    # every state's spectrum and every collision: the report's figures and runs are drawn from them
+    branch, network, mass = shear_scene(dataclasses.replace(scene, spectra="full"), plastic_events, say)
     sigma = np.array([fastest_pair(e)[1] for e in branch.eigenvalues])
     events = np.array([e.p for e in branch.event] + [e.gamma for e in branch.plastic])
     bounds = [c.p for c in branch.collisions]

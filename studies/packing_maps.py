@@ -120,7 +120,7 @@ def packing_cell(scene: PackingScene, params: PackingMapParams) -> dict:
     summary = dict.fromkeys(PACKING_COLUMNS)
     record = {"scene": scene.physics_fields(), "summary": summary, "collisions": [],
               "plastic": []}
-    scene = replace(scene, matrix=params.matrix)
+    scene = replace(scene, matrix=params.matrix, spectra="full")  # every state's pairs, every collision
     try:
         branch = shear(scene, prepare_scene(scene), ShearParams(workers=0),
                        plastic_events=params.plastic_events, window=params.window)

@@ -146,8 +146,8 @@ def planned_workers(n: int, detection: DetectionParams, asked: Optional[int] = N
         return 0
     if dense and (on_gpu(n) if gpu is None else gpu):
         if asked:
-            raise WorkersOnGpu(f"--workers: the spectra run on the GPU (--spectra gpu, or auto from "
-                               f"n = {GPU_FROM}), where the scans run inline; ask for --spectra cpu "
+            raise WorkersOnGpu(f"--workers: the spectra run on the GPU (--device gpu, or auto from "
+                               f"n = {GPU_FROM}), where the scans run inline; ask for --device cpu "
                                f"to scan on workers (got {asked})")
         return 0
     if asked is not None:

@@ -27,6 +27,10 @@ def bifurcate(args: argparse.Namespace, scene: Scene, window) -> int:
     if args.p is not None:
         raise CommandError("bifurcate error: --p: only with --problem FILE.py (a chain scene's load "
                            f"is --fx; got {args.p!r})")
+    if args.spectra not in (None, "full"):
+        raise CommandError(f"bifurcate error: --spectra: a chain's sweep computes every spectrum "
+                           f"and locates every collision (full); none and sample:DGAMMA are a "
+                           f"packing's (got {args.spectra!r})")
     F_from, F_to = parse_range(args.fx) if args.fx is not None else scene.F_x_range
     if args.ds_max is not None:
         number("bifurcate", "ds-max", args.ds_max)

@@ -51,10 +51,13 @@ def bifurcate(args: argparse.Namespace, scene: PackingScene,
             raise CommandError(f"bifurcate error: {flag}: {why} (got {getattr(args, option)!r})")
     if args.workers is not None and args.workers < 0:
         raise CommandError(f"bifurcate error: --workers: must be >= 0 (got {args.workers})")
+    if args.json and (spectra := spectra_from_args(args, scene, window)) != "full":
+        raise CommandError(f"bifurcate error: --json: prints the collisions located, and spectra "
+                           f"{spectra} locate none; give --spectra full")
 
     matrix = matrix_from_args("bifurcate", args, scene)
     out = output_dir("bifurcate", args.out, Path("out") / "bifurcate" / scene.name)
-    scene = dataclasses.replace(scene, matrix=str(matrix))
+    scene = dataclasses.replace(scene, matrix=str(matrix), spectra=spectra_from_args(args, scene, window))
     refuse_other_scene("bifurcate", out, scene)
     check_packing_bifurcate(args, scene, window)
 
@@ -67,6 +70,7 @@ def bifurcate(args: argparse.Namespace, scene: PackingScene,
     from diskfriction.models.packing.plastic import RelaxationFailed
     from diskfriction.models.packing.prepared import prepare_scene
     from diskfriction.continuation.records import brief, collision_records
+    from diskfriction.models.packing.sampled import SampleFailed
     from diskfriction.models.packing.shear import ShearParams, shear
     from diskfriction.studies.kept_shear import kept_segments
     from diskfriction.reports.packing_outputs import (OUTPUTS, RUN_SCENE, save_packing_outputs,
@@ -87,13 +91,13 @@ def bifurcate(args: argparse.Namespace, scene: PackingScene,
                            lambda gamma: progress(gamma / g1, f"gamma = {gamma:.3e}"),
                            plastic_events=PLASTIC_EVENTS, window=window, done=kept.done,
                            on_segment=kept.save)
-        except (ContinuationError, MissedContact, NotJammed, RelaxationFailed,
+        except (ContinuationError, MissedContact, NotJammed, RelaxationFailed, SampleFailed,
                 WindowCrowded) as error:
             kept_line = (f" (the segments finished before it are kept in {kept.directory}: a "
                          "rerun resumes after them)" if kept.finished() else "")
             raise CommandError(f"bifurcate error: {scene.source}: {error}{kept_line}",
                                EXIT_FAILED) from None
-        if window is not None:
+        if window is not None and scene.resolved_spectra == "full":
             check_window_covered(branch, args.window, matrix, 1.0)
         progress.stage(f"writing {out}/{', '.join(OUTPUTS)}")
         save_packing_outputs(out, kept.directory / "writing", branch, scene, packing)
@@ -121,14 +125,7 @@ def bifurcate(args: argparse.Namespace, scene: PackingScene,
         for e in branch.plastic:
             print(f"  gamma = {e.gamma:.9f} ({e.kind}): sigma_xy {e.stress_before:.6g} -> "
                   f"{e.stress_after:.6g}")
-        inside = ("" if branch.window is None else f", Re lambda in [{branch.window[0]:.6g}, "
-                  f"{branch.window[1]:.6g}] (raw)")
-        if branch.widenings:
-            inside += f" (the window crowded and was widened {count(branch.widenings, 'time')})"
-        print(f"{count(len(records), 'collision')} ({matrix}) with gamma >= {g0:g}{inside}"
-              f"{bracketed_only(records)}; "
-              f"complex pairs at {100 * (branch.n_complex > 0).mean():.0f} % of the equilibria, "
-              f"at most {branch.n_complex.max()}")
+        print(spectra_line(branch, scene, records, window))
         print(f"wrote {out}/{', '.join(OUTPUTS)}")
     if not branch.status.reached:
         why = ("a plastic event: the quasistatic branch folds back in gamma (a saddle-node)"
@@ -137,6 +134,53 @@ def bifurcate(args: argparse.Namespace, scene: PackingScene,
                            f"{branch.gamma[-1]:.9g}, short of {g1:g}: {why}; what it reached "
                            f"is written", EXIT_FAILED)
     return 0
+
+
+def spectra_line(branch, scene: PackingScene, records: list, window) -> str:
+    """What bifurcate prints of the shear's spectra: the collisions located and the states with
+    complex pairs (full), the grid strains' pairs (sample), or that none was computed (none)."""
+    band = "" if window is None else f", Re lambda in [{window[0]:.6g}, {window[1]:.6g}] (raw)"
+    if scene.resolved_spectra == "none":
+        return (f"spectra none: no eigenvalue computed, no collision looked for (--spectra "
+                f"sample:DGAMMA or full for the {scene.matrix} spectrum)")
+    if scene.sample_spacing is not None:
+        n = [x.n_complex for x in branch.sample]
+        return (f"spectra sampled at {count(len(n), 'grid strain')} (every {scene.sample_spacing:g}"
+                f"{band}): complex pairs of {scene.matrix} at "
+                f"{100 * sum(k > 0 for k in n) / max(len(n), 1):.0f} % of them, at most "
+                f"{max(n, default=0)}; no collision located")
+    if branch.widenings:
+        band += f" (the window crowded and was widened {count(branch.widenings, 'time')})"
+    g0 = scene.gamma_range[0]
+    return (f"{count(len(records), 'collision')} ({scene.matrix}) with gamma >= {g0:g}{band}"
+            f"{bracketed_only(records)}; complex pairs at "
+            f"{100 * (branch.n_complex > 0).mean():.0f} % of the equilibria, at most "
+            f"{branch.n_complex.max()}")
+
+
+def spectra_from_args(args: argparse.Namespace, scene: PackingScene,
+                      window: Optional[tuple[float, float]]) -> str:
+    """The shear's spectra, resolved (PackingScene.resolved_spectra): --spectra, else the
+    scene's; a one-line CommandError (exit 2) for a value it does not take, a sample grid wider
+    than the strain range, or --window with spectra none."""
+    from diskfriction.scenes.rules import Invalid, spectra_choice
+    from diskfriction.scenes.scene import SceneValueError
+
+    given = scene.spectra if args.spectra is None else args.spectra
+    where = f"--spectra" if args.spectra is not None else f"{scene.source}: stability.spectra"
+    try:
+        chosen = dataclasses.replace(scene, spectra=spectra_choice(given)).resolved_spectra
+    except Invalid as error:
+        raise CommandError(f"bifurcate error: {where}: {error.what} (got {given!r})") from None
+    except SceneValueError as error:
+        raise CommandError(f"bifurcate error: {where}: {error.what}, [{scene.gamma_range[0]:g}, "
+                           f"{scene.gamma_range[1]:g}] (got {given!r})") from None
+    if window is not None and chosen == "none":
+        auto = f" (auto for {scene.N} disks)" if given == "auto" else ""
+        raise CommandError(f"bifurcate error: --window: a window of the spectrum needs --spectra "
+                           f"full or sample:DGAMMA; the shear's spectra are none{auto} (got "
+                           f"{args.window!r})")
+    return chosen
 
 
 def refuse_other_scene(command: str, out: Path, scene: PackingScene) -> None:
@@ -188,7 +232,9 @@ def simulate(args: argparse.Namespace, scene: PackingScene) -> int:
 
     # a packing's strain range is positive: --gamma 0 shears one short step and runs from the
     # branch's first state, at gamma = 0 exactly
-    scene = dataclasses.replace(scene, gamma_range=(0.0, args.gamma) if args.gamma > 0 else (0.0, 1e-12))
+    # no spectrum along the way: the run's start takes its own (runs.linearized)
+    scene = dataclasses.replace(scene, gamma_range=(0.0, args.gamma) if args.gamma > 0 else (0.0, 1e-12),
+                                spectra="none")
     progress = Progress("simulate")
     try:
         branch, network, mass = sheared(scene, progress, args.gamma)
@@ -271,7 +317,8 @@ def verify(args: argparse.Namespace, scene: PackingScene) -> int:
                            f"(got {args.matrix!r})")
     out = output_dir("verify", args.out, Path("out") / "verify" / scene.name)
     refuse_other_scene("verify", out, scene)
-    check_packing("verify", scene, strain=scene.gamma_range[1], runs=sum(VERIFY_STATES),
+    check_packing("verify", dataclasses.replace(scene, spectra="full"), strain=scene.gamma_range[1],
+                  runs=sum(VERIFY_STATES),
                   t_end=args.t_end)
 
     import numpy as np
@@ -283,8 +330,8 @@ def verify(args: argparse.Namespace, scene: PackingScene) -> int:
     from diskfriction.reports.verify import packing_verify_table
 
     progress = Progress("verify")
-    try:
-        branch, network, mass = sheared(scene, progress)
+    try:  # every state's pairs: verify picks states with and without them
+        branch, network, mass = sheared(dataclasses.replace(scene, spectra="full"), progress)
         chosen = sorted(spread(np.flatnonzero(branch.n_complex > 0), VERIFY_STATES[0])
                         + spread(np.flatnonzero(branch.n_complex == 0), VERIFY_STATES[1]))
         rows, unmeasured = [], []
@@ -384,7 +431,7 @@ def report(args: argparse.Namespace, files: list, scenes: list) -> int:
     from diskfriction.reports.packing_report import build_packing_report
 
     scene = scenes[0]
-    check_packing("report", scene, strain=scene.gamma_range[1])
+    check_packing("report", dataclasses.replace(scene, spectra="full"), strain=scene.gamma_range[1])
     out = output_dir("report", args.out, Path("out/report") / scene.name)
     progress = Progress("report")
     try:
@@ -401,9 +448,10 @@ def check_packing(command: str, scene: PackingScene, strain: Optional[float] = N
     """Before any work on a packing scene, refuse in one line (exit 2) what `command` cannot
     compute, and print on stderr the rough wall time of what it will do. Refused, in this order:
     - more memory than this machine has (models/packing/memory.py), naming N and what it counted: the
-      preparation, and with `strain` a shear from gamma = 0 to it, dense 3N x 3N spectra in
-      each of `processes` processes (the shear's and its scan workers') or with `window` only
-      the points it stores;
+      preparation, and with `strain` a shear from gamma = 0 to it with the scene's spectra
+      (resolved_spectra; memory.shear_needs: dense 3N x 3N spectra in each of `processes`
+      processes, the shear's and its scan workers', or with `window` or spectra none only the
+      points it stores);
     - a scene the preparation cannot make (models/packing/limits.py: a box too narrow for its
       contacts, a pressure below what double precision resolves), naming the key and value;
     - with `runs` dynamics runs to t_end (step dt, default models/packing/cost.time_step), --t-end
@@ -421,17 +469,10 @@ def check_packing(command: str, scene: PackingScene, strain: Optional[float] = N
     seconds = [cost.prepare_seconds(N)]
     parts = [f"prepare {N} disks"]
     if strain is not None:
-        stored = memory.points_bytes(N, strain, window)
-        if window:
-            needs.append((stored, f"a shear with a window storing about "
-                                  f"{memory.shear_points(strain):.2g} points of {n} unknowns"))
-        else:
-            where = f" in {processes} processes" if processes > 1 else ""
-            needs.append((memory.dense_bytes(N, processes) + stored,
-                          f"a shear with dense {n} x {n} spectra{where}"))
-        seconds.append(cost.shear_seconds(N, strain, window))
-        parts.append(f"shear them to gamma = {strain:g}"
-                     + (" with a window" if window else " with every eigenvalue"))
+        spectra = scene.resolved_spectra
+        needs.append(memory.shear_needs(N, strain, spectra, window, processes))
+        seconds.append(cost.shear_seconds(N, strain, spectra, window))
+        parts.append(f"shear them to gamma = {strain:g} {cost.spectra_words(spectra, window)}")
     nbytes, what = max(needs)
     try:
         require_memory(nbytes, f"N = {N}: {what}")
@@ -471,8 +512,8 @@ def check_packing_bifurcate(args: argparse.Namespace, scene: PackingScene,
     from diskfriction.continuation.detection.scans import planned_workers
 
     asked = None if args.workers is None else max(args.workers, 0)  # < 0: bifurcate refuses it
-    workers = planned_workers(scene.ndof, DetectionParams(mode=args.detection), asked,
-                              dense=window is None)
+    workers = (planned_workers(scene.ndof, DetectionParams(mode=args.detection), asked,
+                               dense=window is None) if scene.resolved_spectra == "full" else 0)
     check_packing("bifurcate", scene, strain=scene.gamma_range[1], processes=1 + workers,
                   window=window is not None)
 
@@ -490,7 +531,8 @@ def check_packing_simulate(args: argparse.Namespace, scene: PackingScene) -> Non
                            f"{stop:g}] ([shear] gamma of {scene.source}): simulate runs from a "
                            f"state of the scene's shear; widen its range to go further "
                            f"(got {args.gamma!r})")
-    check_packing("simulate", scene, strain=args.gamma, runs=1, t_end=args.t_end, dt=args.dt)
+    check_packing("simulate", dataclasses.replace(scene, spectra="none"), strain=args.gamma, runs=1,
+                  t_end=args.t_end, dt=args.dt)
 
 
 NO_DYNAMICS = "a packing map runs no dynamics; `verify` runs them on one scene"

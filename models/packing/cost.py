@@ -31,6 +31,10 @@ PREPARE_EXPONENT = 1.75
 SHEAR_EXPONENT = 2.5
 DENSE_SECONDS_PER_STRAIN = 0.3
 WINDOW_SECONDS_PER_STRAIN = 0.01
+NONE_SECONDS_PER_STRAIN = 0.2
+NONE_EXPONENT = 1.75
+DENSE_SAMPLE_SECONDS_N256 = 0.5
+WINDOW_SAMPLE_SECONDS_N1024 = 2.0
 SHEAR_START_SECONDS = 4.0
 """What a shear costs besides its strain: the kernels loaded, the first spectra (16 disks to
 gamma = 0.002: 4 to 9 s in a fresh map worker)."""
@@ -60,11 +64,38 @@ def prepare_seconds(N: int) -> float:
     return PREPARE_SECONDS_N1024 * (N / 1024) ** PREPARE_EXPONENT
 
 
-def shear_seconds(N: int, gamma: float, window: bool) -> float:
-    """Estimated wall time of a shear of N disks from gamma = 0 to `gamma`, with every
-    eigenvalue tracked or with a spectral window [s]."""
-    rate = WINDOW_SECONDS_PER_STRAIN if window else DENSE_SECONDS_PER_STRAIN
-    return SHEAR_START_SECONDS + rate * float(N) ** SHEAR_EXPONENT * gamma
+def shear_seconds(N: int, gamma: float, spectra: str, window: bool) -> float:
+    """Estimated wall time of a shear of N disks from gamma = 0 to `gamma` with `spectra`
+    (resolved: "full", "none" or "sample:DGAMMA") and a spectral window or not [s]: the
+    equilibria (NONE_SECONDS_PER_STRAIN N^NONE_EXPONENT per unit strain), and every state's
+    spectrum tracked with its collisions (full: the dense or window rule), or the spectrum at
+    each grid strain (sample: sample_seconds each)."""
+    branch = NONE_SECONDS_PER_STRAIN * float(N) ** NONE_EXPONENT * gamma
+    if spectra == "none":
+        return SHEAR_START_SECONDS + branch
+    if spectra == "full":
+        rate = WINDOW_SECONDS_PER_STRAIN if window else DENSE_SECONDS_PER_STRAIN
+        return SHEAR_START_SECONDS + rate * float(N) ** SHEAR_EXPONENT * gamma
+    samples = 1.0 + gamma / float(spectra.partition(":")[2])
+    return SHEAR_START_SECONDS + branch + samples * sample_seconds(N, window)
+
+
+def sample_seconds(N: int, window: bool) -> float:
+    """Estimated wall time of the spectrum at one grid strain [s]: a dense eigendecomposition
+    of 3N x 3N, DENSE_SAMPLE_SECONDS_N256 (N / 256)^3, or a window's shift-invert,
+    WINDOW_SAMPLE_SECONDS_N1024 (N / 1024)^1.5."""
+    if window:
+        return WINDOW_SAMPLE_SECONDS_N1024 * (N / 1024) ** 1.5
+    return DENSE_SAMPLE_SECONDS_N256 * (N / 256) ** 3
+
+
+def spectra_words(spectra: str, window: bool) -> str:
+    """How the estimate names a shear's spectra."""
+    if spectra == "none":
+        return "without spectra"
+    if spectra == "full":
+        return "with a window" if window else "with every eigenvalue"
+    return f"with the spectrum{' in a window' if window else ''} every {spectra.partition(':')[2]}"
 
 
 def time_step(scene: PackingScene) -> float:

@@ -14,8 +14,10 @@ sweep. The counts are lower bounds: the guard refuses only what cannot fit.
 - Every accepted point of the shear keeps q, its eigenvalues (complex) and their condition
   numbers, its contact rows (4 integers each, about one row per dof) and their histories:
   POINT_DOUBLES n doubles; a window's points keep only the window's eigenvalues,
-  WINDOW_POINT_DOUBLES n. The points: POINTS_PER_STRAIN per unit strain (32 and 64 disks to
-  gamma = 0.01: 196 to 442 points, 256 disks to 0.05 with a window: 1554).
+  WINDOW_POINT_DOUBLES n (and so do the points of a shear without spectra, or with sampled
+  ones). The points: POINTS_PER_STRAIN N^POINTS_EXPONENT per unit strain, a little below what
+  the shears without spectra of 2026-12-02 took (seed 1, mu = 10, P = 0.1: 32, 64 and 256
+  disks to gamma = 0.01 189, 360 and 725 points; 1024 disks to 0.002 658 points).
 """
 from __future__ import annotations
 
@@ -23,7 +25,7 @@ PREPARE_BYTES_PER_DISK = 210.0
 DENSE_MATRICES = 12
 POINT_DOUBLES = 9
 WINDOW_POINT_DOUBLES = 6
-POINTS_PER_STRAIN = 2e4
+POINTS_PER_STRAIN, POINTS_EXPONENT = 1000.0, 0.8
 
 
 def prepare_bytes(N: int) -> float:
@@ -31,15 +33,31 @@ def prepare_bytes(N: int) -> float:
     return PREPARE_BYTES_PER_DISK * float(N)
 
 
-def points_bytes(N: int, gamma: float, window: bool) -> float:
-    """Estimated memory of the points a shear of N disks to `gamma` keeps [bytes]."""
-    per_point = WINDOW_POINT_DOUBLES if window else POINT_DOUBLES
-    return 8.0 * per_point * 3.0 * N * shear_points(gamma)
+def points_bytes(N: int, gamma: float, spectra: str, window: bool) -> float:
+    """Estimated memory of the points a shear of N disks to `gamma` keeps, with the spectra
+    "full", "none" or "sample:DGAMMA" (the states alone, as a window's) [bytes]."""
+    per_point = POINT_DOUBLES if spectra == "full" and not window else WINDOW_POINT_DOUBLES
+    return 8.0 * per_point * 3.0 * N * shear_points(N, gamma)
 
 
-def shear_points(gamma: float) -> float:
-    """The accepted points of a shear to `gamma`, at least one (POINTS_PER_STRAIN)."""
-    return 1.0 + POINTS_PER_STRAIN * gamma
+def shear_needs(N: int, gamma: float, spectra: str, window: bool, processes: int) -> tuple[float, str]:
+    """(bytes, what they hold) of a shear of N disks to `gamma` with `spectra` (resolved,
+    PackingScene.resolved_spectra) and a window or not: its points (points_bytes) and, where it
+    takes dense spectra (every one, full or sampled, without a window), the dense matrices
+    of each of `processes` processes (full: the shear's and its scan workers'; sample: one)."""
+    n, stored = 3 * N, points_bytes(N, gamma, spectra, window)
+    if spectra == "none" or window:
+        return stored, (f"a shear storing about {shear_points(N, gamma):.2g} points of {n} unknowns"
+                        + (" with a window" if window else ""))
+    processes = processes if spectra == "full" else 1
+    where = f" in {processes} processes" if processes > 1 else ""
+    return dense_bytes(N, processes) + stored, f"a shear with dense {n} x {n} spectra{where}"
+
+
+def shear_points(N: int, gamma: float) -> float:
+    """The accepted points of a shear of N disks to `gamma`, at least one: POINTS_PER_STRAIN
+    N^POINTS_EXPONENT per unit strain (the contact events that cut the steps grow with N)."""
+    return 1.0 + POINTS_PER_STRAIN * float(N) ** POINTS_EXPONENT * gamma
 
 
 def dense_bytes(N: int, processes: int = 1) -> float:

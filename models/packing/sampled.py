@@ -19,6 +19,7 @@ from typing import Optional
 import numpy as np
 
 from diskfriction.continuation.branch import Branch
+from diskfriction.continuation.linalg.solves import blas_threads
 from diskfriction.continuation.spectra.eigensolvers import DenseSpectra
 from diskfriction.continuation.spectra.tracking import count_complex_pairs
 from diskfriction.continuation.spectra.window import SpectralWindow, WindowCrowded
@@ -64,8 +65,14 @@ def sampled_spectra(network: Network, mass: np.ndarray, segment: Branch, every: 
     gamma = segment.p
     strains = grid_strains(float(gamma[0]), float(gamma[-1]), every)
     strains = strains[strains > done_before]
+    with blas_threads():  # as the continuation's spectra: one BLAS thread (solves.blas_threads)
+        return tuple(_samples(network, mass, segment, strains, window, matrix, newton_tol, rel_tol))
+
+
+def _samples(network, mass, segment, strains, window, matrix, newton_tol, rel_tol):
+    """sampled_spectra's samples at `strains`, one after another."""
+    gamma = segment.p
     solver = None if window is None else SpectralWindow(*window, margin=WINDOW_MARGIN, extra=WINDOW_EXTRA)
-    samples = []
     for g in strains:
         k = min(int(np.searchsorted(gamma, g, side="right")) - 1, len(gamma) - 1)
         problem = PackingEquilibria(network, segment.u[k], segment.xi[k], segment.rows[k],
@@ -81,9 +88,7 @@ def sampled_spectra(network: Network, mass: np.ndarray, segment: Branch, every: 
                                    f"(Newton's residual stayed at {result.residual:.3g})")
             q = result.x[:-1]
         eigenvalues, n_complex, solver = _spectrum(problem, q, float(g), solver, rel_tol)
-        samples.append(SpectrumSample(float(g), eigenvalues, n_complex,
-                                      largest_force(problem, q, float(g))))
-    return tuple(samples)
+        yield SpectrumSample(float(g), eigenvalues, n_complex, largest_force(problem, q, float(g)))
 
 
 def _spectrum(problem: PackingEquilibria, q: np.ndarray, gamma: float,

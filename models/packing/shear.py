@@ -149,7 +149,8 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
         if on_segment is not None:
             on_segment(segment)
         begin = event.after
-    return joined(segments, scene)
+    branch = joined(segments, scene)
+    return branch if every is None else replace(branch, window=window)  # the samples' window
 
 
 def shear_segment(network: Network, mass: np.ndarray, scene: PackingScene, options: ShearParams,

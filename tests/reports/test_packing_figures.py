@@ -37,7 +37,7 @@ def shear_branch(window=None, collisions=300):
         n_complex=np.full(40, 3), eigenvalues=lam, matrix="M^-1 J", window=window,
         collisions=[SimpleNamespace(p=p, kind=("birth", "death")[n % 2])
                     for n, p in enumerate(rng.uniform(0, 1, collisions))],
-        plastic=[SimpleNamespace(gamma=0.5)])
+        plastic=[SimpleNamespace(gamma=0.5)], labelled={})
 
 
 def test_the_diagram_with_a_window_draws_only_its_eigenvalues_and_names_it(figures):

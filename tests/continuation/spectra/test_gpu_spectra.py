@@ -121,7 +121,7 @@ def test_scans_run_inline_where_the_spectra_run_on_the_gpu(fake_gpu, monkeypatch
     assert scans.planned_workers(300, detection) == 2
     with spectra_on("gpu"):
         assert scans.planned_workers(300, detection) == 0
-        with pytest.raises(scans.WorkersOnGpu, match="--spectra cpu"):
+        with pytest.raises(scans.WorkersOnGpu, match="--device cpu"):
             scans.planned_workers(300, detection, asked=2)
         # a spectral window takes no dense spectra: its scans stay on workers
         window = SpectralWindow(-1.0, 0.0)
@@ -153,18 +153,18 @@ def test_asking_for_gpu_spectra_without_a_gpu_says_why_in_one_line():
         DenseSpectra("gpu")  # the eigensolver's own device: the same line
 
 
-@pytest.mark.skipif(WHY_NO_GPU is None, reason="a GPU is present: bifurcate --spectra gpu runs")
+@pytest.mark.skipif(WHY_NO_GPU is None, reason="a GPU is present: bifurcate --device gpu runs")
 def test_bifurcate_asked_for_gpu_spectra_without_a_gpu_says_why_in_one_line(tmp_path):
-    result = run_main("bifurcate", "--spectra", "gpu", "--out", str(tmp_path / "out"))
+    result = run_main("bifurcate", "--device", "gpu", "--out", str(tmp_path / "out"))
     assert result.returncode == 2 and result.stderr.count("\n") == 1, result.stderr
-    assert error_line(result, "bifurcate") == f"bifurcate error: --spectra gpu: {WHY_NO_GPU}"
+    assert error_line(result, "bifurcate") == f"bifurcate error: --device gpu: {WHY_NO_GPU}"
     assert not (tmp_path / "out").exists()
 
 
 def test_bifurcate_refuses_an_unknown_device_in_one_line(tmp_path):
-    result = run_main("bifurcate", "--spectra", "xpu", "--out", str(tmp_path / "out"))
+    result = run_main("bifurcate", "--device", "xpu", "--out", str(tmp_path / "out"))
     assert result.returncode == 2 and result.stderr.count("\n") == 1, result.stderr
-    assert error_line(result, "bifurcate") == "bifurcate error: --spectra: must be cpu, gpu or auto (got 'xpu')"
+    assert error_line(result, "bifurcate") == "bifurcate error: --device: must be cpu, gpu or auto (got 'xpu')"
 
 
 @pytest.mark.skipif(WHY_NO_GPU is not None, reason=f"no GPU spectra here: {WHY_NO_GPU}")

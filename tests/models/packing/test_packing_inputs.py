@@ -47,20 +47,23 @@ def test_a_shear_too_large_for_the_memory_is_refused_naming_N_and_its_spectra(
         tmp_path, capsys, command, N):
     path = scene(tmp_path, f"[packing]\nN = {N}\n")
     line = refused(capsys, tmp_path, command, str(path), *COMMANDS[command])
-    assert f"N = {N}: a shear with dense {3 * N} x {3 * N} spectra" in line
+    if command in ("bifurcate", "simulate"):  # bifurcate's auto spectra at this N, simulate's
+        assert f"N = {N}: a shear storing about " in line and f"points of {3 * N} unknowns" in line
+    else:  # every state's spectrum
+        assert f"N = {N}: a shear with dense {3 * N} x {3 * N} spectra" in line
     assert "of memory, more than this machine's" in line and str(path) in line
 
 
 def test_bifurcate_counts_the_dense_spectra_of_each_scan_worker(tmp_path, capsys):
     path = scene(tmp_path, "[packing]\nN = 100000\n")
-    line = refused(capsys, tmp_path, "bifurcate", str(path), "--workers", "3")
+    line = refused(capsys, tmp_path, "bifurcate", str(path), "--workers", "3", "--spectra", "full")
     assert "spectra in 4 processes" in line
 
 
 def test_a_windowed_shear_counts_the_points_it_stores(tmp_path, capsys):
     path = scene(tmp_path, "[packing]\nN = 10000000\n")
-    line = refused(capsys, tmp_path, "bifurcate", str(path), "--window=-3:8")
-    assert "N = 10000000: a shear with a window storing about" in line
+    line = refused(capsys, tmp_path, "bifurcate", str(path), "--window=-3:8", "--spectra", "full")
+    assert "N = 10000000: a shear storing about" in line and "with a window" in line
     assert "points of 30000000 unknowns" in line
 
 
@@ -155,7 +158,9 @@ def test_every_packing_command_says_how_long_it_will_take_before_it_starts(
     main([command, str(path), *args, "--out", str(tmp_path / "out")])
     first = capsys.readouterr().err.splitlines()[0]
     assert first.startswith(f"{command}: about ") and "(a rough estimate) to prepare 256 disks" in first
-    assert "shear them to gamma = 0.05 with every eigenvalue" in first
+    shear = {"bifurcate": "with the spectrum every 0.0005",  # auto for 256 disks
+             "simulate": "without spectra"}.get(command, "with every eigenvalue")
+    assert f"shear them to gamma = 0.05 {shear}" in first
     if command in ("simulate", "verify"):
         runs = "once" if command == "simulate" else "up to 10 times"
         assert f"run {runs} for about 2.5e+05 time steps" in first
