@@ -23,9 +23,10 @@ LAYERS = [
 ]
 RANK = {folder: k for k, layer in enumerate(LAYERS) for folder in layer}
 ENTRY_POINTS = {"diskfriction/__main__.py"}  # `python -m diskfriction` starts the command line
-FRONT = re.compile(r"^models/\w+/commands\.py$")
-"""A geometry's front (models/<geometry>/commands.py: what the commands do for its scenes) is
-part of the command line's layer, though it lives in its model's folder."""
+FRONT = re.compile(r"^models/\w+/commands(_\w+)?\.py$")
+"""A geometry's front (models/<geometry>/commands.py: what the commands do for its scenes, and
+the commands_*.py it is split into) is part of the command line's layer, though it lives in its
+model's folder."""
 
 
 def imported_names(nodes) -> set[str]:
@@ -50,7 +51,7 @@ def folder_of(name: str) -> str:
 
 def modules_of(folder: str) -> list[Path]:
     """The sources of a layer's folder (a geometry's front counts as the command line's)."""
-    paths = sorted(ROOT.glob("models/*/commands.py")) if folder == "cli" else []
+    paths = sorted(ROOT.glob("models/*/commands*.py")) if folder == "cli" else []
     return paths + [p for p in sorted((ROOT / folder).rglob("*.py"))
                     if not FRONT.match(p.relative_to(ROOT).as_posix())]
 

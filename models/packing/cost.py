@@ -1,5 +1,5 @@
 """Rough wall time of a packing command's parts, for the estimate each prints before it starts
-(models/packing/commands.check_packing), and a run's time steps, known before any work.
+(models/packing/commands_checks.check_packing), and a run's time steps, known before any work.
 
 Rules fitted to runs on the project's 2-core machine, good to a factor of 2 to 3 on those runs:
 enough to tell minutes from days (what each was fitted on, and the shears since:

@@ -1,6 +1,6 @@
 """What the preparation (prepare.py, prepared.py) can make of a PackingScene, known before any
 work: a box wide enough for its contacts, and a target pressure whose forces double precision
-resolves to the preparation's tolerance (models/packing/commands.check_packing refuses the others).
+resolves to the preparation's tolerance (models/packing/commands_checks.check_packing refuses the others).
 
 Both are set by the preparation's first relaxation, at PHI_START = 0.88 whatever the target
 (prepare.py), in a box of side L_s = sqrt(pi sum R_i^2 / PHI_START):

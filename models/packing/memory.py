@@ -1,5 +1,5 @@
 """What a packing command holds in memory, so that a scene too large for the machine is refused
-with one line before any work (models/packing/commands.check_packing), as models/chain/memory.py does for a chain's
+with one line before any work (models/packing/commands_checks.check_packing), as models/chain/memory.py does for a chain's
 sweep. The counts are lower bounds: the guard refuses only what cannot fit.
 
 - The preparation (prepare.py, fire.py, the frictionless kernel's cell list and contact rows):
