@@ -292,7 +292,7 @@ def plot_packing_diagram(branch: Branch, scene: PackingScene, path: Path) -> Non
         im.secondary_yaxis("right", functions=(lambda v: v / w2, lambda v: v * w2)).set_ylabel(
             rf"{part} $\lambda / \omega_0^2$")
     im.set_xlabel(strain)
-    title += (f"; spectra sampled at {count(gamma.size, 'grid strain')}, no collision located" if sampled
+    title += (f"\nspectra sampled at {count(gamma.size, 'grid strain')}, no collision located" if sampled
               else f"; {count(len(branch.collisions), 'collision')}")
     if window is not None:
         title += (f"\nwindow {window[0]:g} <= Re lambda <= {window[1]:g} {unit}: its complex "

@@ -7,11 +7,19 @@ docs/notes/packings-speed.md, "The time estimates against the shears they were f
 - The preparation: PREPARE_SECONDS_N1024 (N / 1024)^1.75, its FIRE steps growing as N^0.75 and
   each step as N; fitted to 1.04 s at 256 disks and 11.6 s at 1024
   (docs/notes/packings-preparation.md, "Cost").
-- The shear with every eigenvalue (dense spectra; two scan workers, as bifurcate runs it):
+- The shear without spectra (spectra none): SHEAR_START_SECONDS + NONE_SECONDS_PER_STRAIN
+  N^NONE_EXPONENT per unit strain, fitted to the shears of 2026-12-02 (5d116c6, scene defaults,
+  seed 1): 32 disks to gamma = 0.01 in 0.84 s and 256 disks in 32.4 s (the rule: 0.86 and 33 s);
+  64 disks took 5.4 s and 1024 disks 642 s to 0.002 with the machine busy (the rule: 2.9 and
+  76 s: with plastic events in proportion to N the rule errs low from 1024 disks on).
+- With sampled spectra (sample:DGAMMA): that, and the spectrum at each grid strain,
+  DENSE_SAMPLE_SECONDS_N256 (N / 256)^3 dense (0.27 s at 256 disks on one BLAS thread) or
+  WINDOW_SAMPLE_SECONDS_N1024 (N / 1024)^1.5 by a window (about 0.1 to 0.5 s per shift-invert
+  at 1024 disks, docs/notes/packings-window-methods.md, several per sample while it is sized).
+- The shear with every eigenvalue (spectra full, dense; two scan workers, as bifurcate runs it):
   SHEAR_START_SECONDS + DENSE_SECONDS_PER_STRAIN N^2.5 per unit strain, fitted to the shears of
-  2026-11-27 (d253925: 32 disks to gamma = 0.01 in 12 to 25 s, 64 disks in 74 to 86 s; the rule
-  gives 17 and 98 s besides its start). The shears of 2026-12-02 (9b7bcfe) are 2 to 5 times
-  faster, 3.3 to 7.4 s for 32 disks and 29.6 to 53.4 s for 64: this estimate errs high.
+  2026-12-02 (9b7bcfe: 32 disks to gamma = 0.01 in 3.3 to 7.4 s, 64 disks in 29.6 to 53.4 s; the
+  rule gives 5.8 and 33 s besides its start).
 - With a spectral window, WINDOW_SECONDS_PER_STRAIN N^2.5, fitted to 256 disks to 0.05 with the
   window [-3, 8] in about 5 minutes (the rule: 525 s) and 1024 disks at 4.7e5 to 5.9e5 s per
   unit strain (the rule: 3.4e5 s). A window costs more the more eigenvalues it holds.
@@ -29,12 +37,12 @@ from diskfriction.scenes.packing import PackingScene
 PREPARE_SECONDS_N1024 = 11.6
 PREPARE_EXPONENT = 1.75
 SHEAR_EXPONENT = 2.5
-DENSE_SECONDS_PER_STRAIN = 0.3
+DENSE_SECONDS_PER_STRAIN = 0.1
 WINDOW_SECONDS_PER_STRAIN = 0.01
 NONE_SECONDS_PER_STRAIN = 0.2
 NONE_EXPONENT = 1.75
-DENSE_SAMPLE_SECONDS_N256 = 0.5
-WINDOW_SAMPLE_SECONDS_N1024 = 2.0
+DENSE_SAMPLE_SECONDS_N256 = 0.3
+WINDOW_SAMPLE_SECONDS_N1024 = 1.0
 SHEAR_START_SECONDS = 4.0
 """What a shear costs besides its strain: the kernels loaded, the first spectra (16 disks to
 gamma = 0.002: 4 to 9 s in a fresh map worker)."""
