@@ -98,7 +98,8 @@ class Contact:
 
     @classmethod
     def of(cls, scene: Scene, R_eff: float, friction: bool) -> Contact:
-        """k = k_n / sqrt(R_eff), k_t' = k_t / sqrt(R_eff) (module docstring)."""
+        """k = k_n / sqrt(R_eff), k_t' = k_t / sqrt(R_eff) (module docstring); `scene` a chain's or
+        a packing's (peers/packing_deck.py: one Contact per pair of radii)."""
         root = math.sqrt(R_eff)
         return cls(R_eff, scene.k_n / root, scene.k_t / root, scene.mu, friction)
 

@@ -68,7 +68,7 @@ import numpy as np
 
 from diskfriction.errors import OneLineError
 from diskfriction.files import save_text
-from diskfriction.peers.lammps_deck import DATA_FILE, INPUT_FILE, INTEGRATORS, number
+from diskfriction.peers.lammps_deck import DATA_FILE, INPUT_FILE, INTEGRATORS, Contact, number
 from diskfriction.scenes.packing import PackingScene
 
 STRESS_FILE = "stress.txt"
@@ -136,32 +136,6 @@ def time_step(scene: PackingScene) -> float:
 def run_steps(strain: float, rate: float, dt: float) -> int:
     """The deck's steps over `strain`: ceil(strain / (rate dt)), as LAMMPS computes them."""
     return math.ceil(strain / (rate * dt))
-
-
-@dataclass(frozen=True)
-class PairCoefficients:
-    """LAMMPS coefficients of the contacts between two radii (raw units): R_eff [length],
-    hertz k and mindlin k_t' [force / length^2], mu, and whether they carry a tangential force."""
-
-    R_eff: float
-    k: float
-    k_t: float
-    mu: float
-    friction: bool
-
-    @classmethod
-    def of(cls, scene: PackingScene, r_a: float, r_b: float) -> PairCoefficients:
-        """k = k_n / sqrt(R_eff), k_t' = k_t / sqrt(R_eff), R_eff = r_a r_b / (r_a + r_b)."""
-        R_eff = r_a * r_b / (r_a + r_b)
-        root = math.sqrt(R_eff)
-        friction = scene.resolved_effects.pair_law != "none"
-        return cls(R_eff, scene.k_n / root, scene.k_t / root, scene.mu, friction)
-
-    def model(self) -> str:
-        """The granular model arguments of pair_coeff."""
-        tangential = (f"tangential mindlin {number(self.k_t)} 0 {number(self.mu)}" if self.friction
-                      else "tangential linear_nohistory 0 0")
-        return f"hertz {number(self.k)} 0 {tangential} damping viscoelastic"
 
 
 @dataclass(frozen=True)
@@ -289,7 +263,8 @@ def input_deck(scene: PackingScene, sizes: tuple[float, ...], L: float, rate: fl
               "every damping coefficient 0.",
               "pair_style granular"]
     for a, b in pairs:
-        coefficients = PairCoefficients.of(scene, sizes[a], sizes[b])
+        R_eff = sizes[a] * sizes[b] / (sizes[a] + sizes[b])
+        coefficients = Contact.of(scene, R_eff, scene.resolved_effects.pair_law != "none")
         lines.append(f"pair_coeff {a + 1} {b + 1} {coefficients.model()}   # R_eff = "
                      f"{number(coefficients.R_eff)}")
     spin = [eta * c * m_t * r**2 for r, m_t in zip(sizes, masses)]
