@@ -8,10 +8,10 @@ docs/notes/packings-speed.md, "The time estimates against the shears they were f
   each step as N; fitted to 1.04 s at 256 disks and 11.6 s at 1024
   (docs/notes/packings-preparation.md, "Cost").
 - The shear without spectra (spectra none): SHEAR_START_SECONDS + NONE_SECONDS_PER_STRAIN
-  N^NONE_EXPONENT per unit strain, fitted to the shears of 2026-12-02 (5d116c6, scene defaults,
-  seed 1): 32 disks to gamma = 0.01 in 0.84 s and 256 disks in 32.4 s (the rule: 0.86 and 33 s);
-  64 disks took 5.4 s and 1024 disks 642 s to 0.002 with the machine busy (the rule: 2.9 and
-  76 s: with plastic events in proportion to N the rule errs low from 1024 disks on).
+  N^NONE_EXPONENT per unit strain, fitted to the shears of 2026-12-02 (5d116c6 to 11eff34, scene
+  defaults, seed 1, to gamma = 0.01): 32 disks in 0.84 s, 64 disks in 4.5 to 6.7 s, 256 disks in
+  32 to 62 s and 1024 disks in 1239 s, the last three with the machine busy (the rule: 0.84,
+  3.4, 54 and 860 s; docs/notes/packings-lammps.md).
 - With sampled spectra (sample:DGAMMA): that, and the spectrum at each grid strain,
   DENSE_SAMPLE_SECONDS_N256 (N / 256)^3 dense (0.27 s at 256 disks on one BLAS thread) or
   WINDOW_SAMPLE_SECONDS_N1024 (N / 1024)^1.5 by a window (about 0.1 to 0.5 s per shift-invert
@@ -39,8 +39,8 @@ PREPARE_EXPONENT = 1.75
 SHEAR_EXPONENT = 2.5
 DENSE_SECONDS_PER_STRAIN = 0.1
 WINDOW_SECONDS_PER_STRAIN = 0.01
-NONE_SECONDS_PER_STRAIN = 0.2
-NONE_EXPONENT = 1.75
+NONE_SECONDS_PER_STRAIN = 0.082
+NONE_EXPONENT = 2.0
 DENSE_SAMPLE_SECONDS_N256 = 0.3
 WINDOW_SAMPLE_SECONDS_N1024 = 1.0
 SHEAR_START_SECONDS = 4.0
