@@ -35,7 +35,8 @@ PRESSURES = (0.01, 0.1)
 def run(N: int, mu: float, pressure: float, seed: int, gamma_end: float) -> str:
     start = time.perf_counter()
     gamma_end *= (pressure / 0.1) ** (2.0 / 3.0)
-    scene = PackingScene(N=N, seed=seed, mu=mu, pressure=pressure, gamma_range=(0.0, gamma_end))
+    scene = PackingScene(N=N, seed=seed, mu=mu, pressure=pressure, gamma_range=(0.0, gamma_end),
+                         spectra="full")
     branch = shear(scene, prepare_scene(scene), ShearParams(workers=0), plastic_events=1000)
     lam0 = branch.eigenvalues[0]
     omega = float(np.sqrt(np.median(lam0[lam0 != 0].real)))

@@ -63,7 +63,7 @@ def main() -> None:
     N, seed, events, window = read_case(parser, args.case, "EVENTS", int)
     try:
         dampings = [float(d) for d in args.damping.split(",")]
-        scene = PackingScene(N=N, seed=seed, gamma_range=(0.0, 1.0))
+        scene = PackingScene(N=N, seed=seed, gamma_range=(0.0, 1.0), spectra="full")
         for d in dampings:
             replace(scene, relaxation="damped", damping=d)
     except (ValueError, SceneValueError) as error:

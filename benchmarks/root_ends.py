@@ -54,7 +54,7 @@ def main() -> None:
     case = parser.parse_args().case
     N, seed, gamma, window = read_case(parser, case, "GAMMA", float)
     try:
-        scene = PackingScene(N=N, seed=seed, gamma_range=(0.0, gamma))
+        scene = PackingScene(N=N, seed=seed, gamma_range=(0.0, gamma), spectra="full")
     except SceneValueError as error:
         parser.error(str(error))
     print(f"{N} disks, seed {seed}, to gamma = {gamma:g}, window {window}, scans inline")

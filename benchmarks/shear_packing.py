@@ -67,7 +67,7 @@ def reporter(every: float, start: float):
 
 
 def run(N: int, seed: int, gamma_end: float, window=None, workers=None, every: float = 0.0) -> str:
-    scene = PackingScene(N=N, seed=seed, gamma_range=(0.0, gamma_end))
+    scene = PackingScene(N=N, seed=seed, gamma_range=(0.0, gamma_end), spectra="full")
     start = time.perf_counter()
     packing = prepare_scene(scene)
     prepared = time.perf_counter() - start

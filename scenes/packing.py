@@ -73,7 +73,7 @@ class PackingScene:
         if self.effects.conventions != "model":
             raise SceneValueError("PackingScene", ("effects",), (self.effects,),
                                   'a packing takes conventions "model" only')
-        if self.sample_spacing is not None and self.sample_spacing > self.gamma_range[1] - self.gamma_range[0]:
+        if self.spectra.startswith("sample:") and self.sample_spacing > self.gamma_range[1] - self.gamma_range[0]:
             raise SceneValueError(
                 "PackingScene", ("spectra", "gamma_range"), (self.spectra, self.gamma_range),
                 "the sample grid's spacing is wider than the strain range: no two samples in it")
@@ -99,11 +99,15 @@ class PackingScene:
 
     @property
     def resolved_spectra(self) -> str:
-        """spectra with "auto" resolved from N (SPECTRA_BY_N): "none", "full" or
-        "sample:DGAMMA"."""
+        """spectra with "auto" resolved from N (SPECTRA_BY_N; a sample grid no wider than the
+        strain range): "none", "full" or "sample:DGAMMA"."""
         if self.spectra != "auto":
             return self.spectra
-        return next(choice for most, choice in SPECTRA_BY_N if most is None or self.N <= most)
+        choice = next(choice for most, choice in SPECTRA_BY_N if most is None or self.N <= most)
+        span = self.gamma_range[1] - self.gamma_range[0]
+        if choice.startswith("sample:") and float(choice.partition(":")[2]) > span:
+            return f"sample:{span!r}"  # a strain range shorter than the grid: its two ends
+        return choice
 
     @property
     def sample_spacing(self) -> float | None:

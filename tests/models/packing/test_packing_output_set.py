@@ -73,7 +73,9 @@ def test_every_output_names_its_scene_and_the_set_is_written_once(whole):
     from diskfriction.scenes.load import load_scene
 
     scene_path, out = whole
-    physics = json.loads(json.dumps(load_scene(scene_path).physics_fields()))
+    scene = load_scene(scene_path)  # its spectra "auto", which the outputs record resolved
+    physics = json.loads(json.dumps({**scene.physics_fields(), "spectra": scene.resolved_spectra}))
+    assert physics["spectra"] == "full"  # 16 disks
     assert sorted(p.name for p in out.iterdir()) == OUTPUTS
     for name in ("packing.npz", "branch.npz"):
         with np.load(out / name, allow_pickle=False) as data:

@@ -192,6 +192,6 @@ def test_the_locator_starts_from_the_predicted_branch_point(monkeypatch):
         return found
 
     monkeypatch.setattr(fast, "locate", counted)
-    scene = PackingScene(N=256, seed=1, gamma_range=(0.0, 1.27e-4))
+    scene = PackingScene(N=256, seed=1, gamma_range=(0.0, 1.27e-4), spectra="full")
     branch = shear(scene, prepare_scene(scene), ShearParams(workers=0), window=(-3.0, 8.0))
     assert len(branch.collisions) >= 5 and failed == []

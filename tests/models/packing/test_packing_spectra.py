@@ -119,6 +119,8 @@ def test_auto_spectra_follow_N():
     assert PackingScene(N=16).resolved_spectra == "full"
     assert PackingScene(N=4096).resolved_spectra == "none"
     assert PackingScene(N=4096, spectra="full").resolved_spectra == "full"
+    short = PackingScene(N=256, gamma_range=(0.0, 1e-4))  # shorter than auto's grid of 0.0005
+    assert short.resolved_spectra == "sample:0.0001" and short.sample_spacing == 1e-4
 
 
 @pytest.mark.parametrize("spectra, why", [
