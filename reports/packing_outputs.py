@@ -129,8 +129,10 @@ def plastic_record(event, pairs: Optional[int], growth: Optional[float]) -> dict
 def save_packing_branch(out: Path, branch: Branch, scene: PackingScene) -> None:
     """branch.npz (continuation/records.branch_arrays: every per-point array of the shear's
     branch, raw units, the contact rows and histories left out, the segments and window runs
-    as labels, plastic_gamma; and scene_arrays), collisions.json (records.save_collisions)
-    and plastic.json (plastic_records), each naming the scene (scene_record)."""
+    as labels, plastic_gamma; the scene's resolved spectra and, with sampled spectra, the
+    samples' pairs and eigenvalues; and scene_arrays), collisions.json (records.collisions_json
+    with the spectra; its collisions null where none were looked for) and plastic.json
+    (plastic_records), each naming the scene (scene_record)."""
     spectral = spectral_points(branch)
     samples = ({} if spectra_of(branch) != "sample" else
                {"sample_n_complex": spectral[1], "sample_eigenvalues": spectral[2]})

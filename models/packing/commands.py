@@ -52,13 +52,14 @@ def bifurcate(args: argparse.Namespace, scene: PackingScene,
             raise CommandError(f"bifurcate error: {flag}: {why} (got {getattr(args, option)!r})")
     if args.workers is not None and args.workers < 0:
         raise CommandError(f"bifurcate error: --workers: must be >= 0 (got {args.workers})")
-    if args.json and (spectra := spectra_from_args(args, scene, window)) != "full":
+    spectra = spectra_from_args(args, scene, window)
+    if args.json and spectra != "full":
         raise CommandError(f"bifurcate error: --json: prints the collisions located, and spectra "
                            f"{spectra} locate none; give --spectra full")
 
     matrix = matrix_from_args("bifurcate", args, scene)
     out = output_dir("bifurcate", args.out, Path("out") / "bifurcate" / scene.name)
-    scene = dataclasses.replace(scene, matrix=str(matrix), spectra=spectra_from_args(args, scene, window))
+    scene = dataclasses.replace(scene, matrix=str(matrix), spectra=spectra)
     refuse_other_scene("bifurcate", out, scene)
     check_packing_bifurcate(args, scene, window)
 

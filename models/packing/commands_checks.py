@@ -46,13 +46,12 @@ def spectra_from_args(args: argparse.Namespace, scene: PackingScene,
     from diskfriction.scenes.scene import SceneValueError
 
     given = scene.spectra if args.spectra is None else args.spectra
-    where = "--spectra" if args.spectra is not None else f"{scene.source}: stability.spectra"
-    try:
+    try:  # the scene's own spectra were checked when it was loaded: only --spectra fails here
         chosen = dataclasses.replace(scene, spectra=spectra_choice(given)).resolved_spectra
     except Invalid as error:
-        raise CommandError(f"bifurcate error: {where}: {error.what} (got {given!r})") from None
+        raise CommandError(f"bifurcate error: --spectra: {error.what} (got {given!r})") from None
     except SceneValueError as error:
-        raise CommandError(f"bifurcate error: {where}: {error.what}, [{scene.gamma_range[0]:g}, "
+        raise CommandError(f"bifurcate error: --spectra: {error.what}, [{scene.gamma_range[0]:g}, "
                            f"{scene.gamma_range[1]:g}] (got {given!r})") from None
     if window is not None and chosen == "none":
         auto = f" (auto for {scene.N} disks)" if given == "auto" else ""

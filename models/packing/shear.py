@@ -77,10 +77,15 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
     of the scene's gamma range (collisions below its start are left out). At a fold (a plastic
     event) the run ends, unless plastic_events > 0: then up to that many events are passed
     (models/packing/plastic.py: strained past the fold, relaxed with friction) and the shear goes on
-    from each relaxed state as a new segment. window: (lo, hi) of Re lambda tracked by sparse
-    shift-invert (continuation/spectra/window.py; its k sized at the start of every segment,
-    and where it crowds sized anew, wider, at the last certified state:
-    spectra.window.widened), or None: every eigenvalue, a dense spectrum per sample.
+    from each relaxed state as a new segment. What it computes of the spectrum is the scene's
+    resolved_spectra: "full" tracks it at every accepted state and locates every collision;
+    "none" computes no eigenvalue (the same equilibria, contact and plastic events, bit for
+    bit); "sample:DGAMMA" adds the spectrum at the grid strains k DGAMMA
+    (models/packing/sampled.py; labelled "sample"). window: (lo, hi) of Re lambda tracked by
+    sparse shift-invert (continuation/spectra/window.py; its k sized at the start of every
+    segment, and where it crowds sized anew, wider, at the last certified state:
+    spectra.window.widened), or None: every eigenvalue, a dense spectrum per sample; with
+    "sample" the samples' band (ValueError with "none").
     done: the finished segments of an interrupted run with the same inputs (models/packing/segments.py):
     the run goes on where the next one starts, with the same result as a run never
     interrupted; on_segment(segment) is told each segment finished here once it is passed.
@@ -100,7 +105,9 @@ def shear(scene: PackingScene, packing: Packing, params: ShearParams = ShearPara
     pieces: the segments (the branch between two plastic events: each segment's eigenvalue
     labels are its own) and the window's runs; labelled "plastic": the plastic events passed
     (folds in gamma), one between each two segments; events: steps cut at a contact event;
-    status: the last segment's."""
+    status: the last segment's. Without spectra at the states (none, sample) eigenvalues and
+    condition are (m, 0), n_complex -1 (not counted) and there are no collisions; with
+    sample, labelled "sample" holds the samples and window is theirs."""
     network = network_of(scene, packing)
     mass = mass_diagonal(network, scene.m, scene.inertia)
     affine = float(np.linalg.norm(packing.positions[:, 1]))
@@ -256,7 +263,7 @@ def shear_scene(scene: PackingScene, plastic_events: int,
                 relax_progress=None, on_gamma: Optional[Callable[[float], None]] = None
                 ) -> tuple[Branch, Network, np.ndarray]:
     """(branch, network, mass diagonal): the scene's packing prepared (prepared.prepare_scene)
-    and sheared over its strain range with every eigenvalue tracked, passing up to
+    and sheared over its strain range with the scene's spectra (shear), passing up to
     `plastic_events` plastic events; `stage` is told each stage, `relax_progress` is the
     preparation's progress, `on_gamma` each accepted strain."""
     say = stage or (lambda line: None)
