@@ -46,12 +46,13 @@ class SpecialPoint:
     value: complex
 
 
-def _locate(problem: Problem, branch: Branch, k: int, psi: Callable[[Segment, Array, float], float],
+def _locate(problem: Problem, x_a: Array, x_b: Array, psi: Callable[[Segment, Array, float], float],
             done_tol: float, newton_tol: float, max_newton: int, by_x: bool,
             span: tuple[float, float] = (0.0, 1.0), linear_solver: LinearSolver = DIRECT):
-    """Refine the sign change of psi over step k, between segment coordinates span (default the
-    whole step); returns (x at the interpolated root, p bracket)."""
-    seg = Segment(problem, branch.x[k], branch.x[k + 1], newton_tol, max_newton, polish=False,
+    """Refine the sign change of psi over the step from x_a to x_b (accepted points), between
+    segment coordinates span (default the whole step); returns (x at the interpolated root, p
+    bracket)."""
+    seg = Segment(problem, x_a, x_b, newton_tol, max_newton, polish=False,
                   linear_solver=linear_solver)
     pts, vals = {}, {}
 
@@ -116,7 +117,7 @@ def locate_branch_points(problem: Problem, branch: Branch, brackets: list[tuple[
 
     found = []
     for k, s_lo, s_hi in brackets:
-        x, bracket = _locate(problem, branch, int(k), psi, tol_x, newton_tol, max_newton, by_x=True,
+        x, bracket = _locate(problem, *branch.x[k:k + 2], psi, tol_x, newton_tol, max_newton, by_x=True,
                              span=(s_lo, s_hi), linear_solver=linear_solver)
         found.append(SpecialPoint("branch", float(x[-1]), x[:-1], bracket, int(k), 0.0))
     return found
@@ -150,7 +151,7 @@ def locate_folds(problem: Problem, branch: Branch, tol_x: float = 1e-9,
     found = []
     turns = np.flatnonzero(np.sign(branch.tangent[:-1, -1]) * np.sign(branch.tangent[1:, -1]) < 0)
     for k in (k for k in turns if k not in skip):
-        x, bracket = _locate(problem, branch, int(k), psi, tol_x, newton_tol, max_newton, by_x=True,
+        x, bracket = _locate(problem, *branch.x[k:k + 2], psi, tol_x, newton_tol, max_newton, by_x=True,
                              linear_solver=linear_solver)
         found.append(SpecialPoint("fold", float(x[-1]), x[:-1], bracket, int(k), 0.0))
     return found
@@ -216,26 +217,72 @@ def hopf_steps(eigenvalues: Array, rel_tol: float = DEFAULT_REL_TOL) -> list[tup
     return sorted(found)
 
 
+def crossing_steps(eigenvalues: Array, growth: Callable[[Array], Array],
+                   rel_tol: float = DEFAULT_REL_TOL) -> list[tuple[int, int, bool]]:
+    """(step k, column i, rising) of every sign change of growth(lambda) along tracked
+    eigenvalue i: from a point where it is clearly on one side of zero (|growth| > rel_tol
+    sqrt(max|lambda|) there: growth in units of a frequency) to the next clearly on the other;
+    k is the first step of that span over which the sign changes, rising where it turns
+    positive. growth maps an array of eigenvalues to their growth rates elementwise; nan
+    eigenvalues (untracked) break a span. Of a complex pair crossing together (its two members,
+    conjugate, have one growth rate) only the member with Im lambda >= 0 where growth > 0 is
+    kept."""
+    ev = np.asarray(eigenvalues, dtype=complex)
+    g = np.asarray(growth(ev), dtype=float)
+    scale = np.sqrt(np.nanmax(np.abs(ev), axis=1, initial=0.0))[:, None]
+    signs = np.where(np.abs(g) > rel_tol * scale, np.sign(g), 0.0)
+    found = []
+    for i in range(ev.shape[1]):
+        last = None  # (point, sign) of the last clear value
+        for k in range(ev.shape[0]):
+            if not np.isfinite(g[k, i]):
+                last = None
+            elif signs[k, i] != 0:
+                if last is not None and last[1] != signs[k, i]:
+                    span = g[last[0]:k + 1, i]
+                    step = last[0] + int(np.flatnonzero(span[:-1] * span[1:] <= 0)[0])
+                    rising = bool(signs[k, i] > 0)
+                    if ev[step + 1 if rising else step, i].imag >= 0:
+                        found.append((step, i, rising))
+                last = (k, signs[k, i])
+    return sorted(found)
+
+
 def locate_hopf(problem: Problem, branch: Branch, tol_p: float = 1e-10, rel_tol: float = DEFAULT_REL_TOL,
                 newton_tol: float = 1e-12, max_newton: int = 10, linear_solver: LinearSolver = DIRECT,
                 eigensolver: Eigensolver = DEFAULT) -> list[SpecialPoint]:
     """Hopf points: a tracked complex pair whose real part crosses zero (hopf_steps), refined
-    until |dp| <= tol_p, the spectra by `eigensolver`. None on a conservative spectrum
-    (conservative: see CONSERVATIVE)."""
-    found = []
+    until |dp| <= tol_p, the spectra by `eigensolver` (locate_crossing with growth Re lambda).
+    None on a conservative spectrum (conservative: see CONSERVATIVE)."""
     ev = branch.eigenvalues
     if conservative(ev):
-        return found
-    for k, i in hopf_steps(ev, rel_tol):
-        lam_a, lam_b = ev[k, i], ev[k + 1, i]
+        return []
+    return [locate_crossing(problem, branch.x[k], branch.x[k + 1], ev[k, i], ev[k + 1, i], _real_part, k,
+                            tol_p, newton_tol, max_newton, linear_solver, eigensolver)
+            for k, i in hopf_steps(ev, rel_tol)]
 
-        def pair(x: Array, s: float) -> complex:
-            lam = eigensolver.eigensystem(problem, x[:-1], x[-1]).values
-            lam = lam[lam.imag > 0]
-            return complex(lam[np.argmin(np.abs(lam - (lam_a + s * (lam_b - lam_a))))])
 
-        x, bracket = _locate(problem, branch, k, lambda seg, x, s: pair(x, s).real,
-                             tol_p, newton_tol, max_newton, by_x=False, linear_solver=linear_solver)
-        value = pair(x, 0.5)
-        found.append(SpecialPoint("hopf", float(x[-1]), x[:-1], bracket, k, value))
-    return found
+def _real_part(lam: complex) -> float:
+    """Re lambda: the growth rate of a first-order system's mode e^(lambda t)."""
+    return lam.real
+
+
+def locate_crossing(problem: Problem, x_a: Array, x_b: Array, lam_a: complex, lam_b: complex,
+                    growth: Callable[[complex], float], step: int, tol_p: float = 1e-10,
+                    newton_tol: float = 1e-12, max_newton: int = 10, linear_solver: LinearSolver = DIRECT,
+                    eigensolver: Eigensolver = DEFAULT, upper: bool = True, kind: str = "hopf") -> SpecialPoint:
+    """Where the growth rate growth(lambda) of one tracked eigenvalue changes sign over the step
+    from the accepted point x_a (its eigenvalue lam_a) to x_b (lam_b), refined along the step's
+    secant segment until |dp| <= tol_p. lambda(s) at the segment coordinate s is the eigenvalue
+    (by `eigensolver`) nearest to the interpolant lam_a + s (lam_b - lam_a), among the upper
+    members of complex pairs where `upper` (a Hopf point: growth = Re lambda), among all where
+    not (a crossing that may follow an eigenvalue through its pair's birth). Returns the point
+    (`kind`, value lambda there); `step` is the branch step it lies in."""
+    def pair(x: Array, s: float) -> complex:
+        lam = eigensolver.eigensystem(problem, x[:-1], x[-1]).values
+        lam = lam[lam.imag > 0] if upper else lam
+        return complex(lam[np.argmin(np.abs(lam - (lam_a + s * (lam_b - lam_a))))])
+
+    x, bracket = _locate(problem, x_a, x_b, lambda seg, x, s: growth(pair(x, s)), tol_p, newton_tol,
+                         max_newton, by_x=False, linear_solver=linear_solver)
+    return SpecialPoint(kind, float(x[-1]), x[:-1], bracket, step, pair(x, 0.5))
