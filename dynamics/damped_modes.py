@@ -29,7 +29,10 @@ def damped_exponents(eigenvalues: np.ndarray, eta: float) -> np.ndarray:
 
 def damped_growth_rates(eigenvalues: np.ndarray, eta: float) -> np.ndarray:
     """(n,): max Re s of each eigenvalue's two exponents [1 / time] (damped_exponents); positive
-    for a damped-unstable mode."""
+    for a damped-unstable mode. At eta = 0 it is computed as the undamped analysis computes its
+    growth rates, |Im sqrt(lambda)| (= Re sqrt(-lambda)), so that the two agree bit for bit."""
+    if eta == 0.0:
+        return np.abs(np.sqrt(np.asarray(eigenvalues, dtype=complex)).imag)
     return damped_exponents(eigenvalues, eta)[..., 0].real
 
 

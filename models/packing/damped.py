@@ -1,0 +1,121 @@
+"""Damped stability along a shear (docs/packings.md#damped-stability): with a viscous drag
+-eta M q' on every degree of freedom, the modes of M q'' + eta M q' + J q = 0 grow as e^(s t),
+
+    s^2 + eta s + lambda = 0   for every eigenvalue lambda of M^-1 J
+
+(dynamics/damped_modes.py), and a complex pair lambda = a +- i b is damped-unstable exactly
+while b^2 > eta^2 a. Where a pair crosses into ("onset") or out of ("end") damped instability
+is a Hopf point of the damped linearization: there s = i w with w^2 = a and eta w = |b|. This
+module gives every accepted state's damped growth rate and locates those points along a shear's
+branch with spectra "full" (models/packing/shear.py), each to |d gamma| <= TOL_GAMMA by the
+core's locate_crossing over the step that holds it (the step's equilibria solved at fixed
+contacts, as the shear's own corrector does: within a step no contact event happens).
+
+eta = 0 is the undamped analysis: every complex pair grows from its birth to its death, so
+the onsets and ends are the located collisions themselves (births and deaths) and the damped
+growth rate is |Im sqrt(lambda)|, the same numbers the undamped analysis gives. A real
+eigenvalue through zero is a fold (a plastic event, where the segment ends), not a damped Hopf
+point, and is left out.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import partial
+
+import numpy as np
+
+from diskfriction.continuation.branch import Branch
+from diskfriction.continuation.detection.bifurcations import crossing_steps, locate_crossing
+from diskfriction.continuation.spectra.eigensolvers import DenseSpectra
+from diskfriction.continuation.spectra.tracking import DEFAULT_REL_TOL
+from diskfriction.dynamics.damped_modes import damped_growth_rates
+from diskfriction.matrices import Matrix
+from diskfriction.models.packing.equilibria import LINEAR_SOLVER, PackingEquilibria
+from diskfriction.models.packing.network import Network
+
+TOL_GAMMA = 1e-10
+"""The strain bracket every damped Hopf point is refined to [1] (the core's Hopf tolerance)."""
+
+NEWTON_TOL = 1e-11
+"""The equilibria's force tolerance in the refinement [force]: the shear's (ShearParams)."""
+
+
+@dataclass(frozen=True)
+class DampedHopf:
+    """A point of a shear's branch where a complex pair of M^-1 J crosses into (kind "onset") or
+    out of ("end") damped instability at the drag eta [1 / time]: its strain gamma, the
+    eigenvalue lambda there (the member with Im >= 0: Re lambda = w^2, Im lambda = eta w, w the
+    frequency of the marginal mode [1 / time]; at eta = 0 the double real eigenvalue of the
+    collision), the branch step holding it, the strain bracket it was refined to, and the
+    equilibrium q there (None at eta = 0, where the point is a located collision)."""
+
+    eta: float
+    gamma: float
+    kind: str
+    eigenvalue: complex
+    step: int
+    bracket: tuple[float, float]
+    q: np.ndarray | None = field(default=None, compare=False, repr=False)
+
+    @property
+    def frequency(self) -> float:
+        """w = sqrt(Re lambda): the marginal mode's angular frequency [1 / time]."""
+        return float(np.sqrt(max(self.eigenvalue.real, 0.0)))
+
+
+def fastest_damped(eigenvalues: np.ndarray, eta: float, rel_tol: float = DEFAULT_REL_TOL) -> float:
+    """The largest damped growth rate max Re s [1 / time] over the complex eigenvalues of M^-1 J
+    given (|Im lambda| > rel_tol max|lambda|; nan ones, outside a window, left out), -inf
+    without any: positive where the state has a damped-unstable pair at the drag eta."""
+    lam = np.asarray(eigenvalues, dtype=complex)
+    lam = lam[np.isfinite(lam)]
+    pairs = lam[np.abs(lam.imag) > rel_tol * np.abs(lam).max(initial=0.0)]
+    return float(damped_growth_rates(pairs, eta).max()) if pairs.size else -np.inf
+
+
+def damped_rates(eigenvalues: np.ndarray, eta: float, rel_tol: float = DEFAULT_REL_TOL) -> np.ndarray:
+    """fastest_damped of every row (state) of an (m, n) eigenvalue array [1 / time]."""
+    return np.array([fastest_damped(row, eta, rel_tol) for row in eigenvalues])
+
+
+def damped_hopfs(network: Network, mass: np.ndarray, branch: Branch, eta: float,
+                 rel_tol: float = DEFAULT_REL_TOL) -> tuple[DampedHopf, ...]:
+    """Every onset and end of damped instability at the drag eta [1 / time] along a shear's
+    branch (models/packing/shear.py) with spectra "full" of M^-1 J (every eigenvalue, or a
+    window's tracked columns), in strain order within each segment, segments in order (module
+    docstring; eta = 0: its collisions). ValueError for another matrix or a branch without
+    spectra at its states."""
+    if branch.matrix != Matrix.M_INV_J:
+        raise ValueError(f"damped stability needs the matrix M^-1 J (the modes of M q'' + eta M q' "
+                         f"+ J q = 0), not {branch.matrix}")
+    if branch.eigenvalues.shape[1] == 0:
+        raise ValueError('damped Hopf points are located on a branch with spectra "full", not one '
+                         'without spectra at its states ("none" or "sample")')
+    if eta == 0.0:
+        return tuple(DampedHopf(0.0, float(c.p), "onset" if c.kind == "birth" else "end",
+                                complex(c.eigenvalue), int(c.step), (float(c.p), float(c.p)))
+                     for c in branch.collisions)
+    growth = partial(damped_growth_rates, eta=eta)
+    found = []
+    for piece in branch.of_kind("segment"):
+        ev = branch.eigenvalues[piece.start:piece.stop]
+        for k, i, rising in crossing_steps(ev, growth, rel_tol):
+            point = _located(network, mass, branch, piece.start + k, ev[k, i], ev[k + 1, i], eta)
+            if abs(point.value.imag) > rel_tol * abs(point.value):  # a real one: a fold, left out
+                found.append(DampedHopf(eta, point.p, "onset" if rising else "end",
+                                        complex(point.value), point.step, point.bracket, point.u))
+    return tuple(sorted(found, key=lambda h: (h.step, h.gamma)))
+
+
+def _located(network: Network, mass: np.ndarray, branch: Branch, k: int, lam_a: complex,
+             lam_b: complex, eta: float):
+    """The sign change of the damped growth rate of the eigenvalue tracked from lam_a at state k
+    to lam_b at k + 1, located (bifurcations.locate_crossing) on the problem with state k's
+    committed contacts and histories."""
+    problem = PackingEquilibria(network, branch.u[k], branch.xi[k], branch.rows[k], float(branch.p[k]),
+                                mass, str(branch.matrix), NEWTON_TOL)
+    x_a, x_b = (np.append(branch.u[j], branch.p[j]) for j in (k, k + 1))
+    return locate_crossing(problem, x_a, x_b, lam_a, lam_b,
+                           lambda lam: float(damped_growth_rates(np.array([lam]), eta)[0]), k,
+                           TOL_GAMMA, NEWTON_TOL, 20, LINEAR_SOLVER, DenseSpectra(), upper=False,
+                           kind="damped-hopf")
