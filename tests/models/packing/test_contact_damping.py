@@ -186,7 +186,8 @@ def test_a_small_contact_damping_shifts_each_mode_at_first_order(packing):
     C = problem_damping(problem, q, 0.0, damping)
     C_red = (g.P @ (C / problem.mass[:, None])).toarray()[:, g.kept]
     lam, left, right = scipy.linalg.eig(problem.reduced(q, 0.0).toarray(), left=True)
-    shift = -np.einsum("ik,ij,jk->k", left.conj(), C_red, right) / (2 * np.sum(left.conj() * right, axis=0))
+    shift = -(np.einsum("ik,ij,jk->k", left.conj(), C_red, right)
+              / (2 * np.sum(left.conj() * right, axis=0)))
     root = np.sqrt(-lam.astype(complex))
     undamped = np.concatenate([root, -root])
     predicted = np.concatenate([root + shift, -root + shift])
