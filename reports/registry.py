@@ -16,8 +16,8 @@ from diskfriction.files import source_digest
 from diskfriction.scenes import Scene
 
 SWEEP_DEPS = ("diskfriction", "diskfriction.scenes", "diskfriction.symbolic",
-              "diskfriction.continuation", "diskfriction.models")
-DYNAMICS_DEPS = SWEEP_DEPS + ("diskfriction.dynamics", "diskfriction.studies")
+              "diskfriction.continuation", "diskfriction.dynamics", "diskfriction.models")
+DYNAMICS_DEPS = SWEEP_DEPS + ("diskfriction.studies",)
 """The folders a computation's result depends on (tests/test_layers.py checks them against the
 imports): a folder left out would let a cached result outlive an edit there."""
 
