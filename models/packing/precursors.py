@@ -1,0 +1,130 @@
+"""The plastic events of a shear against their precursors (docs/packings.md#plastic-events-and-their-precursors):
+one row per plastic event and drag eta, what the event was and the last onset of damped
+instability before it (models/packing/damped.py), so that "was this event preceded by a damped
+oscillatory instability, how long before, and is the unstable mode the event's displacement?"
+is read off a table.
+
+An event's displacement field u is the disks' translations from the last equilibrium before it
+(the fold) to the relaxed state after it, the mean translation removed (the network's drift
+carries no information). Its size is |u| [length] and its participation ratio
+
+    PR = (sum_i |u_i|^2)^2 / (N sum_i |u_i|^4)     (1 / N for one disk moving, 1 for all alike).
+
+A mode's overlap with u: the mode is the right eigenvector r of M^-1 J (the physical matrix,
+every disk's dofs) of the pair's upper member at the first accepted state after the onset; its
+translations, the mean removed, span with Re r and Im r the plane of displacements the
+oscillation passes through, and the overlap is |P u| / |u| (P the projection on that plane),
+in [0, 1]. A field drawn at random in the 2 N translations would overlap about sqrt(2 / (2 N))
+(random_overlap).
+"""
+from __future__ import annotations
+
+from typing import Optional, Sequence
+
+import numpy as np
+
+from diskfriction.continuation.branch import Branch
+from diskfriction.continuation.spectra.tracking import DEFAULT_REL_TOL
+from diskfriction.models.packing.damped import DampedHopf, fastest_damped
+from diskfriction.models.packing.equilibria import PackingEquilibria
+from diskfriction.models.packing.network import Network
+
+EVENT_COLUMNS = ("event", "gamma", "kind", "fold_lambda", "sigma_xy_before", "drop", "relative_drop",
+                 "displacement", "participation", "drag", "eta", "unstable_at_event",
+                 "growth_at_event", "onset_gamma", "strain_gap", "onset_frequency", "overlap",
+                 "random_overlap")
+"""The precursor table's columns, in order (event_rows; None where not known)."""
+
+
+def translations(q: np.ndarray, N: int) -> np.ndarray:
+    """(N, 2): the disks' (x, y) from q = (x_1..x_N, y_1..y_N, theta_1..theta_N)."""
+    return np.stack([q[:N], q[N:2 * N]], axis=1)
+
+
+def displacement_field(q_before: np.ndarray, q_after: np.ndarray, N: int) -> np.ndarray:
+    """(N, 2): the translations from q_before to q_after, their mean removed [length]."""
+    u = translations(q_after - q_before, N)
+    return u - u.mean(axis=0)
+
+
+def participation_ratio(u: np.ndarray) -> float:
+    """(sum |u_i|^2)^2 / (N sum |u_i|^4) of an (N, 2) field: 1 / N for one disk, 1 for all alike."""
+    squared = np.sum(u * u, axis=1)
+    return float(squared.sum() ** 2 / (u.shape[0] * np.sum(squared ** 2)))
+
+
+def plane_overlap(u: np.ndarray, mode: np.ndarray) -> float:
+    """|P u| / |u|: P the projection on the plane spanned by the translations of Re mode and Im
+    mode ((N, 2) complex, their mean removed)."""
+    mode = mode - mode.mean(axis=0)
+    basis = np.linalg.qr(np.stack([mode.real.ravel(), mode.imag.ravel()], axis=1))[0]
+    return float(np.linalg.norm(basis.T @ u.ravel()) / np.linalg.norm(u))
+
+
+def random_overlap(N: int) -> float:
+    """sqrt(2 / (2 N)): the typical overlap of a field drawn at random in 2 N translations with
+    a plane."""
+    return float(np.sqrt(1.0 / N))
+
+
+def pair_mode(network: Network, mass: np.ndarray, branch: Branch, k: int, near: complex) -> np.ndarray:
+    """(N, 2) complex: the translations of the right eigenvector of the physical M^-1 J at state k
+    (models/packing/equilibria.PackingEquilibria.physical) whose eigenvalue is the upper member
+    nearest `near`."""
+    problem = PackingEquilibria(network, branch.u[k], branch.xi[k], branch.rows[k], float(branch.p[k]),
+                                mass, str(branch.matrix))
+    values, vectors = np.linalg.eig(problem.physical(branch.u[k], float(branch.p[k])).toarray())
+    upper = np.flatnonzero(values.imag > 0)
+    j = upper[np.argmin(np.abs(values[upper] - complex(near.real, abs(near.imag))))]
+    return translations(vectors[:, j], network.N)
+
+
+def fold_eigenvalue(eigenvalues: np.ndarray, rel_tol: float = DEFAULT_REL_TOL) -> Optional[float]:
+    """The real eigenvalue of smallest |lambda| but the translations' exact zeros, over max|lambda|
+    (a fold: a real eigenvalue through zero, so this is near 0 at the last state before it);
+    None without spectra at the states."""
+    lam = eigenvalues[np.isfinite(eigenvalues)]
+    if not lam.size:
+        return None
+    scale = np.abs(lam).max()
+    real = lam[(np.abs(lam.imag) <= rel_tol * scale) & (lam != 0)].real
+    return float(real[np.argmin(np.abs(real))] / scale) if real.size else None
+
+
+def event_rows(network: Network, mass: np.ndarray, branch: Branch, omega_0: float,
+               hopfs: dict[float, Sequence[DampedHopf]]) -> list[dict]:
+    """One row per plastic event of a shear's branch and per drag of `hopfs` (drag in units of
+    omega_0 -> its located onsets and ends, models/packing/damped.damped_hopfs at eta = drag
+    omega_0), EVENT_COLUMNS: the event (its index, strain, kind, fold_lambda: fold_eigenvalue
+    at the last state before it, sigma_xy before and the drop [force / length], the
+    displacement field's size [length] and participation ratio); at the drag, whether the last
+    state before the event has a damped-unstable pair and the largest damped growth rate there
+    [1 / time]; the last onset in the event's segment before it: its strain, the strain gap to
+    the event, the marginal frequency w [1 / time] and the overlap of its mode with the event's
+    displacement (module docstring), None without one."""
+    N, rows = network.N, []
+    for index, event in enumerate(branch.plastic):
+        last = int(np.flatnonzero(branch.segment == index)[-1])
+        u = displacement_field(branch.u[last], event.after[0], N)
+        spectra = branch.eigenvalues.shape[1] > 0
+        common = {"event": index, "gamma": event.gamma, "kind": event.kind,
+                  "fold_lambda": fold_eigenvalue(branch.eigenvalues[last]) if spectra else None,
+                  "sigma_xy_before": event.stress_before, "drop": event.stress_before - event.stress_after,
+                  "relative_drop": (event.stress_before - event.stress_after) / event.stress_before,
+                  "displacement": float(np.linalg.norm(u)), "participation": participation_ratio(u),
+                  "random_overlap": random_overlap(N)}
+        first = int(np.flatnonzero(branch.segment == index)[0])
+        for drag, points in hopfs.items():
+            eta = drag * omega_0
+            growth = fastest_damped(branch.eigenvalues[last], eta)
+            onsets = [h for h in points if h.kind == "onset" and first <= h.step < last]
+            row = {**common, "drag": drag, "eta": eta, "unstable_at_event": bool(growth > 0),
+                   "growth_at_event": growth if np.isfinite(growth) else None,
+                   "onset_gamma": None, "strain_gap": None, "onset_frequency": None, "overlap": None}
+            if onsets:
+                onset = onsets[-1]
+                mode = pair_mode(network, mass, branch, onset.step + 1, onset.eigenvalue)
+                row |= {"onset_gamma": onset.gamma, "strain_gap": event.gamma - onset.gamma,
+                        "onset_frequency": onset.frequency, "overlap": plane_overlap(u, mode)}
+            rows.append({column: row[column] for column in EVENT_COLUMNS})
+    return rows
