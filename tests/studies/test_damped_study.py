@@ -1,0 +1,58 @@
+"""The damped study's pooling (studies/damped_study.py): Wilson's interval against its published
+values and a brute-force coverage check, and the grouping of cells' precursor rows."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from diskfriction.studies.damped_study import GROUP_COLUMNS, mean_interval, precursor_groups, wilson
+
+
+def test_wilson_interval_against_published_values():
+    """Newcombe (1998), Table I: 81/263 -> 0.2553-0.3662; 15/148 -> 0.0624-0.1605; 0/20 -> 0-0.1611."""
+    assert wilson(81, 263) == pytest.approx((0.2553, 0.3662), abs=5e-5)
+    assert wilson(15, 148) == pytest.approx((0.0624, 0.1605), abs=5e-5)
+    assert wilson(0, 20) == pytest.approx((0.0, 0.1611), abs=5e-5)
+    assert all(math.isnan(x) for x in wilson(0, 0))
+
+
+def test_wilson_covers_the_true_fraction_about_95_percent_of_the_time():
+    rng = np.random.default_rng(7)
+    p, n = 0.3, 60
+    hits = [lo <= p <= hi for lo, hi in (wilson(int(k), n) for k in rng.binomial(n, p, 4000))]
+    assert 0.93 <= np.mean(hits) <= 0.97
+
+
+def test_mean_interval():
+    mean, lo, hi = mean_interval([1.0, 2.0, 3.0, None])
+    assert mean == 2.0 and hi - mean == pytest.approx(1.959963984540054 / math.sqrt(3))
+    assert mean_interval([4.0]) == (4.0, 4.0, 4.0)
+
+
+def row(drag, onset, active, gap=None, overlap=None):
+    return {"drag": drag, "onset_gamma": onset, "unstable_at_event": active, "strain_gap": gap,
+            "overlap": overlap}
+
+
+def summary(drag, unstable, onsets):
+    return {"drag": drag, "unstable_fraction": unstable, "onsets_per_disk_strain": onsets}
+
+
+def test_groups_pool_seeds_and_split_drags():
+    cells = [({"mu": 1.0, "seed": 1}, [summary(0.0, 0.8, 3.0), summary(0.1, 0.2, 1.0)],
+              [row(0.0, 0.01, True, 0.001, 0.5), row(0.1, None, False)]),
+             ({"mu": 1.0, "seed": 2}, [summary(0.0, 0.6, 5.0), summary(0.1, 0.1, 0.5)],
+              [row(0.0, 0.02, True, 0.003, 0.3), row(0.0, 0.03, False, 0.002, 0.1),
+               row(0.1, 0.02, True, 0.004, 0.2), row(0.1, None, False)])]
+    groups = precursor_groups(cells, ["mu"])
+    assert [(g["mu"], g["drag"], g["cells"], g["events"]) for g in groups] == [(1.0, 0.0, 2, 3),
+                                                                                (1.0, 0.1, 2, 3)]
+    undamped, damped = groups
+    assert undamped["preceded_fraction"] == 1.0 and undamped["active_fraction"] == 2 / 3
+    assert (undamped["preceded_lo"], undamped["preceded_hi"]) == wilson(3, 3)
+    assert damped["preceded_fraction"] == 1 / 3 and damped["gap_median"] == 0.004
+    assert undamped["gap_median"] == 0.002 and undamped["overlap_median"] == 0.3
+    assert undamped["unstable_fraction"] == pytest.approx(0.7) and damped["onsets_per_disk_strain"] == 0.75
+    assert set(GROUP_COLUMNS) <= set(undamped)
