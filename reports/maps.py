@@ -52,7 +52,11 @@ def field(value) -> str:
 
 def csv_text(axes: list[Axis], rows: list[dict], columns: tuple = COLUMNS) -> str:
     """The table as CSV: a header of the varied keys and `columns`, one line per row."""
-    header = [axis.key for axis in axes] + list(columns)
+    return csv_table([axis.key for axis in axes] + list(columns), rows)
+
+
+def csv_table(header: list[str], rows: list[dict]) -> str:
+    """CSV text: `header`, then each row's values under it (field)."""
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
     writer.writerow(header)
