@@ -42,25 +42,42 @@ NEWTON_TOL = 1e-11
 
 @dataclass(frozen=True)
 class DampedHopf:
-    """A point of a shear's branch where a complex pair of M^-1 J crosses into (kind "onset") or
-    out of ("end") damped instability at the drag eta [1 / time]: its strain gamma, the
-    eigenvalue lambda there (the member with Im >= 0: Re lambda = w^2, Im lambda = eta w, w the
-    frequency of the marginal mode [1 / time]; at eta = 0 the double real eigenvalue of the
-    collision), the branch step holding it, the strain bracket it was refined to, and the
-    equilibrium q there (None at eta = 0, where the point is a located collision)."""
+    """A point of a shear's branch where a mode crosses into (kind "onset") or out of ("end")
+    damped instability at the damping rate eta [1 / time]: its strain gamma; the eigenvalue
+    lambda of M^-1 J there with the viscous drag (the member with Im >= 0: Re lambda = w^2,
+    Im lambda = eta w; at eta = 0 the double real eigenvalue of the collision), None with
+    contact dashpots (models/packing/contact_onsets.py); the marginal mode's angular
+    frequency w [1 / time]; the branch step holding it; the strain bracket it was refined to;
+    the equilibrium q there; and the mode's translations, (N, 2) complex (pair_translations; at
+    eta = 0 the collision's Jordan chain, _collision)."""
 
     eta: float
     gamma: float
     kind: str
-    eigenvalue: complex
+    eigenvalue: complex | None
+    frequency: float
     step: int
     bracket: tuple[float, float]
     q: np.ndarray | None = field(default=None, compare=False, repr=False)
+    mode: np.ndarray | None = field(default=None, compare=False, repr=False)
 
-    @property
-    def frequency(self) -> float:
-        """w = sqrt(Re lambda): the marginal mode's angular frequency [1 / time]."""
-        return float(np.sqrt(max(self.eigenvalue.real, 0.0)))
+
+def pair_translations(problem: PackingEquilibria, q: np.ndarray, gamma: float, near: complex) -> np.ndarray:
+    """(N, 2) complex: the disks' translations in the right eigenvector of the physical M^-1 J
+    at (q, gamma) (PackingEquilibria.physical: every disk's dofs) whose eigenvalue is the upper
+    member nearest `near`."""
+    N = problem.network.N
+    values, vectors = np.linalg.eig(problem.physical(q, gamma).toarray())
+    upper = np.flatnonzero(values.imag > 0)
+    j = upper[np.argmin(np.abs(values[upper] - complex(near.real, abs(near.imag))))]
+    return np.stack([vectors[:N, j], vectors[N:2 * N, j]], axis=1)
+
+
+def problem_at(network: Network, mass: np.ndarray, branch: Branch, k: int) -> PackingEquilibria:
+    """The equilibrium problem with state k's committed contacts and histories (within the step
+    from k to k + 1 no contact event happens)."""
+    return PackingEquilibria(network, branch.u[k], branch.xi[k], branch.rows[k], float(branch.p[k]),
+                             mass, str(branch.matrix), NEWTON_TOL)
 
 
 def fastest_damped(eigenvalues: np.ndarray, eta: float, rel_tol: float = DEFAULT_REL_TOL) -> float:
@@ -92,28 +109,38 @@ def damped_hopfs(network: Network, mass: np.ndarray, branch: Branch, eta: float,
         raise ValueError('damped Hopf points are located on a branch with spectra "full", not one '
                          'without spectra at its states ("none" or "sample")')
     if eta == 0.0:
-        return tuple(DampedHopf(0.0, float(c.p), "onset" if c.kind == "birth" else "end",
-                                complex(c.eigenvalue), int(c.step), (float(c.p), float(c.p)))
-                     for c in branch.collisions)
+        return tuple(_collision(c, network.N) for c in branch.collisions)
     growth = partial(damped_growth_rates, eta=eta)
     found = []
     for piece in branch.of_kind("segment"):
         ev = branch.eigenvalues[piece.start:piece.stop]
         for k, i, rising in crossing_steps(ev, growth, rel_tol):
-            point = _located(network, mass, branch, piece.start + k, ev[k, i], ev[k + 1, i], eta)
-            if abs(point.value.imag) > rel_tol * abs(point.value):  # a real one: a fold, left out
-                found.append(DampedHopf(eta, point.p, "onset" if rising else "end",
-                                        complex(point.value), point.step, point.bracket, point.u))
+            problem = problem_at(network, mass, branch, piece.start + k)
+            point = _located(problem, branch, piece.start + k, ev[k, i], ev[k + 1, i], eta)
+            lam = complex(point.value)
+            if abs(lam.imag) > rel_tol * abs(lam):  # a real one: a fold, left out
+                found.append(DampedHopf(eta, point.p, "onset" if rising else "end", lam,
+                                        float(np.sqrt(max(lam.real, 0.0))), point.step, point.bracket,
+                                        point.u, pair_translations(problem, point.u, point.p, lam)))
     return tuple(sorted(found, key=lambda h: (h.step, h.gamma)))
 
 
-def _located(network: Network, mass: np.ndarray, branch: Branch, k: int, lam_a: complex,
-             lam_b: complex, eta: float):
+def _collision(c, N: int) -> DampedHopf:
+    """A located collision as the damped Hopf point at eta = 0: a birth an onset, a death an end.
+    Its mode spans the plane of the Jordan chain (v, w) there (eigenvector, generalized
+    eigenvector: the pair's eigenvectors next to it are v +- i epsilon w to first order), in
+    coordinates relative to the reference disk (a uniform translation apart from the physical
+    ones: precursors.plane_overlap removes it)."""
+    chain = c.eigenvector + 1j * c.generalized_eigenvector
+    return DampedHopf(0.0, float(c.p), "onset" if c.kind == "birth" else "end", complex(c.eigenvalue),
+                      float(np.sqrt(max(c.eigenvalue, 0.0))), int(c.step), (float(c.p), float(c.p)),
+                      c.u, np.stack([chain[:N], chain[N:2 * N]], axis=1))
+
+
+def _located(problem: PackingEquilibria, branch: Branch, k: int, lam_a: complex, lam_b: complex,
+             eta: float):
     """The sign change of the damped growth rate of the eigenvalue tracked from lam_a at state k
-    to lam_b at k + 1, located (bifurcations.locate_crossing) on the problem with state k's
-    committed contacts and histories."""
-    problem = PackingEquilibria(network, branch.u[k], branch.xi[k], branch.rows[k], float(branch.p[k]),
-                                mass, str(branch.matrix), NEWTON_TOL)
+    to lam_b at k + 1, located (bifurcations.locate_crossing) on `problem` (problem_at k)."""
     x_a, x_b = (np.append(branch.u[j], branch.p[j]) for j in (k, k + 1))
     return locate_crossing(problem, x_a, x_b, lam_a, lam_b,
                            lambda lam: float(damped_growth_rates(np.array([lam]), eta)[0]), k,

@@ -10,11 +10,10 @@ carries no information). Its size is |u| [length] and its participation ratio
 
     PR = (sum_i |u_i|^2)^2 / (N sum_i |u_i|^4)     (1 / N for one disk moving, 1 for all alike).
 
-A mode's overlap with u: the mode is the right eigenvector r of M^-1 J (the physical matrix,
-every disk's dofs) of the pair's upper member at the first accepted state after the onset; its
-translations, the mean removed, span with Re r and Im r the plane of displacements the
-oscillation passes through, and the overlap is |P u| / |u| (P the projection on that plane),
-in [0, 1]. A field drawn at random in the 2 N translations would overlap about sqrt(2 / (2 N))
+A mode's overlap with u: the mode r is the onset's marginal mode (models/packing/damped.py
+DampedHopf.mode: the right eigenvector of the physical M^-1 J at the onset); its translations,
+the mean removed, span with Re r and Im r the plane of displacements the oscillation passes
+through, and the overlap is |P u| / |u| (P the projection on that plane), in [0, 1]. A field drawn at random in the 2 N translations would overlap about sqrt(2 / (2 N))
 (random_overlap).
 """
 from __future__ import annotations
@@ -26,7 +25,6 @@ import numpy as np
 from diskfriction.continuation.branch import Branch
 from diskfriction.continuation.spectra.tracking import DEFAULT_REL_TOL
 from diskfriction.models.packing.damped import DampedHopf, fastest_damped
-from diskfriction.models.packing.equilibria import PackingEquilibria
 from diskfriction.models.packing.network import Network
 
 EVENT_COLUMNS = ("event", "gamma", "kind", "fold_lambda", "sigma_xy_before", "drop", "relative_drop",
@@ -65,18 +63,6 @@ def random_overlap(N: int) -> float:
     """sqrt(2 / (2 N)): the typical overlap of a field drawn at random in 2 N translations with
     a plane."""
     return float(np.sqrt(1.0 / N))
-
-
-def pair_mode(network: Network, mass: np.ndarray, branch: Branch, k: int, near: complex) -> np.ndarray:
-    """(N, 2) complex: the translations of the right eigenvector of the physical M^-1 J at state k
-    (models/packing/equilibria.PackingEquilibria.physical) whose eigenvalue is the upper member
-    nearest `near`."""
-    problem = PackingEquilibria(network, branch.u[k], branch.xi[k], branch.rows[k], float(branch.p[k]),
-                                mass, str(branch.matrix))
-    values, vectors = np.linalg.eig(problem.physical(branch.u[k], float(branch.p[k])).toarray())
-    upper = np.flatnonzero(values.imag > 0)
-    j = upper[np.argmin(np.abs(values[upper] - complex(near.real, abs(near.imag))))]
-    return translations(vectors[:, j], network.N)
 
 
 def fold_eigenvalue(eigenvalues: np.ndarray, rel_tol: float = DEFAULT_REL_TOL) -> Optional[float]:
@@ -123,8 +109,7 @@ def event_rows(network: Network, mass: np.ndarray, branch: Branch, omega_0: floa
                    "onset_gamma": None, "strain_gap": None, "onset_frequency": None, "overlap": None}
             if onsets:
                 onset = onsets[-1]
-                mode = pair_mode(network, mass, branch, onset.step + 1, onset.eigenvalue)
                 row |= {"onset_gamma": onset.gamma, "strain_gap": event.gamma - onset.gamma,
-                        "onset_frequency": onset.frequency, "overlap": plane_overlap(u, mode)}
+                        "onset_frequency": onset.frequency, "overlap": plane_overlap(u, onset.mode)}
             rows.append({column: row[column] for column in EVENT_COLUMNS})
     return rows
