@@ -10,16 +10,23 @@ shift-invert) and summarises the branch (PACKING_COLUMNS):
     plastic event it may not pass or where the branch ended: `reason` says where and why) or
     "failed" (the preparation or the shear raised, e.g. a spectral window crowded: `reason`
     is its line, and nothing of the branch is kept);
-  * gamma_end, the strain reached; states, the accepted equilibria; complex_fraction, the
-    fraction of them with at least one complex pair of the matrix (in the window, if one);
-    pairs_mean, the mean number of pairs per state;
-  * sigma_median, sigma_max: the fastest pair's growth rate sigma = |Im sqrt(lambda)| of
-    M^-1 J [1 / time], median over the states with a complex pair, and largest; omega_c =
-    sqrt(k_c / m) (PackingScene.omega_0), k_c = dF_n/ddelta at the typical overlap delta_0, the
-    frequency of one small disk on one typical contact [1 / time], to read them against
-    (sigma / omega_c is comparable across pressures and stiffnesses). None for "J";
-  * collisions located, plastic_events passed, max_drop the largest relative drop of
-    sigma_xy at one, sigma_xy_end the shear stress at the end [force / length];
+  * gamma_end, the strain reached; states, the accepted equilibria;
+  * per unit strain, not per state (models/packing/strain_statistics.py: each state stands for
+    the strain halfway to its neighbours in its segment; the states crowd near contact events,
+    collisions and folds, where a mean over states would weigh them): complex_fraction, the
+    fraction of the strain covered with at least one complex pair of the matrix (in the
+    window, if one); pairs_mean, the mean number of pairs; sigma_median, the median of the
+    fastest mode's growth rate at zero drag sigma = max Re sqrt(-lambda) over the eigenvalues
+    of M^-1 J [1 / time] (the fastest pair's |Im sqrt(lambda)|; a real lambda < 0, a static
+    instability, would grow at sqrt(-lambda)) over the strain where a mode grows;
+    sigma_max, its largest at a state; omega_c = sqrt(k_c / m) (PackingScene.omega_0), k_c =
+    dF_n/ddelta at the typical overlap delta_0, the frequency of one small disk on one typical
+    contact [1 / time], to read them against (sigma / omega_c is comparable across pressures
+    and stiffnesses). sigma None for "J";
+  * collisions located, collisions_per_disk_strain the same per disk per unit strain covered
+    (the plastic events' jumps left out), plastic_events passed, max_drop the largest
+    relative drop of sigma_xy at one, sigma_xy_end the shear stress at the end
+    [force / length];
   * wall_time [s], the only field that depends on the machine.
 A cell is a pure function of its scene and parameters, as a chain's is (studies/maps.py).
 """
@@ -34,10 +41,11 @@ import numpy as np
 from diskfriction.scenes.packing import PackingScene
 
 PACKING_COLUMNS = ("status", "gamma_end", "states", "complex_fraction", "pairs_mean",
-                   "sigma_median", "sigma_max", "omega_c", "collisions", "plastic_events",
-                   "max_drop", "sigma_xy_end", "reason", "wall_time")
+                   "sigma_median", "sigma_max", "omega_c", "collisions", "collisions_per_disk_strain",
+                   "plastic_events", "max_drop", "sigma_xy_end", "reason", "wall_time")
 """A packing cell's summary, in table order (raw units; module docstring). None: not computed
-(no branch; no growth rate for J or without complex pairs)."""
+(no branch; no growth rate for J or without complex pairs; the fractions and means of a branch
+that covers no strain)."""
 
 SECONDS_PER_STRAIN_N2 = 3.4
 """A cell's shear (full spectra, scans inline) is estimated at this times N^2 seconds per unit
@@ -70,20 +78,14 @@ def packing_cell_seconds(scene: PackingScene, params: PackingMapParams) -> float
     return CELL_START_SECONDS + SECONDS_PER_STRAIN_N2 * scene.N ** 2 * scene.gamma_range[1]
 
 
-def growth_rates(branch) -> np.ndarray:
-    """The fastest pair's sigma = |Im sqrt(lambda)| at every state with a complex pair (the
-    tracked eigenvalues only: nan columns of a window left out) [1 / time]."""
-    from diskfriction.models.packing.dynamics import fastest_pair
-
-    return np.array([fastest_pair(e[np.isfinite(e)])[1]
-                     for e, n in zip(branch.eigenvalues, branch.n_complex) if n > 0])
-
-
 def branch_summary(scene: PackingScene, branch) -> dict:
     """The PACKING_COLUMNS of a sheared branch but wall_time (module docstring)."""
     from diskfriction.continuation.branch import StopCode
+    from diskfriction.files import json_values
+    from diskfriction.models.packing.strain_statistics import strain_statistics
 
-    sigma = growth_rates(branch) if str(branch.matrix) == "M^-1 J" else np.array([])
+    undamped = (0.0,) if str(branch.matrix) == "M^-1 J" else ()  # growth rates of M^-1 J only
+    per_strain = strain_statistics(branch, undamped, counted_from=scene.gamma_range[0])
     drops = [(e.stress_before - e.stress_after) / e.stress_before for e in branch.plastic]
     gamma_end = float(branch.gamma[-1])
     reason = ""
@@ -91,14 +93,16 @@ def branch_summary(scene: PackingScene, branch) -> dict:
         why = ("a plastic event (a fold in gamma) beyond the plastic events passed"
                if branch.status.code is StopCode.FOLD else branch.status.sentence(len(branch)))
         reason = f"shear ended at gamma = {gamma_end:.9g}: {why}"
-    return {"status": "ok" if branch.status.reached else "ended", "gamma_end": gamma_end,
-            "states": len(branch), "complex_fraction": float(np.mean(branch.n_complex > 0)),
-            "pairs_mean": float(np.mean(branch.n_complex)),
-            "sigma_median": float(np.median(sigma)) if sigma.size else None,
-            "sigma_max": float(sigma.max()) if sigma.size else None,
-            "omega_c": scene.omega_0, "collisions": len(branch.collisions),
-            "plastic_events": len(branch.plastic), "max_drop": float(max(drops, default=0.0)),
-            "sigma_xy_end": float(branch.stress[-1, 2]), "reason": reason}
+    return json_values({
+        "status": "ok" if branch.status.reached else "ended", "gamma_end": gamma_end,
+        "states": len(branch), "complex_fraction": per_strain.complex_fraction,
+        "pairs_mean": per_strain.pairs_mean,
+        "sigma_median": per_strain.growth_median[0] if undamped else None,
+        "sigma_max": per_strain.growth_max[0] if undamped else None,
+        "omega_c": scene.omega_0, "collisions": len(branch.collisions),
+        "collisions_per_disk_strain": per_strain.collisions_per_disk_strain,
+        "plastic_events": len(branch.plastic), "max_drop": float(max(drops, default=0.0)),
+        "sigma_xy_end": float(branch.stress[-1, 2]), "reason": reason})
 
 
 def packing_cell(scene: PackingScene, params: PackingMapParams) -> dict:

@@ -1,6 +1,7 @@
 """Maps of packing scenes (issue 25 item 5): the packing's numeric keys, one cell against
-bifurcate on the same scene, a cell that ends at a plastic event says so, and the options a
-packing map does not take are refused in one line."""
+bifurcate on the same scene, a cell's summary per unit strain (issue 63 item 2), a cell that ends
+at a plastic event says so, and the options a packing map does not take are refused in one
+line."""
 from __future__ import annotations
 
 import json
@@ -9,9 +10,13 @@ import numpy as np
 import pytest
 from commandline import error_line, run_cli, run_main
 
+from diskfriction.continuation.branch import Branch, Piece, Stop, StopCode
+from diskfriction.continuation.detection.detectors.base import Collision
+from diskfriction.continuation.spectra.tracking import Kind, count_complex_pairs
+from diskfriction.models.packing.plastic import PlasticEvent
 from diskfriction.scenes.load import SceneError, number_keys, with_values
 from diskfriction.scenes.packing import PackingScene
-from diskfriction.studies.packing_maps import PACKING_COLUMNS, PackingMapParams, packing_cell
+from diskfriction.studies.packing_maps import PACKING_COLUMNS, PackingMapParams, branch_summary, packing_cell
 
 SMALL = 'geometry = "packing"\nname = "small"\n[packing]\nN = 16\n[shear]\ngamma = [0.0, 0.002]\n'
 """16 disks to gamma = 0.002: some 30 states, complex pairs, one plastic event at mu = 10."""
@@ -38,6 +43,58 @@ def test_a_packing_cell_scene_is_checked_as_a_file_would_be():
     assert raised.value.key == "disks.eps"
 
 
+def trapezoid_fraction(gamma: np.ndarray, segment: np.ndarray, on: np.ndarray) -> float:
+    """The fraction of the strain where `on` holds, each state standing for half its steps to
+    its neighbours within its segment (labels per state)."""
+    held = total = 0.0
+    for label in np.unique(segment):
+        g, o = gamma[segment == label], on[segment == label]
+        steps = np.diff(g)
+        held += 0.5 * float(np.sum(steps * o[1:]) + np.sum(steps * o[:-1]))
+        total += float(g[-1] - g[0])
+    return held / total
+
+
+def toy_branch(matrix: str) -> Branch:
+    """Two disks' branch of two segments, the states crowded at gamma 0.001-0.0012 where the
+    pair 1 +- i b sits, a plastic event (sigma_xy 2 -> 1.5) between the segments, three
+    collisions."""
+    gamma = 0.01 * np.array([0.0, 0.1, 0.11, 0.12, 1.0, 1.5, 2.0])
+    b = np.array([0.0, 0.5, 0.2, 1.0, 0.0, 0.0, 0.0])
+    eigenvalues = np.array([[0, 1, 1 + 1j * x, 1 - 1j * x] for x in b])
+    stop = Stop(StopCode.REACHED)
+    collision = Collision(5e-4, Kind.BIRTH, 1.0, np.zeros(4), np.zeros(4), 0.0, (5e-4, 5e-4), 0.0,
+                          np.zeros(6), 0, (2, 3))
+    stress = np.zeros((7, 4))
+    stress[:, 2] = [1.0, 1.2, 1.4, 1.6, 2.0, 1.5, 1.7]
+    n_complex = np.array([count_complex_pairs(e) for e in eigenvalues])
+    return Branch(gamma, np.zeros((7, 6)), eigenvalues, n_complex, np.zeros(7), (collision,) * 3, stop,
+                  pieces=(Piece("segment", 0, 0, 5, stop), Piece("segment", 1, 5, 7, stop)),
+                  labelled={"plastic": (PlasticEvent(0.01, 2.0, 1.5, 0.1, 10),)}, columns={"stress": stress},
+                  parameter="gamma", matrix=matrix)
+
+
+def test_a_cells_summary_is_per_unit_strain_not_per_state():
+    """Cells of strain 0.05, 0.055, 0.01, 0.445, 0.44 | 0.25, 0.25 (times 0.01; 1.5 in all, the
+    plastic event's jump 0.5 left out): the pair over 0.51 of it, where 3 of 7 states hold one."""
+    scene = PackingScene(gamma_range=(0.0, 0.02))  # its omega_c; the disks are the branch's
+    summary = branch_summary(scene, toy_branch("M^-1 J"))
+    assert set(summary) == set(PACKING_COLUMNS) - {"wall_time"}
+    assert summary["complex_fraction"] == pytest.approx(0.51 / 1.5, rel=1e-12)
+    assert summary["pairs_mean"] == pytest.approx(0.51 / 1.5, rel=1e-12)
+    assert summary["collisions_per_disk_strain"] == pytest.approx(3 / (2 * 0.015), rel=1e-12)
+    sigma = np.abs(np.sqrt(1 + 1j * np.array([0.2, 0.5, 1.0])).imag)  # in order, weights 0.01, 0.055, 0.445
+    middle = (np.array([0.005, 0.0375, 0.2875]) / 0.51)  # each one's cumulative weight at its middle
+    assert summary["sigma_median"] == pytest.approx(
+        sigma[1] + (sigma[2] - sigma[1]) * (0.5 - middle[1]) / (middle[2] - middle[1]), rel=1e-12)
+    assert summary["sigma_max"] == pytest.approx(sigma[2], rel=1e-12)
+    assert summary["states"] == 7 and summary["collisions"] == 3 and summary["plastic_events"] == 1
+    assert summary["max_drop"] == 0.25 and summary["sigma_xy_end"] == 1.7 and summary["status"] == "ok"
+    of_J = branch_summary(scene, toy_branch("J"))
+    assert of_J["sigma_median"] is None and of_J["sigma_max"] is None
+    assert of_J["complex_fraction"] == summary["complex_fraction"]
+
+
 @pytest.mark.slow
 def test_a_packing_map_of_one_cell_equals_bifurcate_on_the_same_scene(tmp_path):
     scene = tmp_path / "small.toml"
@@ -59,7 +116,12 @@ def test_a_packing_map_of_one_cell_equals_bifurcate_on_the_same_scene(tmp_path):
     row = table.iloc[0]
     assert row["status"] == "ok" and row["gamma_end"] == branch["gamma"][-1]
     assert row["states"] == branch["gamma"].size and row["collisions"] == len(collisions)
-    assert row["complex_fraction"] == np.mean(branch["n_complex"] > 0)
+    on = branch["n_complex"] > 0
+    per_strain = trapezoid_fraction(branch["gamma"], branch["segment"], on)
+    assert row["complex_fraction"] == pytest.approx(per_strain, rel=1e-12)
+    assert row["collisions_per_disk_strain"] == pytest.approx(
+        len(collisions) / (16 * sum(np.ptp(branch["gamma"][branch["segment"] == s])
+                                    for s in np.unique(branch["segment"]))), rel=1e-12)
     assert row["plastic_events"] == branch["plastic_gamma"].size
     assert row["sigma_xy_end"] == branch["stress"][-1, 2]
     assert 0 < row["sigma_median"] <= row["sigma_max"] < row["omega_c"]
