@@ -1,14 +1,14 @@
 """map.png of a packing map (studies/packing_maps.py); map.csv and map.json are written as a
 chain's are (reports/maps.py, with PACKING_COLUMNS).
 
-    one key:  against the varied key, three panels: the fraction of accepted states with a
-              complex pair (and the mean number of pairs per state); the fastest pair's growth
-              rate sigma / omega_c, median and largest over the states; the collisions (left
+    one key:  against the varied key, three panels: the fraction of the strain with a complex
+              pair (and the mean number of pairs over the strain); the fastest pair's growth
+              rate sigma / omega_c, median over the strain and largest; the collisions (left
               axis) and plastic events (right axis) per 1e-3 of strain, both linear from 0.
               An ended cell is drawn with open markers (its
               figures cover the strain it reached); a failed cell has no point, its reason
               is written under the panels.
-    two keys: the fraction of states with a complex pair in the plane of the two keys.
+    two keys: the fraction of the strain with a complex pair in the plane of the two keys.
 Raw units (docs/packings.md: a packing has no paper units).
 """
 from __future__ import annotations
@@ -49,12 +49,12 @@ def plot_packing_bands(axis: Axis, cells: list[Cell], records: list[dict], path:
             ax.plot(x[ended], y[ended], marker, color="w", ms=3, zorder=3)
 
     draw(frac, [value(s, "complex_fraction") for s in summaries],
-         "states with a complex pair (fraction)", "C1")
+         "strain with a complex pair (fraction)", "C1")
     pairs = frac.twinx()
-    draw(pairs, [value(s, "pairs_mean") for s in summaries], "complex pairs per state (mean, right)",
+    draw(pairs, [value(s, "pairs_mean") for s in summaries], "complex pairs, mean over the strain (right)",
          "C0", "s")
-    frac.set(ylim=(-0.03, 1.03), ylabel="fraction of states")
-    pairs.set(ylim=(0, None), ylabel="pairs per state")
+    frac.set(ylim=(-0.03, 1.03), ylabel="fraction of strain")
+    pairs.set(ylim=(0, None), ylabel="pairs (mean over strain)")
     frac.legend(handles=frac.lines[:1] + pairs.lines[:1], fontsize=7, loc="lower left")
     for column, color, label in (("sigma_median", "C3", "median"), ("sigma_max", "k", "largest")):
         draw(rate, [value(s, column, s["omega_c"] or 1.0) for s in summaries],
@@ -92,5 +92,5 @@ def plot_packing_map(axes: list[Axis], cells: list[Cell], records: list[dict], p
         plot_packing_bands(axes[0], cells, records, path, title)
     else:
         plot_plane(axes, cells, records, "complex_fraction",
-                   "fraction of the accepted states with a complex pair", "no state",
+                   "fraction of the strain with a complex pair", "no state",
                    path, title, "packing")
