@@ -5,10 +5,13 @@ For each (mu, P) and seed: prepare N disks at P, shear with friction from gamma 
 GAMMA_END (P / 0.1)^(2/3) passing every plastic event (every eigenvalue tracked, dense spectra):
 the strain is scaled with the typical overlap, delta ~ (P R / k_n)^(2/3) for Hertz contacts, so
 that every pressure is sheared by the same multiple of its overlaps. Printed:
-- complex: the fraction of accepted states with at least one complex pair of M^-1 J;
-- pairs: the mean number of complex pairs per state;
+- complex: the fraction of the strain with at least one complex pair of M^-1 J, per unit strain
+  (models/packing/strain_statistics.py) and, after "/", per accepted state (the states crowd
+  near events, where pairs are born);
+- pairs: the mean number of complex pairs over the strain;
 - sigma/omega: the fastest pair's growth rate sigma = |Im sqrt(lambda)| over the typical
-  frequency omega = sqrt(median lambda at gamma = 0), median and largest over the states;
+  frequency omega = sqrt(median lambda at gamma = 0): its median over the strain with a pair
+  (and over the states with one, after "/"), and its largest;
 - coll/1e-3: collisions (births and deaths) per 1e-3 of strain; plastic/1e-3: plastic events
   (branch lost and relaxed) per 1e-3 of strain, and the largest relative drop of sigma_xy;
 - seconds of the whole run. Measured in this run, scans inline.
@@ -26,6 +29,7 @@ import numpy as np
 from diskfriction.models.packing.dynamics import fastest_pair
 from diskfriction.models.packing.prepared import prepare_scene
 from diskfriction.models.packing.shear import ShearParams, shear
+from diskfriction.models.packing.strain_statistics import strain_statistics
 from diskfriction.scenes.packing import PackingScene
 
 MUS = (0.3, 1.0, 10.0)
@@ -41,19 +45,21 @@ def run(N: int, mu: float, pressure: float, seed: int, gamma_end: float) -> str:
     lam0 = branch.eigenvalues[0]
     omega = float(np.sqrt(np.median(lam0[lam0 != 0].real)))
     sigma = np.array([fastest_pair(e)[1] for e in branch.eigenvalues]) / omega
+    stats = strain_statistics(branch)
     per = 1e-3 / max(branch.gamma[-1], 1e-300)
     drops = [(e.stress_before - e.stress_after) / e.stress_before for e in branch.plastic]
     return (f"{mu:>5g} {pressure:>6g} {seed:>4} {branch.gamma[-1]:>9.2e} "
-            f"{np.mean(branch.n_complex > 0):>8.2f} {np.mean(branch.n_complex):>6.1f} "
-            f"{np.median(sigma):>11.2e} {sigma.max():>9.2e} {len(branch.collisions) * per:>11.0f} "
+            f"{stats.complex_fraction:>5.2f}/{np.mean(branch.n_complex > 0):.2f} {stats.pairs_mean:>6.1f} "
+            f"{(stats.growth_median[0] or 0.0) / omega:>9.2e}/{np.median(sigma[sigma > 0]):.2e} "
+            f"{sigma.max():>9.2e} {len(branch.collisions) * per:>11.0f} "
             f"{len(branch.plastic) * per:>11.1f} {max(drops, default=0.0):>9.3f} "
             f"{time.perf_counter() - start:>7.1f}")
 
 
 def main(N: int, gamma_end: float, seeds: int, mus=MUS, pressures=PRESSURES) -> None:
     print(f"N = {N}, gamma 0 -> {gamma_end:g} (P / 0.1)^(2/3), seeds 1..{seeds}")
-    print(f"{'mu':>5} {'P':>6} {'seed':>4} {'gamma end':>9} {'complex':>8} {'pairs':>6} "
-          f"{'sigma/omega':>11} {'max':>9} {'coll/1e-3':>11} {'plastic/1e-3':>11} "
+    print(f"{'mu':>5} {'P':>6} {'seed':>4} {'gamma end':>9} {'complex':>10} {'pairs':>6} "
+          f"{'sigma/omega':>18} {'max':>9} {'coll/1e-3':>11} {'plastic/1e-3':>11} "
           f"{'max drop':>9} {'s':>7}")
     for pressure in pressures:
         for mu in mus:
