@@ -63,12 +63,14 @@ the first spectra (16 disks to gamma = 0.002: 4-9 s)."""
 @dataclass(frozen=True)
 class PackingMapParams:
     """What every packing cell runs besides its scene: the shear's matrix ("J" or "M^-1 J"),
-    the spectral window (lo, hi) of Re lambda [raw] or None for every eigenvalue, and the
-    plastic events passed before a cell's shear stops at the next."""
+    the spectral window (lo, hi) of Re lambda [raw] or None for every eigenvalue, the
+    plastic events passed before a cell's shear stops at the next, and the drags [omega_0]
+    of the damped-stability study (studies/damped_study.py; none: no study)."""
 
     matrix: str
     window: Optional[tuple[float, float]] = None
     plastic_events: int = 1000
+    damping: tuple[float, ...] = ()
 
 
 def packing_cell_seconds(scene: PackingScene, params: PackingMapParams) -> float:
@@ -107,8 +109,10 @@ def branch_summary(scene: PackingScene, branch) -> dict:
 
 def packing_cell(scene: PackingScene, params: PackingMapParams) -> dict:
     """The record of one packing cell (raw units): its scene (physics fields), summary
-    (PACKING_COLUMNS), the located collisions (as bifurcate's collisions.json) and the plastic
-    events [gamma, sigma_xy before, after]."""
+    (PACKING_COLUMNS), the located collisions (as bifurcate's collisions.json), the plastic
+    events [gamma, sigma_xy before, after] and, with params.damping, the study's "damped" (one
+    summary per drag, studies/damped_study.DAMPED_COLUMNS) and "events" (the precursor rows,
+    models/packing/precursors.EVENT_COLUMNS)."""
     from dataclasses import replace
 
     from diskfriction.continuation.stepping.arclength import ContinuationError
@@ -126,7 +130,8 @@ def packing_cell(scene: PackingScene, params: PackingMapParams) -> dict:
               "plastic": []}
     scene = replace(scene, matrix=params.matrix, spectra="full")  # every state's pairs, every collision
     try:
-        branch = shear(scene, prepare_scene(scene), ShearParams(workers=0),
+        packing = prepare_scene(scene)
+        branch = shear(scene, packing, ShearParams(workers=0),
                        plastic_events=params.plastic_events, window=params.window)
     except (ContinuationError, MissedContact, RelaxationFailed, WindowCrowded, OneLineError,
             np.linalg.LinAlgError) as error:
@@ -135,5 +140,31 @@ def packing_cell(scene: PackingScene, params: PackingMapParams) -> dict:
         summary |= branch_summary(scene, branch)
         record |= {"collisions": collision_records(branch),
                    "plastic": [[e.gamma, e.stress_before, e.stress_after] for e in branch.plastic]}
+        if params.damping:
+            record |= damped_parts(scene, packing, branch, params.damping)
     summary["wall_time"] = round(time.perf_counter() - start, 3)
     return record
+
+
+def damped_parts(scene: PackingScene, packing, branch, drags: tuple[float, ...]) -> dict:
+    """A cell's "damped" and "events" (packing_cell) at the drags [omega_0]: the damped Hopf
+    points of its branch at each (models/packing/damped.py; those below the scene's strain
+    range left out, as its collisions are), the precursor rows, and the strain statistics."""
+    from diskfriction.files import json_values
+    from diskfriction.models.packing.damped import damped_hopfs
+    from diskfriction.models.packing.equilibria import mass_diagonal
+    from diskfriction.models.packing.precursors import event_rows
+    from diskfriction.models.packing.shear import network_of
+    from diskfriction.models.packing.strain_statistics import strain_statistics
+    from diskfriction.studies.damped_study import damped_summary
+
+    network = network_of(scene, packing)
+    mass = mass_diagonal(network, scene.m, scene.inertia)
+    etas = tuple(drag * scene.omega_0 for drag in drags)
+    hopfs = {drag: tuple(h for h in damped_hopfs(network, mass, branch, eta) if h.gamma >= scene.gamma_range[0])
+             for drag, eta in zip(drags, etas)}
+    events = event_rows(network, mass, branch, scene.omega_0, hopfs)
+    statistics = strain_statistics(branch, etas, counted_from=scene.gamma_range[0])
+    summaries = [damped_summary(statistics, drag, eta, i, hopfs[drag], [r for r in events if r["drag"] == drag],
+                                scene.N) for i, (drag, eta) in enumerate(zip(drags, etas))]
+    return json_values({"damped": summaries, "events": events})

@@ -169,3 +169,20 @@ def test_a_chain_map_refuses_a_window(tmp_path):
     result = run_main("map", "--vary", "contacts.mu=1:10:2", "--window=-1:1",
                       "--out", str(tmp_path / "out"))
     assert result.returncode == 2 and "--window: for packing scenes only" in error_line(result, "map")
+
+
+@pytest.mark.slow
+def test_a_damped_cell_tables_its_plastic_event_at_every_drag():
+    """32 disks, seed 2, to gamma = 0.0021 (one fold: tests/models/packing/test_packing_plastic.py)
+    at the drags 0 and 0.05 omega_0: one precursor row per drag, the summaries counting them, the
+    undamped onsets the births located, and a record that JSON holds strictly (no nan, no inf)."""
+    scene = PackingScene(N=32, seed=2, gamma_range=(0.0, 0.0021))
+    record = packing_cell(scene, PackingMapParams("M^-1 J", damping=(0.0, 0.05)))
+    undamped, damped = record["damped"]
+    assert [s["drag"] for s in record["damped"]] == [0.0, 0.05]
+    assert [r["drag"] for r in record["events"]] == [0.0, 0.05] and record["summary"]["plastic_events"] == 1
+    assert undamped["events"] == damped["events"] == 1
+    assert undamped["onsets"] == sum(c["kind"] == "birth" for c in record["collisions"])
+    assert damped["onsets"] < undamped["onsets"] and 0 < damped["unstable_fraction"] < undamped["unstable_fraction"]
+    assert undamped["unstable_fraction"] == pytest.approx(record["summary"]["complex_fraction"], abs=1e-12)
+    json.dumps(record, allow_nan=False)
