@@ -1,7 +1,7 @@
-"""``diskfriction map [SCENE] --vary KEY=LO:HI:COUNT[:log] [--vary KEY2=...] [--fx A:B]
+"""``diskfriction map [SCENE] --vary KEY=LO:HI:COUNT[:log]|KEY=V1,V2,... [--vary KEY2=...] [--fx A:B]
 [--matrix J|M^-1J] [--slide] [--window LO:HI] [--scheduler ADDRESS] [--workers K] [--out DIR]``
 
-A full bifurcate in every cell of a grid of one or two numeric scene keys and, with --slide,
+A full bifurcate in every cell of a grid of numeric scene keys and, with --slide,
 one dynamics run per window between collisions (as verify does): which windows slide, the
 lowest sliding load F_slide and mu_eff = F_slide / (N F_y) against the Coulomb limit mu.
 On a packing scene every cell prepares its packing and shears it over the scene's strain
@@ -9,17 +9,18 @@ On a packing scene every cell prepares its packing and shears it over the scene'
 fast the fastest grows, its collisions and plastic events.
 Cells run as tasks on dask.distributed (a local cluster of this machine's cores, or
 --scheduler ADDRESS), each written to DIR/cells/ the moment it finishes; a rerun resumes.
-Writes DIR/map.csv (one row per cell), DIR/map.json and DIR/map.png (studies/maps.py,
+Writes DIR/map.csv (one row per cell), DIR/map.json and, for one or two keys, DIR/map.png (studies/maps.py,
 studies/packing_maps.py, reports/maps.py, reports/packing_maps.py). Raw units on the command
 line and in files; a chain's figure uses the paper's.
 """
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
 from dataclasses import dataclass
-from typing import Callable
+from typing import Callable, Optional
 
 from diskfriction.cli.common import (CommandError, add_matrix_argument, add_scene_argument, front_for,
                                      number, output_dir, scene_from_args)
@@ -27,7 +28,7 @@ from diskfriction.cli.progress import Progress
 from diskfriction.cli.simulate_cmd import SCHEDULER, SINGLE_AMPLITUDE
 from diskfriction.words import count, duration
 
-VARY = "KEY=LO:HI:COUNT[:log]"
+VARY = "KEY=LO:HI:COUNT[:log] | KEY=V1,V2,..."
 T_END = 1000.0
 """Default duration of a slide run [raw time], verify's: sigma t_end > ln(1e-4 / 1e-10) = 14
 for every pair growing faster than sigma = 0.014 [1 / time], enough for the growth to reach
@@ -42,7 +43,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--vary", action="append", required=True, metavar=VARY,
                         help="vary a numeric scene key (contacts.mu, disks.N, disks.eps, ...) "
                              "over COUNT values from LO to HI, evenly or, with :log, evenly in "
-                             "log; give it twice for a map of two keys")
+                             "log, or over the values listed; once per key (map.png draws one "
+                             "or two keys)")
     parser.add_argument("--fx", metavar="A:B",
                         help="sweep F_x from A to B in every cell (raw units, A < B; default: "
                              "the scene's F_x range)")
@@ -66,9 +68,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def parse_vary(text: str, geometry: str = "chain"):
-    """'KEY=LO:HI:COUNT[:log]' -> studies.maps.Axis of a `geometry`'s scene key; else a
-    one-line CommandError naming the specification (unknown or non-numeric key, malformed
-    numbers, a grid grid_values refuses)."""
+    """'KEY=LO:HI:COUNT[:log]' (an even grid) or 'KEY=V1,V2,...' (the values listed, in that
+    order, distinct) -> studies.maps.Axis of a `geometry`'s scene key; else a one-line
+    CommandError naming the specification (unknown or non-numeric key, malformed numbers, a
+    grid grid_values refuses, a value listed twice)."""
     from diskfriction.studies.maps import Axis, grid_values
     from diskfriction.scenes.load import number_keys
     from diskfriction.scenes.schema import SCHEMAS
@@ -83,6 +86,16 @@ def parse_vary(text: str, geometry: str = "chain"):
     if key not in numeric:
         kind = "not a numeric scene key" if key in SCHEMAS[geometry] else "no scene key"
         raise bad(f"{key} is {kind} of a {geometry}; a map varies one of {', '.join(numeric)}")
+    if ":" not in spec:
+        try:
+            values = tuple(float(v) for v in spec.split(","))
+        except ValueError:
+            raise bad(f"expected {VARY} with numbers V1, V2, ...") from None
+        if not all(math.isfinite(v) for v in values):
+            raise bad("the values listed must be finite numbers")
+        if len(set(values)) < len(values):
+            raise bad("a value listed twice")
+        return Axis(key, values)
     parts = spec.split(":")
     log = parts[3:] == ["log"]
     try:
@@ -98,18 +111,16 @@ def parse_vary(text: str, geometry: str = "chain"):
 
 
 def grid(scene, texts: list[str]):
-    """(axes, cells) of the --vary specifications: one or two distinct keys, every cell a
-    valid scene (a bad value is one line naming its --vary and key), else a CommandError."""
+    """(axes, cells) of the --vary specifications: distinct keys, every cell a valid scene (a
+    bad value is one line naming its --vary and key), else a CommandError."""
     from diskfriction.studies.maps import map_cells
     from diskfriction.scenes.load import SceneError
 
     axes = [parse_vary(text, scene.geometry) for text in texts]
     keys = [axis.key for axis in axes]
-    if len(axes) > 2:
-        raise CommandError(f"map error: --vary: a map varies one or two keys (got {len(axes)}: "
-                           f"{', '.join(keys)})")
-    if len(set(keys)) < len(keys):
-        raise CommandError(f"map error: --vary: {keys[0]} given twice (got {texts[1]!r})")
+    twice = next((i for i, key in enumerate(keys) if key in keys[:i]), None)
+    if twice is not None:
+        raise CommandError(f"map error: --vary: {keys[twice]} given twice (got {texts[twice]!r})")
     if "shear.damping" in keys and scene.relaxation != "damped":
         raise CommandError(f"map error: --vary {texts[keys.index('shear.damping')]}: shear.damping acts only "
                            f"where [shear] relaxation = \"damped\" (the scene's is {scene.relaxation!r})")
@@ -130,8 +141,10 @@ class MapPlan:
     cell(scene, params) -> dict: one cell's record (a dask task);
     cell_seconds(scene, params): its rough wall time [s];
     columns: the summary's keys, in the table's order;
-    plot(axes, cells, records, path, title): map.png;
-    describe(cell, summary) -> str: the line printed for a cell."""
+    plot(axes, cells, records, path, title): map.png (one or two keys);
+    describe(cell, summary) -> str: the line printed for a cell;
+    study(out, axes, cells, records) -> names: the files a study writes beside the map (a
+    packing's damped study: reports/packing_study.py), None where the map runs none."""
 
     params: object
     check_cell: Callable
@@ -141,6 +154,7 @@ class MapPlan:
     columns: tuple
     plot: Callable
     describe: Callable
+    study: Optional[Callable] = None
 
 
 def run(args: argparse.Namespace) -> int:
@@ -177,14 +191,21 @@ def run(args: argparse.Namespace) -> int:
                           compute=plan.cell)
         progress.stage(f"writing {out}/map.csv, map.json")
         save_map(out, scene, axes, plan.params, code_version(), cells, records, plan.columns)
-        progress.stage(f"plotting {out}/map.png")
-        plan.plot(axes, cells, records, out / "map.png",
-                  f"{scene.name}: {' x '.join(a.key for a in axes)}, {plan.params.matrix}")
+        written = ["map.csv", "map.json"]
+        if len(axes) <= 2:  # a plane holds two keys; the tables hold every cell of more
+            progress.stage(f"plotting {out}/map.png")
+            plan.plot(axes, cells, records, out / "map.png",
+                      f"{scene.name}: {' x '.join(a.key for a in axes)}, {plan.params.matrix}")
+            written.append("map.png")
+        if plan.study is not None:
+            progress.stage(f"writing the study beside the map in {out}")
+            written += plan.study(out, axes, cells, records)
     finally:
         progress.close()
     for cell, record in zip(cells, records):
         print(plan.describe(cell, record["summary"]))
-    print(f"wrote {out}/map.csv, map.json, map.png and {out}/cells/")
+    print(f"wrote {out}/{', '.join(written)} and {out}/cells/"
+          + ("" if len(axes) <= 2 else f" (no map.png: it draws one or two keys, not {len(axes)})"))
     return 0
 
 

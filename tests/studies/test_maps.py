@@ -183,8 +183,10 @@ BAD = [
     (["--vary", "disks.N=4:5:3"], "cell disks.N = 4.5: expected an integer"),
     (["--vary", "disks.eps=0.05:0.15:2"], "cell disks.eps = 0.15: must be in [0, 0.1)"),
     (["--vary", "contacts.mu=1:2:2", "--vary", "contacts.mu=3:4:2"], "contacts.mu given twice"),
-    (["--vary", "contacts.mu=1:2:2", "--vary", "disks.N=4:5:2", "--vary", "disks.eps=0:0.01:2"],
-     "one or two keys"),
+    (["--vary", "contacts.mu=1,2,1"], "a value listed twice"),
+    (["--vary", "contacts.mu=1,x"], "with numbers V1, V2"),
+    (["--vary", "contacts.mu=1,inf"], "finite numbers"),
+    (["--vary", "disks.N=4,5", "--vary", "contacts.mu=1,2", "--vary", "disks.N=6"], "disks.N given twice"),
     (["--vary", "contacts.mu=1:2:2", "--fx", "0.05:0.01"], "a map loads"),
     (["--vary", "contacts.mu=1:2:2", "--t-end", "10"], "add --slide"),
     (["--vary", "contacts.mu=1:2:2", "--workers", "0"], "--workers"),
@@ -216,3 +218,12 @@ def test_the_estimate_printed_first_grows_with_what_a_cell_does(tmp_path):
     cells = map_cells(Scene(), [Axis("contacts.mu", grid_values(5.0, 10.0, 10_000))], "x")
     plan = MapPlan(slide, None, None, None, cell_seconds, (), None, None)
     assert estimate(cells, plan, tmp_path, 2, False).endswith("h on 2 workers (a rough estimate)")
+
+
+def test_values_listed_keep_their_order_and_three_keys_make_every_combination():
+    from diskfriction.cli.map_cmd import grid
+
+    axes, cells = grid(Scene(), ["contacts.mu=10,0.3,1", "disks.N=4,5", "disks.eps=0,0.01"])
+    assert [a.values for a in axes] == [(10.0, 0.3, 1.0), (4.0, 5.0), (0.0, 0.01)]
+    assert len(cells) == 12 and cells[1].values == (("contacts.mu", 10.0), ("disks.N", 4), ("disks.eps", 0.01))
+    assert cells[-1].scene.mu == 1.0 and cells[-1].scene.N == 5 and cells[-1].scene.eps == 0.01
