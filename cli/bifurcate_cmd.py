@@ -1,5 +1,6 @@
 """``diskfriction bifurcate [SCENE] [--fx A:B] [--matrix J|M^-1J] [--detection fast|exhaustive]
-[--spectra none|sample:DGAMMA|full] [--window LO:HI] [--device cpu|gpu|auto] [--out DIR] [--json]``, or ``diskfriction bifurcate --problem FILE.py[:NAME] [--p A:B] ...``
+[--spectra none|sample:DGAMMA|full] [--window LO:HI] [--damping D1,D2,...] [--device cpu|gpu|auto]
+[--out DIR] [--json]``, or ``diskfriction bifurcate --problem FILE.py[:NAME] [--p A:B] ...``
 for any problem (cli/problem_cmd.py)."""
 from __future__ import annotations
 
@@ -59,6 +60,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              "--window; no collision located), full (every collision, in the "
                              "--window if one) (default: the scene's [stability] spectra, auto: "
                              "chosen from N). A chain's sweep is always full")
+    parser.add_argument("--damping", metavar="D1,D2,...",
+                        help="a packing scene with the matrix M^-1J: its damped stability at "
+                             "each drag D (units of omega_0, each >= 0): with spectra full the "
+                             "onsets and ends of damped instability located along the shear, with "
+                             "sample:DGAMMA the samples' damped growth rates; writes "
+                             "DIR/damped.json and precursors.csv (the plastic events against "
+                             "their precursors) with the other outputs (docs/packings.md, "
+                             "Damped stability)")
     parser.add_argument("--device", default="auto", metavar="cpu|gpu|auto",
                         help="where dense spectra run: cpu (LAPACK), gpu (CuPy's cuSOLVER; "
                              "scans then run inline), auto (the GPU from n = 1000 where CuPy "
@@ -107,6 +116,21 @@ def parse_window(text: str, command: str = "bifurcate") -> tuple[float, float]:
         raise CommandError(f"{command} error: --window: expected LO:HI with two numbers, LO < HI "
                            f"(got {text!r})")
     return lo, hi
+
+
+def parse_drags(text: str, command: str = "bifurcate") -> tuple[float, ...]:
+    """'D1,D2,...' -> (D1, D2, ...): drags in units of omega_0, at least one, each a finite
+    number >= 0 and given once; else a one-line CommandError naming COMMAND and --damping."""
+    try:
+        drags = tuple(float(part) for part in text.split(","))
+    except ValueError:
+        drags = ()
+    if not drags or not all(math.isfinite(d) and d >= 0 for d in drags):
+        raise CommandError(f"{command} error: --damping: expected D1,D2,... with numbers >= 0, "
+                           f"the drags in units of omega_0 (got {text!r})")
+    if len(set(drags)) < len(drags):
+        raise CommandError(f"{command} error: --damping: each drag once (got {text!r})")
+    return drags
 
 
 def run(args: argparse.Namespace) -> int:

@@ -108,7 +108,7 @@ def run_problem(args: argparse.Namespace) -> int:
     end of the span, 1 if it stopped before (what was reached is written and said)."""
     given = [option for option, value in (("SCENE", args.scene), ("--fx", args.fx),
                                           ("--matrix", args.matrix), ("--window", args.window),
-                                          ("--spectra", args.spectra))
+                                          ("--spectra", args.spectra), ("--damping", args.damping))
              if value is not None]
     if given:
         raise CommandError(f"bifurcate error: --problem: takes no {', '.join(given)} "

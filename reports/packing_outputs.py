@@ -1,13 +1,15 @@
 """A packing's shear branch as files and a figure (docs/packings.md#shear):
 packing.npz, branch.npz, collisions.json, plastic.json and diagram.png of `diskfriction
-bifurcate PACKING_SCENE`, written as one set (save_packing_outputs), every file naming the
-scene it belongs to (scene_record, scene_arrays; other_scene finds a directory's files of
-another scene)."""
+bifurcate PACKING_SCENE`, and with `--damping` damped.json and precursors.csv (its damped
+stability, docs/packings.md#damped-stability), written as one set (save_packing_outputs),
+every file naming the scene it belongs to (scene_record, scene_arrays; other_scene finds a
+directory's files of another scene)."""
 from __future__ import annotations
 
 import json
 import os
 import zipfile
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Optional
 
@@ -16,23 +18,33 @@ import numpy as np
 from diskfriction.continuation.branch import Branch
 from diskfriction.continuation.records import collisions_json, save_branch
 from diskfriction.continuation.spectra.window import SpectralWindow
-from diskfriction.files import json_values, save_json
+from diskfriction.files import json_values, save_json, save_text
 from diskfriction.matrices import Matrix
+from diskfriction.models.packing.damped import DampedHopf, damped_hopfs, damped_rates
+from diskfriction.models.packing.equilibria import mass_diagonal
 from diskfriction.models.packing.prepare import Packing, save_packing
+from diskfriction.models.packing.precursors import EVENT_COLUMNS, event_rows
+from diskfriction.models.packing.shear import network_of
 from diskfriction.reports.figures import new_figure, save_figure
+from diskfriction.reports.maps import csv_table
 from diskfriction.scenes.packing import PackingScene
 
 OUTPUTS = ("packing.npz", "branch.npz", "collisions.json", "plastic.json", "diagram.png")
 """The files of a packing's shear, written together (save_packing_outputs)."""
+
+DAMPED_OUTPUTS = ("damped.json", "precursors.csv")
+"""The files `bifurcate --damping` adds to OUTPUTS, in the same set (save_packing_outputs with
+a DampedShear); a set written without one removes an earlier run's."""
 
 RUN_SCENE = Path("segments") / "scene.json"
 """{"scene": scene_record} of a shear under way in DIR (models/packing/commands.py), beside its
 segments."""
 
 RECORDED = ("packing.npz", "packing.json", "branch.npz", "collisions.json", "plastic.json",
-            RUN_SCENE, "summary.json", "run.npz", "verify.json")
-"""The files of a packing scene in a directory that name their scene: bifurcate's, prepare's
-(packing.npz, packing.json), a shear under way's, simulate's and verify's."""
+            "damped.json", RUN_SCENE, "summary.json", "run.npz", "verify.json")
+"""The files of a packing scene in a directory that name their scene: bifurcate's (with
+--damping's damped.json), prepare's (packing.npz, packing.json), a shear under way's,
+simulate's and verify's."""
 
 
 def scene_record(scene: PackingScene) -> dict:
@@ -147,16 +159,105 @@ def save_packing_branch(out: Path, branch: Branch, scene: PackingScene) -> None:
                                      "events": plastic_records(branch)})
 
 
+@dataclass(frozen=True)
+class DampedShear:
+    """A shear's damped stability at the drags of `bifurcate --damping`
+    (docs/packings.md#damped-stability): the drags [omega_0], in the order given, and
+    eta = drag omega_0 [1 / time]; gamma, the strains whose spectra the shear computed (every
+    accepted state with spectra full, the grid strains with sample: spectral_points); growth
+    (drags, strains), the fastest damped growth rate there [1 / time]
+    (models/packing/damped.fastest_damped: -inf without a complex pair); hopfs, each drag's
+    onsets and ends of damped instability (damped_hopfs), None where none were looked for
+    (spectra sample); events, the precursor table (models/packing/precursors.event_rows: one
+    row per plastic event and drag)."""
+
+    drags: tuple[float, ...]
+    eta: tuple[float, ...]
+    gamma: np.ndarray
+    growth: np.ndarray
+    hopfs: Optional[tuple[tuple[DampedHopf, ...], ...]]
+    events: list[dict]
+
+    @property
+    def unstable_states(self) -> np.ndarray:
+        """Per drag, the fraction of the strains `gamma` whose state has a damped-unstable pair
+        (growth > 0)."""
+        return (self.growth > 0).mean(axis=1)
+
+
+def damped_shear(scene: PackingScene, packing: Packing, branch: Branch,
+                 drags: tuple[float, ...]) -> DampedShear:
+    """The DampedShear of the shear of `scene` from `packing` (its branch: spectra full or
+    sample, of M^-1 J) at `drags` [omega_0 = scene.omega_0]. With sampled spectra no state's
+    spectrum is known at a plastic event, so the precursor rows' unstable_at_event is None
+    (not known) there, as their growth_at_event."""
+    network = network_of(scene, packing)
+    mass = mass_diagonal(network, scene.m, scene.inertia)
+    gamma, _, lam, _ = spectral_points(branch)
+    eta = tuple(drag * scene.omega_0 for drag in drags)
+    growth = np.array([damped_rates(lam, e) for e in eta]).reshape(len(drags), len(gamma))
+    full = spectra_of(branch) == "full"
+    hopfs = tuple(damped_hopfs(network, mass, branch, e) for e in eta) if full else None
+    events = event_rows(network, mass, branch, scene.omega_0,
+                        dict(zip(drags, hopfs if full else [()] * len(drags))))
+    if not full:
+        events = [row | {"unstable_at_event": None} for row in events]
+    return DampedShear(drags, eta, gamma, growth, hopfs, events)
+
+
+def hopf_record(hopf: DampedHopf) -> dict:
+    """damped.json's record of one onset or end (a DampedHopf): gamma, kind, eigenvalue
+    [Re, Im] of M^-1 J [1 / time^2], frequency w [1 / time] and the branch step holding it."""
+    return {"gamma": hopf.gamma, "kind": hopf.kind,
+            "eigenvalue": [hopf.eigenvalue.real, hopf.eigenvalue.imag],
+            "frequency": hopf.frequency, "step": hopf.step}
+
+
+def damped_json(damped: DampedShear, scene: PackingScene) -> dict:
+    """damped.json's object (docs/outputs.md): the scene record, the spectra, omega_0
+    [1 / time], sample_gamma (the grid strains, sampled spectra only) and per drag its
+    drag, eta, points (hopf_record of each onset and end; null where none were looked for:
+    sampled spectra), unstable_states (DampedShear.unstable_states) and sample_growth (each
+    grid strain's fastest damped growth rate, null without a complex pair; sampled spectra
+    only)."""
+    sampled = damped.hopfs is None
+    drags = [{"drag": drag, "eta": eta,
+              "points": None if sampled else [hopf_record(h) for h in damped.hopfs[i]],
+              "unstable_states": float(damped.unstable_states[i]),
+              "sample_growth": damped.growth[i].tolist() if sampled else None}
+             for i, (drag, eta) in enumerate(zip(damped.drags, damped.eta))]
+    return {"scene": scene_record(scene), "spectra": scene.resolved_spectra,
+            "omega_0": scene.omega_0, "sample_gamma": damped.gamma.tolist() if sampled else None,
+            "drags": drags}
+
+
+def save_damped(out: Path, damped: DampedShear, scene: PackingScene) -> None:
+    """DAMPED_OUTPUTS: damped.json (damped_json) and precursors.csv (EVENT_COLUMNS, one row
+    per plastic event and drag, floats with repr, empty where None; the header alone without
+    a plastic event)."""
+    save_json(out / "damped.json", damped_json(damped, scene))
+    save_text(out / "precursors.csv", csv_table(list(EVENT_COLUMNS), damped.events))
+
+
 def save_packing_outputs(out: Path, staging: Path, branch: Branch, scene: PackingScene,
-                         packing: Packing) -> None:
+                         packing: Packing, damped: Optional[DampedShear] = None) -> tuple[str, ...]:
     """OUTPUTS, every one naming the scene: packing.npz (save_packing), save_packing_branch's
-    and diagram.png, written to `staging` first and then renamed into `out` one after
-    another, so that they replace an earlier run's files together."""
+    and diagram.png, and with `damped` DAMPED_OUTPUTS (save_damped), written to `staging`
+    first and then renamed into `out` one after another, so that they replace an earlier
+    run's files together (an earlier run's DAMPED_OUTPUTS removed without `damped`: they
+    described its branch). Returns the names written."""
     save_packing(staging / "packing.npz", packing, scene_arrays(scene))
     save_packing_branch(staging, branch, scene)
     plot_packing_diagram(branch, scene, staging / "diagram.png")
-    for name in OUTPUTS:
+    if damped is not None:
+        save_damped(staging, damped, scene)
+    names = OUTPUTS + (DAMPED_OUTPUTS if damped is not None else ())
+    for name in names:
         os.replace(staging / name, out / name)
+    if damped is None:
+        for name in DAMPED_OUTPUTS:
+            (out / name).unlink(missing_ok=True)
+    return names
 
 
 PLASTIC_STYLE = dict(colors="k", linestyles=[(0, (4, 2))], linewidths=1.3, zorder=5)

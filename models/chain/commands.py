@@ -31,6 +31,9 @@ def bifurcate(args: argparse.Namespace, scene: Scene, window) -> int:
         raise CommandError(f"bifurcate error: --spectra: a chain's sweep computes every spectrum "
                            f"and locates every collision (full); none and sample:DGAMMA are a "
                            f"packing's (got {args.spectra!r})")
+    if args.damping is not None:
+        raise CommandError(f"bifurcate error: --damping: damped stability along a shear is a "
+                           f"packing's; a chain scene takes no drag (got {args.damping!r})")
     F_from, F_to = parse_range(args.fx) if args.fx is not None else scene.F_x_range
     if args.ds_max is not None:
         number("bifurcate", "ds-max", args.ds_max)

@@ -17,12 +17,13 @@ import sys
 import time
 from pathlib import Path
 
-from diskfriction.cli.bifurcate_cmd import parse_window
+from diskfriction.cli.bifurcate_cmd import parse_drags, parse_window
 from diskfriction.cli.common import (EXIT_FAILED, CommandError, check_memory, check_window_covered,
                                      matrix_from_args, number, output_dir, run_length)
 from diskfriction.cli.map_cmd import MapPlan
 from diskfriction.cli.progress import Progress
 from diskfriction.files import json_text
+from diskfriction.matrices import Matrix
 from diskfriction.models.packing.commands_checks import (check_packing, check_packing_bifurcate,
                                                          check_packing_simulate, spectra_from_args,
                                                          spectra_line)
@@ -43,9 +44,11 @@ def bifurcate(args: argparse.Namespace, scene: PackingScene,
                 window: tuple[float, float] | None) -> int:
     """bifurcate on a packing scene: prepare, shear (with `window`, --window as bifurcate
     parsed and checked it), write packing.npz, branch.npz, collisions.json, plastic.json and
-    diagram.png together (reports/packing_outputs.save_packing_outputs); exit 1 with one line
-    when the branch ends short of the scene's strain (a plastic event, a fold in gamma), after
-    writing what it reached. An --out holding another scene's files is refused (exit 2)."""
+    diagram.png, with --damping damped.json and precursors.csv (the damped stability at each
+    drag, damping_from_args), together (reports/packing_outputs.save_packing_outputs); exit 1
+    with one line when the branch ends short of the scene's strain (a plastic event, a fold in
+    gamma), after writing what it reached. An --out holding another scene's files is refused
+    (exit 2)."""
     for option, why in CHAIN_ONLY.items():
         if getattr(args, option) is not None:
             flag = "--" + option.replace("_", "-")
@@ -58,12 +61,15 @@ def bifurcate(args: argparse.Namespace, scene: PackingScene,
                            f"{spectra} locate none; give --spectra full")
 
     matrix = matrix_from_args("bifurcate", args, scene)
+    drags = damping_from_args(args, scene, spectra, matrix)
     out = output_dir("bifurcate", args.out, Path("out") / "bifurcate" / scene.name)
     scene = dataclasses.replace(scene, matrix=str(matrix), spectra=spectra)
     refuse_other_scene("bifurcate", out, scene)
     check_packing_bifurcate(args, scene, window)
 
     from diskfriction.continuation.stepping.arclength import ContinuationError
+    from diskfriction.continuation.stepping.segment import SegmentSolveError
+    from diskfriction.continuation.linalg.solves import SingularMatrix
     from diskfriction.continuation.branch import StopCode
     from diskfriction.continuation.detection.collisions import DetectionParams
     from diskfriction.continuation.spectra.window import WindowCrowded
@@ -75,7 +81,8 @@ def bifurcate(args: argparse.Namespace, scene: PackingScene,
     from diskfriction.models.packing.sampled import SampleFailed
     from diskfriction.models.packing.shear import ShearParams, shear
     from diskfriction.studies.kept_shear import kept_segments
-    from diskfriction.reports.packing_outputs import (OUTPUTS, RUN_SCENE, save_packing_outputs,
+    from diskfriction.reports.packing_outputs import (DAMPED_OUTPUTS, OUTPUTS, RUN_SCENE,
+                                                      damped_shear, save_packing_outputs,
                                                       scene_record)
 
     g0, g1 = scene.gamma_range
@@ -101,8 +108,17 @@ def bifurcate(args: argparse.Namespace, scene: PackingScene,
                                EXIT_FAILED) from None
         if window is not None and scene.resolved_spectra == "full":
             check_window_covered(branch, args.window, matrix, 1.0)
-        progress.stage(f"writing {out}/{', '.join(OUTPUTS)}")
-        save_packing_outputs(out, kept.directory / "writing", branch, scene, packing)
+        damped = None
+        if drags is not None:
+            progress.stage(f"damped stability at {count(len(drags), 'drag')}")
+            try:
+                damped = damped_shear(scene, packing, branch, drags)
+            except (SegmentSolveError, SingularMatrix) as error:
+                raise CommandError(f"bifurcate error: --damping: {scene.source}: a damped onset "
+                                   f"not located: {error}", EXIT_FAILED) from None
+        progress.stage(f"writing {out}/{', '.join(OUTPUTS + (DAMPED_OUTPUTS if damped else ()))}")
+        written = save_packing_outputs(out, kept.directory / "writing", branch, scene, packing,
+                                       damped)
         kept.release(keep=False)
     except BaseException:
         directory = out / "segments"
@@ -128,7 +144,9 @@ def bifurcate(args: argparse.Namespace, scene: PackingScene,
             print(f"  gamma = {e.gamma:.9f} ({e.kind}): sigma_xy {e.stress_before:.6g} -> "
                   f"{e.stress_after:.6g}")
         print(spectra_line(branch, scene, records, window))
-        print(f"wrote {out}/{', '.join(OUTPUTS)}")
+        for line in damped_lines(damped):
+            print(line)
+        print(f"wrote {out}/{', '.join(written)}")
     if not branch.status.reached:
         why = ("a plastic event: the quasistatic branch folds back in gamma (a saddle-node)"
                if branch.status.code is StopCode.FOLD else branch.status.sentence(len(branch)))
@@ -136,6 +154,47 @@ def bifurcate(args: argparse.Namespace, scene: PackingScene,
                            f"{branch.gamma[-1]:.9g}, short of {g1:g}: {why}; what it reached "
                            f"is written", EXIT_FAILED)
     return 0
+
+
+def damping_from_args(args: argparse.Namespace, scene: PackingScene, spectra: str,
+                      matrix: Matrix) -> tuple[float, ...] | None:
+    """The drags of --damping [omega_0] (cli/bifurcate_cmd.parse_drags), None without it; a
+    one-line CommandError (exit 2) where the shear has nothing to analyse: the matrix J (the
+    damped modes are those of M^-1 J) or spectra none."""
+    if args.damping is None:
+        return None
+    drags = parse_drags(args.damping)
+    if matrix != Matrix.M_INV_J:
+        raise CommandError(f"bifurcate error: --damping: the damped modes of M q'' + eta M q' + "
+                           f"J q = 0 come from the eigenvalues of M^-1 J; the shear's matrix is "
+                           f"{matrix}: give --matrix M^-1J (got {args.damping!r})")
+    if spectra == "none":
+        auto = f" (auto for {scene.N} disks)" if (args.spectra or scene.spectra) == "auto" else ""
+        raise CommandError(f"bifurcate error: --damping: the shear's spectra are none{auto}: "
+                           f"nothing to analyse; give --spectra full or sample:DGAMMA (got "
+                           f"{args.damping!r})")
+    return drags
+
+
+def damped_lines(damped) -> list[str]:
+    """What bifurcate prints of a reports/packing_outputs.DampedShear, one line per drag: the
+    onsets and ends of damped instability located (spectra full) and the fraction of the states
+    (or grid strains) with a damped-unstable pair; none without one."""
+    if damped is None:
+        return []
+    sampled = damped.hopfs is None
+    states = count(damped.gamma.size, "grid strain") if sampled else "the equilibria"
+    lines = []
+    for i, (drag, eta) in enumerate(zip(damped.drags, damped.eta)):
+        if sampled:
+            located = "no onset located (spectra sampled)"
+        else:
+            kinds = [h.kind for h in damped.hopfs[i]]
+            located = (f"{count(kinds.count('onset'), 'onset')} and "
+                       f"{count(kinds.count('end'), 'end')} of damped instability located")
+        lines.append(f"drag {drag:g} omega_0 (eta = {eta:.4g} / time): {located}; damped-unstable "
+                     f"at {100 * damped.unstable_states[i]:.0f} % of {states}")
+    return lines
 
 
 def refuse_other_scene(command: str, out: Path, scene: PackingScene) -> None:
