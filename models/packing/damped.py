@@ -28,6 +28,8 @@ from diskfriction.continuation.branch import Branch
 from diskfriction.continuation.detection.bifurcations import crossing_steps, locate_crossing
 from diskfriction.continuation.spectra.eigensolvers import DenseSpectra
 from diskfriction.continuation.spectra.tracking import DEFAULT_REL_TOL
+from diskfriction.continuation.stepping.newton import fixed_p_newton
+from diskfriction.continuation.stepping.segment import SegmentSolveError
 from diskfriction.dynamics.damped_modes import damped_growth_rates
 from diskfriction.matrices import Matrix
 from diskfriction.models.packing.equilibria import LINEAR_SOLVER, PackingEquilibria
@@ -36,8 +38,13 @@ from diskfriction.models.packing.network import Network
 TOL_GAMMA = 1e-10
 """The strain bracket every damped Hopf point is refined to [1] (the core's Hopf tolerance)."""
 
-NEWTON_TOL = 1e-11
-"""The equilibria's force tolerance in the refinement [force]: the shear's (ShearParams)."""
+NEWTON_TOL = 1e-10
+"""The equilibria's force tolerance in the refinement [force], ten times the shear's
+(ShearParams): each equilibrium inside a step is solved from the step's secant, and at the
+shear's 1e-11 such solves stalled at max |F| = 1.3e-11 (32 disks, seed 2, mu = 1e6, to gamma =
+0.004; the shear's own states there: 8.8e-12). A force error of 1e-10 moves the disks by about
+1e-10 / k_n delta_0^(1/2) ~ 1e-12 and the eigenvalues far less than the strain's tolerance
+resolves."""
 
 
 @dataclass(frozen=True)
@@ -137,11 +144,26 @@ def _collision(c, N: int) -> DampedHopf:
                       c.u, np.stack([chain[:N], chain[N:2 * N]], axis=1))
 
 
+def in_gauge(problem: PackingEquilibria, q: np.ndarray, gamma: float) -> np.ndarray:
+    """x = (q', gamma): the equilibrium q at gamma (a later state of the same step) in the gauge
+    of `problem` (problem_at an earlier state), solved by Newton at fixed strain from q. The
+    gauge pins the reference disk and the loose disks to the committed state, while the branch
+    lets them move from state to state; q' is q translated with the reference disk back (a
+    symmetry of the sheared periodic box) and the loose disks, which carry no force, back
+    where they were, so that the secant between the step's ends stays in one gauge."""
+    result = fixed_p_newton(problem, q, gamma, NEWTON_TOL, 20, LINEAR_SOLVER)
+    if not result.converged:
+        raise SegmentSolveError(f"the state at gamma = {gamma:.9g} is no equilibrium in the gauge "
+                                f"of the step's start ({result.failure()})")
+    return result.x
+
+
 def _located(problem: PackingEquilibria, branch: Branch, k: int, lam_a: complex, lam_b: complex,
              eta: float):
     """The sign change of the damped growth rate of the eigenvalue tracked from lam_a at state k
     to lam_b at k + 1, located (bifurcations.locate_crossing) on `problem` (problem_at k)."""
-    x_a, x_b = (np.append(branch.u[j], branch.p[j]) for j in (k, k + 1))
+    x_a = np.append(branch.u[k], branch.p[k])
+    x_b = in_gauge(problem, branch.u[k + 1], float(branch.p[k + 1]))
     return locate_crossing(problem, x_a, x_b, lam_a, lam_b,
                            lambda lam: float(damped_growth_rates(np.array([lam]), eta)[0]), k,
                            TOL_GAMMA, NEWTON_TOL, 20, LINEAR_SOLVER, DenseSpectra(), upper=False,

@@ -11,7 +11,7 @@ import pytest
 from sheared_packing import SCENE
 
 from diskfriction.dynamics.damped_modes import damped_growth_rates
-from diskfriction.models.packing.damped import TOL_GAMMA, damped_hopfs, damped_rates
+from diskfriction.models.packing.damped import TOL_GAMMA, damped_hopfs, damped_rates, in_gauge, problem_at
 from diskfriction.continuation.stepping.newton import fixed_p_newton
 from diskfriction.models.packing.equilibria import LINEAR_SOLVER, PackingEquilibria, mass_diagonal
 from diskfriction.models.packing.shear import network_of
@@ -102,3 +102,18 @@ def test_refused_without_spectra_or_with_J(network, branch):
     bare = replace(branch, eigenvalues=np.zeros((len(branch), 0), complex))
     with pytest.raises(ValueError, match="spectra \"full\""):
         damped_hopfs(*network, bare, 0.1)
+
+
+def test_a_later_state_in_the_gauge_of_its_steps_start_is_the_same_state_translated(network, branch):
+    """in_gauge: state k + 1 solved in problem k's gauge (its reference disk and loose disks
+    pinned where state k has them) is state k + 1 translated as a whole, the loose disks apart."""
+    net, mass = network
+    N = net.N
+    for k in range(len(branch) - 1):
+        problem = problem_at(net, mass, branch, k)
+        x = in_gauge(problem, branch.u[k + 1], float(branch.p[k + 1]))
+        assert x[-1] == branch.p[k + 1] and np.abs(problem.residual(x[:-1], x[-1])).max() <= 1e-10
+        held = ~problem.gauge.loose
+        for c in (0, 1):
+            shift = x[c * N:(c + 1) * N] - branch.u[k + 1][c * N:(c + 1) * N]
+            assert np.ptp(shift[held]) <= 1e-9, (k, c)
