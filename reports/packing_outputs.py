@@ -25,6 +25,7 @@ from diskfriction.models.packing.equilibria import mass_diagonal
 from diskfriction.models.packing.prepare import Packing, save_packing
 from diskfriction.models.packing.precursors import EVENT_COLUMNS, event_rows
 from diskfriction.models.packing.shear import network_of
+from diskfriction.models.packing.strain_statistics import strain_statistics
 from diskfriction.reports.figures import new_figure, save_figure
 from diskfriction.reports.maps import csv_table
 from diskfriction.scenes.packing import PackingScene
@@ -169,7 +170,9 @@ class DampedShear:
     (models/packing/damped.fastest_damped: -inf without a complex pair); hopfs, each drag's
     onsets and ends of damped instability (damped_hopfs), None where none were looked for
     (spectra sample); events, the precursor table (models/packing/precursors.event_rows: one
-    row per plastic event and drag)."""
+    row per plastic event and drag); unstable_fraction, per drag the fraction of the strain
+    with a damped-unstable mode (models/packing/strain_statistics.py: each state or sample
+    weighted by the strain it stands for)."""
 
     drags: tuple[float, ...]
     eta: tuple[float, ...]
@@ -177,12 +180,8 @@ class DampedShear:
     growth: np.ndarray
     hopfs: Optional[tuple[tuple[DampedHopf, ...], ...]]
     events: list[dict]
+    unstable_fraction: tuple[float, ...]
 
-    @property
-    def unstable_states(self) -> np.ndarray:
-        """Per drag, the fraction of the strains `gamma` whose state has a damped-unstable pair
-        (growth > 0)."""
-        return (self.growth > 0).mean(axis=1)
 
 
 def damped_shear(scene: PackingScene, packing: Packing, branch: Branch,
@@ -200,9 +199,8 @@ def damped_shear(scene: PackingScene, packing: Packing, branch: Branch,
     hopfs = tuple(damped_hopfs(network, mass, branch, e) for e in eta) if full else None
     events = event_rows(network, mass, branch, scene.omega_0,
                         dict(zip(drags, hopfs if full else [()] * len(drags))))
-    if not full:
-        events = [row | {"unstable_at_event": None} for row in events]
-    return DampedShear(drags, eta, gamma, growth, hopfs, events)
+    statistics = strain_statistics(branch, eta, sampled=not full, counted_from=scene.gamma_range[0])
+    return DampedShear(drags, eta, gamma, growth, hopfs, events, statistics.unstable_fraction)
 
 
 def hopf_record(hopf: DampedHopf) -> dict:
@@ -217,13 +215,13 @@ def damped_json(damped: DampedShear, scene: PackingScene) -> dict:
     """damped.json's object (docs/outputs.md): the scene record, the spectra, omega_0
     [1 / time], sample_gamma (the grid strains, sampled spectra only) and per drag its
     drag, eta, points (hopf_record of each onset and end; null where none were looked for:
-    sampled spectra), unstable_states (DampedShear.unstable_states) and sample_growth (each
+    sampled spectra), unstable_fraction (DampedShear.unstable_fraction) and sample_growth (each
     grid strain's fastest damped growth rate, null without a complex pair; sampled spectra
     only)."""
     sampled = damped.hopfs is None
     drags = [{"drag": drag, "eta": eta,
               "points": None if sampled else [hopf_record(h) for h in damped.hopfs[i]],
-              "unstable_states": float(damped.unstable_states[i]),
+              "unstable_fraction": float(damped.unstable_fraction[i]),
               "sample_growth": damped.growth[i].tolist() if sampled else None}
              for i, (drag, eta) in enumerate(zip(damped.drags, damped.eta))]
     return {"scene": scene_record(scene), "spectra": scene.resolved_spectra,

@@ -183,7 +183,6 @@ def damped_lines(damped) -> list[str]:
     if damped is None:
         return []
     sampled = damped.hopfs is None
-    states = count(damped.gamma.size, "grid strain") if sampled else "the equilibria"
     lines = []
     for i, (drag, eta) in enumerate(zip(damped.drags, damped.eta)):
         if sampled:
@@ -193,7 +192,7 @@ def damped_lines(damped) -> list[str]:
             located = (f"{count(kinds.count('onset'), 'onset')} and "
                        f"{count(kinds.count('end'), 'end')} of damped instability located")
         lines.append(f"drag {drag:g} omega_0 (eta = {eta:.4g} / time): {located}; damped-unstable "
-                     f"at {100 * damped.unstable_states[i]:.0f} % of {states}")
+                     f"over {100 * damped.unstable_fraction[i]:.0f} % of the strain")
     return lines
 
 

