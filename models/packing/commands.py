@@ -464,8 +464,8 @@ PACKING_REFUSES = {"fx": "a packing's load is its strain: [shear] gamma in the s
 
 
 def packing_params(args: argparse.Namespace, scene):
-    """A packing map's studies.packing_maps.PackingMapParams from --matrix and --window
-    (checked: one line, exit 2); the chain's options are refused (PACKING_REFUSES)."""
+    """A packing map's studies.packing_maps.PackingMapParams from --matrix, --window and
+    --damping (checked: one line, exit 2); the chain's options are refused (PACKING_REFUSES)."""
     from diskfriction.studies.packing_maps import PackingMapParams
 
     for option, why in PACKING_REFUSES.items():
@@ -473,7 +473,13 @@ def packing_params(args: argparse.Namespace, scene):
             flag = "--" + option.replace("_", "-")
             raise CommandError(f"map error: {flag}: {why} (got {getattr(args, option)!r})")
     window = parse_window(args.window, "map") if args.window is not None else None
-    return PackingMapParams(str(matrix_from_args("map", args, scene)), window, PLASTIC_EVENTS)
+    matrix = matrix_from_args("map", args, scene)
+    drags = () if args.damping is None else parse_drags(args.damping, "map")
+    if drags and matrix != Matrix.M_INV_J:
+        raise CommandError(f"map error: --damping: the damped modes of M q'' + eta M q' + J q = 0 "
+                           f"come from the eigenvalues of M^-1 J; the map's matrix is {matrix}: "
+                           f"give --matrix M^-1J (got {args.damping!r})")
+    return PackingMapParams(str(matrix), window, PLASTIC_EVENTS, drags)
 
 
 def describe_packing(cell, s: dict) -> str:
@@ -485,7 +491,7 @@ def describe_packing(cell, s: dict) -> str:
     fastest = ("" if s["sigma_max"] is None else
                f", sigma_max = {s['sigma_max']:.4g} ({s['sigma_max'] / s['omega_c']:.3g} omega_c)")
     line = (f"{values}: {s['status']} to gamma = {s['gamma_end']:.4g}, "
-            f"{count(s['states'], 'state')}, complex pairs at {100 * s['complex_fraction']:.0f} %"
+            f"{count(s['states'], 'state')}, complex pairs over {100 * s['complex_fraction']:.0f} % of the strain"
             f"{fastest}, {count(s['collisions'], 'collision')}, "
             f"{count(s['plastic_events'], 'plastic event')}")
     return line + (f"; {s['reason']}" if s["reason"] else "")
@@ -511,8 +517,13 @@ def map_plan(args: argparse.Namespace, scene: PackingScene) -> MapPlan:
     def plot(axes, cells, records, path: Path, title: str) -> None:
         plot_packing_map(axes, cells, records, path, f"{title}, gamma 0 -> {scene.gamma_range[1]:g}")
 
+    def study(out: Path, axes, cells, records) -> list[str]:
+        from diskfriction.reports.packing_study import save_study
+
+        return save_study(out, axes, cells, records)
+
     return MapPlan(params, check_cell, map_kernels, packing_cell, packing_cell_seconds,
-                   PACKING_COLUMNS, plot, describe_packing)
+                   PACKING_COLUMNS, plot, describe_packing, study if params.damping else None)
 
 
 def map_kernels(cells, params, progress: Progress) -> str:
@@ -524,7 +535,8 @@ def map_kernels(cells, params, progress: Progress) -> str:
         load_packing_kernels(effects, progress.part("kernels"))
     g1 = cells[0].scene.gamma_range[1]
     inside = "" if params.window is None else f", Re lambda in {params.window[0]:g}:{params.window[1]:g}"
-    return f"prepare and shear gamma 0 -> {g1:g} ({params.matrix}{inside})"
+    study = "" if not params.damping else f", the damped study at {count(len(params.damping), 'drag')}"
+    return f"prepare and shear gamma 0 -> {g1:g} ({params.matrix}{inside}){study}"
 
 
 def export(args: argparse.Namespace, scene: PackingScene) -> int:

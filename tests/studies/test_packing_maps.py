@@ -149,6 +149,8 @@ BAD = [
     (["--vary", "shear.gamma=0:0.01:2"], "shear.gamma is not a numeric scene key of a packing"),
     (["--vary", "packing.N=16:17:3"], "cell packing.N = 16.5: expected an integer"),
     (["--vary", "shear.damping=0.1:2:3"], "shear.damping acts only where [shear] relaxation = \"damped\""),
+    (["--damping", "0,-1"], "--damping: expected D1,D2,... with numbers >= 0"),
+    (["--damping", "0.1", "--matrix", "J"], "--damping: the damped modes"),
     (["--vary", "packing.pressure=1e-300:1e-299:2"],
      "cell packing.pressure = 1e-300: packing.pressure: the preparation relaxes first"),
 ]
@@ -186,3 +188,29 @@ def test_a_damped_cell_tables_its_plastic_event_at_every_drag():
     assert damped["onsets"] < undamped["onsets"] and 0 < damped["unstable_fraction"] < undamped["unstable_fraction"]
     assert undamped["unstable_fraction"] == pytest.approx(record["summary"]["complex_fraction"], abs=1e-12)
     json.dumps(record, allow_nan=False)
+
+
+@pytest.mark.slow
+def test_a_damped_map_writes_the_study_beside_the_map(tmp_path):
+    """Two seeds at mu = 0 (frictionless: no pair, the baseline) and mu = 10, 16 disks to gamma =
+    0.002, drags 0 and 0.05: the study's files hold every cell, pool the two seeds, and the
+    frictionless cells have no onset."""
+    import pandas
+
+    scene = tmp_path / "small.toml"
+    scene.write_text(SMALL)
+    mapped = run_cli("map", str(scene), "--vary", "contacts.mu=0,10", "--vary", "packing.seed=1,2",
+                     "--damping", "0,0.05", "--workers", "1", "--out", str(tmp_path / "m"))
+    assert mapped.returncode == 0, mapped.stderr
+    assert "the damped study at 2 drags" in mapped.stderr
+    out = tmp_path / "m"
+    cells = [json.loads(p.read_text()) for p in (out / "cells").glob("*.json")]
+    damped = pandas.read_csv(out / "damped.csv")
+    assert len(damped) == 8 and list(damped.columns[:3]) == ["contacts.mu", "packing.seed", "drag"]
+    assert (damped[damped["contacts.mu"] == 0]["onsets"] == 0).all()
+    events = pandas.read_csv(out / "events.csv")
+    assert len(events) == 2 * sum(c["summary"]["plastic_events"] for c in cells)
+    pooled = pandas.read_csv(out / "precursors.csv")
+    assert pooled[["contacts.mu", "drag", "cells"]].values.tolist() == [[0, 0, 2], [0, 0.05, 2],
+                                                                         [10, 0, 2], [10, 0.05, 2]]
+    assert (out / "precursors.png").read_bytes()[:4] == b"\x89PNG"
