@@ -2,10 +2,13 @@
 docs/packings.md#dynamics): velocity Verlet with the Coulomb cap, the contact rows found again
 every few steps (the history carried by row), the strain held fixed.
 
-M q'' = F(q, xi; gamma), M = diag(m_i, m_i, I_i) (models/packing/equilibria.mass_diagonal). The
-history follows the motion by the chain's rule; sliding (the cap) is the only dissipation. The
+M q'' = F(q, xi; gamma) - eta M q', M = diag(m_i, m_i, I_i)
+(models/packing/equilibria.mass_diagonal), eta a viscous drag rate [1 / time] (0 by default:
+the model has none, and sliding, the cap, is the only dissipation; the damped linearization's
+modes: dynamics/damped_modes.py). The history follows the motion by the chain's rule. The
 energy budget E_k + U_n - W_t, W_t the work of the tangential forces on the disks, is conserved
-by the exact dynamics whether or not contacts slide; its drift measures the integration error.
+by the exact undamped dynamics whether or not contacts slide; its drift measures the
+integration error. With eta > 0 it decreases by the drag's work, int eta v.M v dt.
 """
 from __future__ import annotations
 
@@ -26,8 +29,9 @@ chain's default: docs/dynamics.md)."""
 @dataclass(frozen=True)
 class PackingRun:
     """Frames of a run: t (f,) [time], q (f, 3N), v = q' (f, 3N), the energy budget
-    E_k + U_n - W_t (f,) [energy], the kinetic energy (f,), sliding updates (f,) since the start,
-    the step dt, and the histories xi of the contact rows at the end."""
+    E_k + U_n - W_t (f,) [energy] (which a drag lowers by its work), the kinetic energy (f,),
+    sliding updates (f,) since the start, the step dt, and the histories xi of the contact rows
+    at the end."""
 
     t: np.ndarray
     q: np.ndarray
@@ -54,11 +58,15 @@ def run_steps(t_end: float, dt_max: float, frames: int) -> tuple[int, int]:
 
 
 def simulate(network: Network, q: np.ndarray, v: np.ndarray, xi: np.ndarray, rows: np.ndarray,
-             gamma: float, mass: np.ndarray, dt_max: float, t_end: float, frames: int = 200
-             ) -> PackingRun:
+             gamma: float, mass: np.ndarray, dt_max: float, t_end: float, frames: int = 200,
+             eta: float = 0.0) -> PackingRun:
     """Run from (q, v, xi) over the contact rows `rows` to exactly t_end in equal steps of at
     most dt_max (run_steps), about `frames` frames evenly spaced, the last at t_end; the rows
-    found again whenever the disks may have moved half the reach since the last search."""
+    found again whenever the disks may have moved half the reach since the last search. eta:
+    the drag rate [1 / time], the force -eta M q' on every dof (the kernels' advance: exact,
+    v *= exp(-eta dt / 2) at either end of a step); 0, none, is the undamped run bit for bit.
+    With eta > 0 the budget E_k + U_n - W_t is not conserved: it decreases by the drag's work,
+    int eta v.M v dt."""
     q, v, xi = q.copy(), v.copy(), xi.copy()
     params, inv_mass = network.params(gamma), 1.0 / mass
     reach = REACH * network.constants[0]
@@ -79,7 +87,7 @@ def simulate(network: Network, q: np.ndarray, v: np.ndarray, xi: np.ndarray, row
         speed = float(np.abs(v).max())
         between = max(1, min(every - done % every, int(0.5 * reach / (speed * dt + 1e-300))))
         slides = network.kernels.advance(q, v, xi, network.radii, rows, params, inv_mass, dt,
-                                         between, F, work, 0.0)
+                                         between, F, work, eta)
         if network.frictional:  # without tangential forces no contact slides: no history to cap
             capped += slides
         done += between
