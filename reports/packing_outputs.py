@@ -167,7 +167,7 @@ class DampedShear:
     eta = drag omega_0 [1 / time]; gamma, the strains whose spectra the shear computed (every
     accepted state with spectra full, the grid strains with sample: spectral_points); growth
     (drags, strains), the fastest damped growth rate there [1 / time]
-    (models/packing/damped.fastest_damped: -inf without a complex pair); hopfs, each drag's
+    (models/packing/damped.fastest_damped: over every mode but the translations' zeros); hopfs, each drag's
     onsets and ends of damped instability (damped_hopfs), None where none were looked for
     (spectra sample); events, the precursor table (models/packing/precursors.event_rows: one
     row per plastic event and drag); unstable_fraction, per drag the fraction of the strain
@@ -216,8 +216,7 @@ def damped_json(damped: DampedShear, scene: PackingScene) -> dict:
     [1 / time], sample_gamma (the grid strains, sampled spectra only) and per drag its
     drag, eta, points (hopf_record of each onset and end; null where none were looked for:
     sampled spectra), unstable_fraction (DampedShear.unstable_fraction) and sample_growth (each
-    grid strain's fastest damped growth rate, null without a complex pair; sampled spectra
-    only)."""
+    grid strain's fastest damped growth rate; sampled spectra only)."""
     sampled = damped.hopfs is None
     drags = [{"drag": drag, "eta": eta,
               "points": None if sampled else [hopf_record(h) for h in damped.hopfs[i]],

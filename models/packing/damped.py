@@ -88,13 +88,19 @@ def problem_at(network: Network, mass: np.ndarray, branch: Branch, k: int) -> Pa
 
 
 def fastest_damped(eigenvalues: np.ndarray, eta: float, rel_tol: float = DEFAULT_REL_TOL) -> float:
-    """The largest damped growth rate max Re s [1 / time] over the complex eigenvalues of M^-1 J
-    given (|Im lambda| > rel_tol max|lambda|; nan ones, outside a window, left out), -inf
-    without any: positive where the state has a damped-unstable pair at the drag eta."""
+    """The largest damped growth rate max Re s [1 / time] of s^2 + eta s + lambda = 0 over the
+    eigenvalues lambda of M^-1 J at one state (nan ones, outside a window, left out), eta >= 0
+    [1 / time]: positive where a mode is damped-unstable (a complex pair with (Im lambda)^2 >
+    eta^2 Re lambda, or a real lambda < 0, which grows at any drag). An eigenvalue with
+    |Im lambda| within rel_tol max|lambda| is taken as real, as the pair count does, and one
+    with |lambda| within it (the translations' zeros, and their rounding) as no mode, so that
+    rounding grows none; -inf without any."""
     lam = np.asarray(eigenvalues, dtype=complex)
     lam = lam[np.isfinite(lam)]
-    pairs = lam[np.abs(lam.imag) > rel_tol * np.abs(lam).max(initial=0.0)]
-    return float(damped_growth_rates(pairs, eta).max()) if pairs.size else -np.inf
+    floor = rel_tol * float(np.abs(lam).max(initial=0.0))
+    lam = np.where(np.abs(lam.imag) > floor, lam, lam.real)
+    lam = lam[np.abs(lam) > floor]
+    return float(damped_growth_rates(lam, eta).max(initial=-np.inf))
 
 
 def damped_rates(eigenvalues: np.ndarray, eta: float, rel_tol: float = DEFAULT_REL_TOL) -> np.ndarray:

@@ -36,7 +36,7 @@ import numpy as np
 
 from diskfriction.continuation.branch import Branch
 from diskfriction.continuation.spectra.tracking import DEFAULT_REL_TOL
-from diskfriction.dynamics.damped_modes import damped_growth_rates
+from diskfriction.models.packing.damped import fastest_damped
 
 
 @dataclass(frozen=True)
@@ -128,20 +128,6 @@ def strain_quantile(values: np.ndarray, weights: np.ndarray, q):
     return np.interp(q, middle, v)
 
 
-def fastest_growth(eigenvalues: np.ndarray, eta: float, rel_tol: float = DEFAULT_REL_TOL) -> float:
-    """The largest growth rate max Re s [1 / time] of s^2 + eta s + lambda = 0 over the
-    eigenvalues lambda of M^-1 J at one state (nan columns of a window left out), eta >= 0
-    [1 / time]: positive where a mode is damped-unstable. An eigenvalue with |Im lambda| (or
-    |lambda|) within rel_tol max|lambda| is taken as real (as zero), as the pair count does,
-    so that rounding grows no mode; -inf without an eigenvalue."""
-    lam = np.asarray(eigenvalues, dtype=complex)
-    lam = lam[np.isfinite(lam)]
-    floor = rel_tol * float(np.abs(lam).max(initial=0.0))
-    lam = np.where(np.abs(lam.imag) > floor, lam, lam.real)
-    lam = np.where(np.abs(lam) > floor, lam, 0.0)
-    return float(damped_growth_rates(lam, eta).max(initial=-np.inf))
-
-
 def spectra_by_strain(branch: Branch, sampled: bool) -> tuple[np.ndarray, list[np.ndarray], np.ndarray]:
     """(weights, eigenvalues per point, complex pairs per point) of the branch's accepted states
     (sampled False) or samples (True). ValueError where the branch holds no such spectra."""
@@ -167,7 +153,7 @@ def strain_statistics(branch: Branch, etas: Sequence[float] = (0.0,), sampled: b
     weights, eigenvalues, n_complex = spectra_by_strain(branch, sampled)
     unstable, medians, largest = [], [], []
     for eta in etas:
-        growth = np.array([fastest_growth(e, eta, rel_tol) for e in eigenvalues])
+        growth = np.array([fastest_damped(e, eta, rel_tol) for e in eigenvalues])
         grows = growth > 0
         unstable.append(strain_mean(grows, weights))
         median = strain_quantile(growth[grows], weights[grows], 0.5)

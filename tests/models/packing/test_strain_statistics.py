@@ -14,11 +14,12 @@ from sheared_packing import SCENE
 
 from diskfriction.continuation.branch import Branch, Piece, Stop, StopCode
 from diskfriction.continuation.spectra.tracking import count_complex_pairs
+from diskfriction.models.packing.damped import fastest_damped
 from diskfriction.models.packing.dynamics import fastest_pair
 from diskfriction.models.packing.equilibria import mass_diagonal
 from diskfriction.models.packing.sampled import SpectrumSample, grid_strains, sampled_spectra, with_samples
 from diskfriction.models.packing.shear import network_of
-from diskfriction.models.packing.strain_statistics import (cell_widths, fastest_growth, sample_weights,
+from diskfriction.models.packing.strain_statistics import (cell_widths, sample_weights,
                                                            state_weights, strain_covered, strain_mean,
                                                            strain_quantile, strain_statistics)
 
@@ -141,7 +142,7 @@ def test_the_damped_unstable_fraction_per_unit_strain_is_the_grids(closed_form, 
     periods the fraction (pi - 2 arcsin eta) / (2 pi)."""
     grid = even_grid()
     on_grid = b_of(grid) > eta
-    grows = np.array([fastest_growth(e, eta) > 0 for e in closed_form.eigenvalues])
+    grows = np.array([fastest_damped(e, eta) > 0 for e in closed_form.eigenvalues])
     weighted = strain_statistics(closed_form, (0.0, eta)).unstable_fraction[1]
     bound = (rule_error(closed_form, grows) + grid_error(on_grid)) / strain_covered(closed_form)
     assert abs(weighted - np.mean(on_grid)) <= bound < 0.02
@@ -198,9 +199,9 @@ def test_a_quantile_of_equal_weights_is_numpys_hazen_and_weight_moves_it():
 
 def test_rounding_grows_no_mode_and_a_negative_eigenvalue_grows_at_any_drag():
     lam = np.array([0.0, 1e-14j, 2.0 + 1e-12j, 2.0 - 1e-12j, 3.0])
-    assert fastest_growth(lam, 0.0) == 0.0 and fastest_growth(lam, 0.5) == 0.0
-    assert fastest_growth(np.array([-4.0, 1.0]), 10.0) == pytest.approx((-10 + np.sqrt(116)) / 2)
-    assert fastest_growth(np.array([np.nan, 1 + 2j, 1 - 2j]), 0.0) == pytest.approx(abs(np.sqrt(1 + 2j).imag))
+    assert fastest_damped(lam, 0.0) == 0.0 and fastest_damped(lam, 0.5) == -0.25  # the zeros are no mode
+    assert fastest_damped(np.array([-4.0, 1.0]), 10.0) == pytest.approx((-10 + np.sqrt(116)) / 2)
+    assert fastest_damped(np.array([np.nan, 1 + 2j, 1 - 2j]), 0.0) == pytest.approx(abs(np.sqrt(1 + 2j).imag))
 
 
 def test_a_branch_without_spectra_at_its_states_is_refused(closed_form):
@@ -270,6 +271,6 @@ def test_a_shears_strain_statistics_are_its_spectrum_on_an_even_grid(gridded):
     assert samples.strain == pytest.approx(covered, rel=1e-12)
     assert states.collisions_per_disk_strain == len(branch.collisions) / (SCENE.N * covered)
     sigma = [fastest_pair(e)[1] for e in branch.eigenvalues]
-    assert np.allclose([fastest_growth(e, 0.0) for e in branch.eigenvalues], sigma, rtol=1e-12, atol=0)
+    assert np.allclose([fastest_damped(e, 0.0) for e in branch.eigenvalues], sigma, rtol=1e-12, atol=0)
     assert states.growth_max[0] == max(sigma)
     assert states.unstable_fraction[1] < states.unstable_fraction[0]  # the drag damps some pairs
