@@ -205,10 +205,14 @@ def damped_shear(scene: PackingScene, packing: Packing, branch: Branch,
 
 def hopf_record(hopf: DampedHopf) -> dict:
     """damped.json's record of one onset or end (a DampedHopf): gamma, kind, eigenvalue
-    [Re, Im] of M^-1 J [1 / time^2], frequency w [1 / time] and the branch step holding it."""
+    [Re, Im] of M^-1 J [1 / time^2], frequency w [1 / time], the branch step holding it, the
+    strain bracket, and how it was found: "refined" (to the bracket), "event" (the spectrum's
+    jump at the contact event ending the step) or "step" (not refined: the bracket is the
+    step)."""
+    how = "event" if hopf.jump else "refined" if hopf.resolved else "step"
     return {"gamma": hopf.gamma, "kind": hopf.kind,
             "eigenvalue": [hopf.eigenvalue.real, hopf.eigenvalue.imag],
-            "frequency": hopf.frequency, "step": hopf.step}
+            "frequency": hopf.frequency, "step": hopf.step, "bracket": list(hopf.bracket), "found": how}
 
 
 def damped_json(damped: DampedShear, scene: PackingScene) -> dict:

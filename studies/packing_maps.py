@@ -115,7 +115,9 @@ def packing_cell(scene: PackingScene, params: PackingMapParams) -> dict:
     models/packing/precursors.EVENT_COLUMNS)."""
     from dataclasses import replace
 
+    from diskfriction.continuation.linalg.solves import SingularMatrix
     from diskfriction.continuation.stepping.arclength import ContinuationError
+    from diskfriction.continuation.stepping.segment import SegmentSolveError
     from diskfriction.continuation.spectra.window import WindowCrowded
     from diskfriction.errors import OneLineError
     from diskfriction.models.packing.equilibria import MissedContact
@@ -141,7 +143,10 @@ def packing_cell(scene: PackingScene, params: PackingMapParams) -> dict:
         record |= {"collisions": collision_records(branch),
                    "plastic": [[e.gamma, e.stress_before, e.stress_after] for e in branch.plastic]}
         if params.damping:
-            record |= damped_parts(scene, packing, branch, params.damping)
+            try:
+                record |= damped_parts(scene, packing, branch, params.damping)
+            except (SegmentSolveError, SingularMatrix, np.linalg.LinAlgError) as error:
+                summary |= {"status": "failed", "reason": f"the damped study stopped: {error}"}
     summary["wall_time"] = round(time.perf_counter() - start, 3)
     return record
 

@@ -17,7 +17,7 @@ commit hook does nothing (no history carried alongside u).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable
+from typing import Callable, Optional
 
 import numpy as np
 
@@ -257,9 +257,10 @@ def locate_hopf(problem: Problem, branch: Branch, tol_p: float = 1e-10, rel_tol:
     ev = branch.eigenvalues
     if conservative(ev):
         return []
-    return [locate_crossing(problem, branch.x[k], branch.x[k + 1], ev[k, i], ev[k + 1, i], _real_part, k,
-                            tol_p, newton_tol, max_newton, linear_solver, eigensolver)
-            for k, i in hopf_steps(ev, rel_tol)]
+    found = (locate_crossing(problem, branch.x[k], branch.x[k + 1], ev[k, i], ev[k + 1, i], _real_part, k,
+                             tol_p, newton_tol, max_newton, linear_solver, eigensolver)
+             for k, i in hopf_steps(ev, rel_tol))
+    return [point for point in found if point is not None]
 
 
 def _real_part(lam: complex) -> float:
@@ -270,18 +271,25 @@ def _real_part(lam: complex) -> float:
 def locate_crossing(problem: Problem, x_a: Array, x_b: Array, lam_a: complex, lam_b: complex,
                     growth: Callable[[complex], float], step: int, tol_p: float = 1e-10,
                     newton_tol: float = 1e-12, max_newton: int = 10, linear_solver: LinearSolver = DIRECT,
-                    eigensolver: Eigensolver = DEFAULT, upper: bool = True, kind: str = "hopf") -> SpecialPoint:
+                    eigensolver: Eigensolver = DEFAULT, upper: bool = True,
+                    kind: str = "hopf") -> Optional[SpecialPoint]:
     """Where the growth rate growth(lambda) of one tracked eigenvalue changes sign over the step
     from the accepted point x_a (its eigenvalue lam_a) to x_b (lam_b), refined along the step's
     secant segment until |dp| <= tol_p. lambda(s) at the segment coordinate s is the eigenvalue
     (by `eigensolver`) nearest to the interpolant lam_a + s (lam_b - lam_a), among the upper
     members of complex pairs where `upper` (a Hopf point: growth = Re lambda), among all where
     not (a crossing that may follow an eigenvalue through its pair's birth). Returns the point
-    (`kind`, value lambda there); `step` is the branch step it lies in."""
+    (`kind`, value lambda there); `step` is the branch step it lies in. None where `problem`
+    gives the growth one sign at both ends: the sign then changed where the spectrum jumps at an
+    end, not inside the step (a problem whose matrix changes from one step to the next, as a
+    packing's at a contact event)."""
     def pair(x: Array, s: float) -> complex:
         lam = eigensolver.eigensystem(problem, x[:-1], x[-1]).values
         lam = lam[lam.imag > 0] if upper else lam
         return complex(lam[np.argmin(np.abs(lam - (lam_a + s * (lam_b - lam_a))))])
+
+    if not growth(pair(x_a, 0.0)) * growth(pair(x_b, 1.0)) < 0.0:
+        return None
 
     x, bracket = _locate(problem, x_a, x_b, lambda seg, x, s: growth(pair(x, s)), tol_p, newton_tol,
                          max_newton, by_x=False, linear_solver=linear_solver)

@@ -27,10 +27,10 @@ import numpy as np
 from diskfriction.continuation.branch import Branch
 from diskfriction.continuation.detection.bifurcations import crossing_steps, locate_crossing
 from diskfriction.continuation.spectra.eigensolvers import DenseSpectra
+from diskfriction.continuation.linalg.solves import SingularMatrix
 from diskfriction.continuation.spectra.tracking import DEFAULT_REL_TOL
-from diskfriction.continuation.stepping.newton import fixed_p_newton
 from diskfriction.continuation.stepping.segment import SegmentSolveError
-from diskfriction.dynamics.damped_modes import damped_growth_rates
+from diskfriction.dynamics.damped_modes import damped_exponents, damped_growth_rates
 from diskfriction.matrices import Matrix
 from diskfriction.models.packing.equilibria import LINEAR_SOLVER, PackingEquilibria
 from diskfriction.models.packing.network import Network
@@ -67,6 +67,8 @@ class DampedHopf:
     bracket: tuple[float, float]
     q: np.ndarray | None = field(default=None, compare=False, repr=False)
     mode: np.ndarray | None = field(default=None, compare=False, repr=False)
+    jump: bool = False
+    resolved: bool = True
 
 
 def pair_translations(problem: PackingEquilibria, q: np.ndarray, gamma: float, near: complex) -> np.ndarray:
@@ -128,14 +130,57 @@ def damped_hopfs(network: Network, mass: np.ndarray, branch: Branch, eta: float,
     for piece in branch.of_kind("segment"):
         ev = branch.eigenvalues[piece.start:piece.stop]
         for k, i, rising in crossing_steps(ev, growth, rel_tol):
-            problem = problem_at(network, mass, branch, piece.start + k)
-            point = _located(problem, branch, piece.start + k, ev[k, i], ev[k + 1, i], eta)
+            step = piece.start + k
+            problem = problem_at(network, mass, branch, step)
+            try:
+                point = _located(problem, branch, step, ev[k, i], ev[k + 1, i], eta)
+            except (SegmentSolveError, SingularMatrix):  # an equilibrium inside the step not found
+                found.append(_unresolved(branch, step, complex(ev[k, i]), complex(ev[k + 1, i]), eta, rising))
+                continue
+            if point is None:  # the sign changed at the contact event ending the step
+                unstable = complex(ev[k + 1, i] if rising else ev[k, i])
+                if abs(unstable.imag) > rel_tol * abs(unstable):  # a real one: static, left out
+                    found.append(_at_event(network, mass, branch, step, unstable, eta, rising))
+                continue
             lam = complex(point.value)
             if abs(lam.imag) > rel_tol * abs(lam):  # a real one: a fold, left out
                 found.append(DampedHopf(eta, point.p, "onset" if rising else "end", lam,
                                         float(np.sqrt(max(lam.real, 0.0))), point.step, point.bracket,
                                         point.u, pair_translations(problem, point.u, point.p, lam)))
     return tuple(sorted(found, key=lambda h: (h.step, h.gamma)))
+
+
+def _unresolved(branch: Branch, k: int, lam_a: complex, lam_b: complex, eta: float,
+                rising: bool) -> DampedHopf:
+    """A crossing in step k whose refinement found no equilibrium inside the step (a disk
+    turning loose at the contact event ending it makes the Jacobian there nearly singular, and
+    Newton stalls): the whole step as its bracket (`resolved` False), gamma where the damped
+    growth rates at its ends, linear in the strain, cross zero, the eigenvalue and frequency of
+    its unstable end, no state and no mode."""
+    g_a, g_b = damped_growth_rates(np.array([lam_a, lam_b]), eta)
+    gamma_a, gamma_b = float(branch.p[k]), float(branch.p[k + 1])
+    gamma = gamma_a + (gamma_b - gamma_a) * g_a / (g_a - g_b)
+    lam = lam_b if rising else lam_a
+    frequency = float(np.abs(damped_exponents(np.array([lam]), eta)[0, 0].imag))
+    return DampedHopf(eta, gamma, "onset" if rising else "end", lam, frequency, k, (gamma_a, gamma_b),
+                      resolved=False)
+
+
+def _at_event(network: Network, mass: np.ndarray, branch: Branch, k: int, lam: complex, eta: float,
+              rising: bool) -> DampedHopf:
+    """A crossing at the contact event that ends step k: with the step's contacts the growth
+    rate keeps its sign up to state k + 1, where a contact opens or closes and the spectrum
+    jumps across zero growth (locate_crossing's None). The point is state k + 1 (a bracket of
+    width 0, `jump`); lam is the tracked eigenvalue on its unstable side (state k + 1 for an
+    onset, k for an end), whose damped root gives the frequency and whose right eigenvector
+    there the mode."""
+    gamma = float(branch.p[k + 1])
+    j = k + 1 if rising else k
+    problem = problem_at(network, mass, branch, j)
+    frequency = float(np.abs(damped_exponents(np.array([lam]), eta)[0, 0].imag))
+    return DampedHopf(eta, gamma, "onset" if rising else "end", lam, frequency, k, (gamma, gamma),
+                      branch.u[k + 1], pair_translations(problem, branch.u[j], float(branch.p[j]), lam),
+                      jump=True)
 
 
 def _collision(c, N: int) -> DampedHopf:
@@ -151,17 +196,20 @@ def _collision(c, N: int) -> DampedHopf:
 
 
 def in_gauge(problem: PackingEquilibria, q: np.ndarray, gamma: float) -> np.ndarray:
-    """x = (q', gamma): the equilibrium q at gamma (a later state of the same step) in the gauge
-    of `problem` (problem_at an earlier state), solved by Newton at fixed strain from q. The
-    gauge pins the reference disk and the loose disks to the committed state, while the branch
-    lets them move from state to state; q' is q translated with the reference disk back (a
-    symmetry of the sheared periodic box) and the loose disks, which carry no force, back
-    where they were, so that the secant between the step's ends stays in one gauge."""
-    result = fixed_p_newton(problem, q, gamma, NEWTON_TOL, 20, LINEAR_SOLVER)
-    if not result.converged:
-        raise SegmentSolveError(f"the state at gamma = {gamma:.9g} is no equilibrium in the gauge "
-                                f"of the step's start ({result.failure()})")
-    return result.x
+    """x = (q', gamma): a later state q of the step (at gamma) in the gauge of `problem`
+    (problem_at the step's start). The gauge pins the reference disk and the loose disks to the
+    committed state, while the branch lets them move from state to state; q' is q translated
+    as a whole so that the reference disk is back (a symmetry of the sheared periodic box:
+    every separation and image is kept) and the gauge rows' dofs back at the committed state
+    (the loose disks carry no force), so that the secant between the step's ends stays in one
+    gauge. Where a disk turns loose at q (a contact event ending the step) q' is no equilibrium
+    of `problem` by that disk's force, which its last contact no longer balances."""
+    N, committed, shifted = problem.network.N, problem.q_c, np.array(q, dtype=float)
+    ref = problem.gauge.ref
+    for c in (0, 1):
+        shifted[c * N:(c + 1) * N] -= q[c * N + ref] - committed[c * N + ref]
+    shifted[problem.gauge.rows] = committed[problem.gauge.rows]
+    return np.append(shifted, gamma)
 
 
 def _located(problem: PackingEquilibria, branch: Branch, k: int, lam_a: complex, lam_b: complex,

@@ -87,7 +87,8 @@ def event_rows(network: Network, mass: np.ndarray, branch: Branch, omega_0: floa
     state before the event has a damped-unstable pair and the largest damped growth rate there
     [1 / time]; the last onset in the event's segment before it: its strain, the strain gap to
     the event, the marginal frequency w [1 / time] and the overlap of its mode with the event's
-    displacement (module docstring), None without one."""
+    displacement (module docstring), None without one (the overlap None also where the onset
+    was not refined and has no mode: DampedHopf.resolved)."""
     N, rows = network.N, []
     for index, event in enumerate(branch.plastic):
         last = int(np.flatnonzero(branch.segment == index)[-1])
@@ -111,6 +112,7 @@ def event_rows(network: Network, mass: np.ndarray, branch: Branch, omega_0: floa
             if onsets:
                 onset = onsets[-1]
                 row |= {"onset_gamma": onset.gamma, "strain_gap": event.gamma - onset.gamma,
-                        "onset_frequency": onset.frequency, "overlap": plane_overlap(u, onset.mode)}
+                        "onset_frequency": onset.frequency,
+                        "overlap": None if onset.mode is None else plane_overlap(u, onset.mode)}
             rows.append({column: row[column] for column in EVENT_COLUMNS})
     return rows
