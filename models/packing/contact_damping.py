@@ -146,19 +146,24 @@ def problem_damping(problem, q: np.ndarray, gamma: float, damping: ContactDampin
                           damping, tangential)
 
 
-def reduced_exponents(problem, q: np.ndarray, gamma: float, C) -> np.ndarray:
-    """(2k,): the exponents of z'' + C_red z' + K_red z = 0 on the k coordinates of a
-    PackingEquilibria's tracked spectrum at (q, gamma), C_red = P M^-1 C E and K_red = P M^-1 J
-    E (module docstring; M^-1 J whatever the problem's matrix is) [1 / time]; C (3N x 3N, dense
-    or sparse) [mass / time]."""
+def reduced_pencil(problem, q: np.ndarray, gamma: float, C) -> tuple[np.ndarray, np.ndarray]:
+    """(C_red, K_red), dense (k x k): P M^-1 C E [1 / time] and P M^-1 J E [1 / time^2] on the k
+    coordinates of a PackingEquilibria's tracked spectrum at (q, gamma) (module docstring; M^-1
+    J whatever the problem's matrix is); C (3N x 3N, dense or sparse) [mass / time]."""
     g = problem.gauge
     inverse_mass = sp.diags_array(1.0 / problem.mass)
     A = problem.physical(q, gamma)
     if problem.matrix is Matrix.J:
         A = inverse_mass @ A
-    K_red = (g.P @ A).tocsc()[:, g.kept]
-    C_red = (g.P @ (inverse_mass @ sp.csr_array(C))).tocsc()[:, g.kept]
-    return quadratic_exponents(np.ones(g.kept.size), C_red, K_red)
+    K_red = (g.P @ A).tocsc()[:, g.kept].toarray()
+    C_red = (g.P @ (inverse_mass @ sp.csr_array(C))).tocsc()[:, g.kept].toarray()
+    return C_red, K_red
+
+
+def reduced_exponents(problem, q: np.ndarray, gamma: float, C) -> np.ndarray:
+    """(2k,): the exponents of z'' + C_red z' + K_red z = 0 (reduced_pencil) [1 / time]."""
+    C_red, K_red = reduced_pencil(problem, q, gamma, C)
+    return quadratic_exponents(np.ones(K_red.shape[0]), C_red, K_red)
 
 
 def damped_spectrum(problem, q: np.ndarray, gamma: float, damping: ContactDamping

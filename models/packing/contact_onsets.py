@@ -59,7 +59,6 @@ from functools import partial
 from typing import Callable, Optional
 
 import numpy as np
-import scipy.sparse as sp
 
 from diskfriction.continuation.branch import Branch
 from diskfriction.continuation.linalg.solves import blas_threads
@@ -67,8 +66,8 @@ from diskfriction.continuation.spectra.tracking import DEFAULT_REL_TOL
 from diskfriction.continuation.stepping.newton import fixed_p_newton
 from diskfriction.continuation.stepping.segment import refine_sign_change
 from diskfriction.dynamics.quadratic_modes import largest_growth, quadratic_exponents
-from diskfriction.matrices import Matrix
-from diskfriction.models.packing.contact_damping import ContactDamping, problem_damping, reduced_exponents
+from diskfriction.models.packing.contact_damping import (ContactDamping, problem_damping, reduced_exponents,
+                                                         reduced_pencil)
 from diskfriction.models.packing.damped import NEWTON_TOL, TOL_GAMMA, DampedHopf, problem_at
 from diskfriction.models.packing.equilibria import LINEAR_SOLVER, PackingEquilibria
 from diskfriction.models.packing.network import Network
@@ -180,20 +179,6 @@ def _located(step: _StepGrowth, eta: float, rel_tol: float) -> Optional[DampedHo
     return DampedHopf(eta, gamma, kind, None,
                       abs(marginal.imag), step.k, (a, b), q,
                       mode_translations(problem, null_vector(marginal, C_red, K_red)))
-
-
-def reduced_pencil(problem: PackingEquilibria, q: np.ndarray, gamma: float, C
-                   ) -> tuple[np.ndarray, np.ndarray]:
-    """(C_red, K_red), dense (k x k): P M^-1 C E [1 / time] and P M^-1 J E [1 / time^2] in the
-    tracked spectrum's coordinates (contact_damping.reduced_exponents' pencil)."""
-    g = problem.gauge
-    inverse_mass = sp.diags_array(1.0 / problem.mass)
-    A = problem.physical(q, gamma)
-    if problem.matrix is Matrix.J:
-        A = inverse_mass @ A
-    K_red = (g.P @ A).tocsc()[:, g.kept].toarray()
-    C_red = (g.P @ (inverse_mass @ sp.csr_array(C))).tocsc()[:, g.kept].toarray()
-    return C_red, K_red
 
 
 def null_vector(s: complex, C_red: np.ndarray, K_red: np.ndarray) -> np.ndarray:

@@ -18,9 +18,9 @@ from diskfriction.continuation.stepping.newton import fixed_p_newton
 from diskfriction.dynamics.damped_modes import damped_growth_rates
 from diskfriction.dynamics.quadratic_modes import largest_growth
 from diskfriction.models.packing.contact_damping import (ContactDamping, damped_spectrum, problem_damping,
-                                                          reduced_exponents)
+                                                          reduced_exponents, reduced_pencil)
 from diskfriction.models.packing.contact_onsets import (contact_hopfs, mode_translations, null_vector,
-                                                        reduced_pencil, stability_changes)
+                                                        stability_changes)
 from diskfriction.models.packing.damped import TOL_GAMMA, damped_hopfs, fastest_damped, problem_at
 from diskfriction.models.packing.equilibria import LINEAR_SOLVER, mass_diagonal
 from diskfriction.models.packing.shear import network_of
