@@ -52,12 +52,13 @@ import numpy as np
 
 from diskfriction.continuation.branch import Branch
 from diskfriction.continuation.spectra.eigensolvers import DenseSpectra
-from diskfriction.dynamics.damped_modes import damped_exponents, damped_growth_rates
+from diskfriction.dynamics.damped_modes import damped_exponents
 from diskfriction.matrices import Matrix
+from diskfriction.models.packing.damped import damped_rates
 from diskfriction.models.packing.dynamics import STABLE_FRACTION, simulate
 from diskfriction.models.packing.equilibria import LOOSE_OVERLAP, PackingEquilibria, row_keys
 from diskfriction.models.packing.network import Network
-from diskfriction.models.packing.plastic import omega_bound, relax
+from diskfriction.models.packing.plastic import RelaxationFailed, omega_bound, relax
 
 VERDICTS = ("returned", "slipped", "rearranged", "saturated")
 """A run's verdicts (module docstring)."""
@@ -283,26 +284,19 @@ class Causality:
     rates: np.ndarray
     folds: np.ndarray
     outcomes: tuple[Outcome, ...]
+    failed: tuple[tuple[float, str], ...] = ()
 
     @property
     def counts(self) -> dict[str, int]:
-        """The runs per verdict (every one of VERDICTS, 0 where none)."""
+        """The runs per verdict (every one of VERDICTS, 0 where none), and "failed": the runs
+        whose end FIRE could not relax (failed: their strain and why)."""
         found = Counter(outcome.verdict for outcome in self.outcomes)
-        return {verdict: found[verdict] for verdict in VERDICTS}
-
-
-def damped_rates(eigenvalues: np.ndarray, eta: float, rel_tol: float = 1e-9) -> np.ndarray:
-    """(m,): per state the largest damped growth rate Re s [1 / time] over the complex
-    eigenvalues of M^-1 J (rows of (m, n)), -inf where a state has none."""
-    lam = np.asarray(eigenvalues, dtype=complex)
-    scale = np.abs(lam).max(axis=1, keepdims=True)
-    rates = np.where(np.abs(lam.imag) > rel_tol * scale, damped_growth_rates(lam, eta), -np.inf)
-    return rates.max(axis=1)
+        return {verdict: found[verdict] for verdict in VERDICTS} | {"failed": len(self.failed)}
 
 
 def onsets(branch: Branch, eta: float) -> np.ndarray:
-    """The states where a damped-unstable pair appears along each segment: Re s > 0 there
-    (damped_rates) and not at the segment's state before (or it is the segment's first)."""
+    """The states where a damped-unstable mode appears along each segment: Re s > 0 there
+    (damped.damped_rates) and not at the segment's state before (or it is the segment's first)."""
     rates = damped_rates(branch.eigenvalues, eta)
     unstable = rates > 0
     first = np.zeros(len(branch), bool)
@@ -325,7 +319,7 @@ def causality(branch: Branch, network: Network, mass: np.ndarray, eta: float, de
                          "shear with spectra \"full\", no window and matrix \"M^-1 J\"")
     ends = {piece.label: piece.stop - 1 for piece in branch.of_kind("segment")}
     segment = branch.labels("segment")
-    states, gamma, rates, folds, outcomes = [], [], [], [], []
+    states, gamma, rates, folds, outcomes, failed = [], [], [], [], [], []
     for k in onsets(branch, eta):
         q, xi, rows, g = branch.q[k], branch.xi[k], branch.rows[k], float(branch.gamma[k])
         mode = fastest(damped_modes(network, mass, q, xi, rows, g)[1], eta)
@@ -333,11 +327,15 @@ def causality(branch: Branch, network: Network, mass: np.ndarray, eta: float, de
         event = branch.plastic[label] if label < len(branch.plastic) else None
         known = event is not None and event.after is not None
         w = event.after[0] - branch.q[ends[label]] if known else None
-        outcomes.append(run_mode(network, mass, q, xi, rows, g, mode, eta, delta_0, amplitude,
-                                 moving, w=w, f_tol=f_tol))
+        try:
+            outcomes.append(run_mode(network, mass, q, xi, rows, g, mode, eta, delta_0, amplitude,
+                                     moving, w=w, f_tol=f_tol))
+        except RelaxationFailed as error:  # counted apart: no verdict without a relaxed end
+            failed.append((g, str(error)))
+            continue
         states.append(int(k))
         gamma.append(g)
         rates.append(mode.growth_rate(eta))
         folds.append(np.nan if event is None else event.gamma)
     return Causality(eta, np.array(states, int), np.array(gamma), np.array(rates),
-                     np.array(folds), tuple(outcomes))
+                     np.array(folds), tuple(outcomes), tuple(failed))
