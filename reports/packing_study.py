@@ -4,8 +4,11 @@ map.csv:
     events.csv      one row per plastic event, drag and cell: the cell's varied values, then
                     models/packing/precursors.EVENT_COLUMNS (raw units; empty: not known).
     damped.csv      one row per cell and drag: the varied values, then DAMPED_COLUMNS.
+    runs.csv        (map --causality) one row per damped run from an onset: the varied values,
+                    then RUN_COLUMNS.
     precursors.csv  the cells pooled over the seeds (every varied key but packing.seed) per drag:
-                    GROUP_COLUMNS, fractions with Wilson's 95 % interval, rates with the mean's.
+                    GROUP_COLUMNS, fractions with Wilson's 95 % interval, rates with the mean's,
+                    the runs counted per verdict (empty where none ran).
     precursors.png  the fraction of plastic events preceded by a damped instability against the
                     drag [omega_0], one line per group of the other keys, with the intervals.
 Each file is written atomically (files.save_text); floats with repr, as map.csv (reports/maps.py: csv_table).
@@ -13,6 +16,7 @@ Each file is written atomically (files.save_text); floats with repr, as map.csv 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Optional
 
 import numpy as np
 
@@ -20,16 +24,16 @@ from diskfriction.files import save_text
 from diskfriction.models.packing.precursors import EVENT_COLUMNS
 from diskfriction.reports.figures import new_figure, save_figure
 from diskfriction.reports.maps import csv_table
-from diskfriction.studies.damped_study import DAMPED_COLUMNS, GROUP_COLUMNS, precursor_groups
+from diskfriction.studies.damped_study import DAMPED_COLUMNS, GROUP_COLUMNS, RUN_COLUMNS, precursor_groups
 
 SEED = "packing.seed"
 """The varied key pooled over (the seeds are the ensemble)."""
 
 
-def study_cells(cells, records) -> list[tuple[dict, list[dict], list[dict]]]:
-    """(values, damped summaries, event rows) of every cell whose record carries them (failed
-    cells carry none)."""
-    return [(dict(cell.values), record.get("damped") or [], record.get("events") or [])
+def study_cells(cells, records) -> list[tuple[dict, list[dict], list[dict], Optional[list[dict]]]]:
+    """(values, damped summaries, event rows, run rows or None) of every cell (a failed cell
+    carries none of them; a cell that ran no dynamics no run rows)."""
+    return [(dict(cell.values), record.get("damped") or [], record.get("events") or [], record.get("runs"))
             for cell, record in zip(cells, records)]
 
 
@@ -39,14 +43,19 @@ def save_study(out: Path, axes, cells, records) -> list[str]:
     keys = [axis.key for axis in axes]
     study = study_cells(cells, records)
     save_text(out / "events.csv", csv_table(keys + list(EVENT_COLUMNS),
-                                        [values | row for values, _, rows in study for row in rows]))
+                                        [values | row for values, _, rows, _ in study for row in rows]))
     save_text(out / "damped.csv", csv_table(keys + list(DAMPED_COLUMNS),
-                                        [values | s for values, summaries, _ in study for s in summaries]))
+                                        [values | s for values, summaries, _, _ in study for s in summaries]))
+    names = ["events.csv", "damped.csv"]
+    if any(runs is not None for *_, runs in study):
+        save_text(out / "runs.csv", csv_table(keys + list(RUN_COLUMNS),
+                                              [values | r for values, _, _, runs in study for r in runs or []]))
+        names.append("runs.csv")
     pooled = [key for key in keys if key != SEED]
     groups = precursor_groups(study, pooled)
     save_text(out / "precursors.csv", csv_table(pooled + ["drag"] + list(GROUP_COLUMNS), groups))
     plot_precursors(groups, pooled, out / "precursors.png")
-    return ["events.csv", "damped.csv", "precursors.csv", "precursors.png"]
+    return names + ["precursors.csv", "precursors.png"]
 
 
 def plot_precursors(groups: list[dict], keys: list[str], path: Path) -> None:

@@ -64,13 +64,15 @@ the first spectra (16 disks to gamma = 0.002: 4-9 s)."""
 class PackingMapParams:
     """What every packing cell runs besides its scene: the shear's matrix ("J" or "M^-1 J"),
     the spectral window (lo, hi) of Re lambda [raw] or None for every eigenvalue, the
-    plastic events passed before a cell's shear stops at the next, and the drags [omega_0]
-    of the damped-stability study (studies/damped_study.py; none: no study)."""
+    plastic events passed before a cell's shear stops at the next, the drags [omega_0]
+    of the damped-stability study (studies/damped_study.py; none: no study) and whether it runs
+    the damped dynamics from every onset at each drag above 0 (models/packing/causality.py)."""
 
     matrix: str
     window: Optional[tuple[float, float]] = None
     plastic_events: int = 1000
     damping: tuple[float, ...] = ()
+    causality: bool = False
 
 
 def packing_cell_seconds(scene: PackingScene, params: PackingMapParams) -> float:
@@ -111,8 +113,9 @@ def packing_cell(scene: PackingScene, params: PackingMapParams) -> dict:
     """The record of one packing cell (raw units): its scene (physics fields), summary
     (PACKING_COLUMNS), the located collisions (as bifurcate's collisions.json), the plastic
     events [gamma, sigma_xy before, after] and, with params.damping, the study's "damped" (one
-    summary per drag, studies/damped_study.DAMPED_COLUMNS) and "events" (the precursor rows,
-    models/packing/precursors.EVENT_COLUMNS)."""
+    summary per drag, studies/damped_study.DAMPED_COLUMNS), "events" (the precursor rows,
+    models/packing/precursors.EVENT_COLUMNS) and, with params.causality, "runs" (one row per
+    damped run from an onset, studies/damped_study.RUN_COLUMNS)."""
     from dataclasses import replace
 
     from diskfriction.continuation.linalg.solves import SingularMatrix
@@ -144,24 +147,28 @@ def packing_cell(scene: PackingScene, params: PackingMapParams) -> dict:
                    "plastic": [[e.gamma, e.stress_before, e.stress_after] for e in branch.plastic]}
         if params.damping:
             try:
-                record |= damped_parts(scene, packing, branch, params.damping)
+                record |= damped_parts(scene, packing, branch, params.damping, params.causality)
             except (SegmentSolveError, SingularMatrix, np.linalg.LinAlgError) as error:
                 summary |= {"status": "failed", "reason": f"the damped study stopped: {error}"}
     summary["wall_time"] = round(time.perf_counter() - start, 3)
     return record
 
 
-def damped_parts(scene: PackingScene, packing, branch, drags: tuple[float, ...]) -> dict:
+def damped_parts(scene: PackingScene, packing, branch, drags: tuple[float, ...],
+                 runs: bool = False) -> dict:
     """A cell's "damped" and "events" (packing_cell) at the drags [omega_0]: the damped Hopf
     points of its branch at each (models/packing/damped.py; those below the scene's strain
-    range left out, as its collisions are), the precursor rows, and the strain statistics."""
+    range left out, as its collisions are), the precursor rows, and the strain statistics; with
+    `runs`, "runs": the damped dynamics from every onset of each drag above 0
+    (models/packing/causality.py; at drag 0 nothing damps a run to rest)."""
     from diskfriction.files import json_values
+    from diskfriction.models.packing.causality import causality
     from diskfriction.models.packing.damped import damped_hopfs
     from diskfriction.models.packing.equilibria import mass_diagonal
     from diskfriction.models.packing.precursors import event_rows
     from diskfriction.models.packing.shear import network_of
     from diskfriction.models.packing.strain_statistics import strain_statistics
-    from diskfriction.studies.damped_study import damped_summary
+    from diskfriction.studies.damped_study import damped_summary, run_rows
 
     network = network_of(scene, packing)
     mass = mass_diagonal(network, scene.m, scene.inertia)
@@ -172,4 +179,8 @@ def damped_parts(scene: PackingScene, packing, branch, drags: tuple[float, ...])
     statistics = strain_statistics(branch, etas, counted_from=scene.gamma_range[0])
     summaries = [damped_summary(statistics, drag, eta, i, hopfs[drag], [r for r in events if r["drag"] == drag],
                                 scene.N) for i, (drag, eta) in enumerate(zip(drags, etas))]
-    return json_values({"damped": summaries, "events": events})
+    parts = {"damped": summaries, "events": events}
+    if runs:
+        parts["runs"] = [row for drag, eta in zip(drags, etas) if drag > 0
+                         for row in run_rows(drag, causality(branch, network, mass, eta, scene.delta_0))]
+    return json_values(parts)

@@ -36,16 +36,22 @@ def row(drag, onset, active, gap=None, overlap=None):
             "overlap": overlap}
 
 
+def run(drag, verdict, overlap):
+    return {"drag": drag, "verdict": verdict, "overlap": overlap}
+
+
 def summary(drag, unstable, onsets):
     return {"drag": drag, "unstable_fraction": unstable, "onsets_per_disk_strain": onsets}
 
 
 def test_groups_pool_seeds_and_split_drags():
     cells = [({"mu": 1.0, "seed": 1}, [summary(0.0, 0.8, 3.0), summary(0.1, 0.2, 1.0)],
-              [row(0.0, 0.01, True, 0.001, 0.5), row(0.1, None, False)]),
+              [row(0.0, 0.01, True, 0.001, 0.5), row(0.1, None, False)],
+              [run(0.1, "rearranged", 0.9), run(0.1, "slipped", 0.2)]),
              ({"mu": 1.0, "seed": 2}, [summary(0.0, 0.6, 5.0), summary(0.1, 0.1, 0.5)],
               [row(0.0, 0.02, True, 0.003, 0.3), row(0.0, 0.03, False, 0.002, 0.1),
-               row(0.1, 0.02, True, 0.004, 0.2), row(0.1, None, False)])]
+               row(0.1, 0.02, True, 0.004, 0.2), row(0.1, None, False)],
+              [run(0.1, "rearranged", 0.7), run(0.1, "failed", None)])]
     groups = precursor_groups(cells, ["mu"])
     assert [(g["mu"], g["drag"], g["cells"], g["events"]) for g in groups] == [(1.0, 0.0, 2, 3),
                                                                                 (1.0, 0.1, 2, 3)]
@@ -56,3 +62,22 @@ def test_groups_pool_seeds_and_split_drags():
     assert undamped["gap_median"] == 0.002 and undamped["overlap_median"] == 0.3
     assert undamped["unstable_fraction"] == pytest.approx(0.7) and damped["onsets_per_disk_strain"] == 0.75
     assert set(GROUP_COLUMNS) <= set(undamped)
+    assert undamped["runs"] is None and undamped["rearranged"] is None  # no run at drag 0
+    assert (damped["runs"], damped["rearranged"], damped["slipped"], damped["failed"]) == (4, 2, 1, 1)
+    assert (damped["rearranged_lo"], damped["rearranged_hi"]) == wilson(2, 3)
+    assert damped["rearranged_overlap_median"] == pytest.approx(0.8)
+
+
+def test_run_rows_hold_every_run_and_the_failed_ones():
+    from diskfriction.models.packing.causality import Causality, Outcome
+    from diskfriction.studies.damped_study import RUN_COLUMNS, run_rows
+
+    outcome = Outcome("rearranged", 12.0, 3e-3, np.zeros(9), 1, 2, 40, 1e-9, -0.05, 0.97)
+    found = Causality(0.5, np.array([4]), np.array([0.002]), np.array([0.3]), np.array([np.nan]),
+                      (outcome,), ((0.003, "FIRE stopped"),))
+    rows = run_rows(0.05, found)
+    assert [tuple(r) for r in rows] == [RUN_COLUMNS, RUN_COLUMNS]
+    assert rows[0] | {} == {"drag": 0.05, "gamma": 0.002, "rate": 0.3, "fold_gamma": None,
+                            "verdict": "rearranged", "time": 12.0, "distance": 3e-3, "gained": 1,
+                            "lost": 2, "slides": 40, "stress_change": -0.05, "overlap": 0.97}
+    assert rows[1]["verdict"] == "failed" and rows[1]["gamma"] == 0.003 and rows[1]["rate"] is None
