@@ -1,7 +1,7 @@
 """``diskfriction bifurcate [SCENE] [--fx A:B] [--matrix J|M^-1J] [--detection fast|exhaustive]
-[--spectra none|sample:DGAMMA|full] [--window LO:HI] [--damping D1,D2,...] [--device cpu|gpu|auto]
-[--out DIR] [--json]``, or ``diskfriction bifurcate --problem FILE.py[:NAME] [--p A:B] ...``
-for any problem (cli/problem_cmd.py)."""
+[--spectra none|sample:DGAMMA|full] [--window LO:HI] [--damping D1,D2,... [--dashpots]]
+[--device cpu|gpu|auto] [--out DIR] [--json]``, or ``diskfriction bifurcate --problem
+FILE.py[:NAME] [--p A:B] ...`` for any problem (cli/problem_cmd.py)."""
 from __future__ import annotations
 
 import argparse
@@ -64,10 +64,18 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="a packing scene with the matrix M^-1J: its damped stability at "
                              "each drag D (units of omega_0, each >= 0): with spectra full the "
                              "onsets and ends of damped instability located along the shear, with "
-                             "sample:DGAMMA the samples' damped growth rates; writes "
+                             "sample:DGAMMA the samples' damped growth rates (contact dashpots "
+                             "instead of the drag: --dashpots); writes "
                              "DIR/damped.json and precursors.csv (the plastic events against "
                              "their precursors) with the other outputs (docs/packings.md, "
                              "Damped stability)")
+    parser.add_argument("--dashpots", action="store_true",
+                        help="with --damping: each D is the rate D omega_0 of dashpots on the "
+                             "contacts' relative velocities (normal, and tangential at half the "
+                             "rate, as LAMMPS's gran/hooke), not a drag on every disk; their "
+                             "damped modes are solved at every accepted state, with any --spectra "
+                             "and --matrix, and the onsets and ends located are the states' (the "
+                             "first mode to grow, the last to recover)")
     parser.add_argument("--device", default="auto", metavar="cpu|gpu|auto",
                         help="where dense spectra run: cpu (LAPACK), gpu (CuPy's cuSOLVER; "
                              "scans then run inline), auto (the GPU from n = 1000 where CuPy "
@@ -158,6 +166,9 @@ def _run(args: argparse.Namespace) -> int:
     if args.workers is not None and args.workers > 0 and not detector.parallel:
         raise CommandError(f"bifurcate error: --workers: scan workers serve the fast detection; "
                            f"--detection {args.detection} scans each step inline (got {args.workers})")
+    if args.dashpots and args.damping is None:
+        raise CommandError("bifurcate error: --dashpots: only with --damping D1,D2,... (the "
+                           "dashpots' rates, in units of omega_0)")
     if args.problem is not None:
         from diskfriction.cli.problem_cmd import run_problem
 

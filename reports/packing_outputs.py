@@ -20,12 +20,14 @@ from diskfriction.continuation.records import collisions_json, save_branch
 from diskfriction.continuation.spectra.window import SpectralWindow
 from diskfriction.files import json_values, save_json, save_text
 from diskfriction.matrices import Matrix
+from diskfriction.models.packing.contact_damping import ContactDamping
+from diskfriction.models.packing.contact_onsets import clear_signs, contact_growth, contact_hopfs
 from diskfriction.models.packing.damped import DampedHopf, damped_hopfs, damped_rates
 from diskfriction.models.packing.equilibria import mass_diagonal
 from diskfriction.models.packing.prepare import Packing, save_packing
 from diskfriction.models.packing.precursors import EVENT_COLUMNS, event_rows
 from diskfriction.models.packing.shear import network_of
-from diskfriction.models.packing.strain_statistics import strain_statistics
+from diskfriction.models.packing.strain_statistics import state_weights, strain_mean, strain_statistics
 from diskfriction.reports.figures import new_figure, save_figure
 from diskfriction.reports.maps import csv_table
 from diskfriction.scenes.packing import PackingScene
@@ -164,18 +166,22 @@ def save_packing_branch(out: Path, branch: Branch, scene: PackingScene) -> None:
 class DampedShear:
     """A shear's damped stability at the drags of `bifurcate --damping`
     (docs/packings.md#damped-stability): the drags [omega_0], in the order given, and
-    eta = drag omega_0 [1 / time]; gamma, the strains whose spectra the shear computed (every
-    accepted state with spectra full, the grid strains with sample: spectral_points); growth
-    (drags, strains), the fastest damped growth rate there [1 / time]
-    (models/packing/damped.fastest_damped: over every mode but the translations' zeros); hopfs, each drag's
-    onsets and ends of damped instability (damped_hopfs), None where none were looked for
-    (spectra sample); events, the precursor table (models/packing/precursors.event_rows: one
-    row per plastic event and drag); unstable_fraction, per drag the fraction of the strain
-    with a damped-unstable mode (models/packing/strain_statistics.py: each state or sample
-    weighted by the strain it stands for)."""
+    eta = drag omega_0 [1 / time]; damping, what eta is the rate of: "drag" (the viscous drag
+    -eta M q') or "dashpots" (contact dashpots of rate eta, models/packing/contact_damping.py
+    ContactDamping(eta)); gamma, the strains whose spectra the shear computed (every accepted
+    state with spectra full, the grid strains with sample: spectral_points); growth (drags,
+    strains), the fastest damped growth rate there [1 / time] (the drag's
+    models/packing/damped.fastest_damped: over every mode but the translations' zeros; the
+    dashpots' contact_onsets.contact_growth); hopfs, each drag's onsets and ends of damped
+    instability (damped_hopfs, or the states' contact_hopfs with dashpots), None where none were
+    looked for (spectra sample); events, the precursor table (models/packing/precursors.event_rows:
+    one row per plastic event and drag); unstable_fraction, per drag the fraction of the strain
+    with a damped-unstable mode (growth > 0; models/packing/strain_statistics.py: each state or
+    sample weighted by the strain it stands for)."""
 
     drags: tuple[float, ...]
     eta: tuple[float, ...]
+    damping: str
     gamma: np.ndarray
     growth: np.ndarray
     hopfs: Optional[tuple[tuple[DampedHopf, ...], ...]]
@@ -183,44 +189,71 @@ class DampedShear:
     unstable_fraction: tuple[float, ...]
 
 
-
 def damped_shear(scene: PackingScene, packing: Packing, branch: Branch,
-                 drags: tuple[float, ...]) -> DampedShear:
-    """The DampedShear of the shear of `scene` from `packing` (its branch: spectra full or
-    sample, of M^-1 J) at `drags` [omega_0 = scene.omega_0]. With sampled spectra no state's
-    spectrum is known at a plastic event, so the precursor rows' unstable_at_event is None
-    (not known) there, as their growth_at_event."""
+                 drags: tuple[float, ...], dashpots: bool = False) -> DampedShear:
+    """The DampedShear of the shear of `scene` from `packing` at `drags` [omega_0 =
+    scene.omega_0]: the viscous drag (the branch: spectra full or sample, of M^-1 J; with
+    sampled spectra no state's spectrum is known at a plastic event, so the precursor rows'
+    unstable_at_event is None (not known) there, as their growth_at_event), or with `dashpots`
+    contact dashpots (_dashpot_shear: any spectra, any matrix, as their modes are solved at the
+    accepted states)."""
     network = network_of(scene, packing)
     mass = mass_diagonal(network, scene.m, scene.inertia)
-    gamma, _, lam, _ = spectral_points(branch)
     eta = tuple(drag * scene.omega_0 for drag in drags)
-    growth = np.array([damped_rates(lam, e) for e in eta]).reshape(len(drags), len(gamma))
+    if dashpots:
+        return _dashpot_shear(network, mass, branch, drags, eta, scene.omega_0)
     full = spectra_of(branch) == "full"
+    gamma, _, lam, _ = spectral_points(branch)
+    growth = np.array([damped_rates(lam, e) for e in eta]).reshape(len(drags), len(gamma))
     hopfs = tuple(damped_hopfs(network, mass, branch, e) for e in eta) if full else None
     events = event_rows(network, mass, branch, scene.omega_0,
                         dict(zip(drags, hopfs if full else [()] * len(drags))))
     statistics = strain_statistics(branch, eta, sampled=not full, counted_from=scene.gamma_range[0])
-    return DampedShear(drags, eta, gamma, growth, hopfs, events, statistics.unstable_fraction)
+    return DampedShear(drags, eta, "drag", gamma, growth, hopfs, events,
+                       statistics.unstable_fraction)
+
+
+def _dashpot_shear(network, mass: np.ndarray, branch: Branch, drags: tuple[float, ...],
+                   eta: tuple[float, ...], omega_0: float) -> DampedShear:
+    """damped_shear with contact dashpots ContactDamping(eta) at every drag (each > 0): each
+    accepted state's largest growth rate g (contact_growth: one quadratic eigenproblem per state
+    and drag, from the state alone, whatever the shear computed of the spectrum), the onsets and
+    ends where g changes sign (contact_hopfs on those g), the precursor rows' growth at the
+    event g at the last state before it, and the fraction of the strain where g is clearly
+    positive (contact_onsets.clear_signs, as the onsets read it; each state weighted by
+    strain_statistics.state_weights)."""
+    growths = [contact_growth(network, mass, branch, ContactDamping(e)) for e in eta]
+    hopfs = tuple(contact_hopfs(network, mass, branch, ContactDamping(e), growth=g)
+                  for e, g in zip(eta, growths))
+    growth = np.array([g for g, _ in growths]).reshape(len(drags), len(branch))
+    at = dict(zip(drags, growth))
+    events = event_rows(network, mass, branch, omega_0, dict(zip(drags, hopfs)),
+                        lambda drag, k: at[drag][k])
+    weights = state_weights(branch)
+    fractions = tuple(strain_mean(clear_signs(*g) > 0, weights) for g in growths)
+    return DampedShear(drags, eta, "dashpots", branch.gamma, growth, hopfs, events, fractions)
 
 
 def hopf_record(hopf: DampedHopf) -> dict:
     """damped.json's record of one onset or end (a DampedHopf): gamma, kind, eigenvalue
-    [Re, Im] of M^-1 J [1 / time^2], frequency w [1 / time], the branch step holding it, the
-    strain bracket, and how it was found: "refined" (to the bracket), "event" (the spectrum's
-    jump at the contact event ending the step) or "step" (not refined: the bracket is the
-    step)."""
+    [Re, Im] of M^-1 J [1 / time^2] (null with contact dashpots: no eigenvalue of M^-1 J maps to
+    the marginal exponent), frequency w [1 / time], the branch step holding it, the strain
+    bracket, and how it was found: "refined" (to the bracket), "event" (the spectrum's jump at
+    the contact event ending the step) or "step" (not refined: the bracket is the step)."""
     how = "event" if hopf.jump else "refined" if hopf.resolved else "step"
+    lam = hopf.eigenvalue
     return {"gamma": hopf.gamma, "kind": hopf.kind,
-            "eigenvalue": [hopf.eigenvalue.real, hopf.eigenvalue.imag],
+            "eigenvalue": None if lam is None else [lam.real, lam.imag],
             "frequency": hopf.frequency, "step": hopf.step, "bracket": list(hopf.bracket), "found": how}
 
 
 def damped_json(damped: DampedShear, scene: PackingScene) -> dict:
     """damped.json's object (docs/outputs.md): the scene record, the spectra, omega_0
-    [1 / time], sample_gamma (the grid strains, sampled spectra only) and per drag its
-    drag, eta, points (hopf_record of each onset and end; null where none were looked for:
-    sampled spectra), unstable_fraction (DampedShear.unstable_fraction) and sample_growth (each
-    grid strain's fastest damped growth rate; sampled spectra only)."""
+    [1 / time], damping ("drag" or "dashpots": DampedShear.damping), sample_gamma (the grid
+    strains, sampled spectra only) and per drag its drag, eta, points (hopf_record of each onset
+    and end; null where none were looked for: sampled spectra), unstable_fraction
+    (DampedShear.unstable_fraction) and sample_growth (each grid strain's fastest damped growth
+    rate; sampled spectra only)."""
     sampled = damped.hopfs is None
     drags = [{"drag": drag, "eta": eta,
               "points": None if sampled else [hopf_record(h) for h in damped.hopfs[i]],
@@ -228,8 +261,8 @@ def damped_json(damped: DampedShear, scene: PackingScene) -> dict:
               "sample_growth": damped.growth[i].tolist() if sampled else None}
              for i, (drag, eta) in enumerate(zip(damped.drags, damped.eta))]
     return {"scene": scene_record(scene), "spectra": scene.resolved_spectra,
-            "omega_0": scene.omega_0, "sample_gamma": damped.gamma.tolist() if sampled else None,
-            "drags": drags}
+            "omega_0": scene.omega_0, "damping": damped.damping,
+            "sample_gamma": damped.gamma.tolist() if sampled else None, "drags": drags}
 
 
 def save_damped(out: Path, damped: DampedShear, scene: PackingScene) -> None:

@@ -45,9 +45,10 @@ def bifurcate(args: argparse.Namespace, scene: PackingScene,
     """bifurcate on a packing scene: prepare, shear (with `window`, --window as bifurcate
     parsed and checked it), write packing.npz, branch.npz, collisions.json, plastic.json and
     diagram.png, with --damping damped.json and precursors.csv (the damped stability at each
-    drag, damping_from_args), together (reports/packing_outputs.save_packing_outputs); exit 1
-    with one line when the branch ends short of the scene's strain (a plastic event, a fold in
-    gamma), after writing what it reached. An --out holding another scene's files is refused
+    drag, damping_from_args; with --dashpots contact dashpots of those rates), together
+    (reports/packing_outputs.save_packing_outputs); exit 1 with one line when the branch ends
+    short of the scene's strain (a plastic event, a fold in gamma), after writing what it
+    reached. An --out holding another scene's files is refused
     (exit 2)."""
     for option, why in CHAIN_ONLY.items():
         if getattr(args, option) is not None:
@@ -112,7 +113,7 @@ def bifurcate(args: argparse.Namespace, scene: PackingScene,
         if drags is not None:
             progress.stage(f"damped stability at {count(len(drags), 'drag')}")
             try:
-                damped = damped_shear(scene, packing, branch, drags)
+                damped = damped_shear(scene, packing, branch, drags, args.dashpots)
             except (SegmentSolveError, SingularMatrix) as error:
                 raise CommandError(f"bifurcate error: --damping: {scene.source}: a damped onset "
                                    f"not located: {error}", EXIT_FAILED) from None
@@ -159,11 +160,20 @@ def bifurcate(args: argparse.Namespace, scene: PackingScene,
 def damping_from_args(args: argparse.Namespace, scene: PackingScene, spectra: str,
                       matrix: Matrix) -> tuple[float, ...] | None:
     """The drags of --damping [omega_0] (cli/bifurcate_cmd.parse_drags), None without it; a
-    one-line CommandError (exit 2) where the shear has nothing to analyse: the matrix J (the
-    damped modes are those of M^-1 J) or spectra none."""
+    one-line CommandError (exit 2) where the drag's shear has nothing to analyse: the matrix J
+    (the drag's damped modes are those of M^-1 J) or spectra none. With --dashpots any matrix
+    and spectra (their modes are solved at the accepted states, which every shear keeps), each
+    rate > 0: dashpots of rate 0 damp nothing, and the undamped analysis locates its onsets at
+    the collisions (the drag 0), where a state's growth rate rises from zero, not from below."""
     if args.damping is None:
         return None
     drags = parse_drags(args.damping)
+    if args.dashpots:
+        if 0.0 in drags:
+            raise CommandError(f"bifurcate error: --dashpots: each rate > 0: dashpots of rate 0 "
+                               f"damp nothing, and the undamped analysis is the drag 0, --damping "
+                               f"0 without --dashpots (got {args.damping!r})")
+        return drags
     if matrix != Matrix.M_INV_J:
         raise CommandError(f"bifurcate error: --damping: the damped modes of M q'' + eta M q' + "
                            f"J q = 0 come from the eigenvalues of M^-1 J; the shear's matrix is "
@@ -177,9 +187,9 @@ def damping_from_args(args: argparse.Namespace, scene: PackingScene, spectra: st
 
 
 def damped_lines(damped) -> list[str]:
-    """What bifurcate prints of a reports/packing_outputs.DampedShear, one line per drag: the
-    onsets and ends of damped instability located (spectra full) and the fraction of the states
-    (or grid strains) with a damped-unstable pair; none without one."""
+    """What bifurcate prints of a reports/packing_outputs.DampedShear, one line per drag (or
+    dashpots' rate): the onsets and ends of damped instability located (spectra full) and the
+    fraction of the strain with a damped-unstable mode; none without one."""
     if damped is None:
         return []
     sampled = damped.hopfs is None
@@ -191,7 +201,8 @@ def damped_lines(damped) -> list[str]:
             kinds = [h.kind for h in damped.hopfs[i]]
             located = (f"{count(kinds.count('onset'), 'onset')} and "
                        f"{count(kinds.count('end'), 'end')} of damped instability located")
-        lines.append(f"drag {drag:g} omega_0 (eta = {eta:.4g} / time): {located}; damped-unstable "
+        what = "contact dashpots" if damped.damping == "dashpots" else "drag"
+        lines.append(f"{what} {drag:g} omega_0 (eta = {eta:.4g} / time): {located}; damped-unstable "
                      f"over {100 * damped.unstable_fraction[i]:.0f} % of the strain")
     return lines
 

@@ -12,10 +12,13 @@ the state's largest growth rate
 
 of the quadratic eigenproblem at the equilibrium at strain gamma (contact_damping.damped_spectrum:
 the tracked spectrum's coordinates, the translations and loose disks left out). g is computed at
-every accepted state k of each segment (its own committed contacts, damped.problem_at). Where it
-changes sign clearly (|g| > rel_tol times the state's frequency scale max|s|, as
-bifurcations.crossing_steps asks of a pair's growth rate in units of sqrt(max|lambda|)) from one
-state to the next state clearly on the other side, the step over which it changes is refined to
+every accepted state k (its own committed contacts, damped.problem_at; contact_growth, which
+bifurcate --dashpots also reads for the fraction of the strain with g > 0 and for g at each
+plastic event). Where it changes sign clearly (clear_signs: |g| > rel_tol times the state's
+frequency scale max|s|, as bifurcations.crossing_steps asks of a pair's growth rate in units of
+sqrt(max|lambda|); undamped, a stable state's g is 0 to rounding, so that at the rate 0 no state
+is clearly stable and no point is found) from one state to the next state clearly on the other
+side, the step over which it changes is refined to
 |d gamma| <= damped.TOL_GAMMA by segment.refine_sign_change on g(gamma) at the equilibria solved at
 fixed strain with the step's committed contacts (newton.fixed_p_newton, from the equilibria
 interpolated between the bracket's ends, as sampled.py solves a grid strain): an "onset" where g
@@ -78,29 +81,59 @@ q' + J q = 0 (contact_damping.problem_damping with its rates, or a drag eta M)."
 
 
 def contact_hopfs(network: Network, mass: np.ndarray, branch: Branch, damping: ContactDamping,
-                  rel_tol: float = DEFAULT_REL_TOL) -> tuple[DampedHopf, ...]:
+                  rel_tol: float = DEFAULT_REL_TOL,
+                  growth: Optional[tuple[np.ndarray, np.ndarray]] = None) -> tuple[DampedHopf, ...]:
     """Every onset and end of the states' damped stability with the dashpots `damping` on the
     contacts along a shear's branch (any spectra: only its states are read), in strain order within
-    each segment, segments in order (module docstring). eta of each point: damping.rate."""
+    each segment, segments in order (module docstring). eta of each point: damping.rate. growth:
+    the branch's contact_growth at `damping` where already computed."""
     return stability_changes(network, mass, branch, damping.rate,
-                             partial(problem_damping, damping=damping), rel_tol)
+                             partial(problem_damping, damping=damping), rel_tol, growth)
+
+
+def contact_growth(network: Network, mass: np.ndarray, branch: Branch, damping: ContactDamping
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """(g, max|s|), (m,) each [1 / time]: the largest growth rate max Re s and the frequency
+    scale max|s| of M q'' + C q' + J q = 0 at each of the branch's m accepted states, with the
+    dashpots `damping` on its committed contacts (contact_damping.damped_spectrum; g > 0: a mode
+    grows)."""
+    return state_growth(network, mass, branch, partial(problem_damping, damping=damping))
+
+
+def state_growth(network: Network, mass: np.ndarray, branch: Branch, dashpots: Dashpots
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """contact_growth with the damping C = dashpots(problem, q, gamma): state k's with its own
+    committed contacts (damped.problem_at), on one BLAS thread."""
+    with blas_threads():  # as the continuation's spectra: one BLAS thread (solves.blas_threads)
+        g, scale = np.array([_growth(problem_at(network, mass, branch, k), branch.u[k],
+                                     float(branch.p[k]), dashpots)
+                             for k in range(len(branch))]).reshape(-1, 2).T
+    return g, scale
 
 
 def stability_changes(network: Network, mass: np.ndarray, branch: Branch, eta: float,
-                      dashpots: Dashpots, rel_tol: float = DEFAULT_REL_TOL) -> tuple[DampedHopf, ...]:
+                      dashpots: Dashpots, rel_tol: float = DEFAULT_REL_TOL,
+                      growth: Optional[tuple[np.ndarray, np.ndarray]] = None
+                      ) -> tuple[DampedHopf, ...]:
     """contact_hopfs with the damping C = dashpots(problem, q, gamma), its points labelled with
-    the rate eta [1 / time]."""
-    with blas_threads():  # as the continuation's spectra: one BLAS thread (solves.blas_threads)
-        return tuple(_changes(network, mass, branch, eta, dashpots, rel_tol))
+    the rate eta [1 / time]; growth: the branch's state_growth with it where already computed."""
+    g, scale = state_growth(network, mass, branch, dashpots) if growth is None else growth
+    with blas_threads():
+        return tuple(_changes(network, mass, branch, eta, dashpots, rel_tol, g, scale))
 
 
-def _changes(network, mass, branch, eta, dashpots, rel_tol):
-    """stability_changes' points, one after another."""
+def clear_signs(g: np.ndarray, scale: np.ndarray, rel_tol: float = DEFAULT_REL_TOL) -> np.ndarray:
+    """(m,): +1 where the growth rate g is clearly positive (g > rel_tol max|s|, scale = max|s|:
+    a mode grows), -1 where clearly negative, 0 in between (rounding: undamped, every stable
+    state's exponents lie on the imaginary axis)."""
+    return np.where(np.abs(g) > rel_tol * scale, np.sign(g), 0.0)
+
+
+def _changes(network, mass, branch, eta, dashpots, rel_tol, g, scale):
+    """stability_changes' points, one after another, from the states' (g, max|s|)."""
     for piece in branch.of_kind("segment"):
-        steps = range(piece.start, piece.stop)
-        growth, scale = np.array([_growth(problem_at(network, mass, branch, k), branch.u[k],
-                                          float(branch.p[k]), dashpots) for k in steps]).T
-        signs = np.where(np.abs(growth) > rel_tol * scale, np.sign(growth), 0.0)
+        growth = g[piece.start:piece.stop]
+        signs = clear_signs(growth, scale[piece.start:piece.stop], rel_tol)
         last = None  # the last state clearly on one side
         for k in np.flatnonzero(signs):
             if last is not None and signs[last] != signs[k]:
@@ -176,8 +209,8 @@ def _located(step: _StepGrowth, eta: float, rel_tol: float) -> Optional[DampedHo
     if abs(marginal.imag) <= rel_tol * np.abs(s).max():
         return None
     marginal = complex(marginal.real, -abs(marginal.imag))
-    return DampedHopf(eta, gamma, kind, None,
-                      abs(marginal.imag), step.k, (a, b), q,
+    return DampedHopf(eta, float(gamma), kind, None,
+                      float(abs(marginal.imag)), step.k, (float(a), float(b)), q,
                       mode_translations(problem, null_vector(marginal, C_red, K_red)))
 
 

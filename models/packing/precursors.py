@@ -1,6 +1,7 @@
 """The plastic events of a shear against their precursors (docs/packings.md#plastic-events-and-their-precursors):
 one row per plastic event and drag eta, what the event was and the last onset of damped
-instability before it (models/packing/damped.py), so that "was this event preceded by a damped
+instability before it (models/packing/damped.py; with contact dashpots of the rate eta,
+contact_onsets.py: the state's first mode to grow), so that "was this event preceded by a damped
 oscillatory instability, how long before, and is the unstable mode the event's displacement?"
 is read off a table.
 
@@ -11,14 +12,15 @@ carries no information). Its size is |u| [length] and its participation ratio
     PR = (sum_i |u_i|^2)^2 / (N sum_i |u_i|^4)     (1 / N for one disk moving, 1 for all alike).
 
 A mode's overlap with u: the mode r is the onset's marginal mode (models/packing/damped.py
-DampedHopf.mode: the right eigenvector of the physical M^-1 J at the onset); its translations,
+DampedHopf.mode: the right eigenvector of the physical M^-1 J at the onset; with dashpots the
+null vector of the quadratic pencil there, contact_onsets.mode_translations); its translations,
 the mean removed, span with Re r and Im r the plane of displacements the oscillation passes
 through, and the overlap is |P u| / |u| (P the projection on that plane), in [0, 1]. A field drawn at random in the 2 N translations would overlap about sqrt(2 / (2 N))
 (random_overlap).
 """
 from __future__ import annotations
 
-from typing import Optional, Sequence
+from typing import Callable, Optional, Sequence
 
 import numpy as np
 
@@ -78,22 +80,29 @@ def fold_eigenvalue(eigenvalues: np.ndarray, rel_tol: float = DEFAULT_REL_TOL) -
 
 
 def event_rows(network: Network, mass: np.ndarray, branch: Branch, omega_0: float,
-               hopfs: dict[float, Sequence[DampedHopf]]) -> list[dict]:
+               hopfs: dict[float, Sequence[DampedHopf]],
+               growth_at: Optional[Callable[[float, int], float]] = None) -> list[dict]:
     """One row per plastic event of a shear's branch and per drag of `hopfs` (drag in units of
     omega_0 -> its located onsets and ends, models/packing/damped.damped_hopfs at eta = drag
-    omega_0), EVENT_COLUMNS: the event (its index, strain, kind, fold_lambda: fold_eigenvalue
-    at the last state before it, sigma_xy before and the drop [force / length], the
-    displacement field's size [length] and participation ratio); at the drag, whether the last
-    state before the event has a damped-unstable pair and the largest damped growth rate there
-    [1 / time]; the last onset in the event's segment before it: its strain, the strain gap to
-    the event, the marginal frequency w [1 / time] and the overlap of its mode with the event's
-    displacement (module docstring), None without one (the overlap None also where the onset
-    was not refined and has no mode: DampedHopf.resolved)."""
+    omega_0, or contact_onsets.contact_hopfs with dashpots of that rate), EVENT_COLUMNS: the
+    event (its index, strain, kind, fold_lambda: fold_eigenvalue at the last state before it,
+    sigma_xy before and the drop [force / length], the displacement field's size [length] and
+    participation ratio); at the drag, the largest damped growth rate at the last state before
+    the event [1 / time] and whether it is positive (a mode grows there); the last onset in the
+    event's segment before it: its strain, the strain gap to the event, the marginal frequency w
+    [1 / time] and the overlap of its mode with the event's displacement (module docstring),
+    None without one (the overlap None also where the onset was not refined and has no mode:
+    DampedHopf.resolved). growth_at(drag, k): the growth rate at state k [1 / time], nan where
+    not known; by default fastest_damped of the state's eigenvalues at the drag eta M (nan
+    without spectra at the states: the growth and unstable_at_event None)."""
     N, rows = network.N, []
+    spectra = branch.eigenvalues.shape[1] > 0
+    if growth_at is None:
+        def growth_at(drag: float, k: int) -> float:
+            return fastest_damped(branch.eigenvalues[k], drag * omega_0) if spectra else np.nan
     for index, event in enumerate(branch.plastic):
         last = int(np.flatnonzero(branch.segment == index)[-1])
         u = displacement_field(branch.u[last], event.after[0], N)
-        spectra = branch.eigenvalues.shape[1] > 0
         common = {"event": index, "gamma": event.gamma, "kind": event.kind,
                   "fold_lambda": fold_eigenvalue(branch.eigenvalues[last]) if spectra else None,
                   "sigma_xy_before": event.stress_before, "drop": event.stress_before - event.stress_after,
@@ -102,11 +111,10 @@ def event_rows(network: Network, mass: np.ndarray, branch: Branch, omega_0: floa
                   "random_overlap": random_overlap(N)}
         first = int(np.flatnonzero(branch.segment == index)[0])
         for drag, points in hopfs.items():
-            eta = drag * omega_0
-            growth = fastest_damped(branch.eigenvalues[last], eta) if spectra else np.nan
+            growth = float(growth_at(drag, last))
             onsets = [h for h in points if h.kind == "onset" and first <= h.step < last]
-            row = {**common, "drag": drag, "eta": eta,
-                   "unstable_at_event": bool(growth > 0) if spectra else None,
+            row = {**common, "drag": drag, "eta": drag * omega_0,
+                   "unstable_at_event": None if np.isnan(growth) else bool(growth > 0),
                    "growth_at_event": growth if np.isfinite(growth) else None,
                    "onset_gamma": None, "strain_gap": None, "onset_frequency": None, "overlap": None}
             if onsets:

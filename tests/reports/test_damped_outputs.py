@@ -92,6 +92,7 @@ def test_at_drag_zero_the_points_are_the_collisions(full24):
     onset and a death an end, the double real eigenvalue."""
     damped, collisions = read(full24, "damped.json"), read(full24, "collisions.json")["collisions"]
     assert damped["spectra"] == "full" and damped["sample_gamma"] is None
+    assert damped["damping"] == "drag"
     assert [d["drag"] for d in damped["drags"]] == list(DRAGS)
     points = damped["drags"][0]["points"]
     assert len(collisions) > 10
