@@ -1,6 +1,6 @@
 """``diskfriction map [SCENE] --vary KEY=LO:HI:COUNT[:log]|KEY=V1,V2,... [--vary KEY2=...] [--fx A:B]
-[--matrix J|M^-1J] [--slide] [--window LO:HI] [--damping D1,D2,...] [--scheduler ADDRESS]
-[--workers K] [--out DIR]``
+[--matrix J|M^-1J] [--slide] [--window LO:HI] [--damping D1,D2,... [--causality]]
+[--scheduler ADDRESS] [--workers K] [--out DIR]``
 
 A full bifurcate in every cell of a grid of numeric scene keys and, with --slide,
 one dynamics run per window between collisions (as verify does): which windows slide, the
@@ -9,7 +9,8 @@ On a packing scene every cell prepares its packing and shears it over the scene'
 (as bifurcate does; --window as bifurcate's): how often its states carry complex pairs, how
 fast the fastest grows, its collisions and plastic events; with --damping, the damped study
 (studies/damped_study.py): its damped onsets and its plastic events against their precursors at
-each drag, pooled over the seeds with confidence intervals.
+each drag, pooled over the seeds with confidence intervals; with --causality also the damped
+dynamics from every onset, counted per outcome.
 Cells run as tasks on dask.distributed (a local cluster of this machine's cores, or
 --scheduler ADDRESS), each written to DIR/cells/ the moment it finishes; a rerun resumes.
 Writes DIR/map.csv (one row per cell), DIR/map.json and, for one or two keys, DIR/map.png (studies/maps.py,
@@ -71,6 +72,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              "every cell's damped onsets and plastic events against their "
                              "precursors; writes events.csv, damped.csv, precursors.csv and "
                              "precursors.png (docs/packings-study.md)")
+    parser.add_argument("--causality", action="store_true",
+                        help="with --damping: run the damped dynamics from every onset of damped "
+                             "instability at each drag above 0 and count what they become; "
+                             "writes runs.csv (minutes per cell)")
     parser.add_argument("--out", metavar="DIR", help="output directory (default: out/map/SCENE)")
     parser.set_defaults(run=run)
 

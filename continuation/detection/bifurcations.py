@@ -283,10 +283,14 @@ def locate_crossing(problem: Problem, x_a: Array, x_b: Array, lam_a: complex, la
     gives the growth one sign at both ends: the sign then changed where the spectrum jumps at an
     end, not inside the step (a problem whose matrix changes from one step to the next, as a
     packing's at a contact event)."""
+    known: dict[float, complex] = {}  # the ends, s = 0 and 1, are taken once
+
     def pair(x: Array, s: float) -> complex:
-        lam = eigensolver.eigensystem(problem, x[:-1], x[-1]).values
-        lam = lam[lam.imag > 0] if upper else lam
-        return complex(lam[np.argmin(np.abs(lam - (lam_a + s * (lam_b - lam_a))))])
+        if s not in known:
+            lam = eigensolver.eigensystem(problem, x[:-1], x[-1]).values
+            lam = lam[lam.imag > 0] if upper else lam
+            known[s] = complex(lam[np.argmin(np.abs(lam - (lam_a + s * (lam_b - lam_a))))])
+        return known[s]
 
     if not growth(pair(x_a, 0.0)) * growth(pair(x_b, 1.0)) < 0.0:
         return None

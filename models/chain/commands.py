@@ -445,9 +445,10 @@ def chain_params(args: argparse.Namespace, scene):
     if args.window is not None:
         raise CommandError(f"map error: --window: for packing scenes only; a chain's cells take "
                            f"full spectra (got {args.window!r})")
-    if args.damping is not None:
-        raise CommandError(f"map error: --damping: the damped study is a packing's; a chain "
-                           f"scene takes no drag (got {args.damping!r})")
+    if args.damping is not None or args.causality:
+        flag, value = ("--damping", args.damping) if args.damping is not None else ("--causality", True)
+        raise CommandError(f"map error: {flag}: the damped study is a packing's; a chain "
+                           f"scene takes no drag (got {value!r})")
     F_from, F_to = parse_range(args.fx, command="map") if args.fx is not None else scene.F_x_range
     if F_from > F_to:
         raise CommandError(f"map error: --fx: a map loads, A < B (got {args.fx!r})")

@@ -475,8 +475,9 @@ PACKING_REFUSES = {"fx": "a packing's load is its strain: [shear] gamma in the s
 
 
 def packing_params(args: argparse.Namespace, scene):
-    """A packing map's studies.packing_maps.PackingMapParams from --matrix, --window and
-    --damping (checked: one line, exit 2); the chain's options are refused (PACKING_REFUSES)."""
+    """A packing map's studies.packing_maps.PackingMapParams from --matrix, --window, --damping
+    and --causality (checked: one line, exit 2); the chain's options are refused
+    (PACKING_REFUSES)."""
     from diskfriction.studies.packing_maps import PackingMapParams
 
     for option, why in PACKING_REFUSES.items():
@@ -486,11 +487,14 @@ def packing_params(args: argparse.Namespace, scene):
     window = parse_window(args.window, "map") if args.window is not None else None
     matrix = matrix_from_args("map", args, scene)
     drags = () if args.damping is None else parse_drags(args.damping, "map")
+    if args.causality and not drags:
+        raise CommandError("map error: --causality: runs the dynamics from the damped onsets; add "
+                           "--damping D1,D2,... (got --causality alone)")
     if drags and matrix != Matrix.M_INV_J:
         raise CommandError(f"map error: --damping: the damped modes of M q'' + eta M q' + J q = 0 "
                            f"come from the eigenvalues of M^-1 J; the map's matrix is {matrix}: "
                            f"give --matrix M^-1J (got {args.damping!r})")
-    return PackingMapParams(str(matrix), window, PLASTIC_EVENTS, drags)
+    return PackingMapParams(str(matrix), window, PLASTIC_EVENTS, drags, args.causality)
 
 
 def describe_packing(cell, s: dict) -> str:
@@ -547,6 +551,7 @@ def map_kernels(cells, params, progress: Progress) -> str:
     g1 = cells[0].scene.gamma_range[1]
     inside = "" if params.window is None else f", Re lambda in {params.window[0]:g}:{params.window[1]:g}"
     study = "" if not params.damping else f", the damped study at {count(len(params.damping), 'drag')}"
+    study += ", damped runs from every onset" if params.causality else ""
     return f"prepare and shear gamma 0 -> {g1:g} ({params.matrix}{inside}){study}"
 
 

@@ -185,6 +185,7 @@ BAD = [
     (["--vary", "contacts.mu=1:2:2", "--vary", "contacts.mu=3:4:2"], "contacts.mu given twice"),
     (["--vary", "contacts.mu=1,2,1"], "a value listed twice"),
     (["--vary", "contacts.mu=1,2", "--damping", "0.1"], "--damping: the damped study is a packing's"),
+    (["--vary", "contacts.mu=1,2", "--causality"], "--causality: the damped study is a packing's"),
     (["--vary", "contacts.mu=1,x"], "with numbers V1, V2"),
     (["--vary", "contacts.mu=1,inf"], "finite numbers"),
     (["--vary", "disks.N=4,5", "--vary", "contacts.mu=1,2", "--vary", "disks.N=6"], "disks.N given twice"),

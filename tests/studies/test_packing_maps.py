@@ -151,6 +151,7 @@ BAD = [
     (["--vary", "shear.damping=0.1:2:3"], "shear.damping acts only where [shear] relaxation = \"damped\""),
     (["--damping", "0,-1"], "--damping: expected D1,D2,... with numbers >= 0"),
     (["--damping", "0.1", "--matrix", "J"], "--damping: the damped modes"),
+    (["--causality"], "--causality: runs the dynamics from the damped onsets; add --damping"),
     (["--vary", "packing.pressure=1e-300:1e-299:2"],
      "cell packing.pressure = 1e-300: packing.pressure: the preparation relaxes first"),
 ]
