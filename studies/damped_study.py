@@ -42,6 +42,10 @@ Z_95 = 1.959963984540054
 """The standard normal's two-sided 95 % quantile."""
 
 
+def _mean(values: list) -> float | None:
+    return float(np.mean(values)) if values else None
+
+
 def _median(values: list) -> float | None:
     return float(np.median(values)) if values else None
 
@@ -98,12 +102,14 @@ def mean_interval(values: Sequence[float], z: float = Z_95) -> tuple[float, floa
 GROUP_COLUMNS = ("cells", "events", "preceded_fraction", "preceded_lo", "preceded_hi",
                  "active_fraction", "active_lo", "active_hi", "unstable_fraction", "unstable_lo",
                  "unstable_hi", "onsets_per_disk_strain", "onsets_lo", "onsets_hi", "gap_median",
-                 "overlap_median", "runs", "returned", "slipped", "rearranged", "saturated",
+                 "overlap_median", "chance_preceded", "chance_gap_median", "runs", "returned", "slipped", "rearranged", "saturated",
                  "failed", "rearranged_lo", "rearranged_hi", "rearranged_overlap_median")
 """precursor_groups' figures per group (after its keys and drag): the cells and events pooled;
 the fractions of events preceded and active with Wilson's interval; the fraction of strain
-damped-unstable and the onsets per disk per unit strain, mean and interval over the cells; the
-median strain gap and overlap over the group's events; the damped runs from the onsets (None
+damped-unstable (its interval clipped to [0, 1]) and the onsets per disk per unit strain, mean
+and interval over the cells; the
+median strain gap and overlap over the group's events; their chance baselines (precursors.chance:
+the mean fraction of an event's segment preceded by an onset, the median chance gap); the damped runs from the onsets (None
 where the cells ran none): how many, per verdict, the fraction rearranged with Wilson's
 interval, and the median overlap of the rearranged ones' displacement with the next plastic
 event's."""
@@ -143,10 +149,13 @@ def precursor_groups(cells: Sequence[tuple[dict, list[dict], list[dict], Optiona
             "active_fraction": active / len(events) if events else None,
             "active_lo": wilson(active, len(events))[0] if events else None,
             "active_hi": wilson(active, len(events))[1] if events else None,
-            "unstable_fraction": unstable[0], "unstable_lo": unstable[1], "unstable_hi": unstable[2],
+            "unstable_fraction": unstable[0], "unstable_lo": max(0.0, unstable[1]),
+            "unstable_hi": min(1.0, unstable[2]),
             "onsets_per_disk_strain": onsets[0], "onsets_lo": onsets[1], "onsets_hi": onsets[2],
             "gap_median": _median([r["strain_gap"] for r in events if r["strain_gap"] is not None]),
             "overlap_median": _median([r["overlap"] for r in events if r["overlap"] is not None]),
+            "chance_preceded": _mean([r["chance_preceded"] for r in events if r.get("chance_preceded") is not None]),
+            "chance_gap_median": _median([r["chance_gap"] for r in events if r.get("chance_gap") is not None]),
             "runs": len(ran) if counted else None, **verdicts,
             "rearranged_lo": rearranged[0], "rearranged_hi": rearranged[1],
             "rearranged_overlap_median": _median([r["overlap"] for r in ran if r["verdict"] == "rearranged"

@@ -32,7 +32,7 @@ from diskfriction.models.packing.network import Network
 EVENT_COLUMNS = ("event", "gamma", "kind", "fold_lambda", "sigma_xy_before", "drop", "relative_drop",
                  "displacement", "participation", "drag", "eta", "unstable_at_event",
                  "growth_at_event", "onset_gamma", "strain_gap", "onset_frequency", "overlap",
-                 "random_overlap")
+                 "random_overlap", "chance_preceded", "chance_gap")
 """The precursor table's columns, in order (event_rows; None where not known)."""
 
 
@@ -65,6 +65,27 @@ def random_overlap(N: int) -> float:
     """sqrt(2 / (2 N)): the typical overlap of a field drawn at random in 2 N translations with
     a plane."""
     return float(np.sqrt(1.0 / N))
+
+
+CHANCE_POINTS = 1000
+"""The strains, evenly spread over an event's segment, at which chance() asks what an event
+there would have been preceded by."""
+
+
+def chance(onsets: np.ndarray, start: float, end: float, points: int = CHANCE_POINTS
+           ) -> tuple[float, Optional[float]]:
+    """What "preceded" would be by chance, for an event at a strain drawn evenly from the segment
+    [start, end] with the onsets at `onsets` in it: the fraction of the segment's strain that has
+    an onset before it, and the median strain gap from the last onset over that strain (None
+    without one). An event is preceded more often, or closer, than chance where its onsets
+    cluster before it."""
+    strains = start + (np.arange(points) + 0.5) * (end - start) / points
+    last = np.searchsorted(np.sort(onsets), strains, side="right")
+    after = last > 0
+    if not after.any():
+        return 0.0, None
+    gaps = strains[after] - np.sort(onsets)[last[after] - 1]
+    return float(after.mean()), float(np.median(gaps))
 
 
 def fold_eigenvalue(eigenvalues: np.ndarray, rel_tol: float = DEFAULT_REL_TOL) -> Optional[float]:
@@ -117,6 +138,8 @@ def event_rows(network: Network, mass: np.ndarray, branch: Branch, omega_0: floa
                    "unstable_at_event": None if np.isnan(growth) else bool(growth > 0),
                    "growth_at_event": growth if np.isfinite(growth) else None,
                    "onset_gamma": None, "strain_gap": None, "onset_frequency": None, "overlap": None}
+            fraction, gap = chance(np.array([h.gamma for h in onsets]), float(branch.p[first]), event.gamma)
+            row |= {"chance_preceded": fraction, "chance_gap": gap}
             if onsets:
                 onset = onsets[-1]
                 row |= {"onset_gamma": onset.gamma, "strain_gap": event.gamma - onset.gamma,

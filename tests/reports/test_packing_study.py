@@ -13,7 +13,8 @@ from diskfriction.studies.maps import Axis, Cell
 def event(drag, onset):
     row = dict.fromkeys(EVENT_COLUMNS)
     return row | {"event": 0, "kind": "fold", "drag": drag, "onset_gamma": onset,
-                  "unstable_at_event": onset is not None, "strain_gap": None if onset is None else 1e-4}
+                  "unstable_at_event": onset is not None, "strain_gap": None if onset is None else 1e-4,
+                  "chance_preceded": 0.5}
 
 
 def damped(drag, unstable):

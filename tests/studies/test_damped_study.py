@@ -33,7 +33,7 @@ def test_mean_interval():
 
 def row(drag, onset, active, gap=None, overlap=None):
     return {"drag": drag, "onset_gamma": onset, "unstable_at_event": active, "strain_gap": gap,
-            "overlap": overlap}
+            "overlap": overlap, "chance_preceded": 0.5 if onset else 0.0, "chance_gap": gap and 2 * gap}
 
 
 def run(drag, verdict, overlap):
@@ -60,6 +60,8 @@ def test_groups_pool_seeds_and_split_drags():
     assert (undamped["preceded_lo"], undamped["preceded_hi"]) == wilson(3, 3)
     assert damped["preceded_fraction"] == 1 / 3 and damped["gap_median"] == 0.004
     assert undamped["gap_median"] == 0.002 and undamped["overlap_median"] == 0.3
+    assert undamped["chance_preceded"] == 0.5 and undamped["chance_gap_median"] == 0.004
+    assert damped["chance_preceded"] == pytest.approx(1 / 6)
     assert undamped["unstable_fraction"] == pytest.approx(0.7) and damped["onsets_per_disk_strain"] == 0.75
     assert set(GROUP_COLUMNS) <= set(undamped)
     assert undamped["runs"] is None and undamped["rearranged"] is None  # no run at drag 0

@@ -80,3 +80,14 @@ def test_the_table_of_a_known_fold(fold_run):
     assert undamped["unstable_at_event"] and damped["unstable_at_event"]
     assert overdamped["onset_gamma"] is None and not overdamped["unstable_at_event"]
     assert overdamped["growth_at_event"] < 0
+
+
+def test_chance_of_being_preceded_against_its_closed_form():
+    """Onsets at 0.3 and 0.7 of a segment [0, 1]: 70 % of it has one before it; the gaps run
+    from 0 to 0.4 over [0.3, 0.7) and 0 to 0.3 over [0.7, 1]: below g <= 0.3 lies the strain 2 g
+    of the 0.7, so the median is 0.175 (to the grid's spacing)."""
+    from diskfriction.models.packing.precursors import chance
+
+    fraction, gap = chance(np.array([0.7, 0.3]), 0.0, 1.0, points=10_000)
+    assert fraction == pytest.approx(0.7, abs=1e-4) and gap == pytest.approx(0.175, abs=1e-3)
+    assert chance(np.array([]), 0.0, 1.0) == (0.0, None)
