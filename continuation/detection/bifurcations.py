@@ -272,7 +272,9 @@ def locate_crossing(problem: Problem, x_a: Array, x_b: Array, lam_a: complex, la
                     growth: Callable[[complex], float], step: int, tol_p: float = 1e-10,
                     newton_tol: float = 1e-12, max_newton: int = 10, linear_solver: LinearSolver = DIRECT,
                     eigensolver: Eigensolver = DEFAULT, upper: bool = True,
-                    kind: str = "hopf") -> Optional[SpecialPoint]:
+                    kind: str = "hopf",
+                    nearest: Optional[Callable[[Problem, Array, complex], complex]] = None
+                    ) -> Optional[SpecialPoint]:
     """Where the growth rate growth(lambda) of one tracked eigenvalue changes sign over the step
     from the accepted point x_a (its eigenvalue lam_a) to x_b (lam_b), refined along the step's
     secant segment until |dp| <= tol_p. lambda(s) at the segment coordinate s is the eigenvalue
@@ -282,14 +284,19 @@ def locate_crossing(problem: Problem, x_a: Array, x_b: Array, lam_a: complex, la
     (`kind`, value lambda there); `step` is the branch step it lies in. None where `problem`
     gives the growth one sign at both ends: the sign then changed where the spectrum jumps at an
     end, not inside the step (a problem whose matrix changes from one step to the next, as a
-    packing's at a contact event)."""
+    packing's at a contact event). nearest(problem, x, target): the eigenvalue at x nearest
+    target, where a caller has a cheaper way to it than the whole spectrum (not with `upper`)."""
     known: dict[float, complex] = {}  # the ends, s = 0 and 1, are taken once
 
     def pair(x: Array, s: float) -> complex:
         if s not in known:
-            lam = eigensolver.eigensystem(problem, x[:-1], x[-1]).values
-            lam = lam[lam.imag > 0] if upper else lam
-            known[s] = complex(lam[np.argmin(np.abs(lam - (lam_a + s * (lam_b - lam_a))))])
+            target = lam_a + s * (lam_b - lam_a)
+            if nearest is not None and not upper:
+                known[s] = complex(nearest(problem, x, target))
+            else:
+                lam = eigensolver.eigensystem(problem, x[:-1], x[-1]).values
+                lam = lam[lam.imag > 0] if upper else lam
+                known[s] = complex(lam[np.argmin(np.abs(lam - target))])
         return known[s]
 
     if not growth(pair(x_a, 0.0)) * growth(pair(x_b, 1.0)) < 0.0:
