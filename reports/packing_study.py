@@ -72,7 +72,8 @@ def plot_precursors(groups: list[dict], keys: list[str], path: Path) -> None:
         drag = np.array([m["drag"] for m in members])
         for name, style in (("preceded", "-o"), ("active", "--s")):
             y = np.array([m[f"{name}_fraction"] for m in members])
-            errors = np.array([y - [m[f"{name}_lo"] for m in members], [m[f"{name}_hi"] for m in members] - y])
+            errors = np.clip([y - [m[f"{name}_lo"] for m in members], [m[f"{name}_hi"] for m in members] - y],
+                             0.0, None)  # an interval holds its fraction: no negative bar from rounding
             text = ", ".join(f"{k.split('.')[-1]} = {v:g}" for k, v in zip(keys, label))
             ax.errorbar(drag, y, yerr=errors, fmt=style, capsize=3, ms=4,
                         label=f"{text or 'all'}: {name}", alpha=1.0 if name == "preceded" else 0.6)

@@ -79,13 +79,14 @@ def run_rows(drag: float, found) -> list[dict]:
 
 
 def wilson(k: int, n: int, z: float = Z_95) -> tuple[float, float]:
-    """Wilson's score interval for k successes in n trials (nan, nan for n = 0)."""
+    """Wilson's score interval for k successes in n trials (nan, nan for n = 0); its ends are 0
+    and 1 exactly for k = 0 and k = n, where the formula gives them up to rounding."""
     if n == 0:
         return math.nan, math.nan
     p = k / n
     centre = (p + z * z / (2 * n)) / (1 + z * z / n)
     half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    return max(0.0, centre - half), min(1.0, centre + half)
+    return (0.0 if k == 0 else max(0.0, centre - half)), (1.0 if k == n else min(1.0, centre + half))
 
 
 def mean_interval(values: Sequence[float], z: float = Z_95) -> tuple[float, float, float]:

@@ -29,19 +29,20 @@ def test_the_files_hold_every_cell_and_pool_the_seeds(tmp_path):
         for j, seed in enumerate((1, 2)):
             cells.append(Cell((i, j), (("contacts.mu", mu), ("packing.seed", seed)), None))
             records.append({"summary": {}, "damped": [damped(0.0, 0.9), damped(0.1, 0.2)],
-                            "events": [event(0.0, 0.001), event(0.1, 0.001 if seed == 1 else None)]})
+                            "events": [event(0.0, 0.001), event(0.1, 0.001 if (mu, seed) == (0.3, 1) else None),
+                                       event(0.0, 0.002), event(0.1, None)]})
     records[0]["runs"] = [dict.fromkeys(RUN_COLUMNS) | {"drag": 0.1, "gamma": 0.002, "verdict": "rearranged",
                                                         "overlap": 0.9}]
     records[-1] = {"summary": {"status": "failed"}, "damped": [], "events": []}  # a failed cell
     names = save_study(tmp_path, axes, cells, records)
     assert all((tmp_path / name).exists() for name in names)
     events = pd.read_csv(tmp_path / "events.csv")
-    assert list(events.columns) == ["contacts.mu", "packing.seed", *EVENT_COLUMNS] and len(events) == 6
+    assert list(events.columns) == ["contacts.mu", "packing.seed", *EVENT_COLUMNS] and len(events) == 12
     assert len(pd.read_csv(tmp_path / "damped.csv")) == 6
     runs = pd.read_csv(tmp_path / "runs.csv")
     assert len(runs) == 1 and runs["verdict"].tolist() == ["rearranged"] and "runs.csv" in names
     pooled = pd.read_csv(tmp_path / "precursors.csv")
     assert list(pooled.columns) == ["contacts.mu", "drag", *GROUP_COLUMNS]
     assert pooled[["contacts.mu", "drag", "cells", "events"]].values.tolist() == [
-        [0.3, 0.0, 2, 2], [0.3, 0.1, 2, 2], [10.0, 0.0, 1, 1], [10.0, 0.1, 1, 1]]
-    assert pooled["preceded_fraction"].tolist() == [1.0, 0.5, 1.0, 1.0]
+        [0.3, 0.0, 2, 4], [0.3, 0.1, 2, 4], [10.0, 0.0, 1, 2], [10.0, 0.1, 1, 2]]
+    assert pooled["preceded_fraction"].tolist() == [1.0, 0.25, 1.0, 0.0]  # none preceded: drawn too

@@ -16,6 +16,8 @@ def test_wilson_interval_against_published_values():
     assert wilson(15, 148) == pytest.approx((0.0624, 0.1605), abs=5e-5)
     assert wilson(0, 20) == pytest.approx((0.0, 0.1611), abs=5e-5)
     assert all(math.isnan(x) for x in wilson(0, 0))
+    for n in range(1, 200):  # none and all: the ends exactly, not up to rounding
+        assert wilson(0, n)[0] == 0.0 and wilson(n, n)[1] == 1.0
 
 
 def test_wilson_covers_the_true_fraction_about_95_percent_of_the_time():
