@@ -10,7 +10,8 @@ map.csv:
                     GROUP_COLUMNS, fractions with Wilson's 95 % interval, rates with the mean's,
                     the runs counted per verdict (empty where none ran).
     precursors.png  the fraction of plastic events preceded by a damped instability against the
-                    drag [omega_0], one line per group of the other keys, with the intervals.
+                    drag [omega_0], one line per group of the other keys, with the intervals,
+                    and dotted the fraction chance gives.
 Each file is written atomically (files.save_text); floats with repr, as map.csv (reports/maps.py: csv_table).
 """
 from __future__ import annotations
@@ -59,8 +60,10 @@ def save_study(out: Path, axes, cells, records) -> list[str]:
 
 
 def plot_precursors(groups: list[dict], keys: list[str], path: Path) -> None:
-    """The fraction of plastic events preceded by a damped instability (and, dashed, active at
-    the event) against the drag, one colour per group of `keys`, Wilson's intervals as bars."""
+    """The fraction of plastic events preceded by a damped instability against the drag, one
+    colour per group of `keys`, Wilson's intervals as bars, and dotted in the same colour what
+    chance gives (chance_preceded: the fraction an event at a strain drawn evenly from its
+    segment would be preceded)."""
     fig, ax = new_figure(figsize=(6.4, 4.2))
     lines: dict[tuple, list[dict]] = {}
     for g in groups:
@@ -70,17 +73,19 @@ def plot_precursors(groups: list[dict], keys: list[str], path: Path) -> None:
         if not members:
             continue
         drag = np.array([m["drag"] for m in members])
-        for name, style in (("preceded", "-o"), ("active", "--s")):
-            y = np.array([m[f"{name}_fraction"] for m in members])
-            errors = np.clip([y - [m[f"{name}_lo"] for m in members], [m[f"{name}_hi"] for m in members] - y],
-                             0.0, None)  # an interval holds its fraction: no negative bar from rounding
-            text = ", ".join(f"{k.split('.')[-1]} = {v:g}" for k, v in zip(keys, label))
-            ax.errorbar(drag, y, yerr=errors, fmt=style, capsize=3, ms=4,
-                        label=f"{text or 'all'}: {name}", alpha=1.0 if name == "preceded" else 0.6)
+        y = np.array([m["preceded_fraction"] for m in members])
+        errors = np.clip([y - [m["preceded_lo"] for m in members], [m["preceded_hi"] for m in members] - y],
+                         0.0, None)  # an interval holds its fraction: no negative bar from rounding
+        text = ", ".join(f"{k.split('.')[-1]} = {v:g}" for k, v in zip(keys, label))
+        line = ax.errorbar(drag, y, yerr=errors, fmt="-o", capsize=3, ms=4, label=f"{text or 'all'}")
+        chance = [m["chance_preceded"] for m in members]
+        if all(c is not None for c in chance):
+            ax.plot(drag, chance, ":", color=line[0].get_color())
     ax.set_xlabel(r"drag $\eta$ [$\omega_0$]")
-    ax.set_ylabel("fraction of plastic events")
+    ax.set_ylabel("fraction of plastic events preceded (dotted: by chance)")
     ax.set_ylim(-0.02, 1.02)
     if any(g["drag"] > 0 for g in groups):
         ax.set_xscale("symlog", linthresh=min(g["drag"] for g in groups if g["drag"] > 0))
+        ax.set_xlim(left=0.0)
     ax.legend(fontsize=7)
     save_figure(fig, path)
