@@ -68,13 +68,18 @@ def fastest_root(eigenvalues: np.ndarray, eta: float) -> np.ndarray:
     return np.array(rows)
 
 
+def sheared24(tmp_path_factory, name: str, *flags: str) -> Path:
+    """DIR of bifurcate on the 24-disk scene (sheared_packing.SCENE) with `flags`."""
+    root = tmp_path_factory.mktemp(name)
+    scene = scene_file(root, SCENE.N, SCENE.seed, SCENE.gamma_range[1])
+    assert bifurcate(scene, root / "out", *flags) == 0
+    return root / "out"
+
+
 @pytest.fixture(scope="module")
 def full24(tmp_path_factory) -> Path:
-    """DIR of the 24-disk shear (sheared_packing.SCENE) with --damping 0,0.01."""
-    root = tmp_path_factory.mktemp("full24")
-    scene = scene_file(root, SCENE.N, SCENE.seed, SCENE.gamma_range[1])
-    assert bifurcate(scene, root / "out", *damping()) == 0
-    return root / "out"
+    """DIR of the 24-disk shear with --damping 0,0.01."""
+    return sheared24(tmp_path_factory, "full24", *damping())
 
 
 @pytest.fixture(scope="module")

@@ -16,7 +16,7 @@ import pandas as pd
 import pytest
 from commandline import run_main
 from sheared_packing import SCENE
-from test_damped_outputs import bifurcate, read, scene_file
+from test_damped_outputs import bifurcate, read, scene_file, sheared24
 from test_outputs import assert_documented, paths
 
 from diskfriction.continuation.linalg.solves import blas_threads
@@ -65,10 +65,7 @@ def network(sheared):
 @pytest.fixture(scope="module")
 def dashpots24(tmp_path_factory) -> Path:
     """DIR of the 24-disk shear (spectra full) with --damping 0.002,0.01 --dashpots."""
-    root = tmp_path_factory.mktemp("dashpots24")
-    scene = scene_file(root, SCENE.N, SCENE.seed, SCENE.gamma_range[1])
-    assert bifurcate(scene, root / "out", *dashpots()) == 0
-    return root / "out"
+    return sheared24(tmp_path_factory, "dashpots24", *dashpots())
 
 
 def same_branch(out: Path, branch) -> None:
