@@ -22,10 +22,10 @@ from diskfriction.files import json_values, save_json, save_text
 from diskfriction.matrices import Matrix
 from diskfriction.models.packing.contact_damping import ContactDamping
 from diskfriction.models.packing.contact_onsets import clear_signs, contact_growth, contact_hopfs
-from diskfriction.models.packing.damped import DampedHopf, damped_hopfs, damped_rates
+from diskfriction.models.packing.damped import DampedHopf, damped_rates
 from diskfriction.models.packing.equilibria import mass_diagonal
 from diskfriction.models.packing.prepare import Packing, save_packing
-from diskfriction.models.packing.precursors import EVENT_COLUMNS, event_rows
+from diskfriction.models.packing.precursors import EVENT_COLUMNS, drag_study, event_rows
 from diskfriction.models.packing.shear import network_of
 from diskfriction.models.packing.strain_statistics import state_weights, strain_mean, strain_statistics
 from diskfriction.reports.figures import new_figure, save_figure
@@ -202,13 +202,16 @@ def damped_shear(scene: PackingScene, packing: Packing, branch: Branch,
     eta = tuple(drag * scene.omega_0 for drag in drags)
     if dashpots:
         return _dashpot_shear(network, mass, branch, drags, eta, scene.omega_0)
-    full = spectra_of(branch) == "full"
     gamma, _, lam, _ = spectral_points(branch)
     growth = np.array([damped_rates(lam, e) for e in eta]).reshape(len(drags), len(gamma))
-    hopfs = tuple(damped_hopfs(network, mass, branch, e) for e in eta) if full else None
-    events = event_rows(network, mass, branch, scene.omega_0,
-                        dict(zip(drags, hopfs if full else [()] * len(drags))))
-    statistics = strain_statistics(branch, eta, sampled=not full, counted_from=scene.gamma_range[0])
+    if spectra_of(branch) == "full":
+        points, events, statistics = drag_study(network, mass, branch, scene.omega_0, drags,
+                                                scene.gamma_range[0])
+        hopfs = tuple(points[drag] for drag in drags)
+    else:  # sampled: no onset looked for
+        hopfs = None
+        events = event_rows(network, mass, branch, scene.omega_0, dict.fromkeys(drags, ()))
+        statistics = strain_statistics(branch, eta, sampled=True, counted_from=scene.gamma_range[0])
     return DampedShear(drags, eta, "drag", gamma, growth, hopfs, events,
                        statistics.unstable_fraction)
 

@@ -157,28 +157,24 @@ def packing_cell(scene: PackingScene, params: PackingMapParams) -> dict:
 def damped_parts(scene: PackingScene, packing, branch, drags: tuple[float, ...],
                  runs: bool = False) -> dict:
     """A cell's "damped" and "events" (packing_cell) at the drags [omega_0]: the damped Hopf
-    points of its branch at each (models/packing/damped.py; those below the scene's strain
-    range left out, as its collisions are), the precursor rows, and the strain statistics; with
+    points of its branch at each, the precursor rows and the strain statistics
+    (models/packing/precursors.drag_study, from the scene's strain range); with
     `runs`, "runs": the damped dynamics from every onset of each drag above 0
     (models/packing/causality.py; at drag 0 nothing damps a run to rest)."""
     from diskfriction.files import json_values
     from diskfriction.models.packing.causality import causality
-    from diskfriction.models.packing.damped import damped_hopfs
     from diskfriction.models.packing.equilibria import mass_diagonal
-    from diskfriction.models.packing.precursors import event_rows
+    from diskfriction.models.packing.precursors import drag_study
     from diskfriction.models.packing.shear import network_of
-    from diskfriction.models.packing.strain_statistics import strain_statistics
     from diskfriction.studies.damped_study import damped_summary, run_rows
 
     network = network_of(scene, packing)
     mass = mass_diagonal(network, scene.m, scene.inertia)
     etas = tuple(drag * scene.omega_0 for drag in drags)
-    hopfs = {drag: tuple(h for h in damped_hopfs(network, mass, branch, eta) if h.gamma >= scene.gamma_range[0])
-             for drag, eta in zip(drags, etas)}
-    events = event_rows(network, mass, branch, scene.omega_0, hopfs)
-    statistics = strain_statistics(branch, etas, counted_from=scene.gamma_range[0])
-    summaries = [damped_summary(statistics, drag, eta, i, hopfs[drag], [r for r in events if r["drag"] == drag],
-                                scene.N) for i, (drag, eta) in enumerate(zip(drags, etas))]
+    hopfs, events, statistics = drag_study(network, mass, branch, scene.omega_0, drags, scene.gamma_range[0])
+    summaries = [damped_summary(statistics, drag, eta, i, hopfs[drag],
+                                [r for r in events if r["drag"] == drag], scene.N)
+                 for i, (drag, eta) in enumerate(zip(drags, etas))]
     parts = {"damped": summaries, "events": events}
     if runs:
         parts["runs"] = [row for drag, eta in zip(drags, etas) if drag > 0

@@ -286,22 +286,21 @@ def locate_crossing(problem: Problem, x_a: Array, x_b: Array, lam_a: complex, la
     end, not inside the step (a problem whose matrix changes from one step to the next, as a
     packing's at a contact event). nearest(problem, x, target): the eigenvalue at x nearest
     target, where a caller has a cheaper way to it than the whole spectrum (not with `upper`)."""
-    known: dict[float, complex] = {}  # the ends, s = 0 and 1, are taken once
-
     def pair(x: Array, s: float) -> complex:
-        if s not in known:
-            target = lam_a + s * (lam_b - lam_a)
-            if nearest is not None and not upper:
-                known[s] = complex(nearest(problem, x, target))
-            else:
-                lam = eigensolver.eigensystem(problem, x[:-1], x[-1]).values
-                lam = lam[lam.imag > 0] if upper else lam
-                known[s] = complex(lam[np.argmin(np.abs(lam - target))])
-        return known[s]
+        target = lam_a + s * (lam_b - lam_a)
+        if nearest is not None and not upper:
+            return complex(nearest(problem, x, target))
+        lam = eigensolver.eigensystem(problem, x[:-1], x[-1]).values
+        lam = lam[lam.imag > 0] if upper else lam
+        return complex(lam[np.argmin(np.abs(lam - target))])
 
-    if not growth(pair(x_a, 0.0)) * growth(pair(x_b, 1.0)) < 0.0:
+    ends = {0.0: pair(x_a, 0.0), 1.0: pair(x_b, 1.0)}  # taken once: the refinement starts from them
+    if not growth(ends[0.0]) * growth(ends[1.0]) < 0.0:
         return None
 
-    x, bracket = _locate(problem, x_a, x_b, lambda seg, x, s: growth(pair(x, s)), tol_p, newton_tol,
-                         max_newton, by_x=False, linear_solver=linear_solver)
+    def psi(seg: Segment, x: Array, s: float) -> float:
+        return growth(ends[s] if s in ends else pair(x, s))
+
+    x, bracket = _locate(problem, x_a, x_b, psi, tol_p, newton_tol, max_newton, by_x=False,
+                         linear_solver=linear_solver)
     return SpecialPoint(kind, float(x[-1]), x[:-1], bracket, step, pair(x, 0.5))

@@ -76,12 +76,29 @@ class DampedHopf:
 def pair_translations(problem: PackingEquilibria, q: np.ndarray, gamma: float, near: complex) -> np.ndarray:
     """(N, 2) complex: the disks' translations in the right eigenvector of the physical M^-1 J
     at (q, gamma) (PackingEquilibria.physical: every disk's dofs) whose eigenvalue is the upper
-    member nearest `near`."""
+    member nearest `near` (shift_inverted; the dense eigendecomposition where ARPACK fails)."""
     N = problem.network.N
-    values, vectors = np.linalg.eig(problem.physical(q, gamma).toarray())
-    upper = np.flatnonzero(values.imag > 0)
-    j = upper[np.argmin(np.abs(values[upper] - complex(near.real, abs(near.imag))))]
-    return np.stack([vectors[:N, j], vectors[N:2 * N, j]], axis=1)
+    A = problem.physical(q, gamma)
+    target = complex(near.real, abs(near.imag))
+    found = shift_inverted(A, target, vectors=True)
+    if found is None:
+        values, vectors = np.linalg.eig(A.toarray())
+        upper = np.flatnonzero(values.imag > 0)
+        vector = vectors[:, upper[np.argmin(np.abs(values[upper] - target))]]
+    else:
+        vector = found[1][:, 0]
+    return np.stack([vector[:N], vector[N:2 * N]], axis=1)
+
+
+def shift_inverted(A, target: complex, vectors: bool = False):
+    """The eigenvalue of the sparse A nearest the complex target (and its right eigenvector,
+    (n, 1), with `vectors`), by ARPACK on (A - target I)^-1 in complex arithmetic (scipy takes a
+    real A with a complex shift apart); None where ARPACK fails."""
+    try:
+        return spla.eigs(A.astype(complex), k=1, sigma=target, v0=start_vector(A.shape[0]).astype(complex),
+                         return_eigenvectors=vectors)
+    except (spla.ArpackNoConvergence, RuntimeError):
+        return None
 
 
 def problem_at(network: Network, mass: np.ndarray, branch: Branch, k: int) -> PackingEquilibria:
@@ -163,9 +180,8 @@ def _unresolved(branch: Branch, k: int, lam_a: complex, lam_b: complex, eta: flo
     gamma_a, gamma_b = float(branch.p[k]), float(branch.p[k + 1])
     gamma = gamma_a + (gamma_b - gamma_a) * g_a / (g_a - g_b)
     lam = lam_b if rising else lam_a
-    frequency = float(np.abs(damped_exponents(np.array([lam]), eta)[0, 0].imag))
-    return DampedHopf(eta, gamma, "onset" if rising else "end", lam, frequency, k, (gamma_a, gamma_b),
-                      resolved=False)
+    return DampedHopf(eta, gamma, "onset" if rising else "end", lam, marginal_frequency(lam, eta), k,
+                      (gamma_a, gamma_b), resolved=False)
 
 
 def _at_event(network: Network, mass: np.ndarray, branch: Branch, k: int, lam: complex, eta: float,
@@ -179,8 +195,8 @@ def _at_event(network: Network, mass: np.ndarray, branch: Branch, k: int, lam: c
     gamma = float(branch.p[k + 1])
     j = k + 1 if rising else k
     problem = problem_at(network, mass, branch, j)
-    frequency = float(np.abs(damped_exponents(np.array([lam]), eta)[0, 0].imag))
-    return DampedHopf(eta, gamma, "onset" if rising else "end", lam, frequency, k, (gamma, gamma),
+    return DampedHopf(eta, gamma, "onset" if rising else "end", lam, marginal_frequency(lam, eta), k,
+                      (gamma, gamma),
                       branch.u[k + 1], pair_translations(problem, branch.u[j], float(branch.p[j]), lam),
                       jump=True)
 
@@ -215,19 +231,21 @@ def in_gauge(problem: PackingEquilibria, q: np.ndarray, gamma: float) -> np.ndar
 
 
 def nearest_eigenvalue(problem: PackingEquilibria, x: np.ndarray, target: complex) -> complex:
-    """The eigenvalue of the problem's stability matrix at x = (q, gamma) nearest target: ARPACK
-    on (A - target I)^-1 for one eigenvalue, its gauge rows' parked diagonal far from any
-    target here (Re lambda = w^2 > 0); the whole dense spectrum where ARPACK fails. 64 disks: 7
-    ms against a dense spectrum's 15-96 ms; 256 disks: 53 against 719 ms (2026-12-02, two
-    other jobs on the machine)."""
-    A = problem.stability_matrix(x[:-1], x[-1])
-    try:
-        values = spla.eigs(A.astype(complex), k=1, sigma=target, v0=start_vector(A.shape[0]).astype(complex),
-                           return_eigenvectors=False)  # complex: scipy takes a real A with a complex shift apart
-        return complex(values[0])
-    except (spla.ArpackNoConvergence, RuntimeError):
+    """The eigenvalue of the problem's stability matrix at x = (q, gamma) nearest target
+    (shift_inverted: its gauge rows' parked diagonal lies far from any target here, Re lambda =
+    w^2 > 0); the whole dense spectrum where ARPACK fails. 64 disks: 7 ms against a dense
+    spectrum's 15-96 ms; 256 disks: 53 against 719 ms (2026-12-02, two other jobs on the
+    machine)."""
+    values = shift_inverted(problem.stability_matrix(x[:-1], x[-1]), target)
+    if values is None:
         values = DenseSpectra().eigensystem(problem, x[:-1], x[-1]).values
-        return complex(values[np.argmin(np.abs(values - target))])
+    return complex(values[np.argmin(np.abs(values - target))])
+
+
+def marginal_frequency(lam: complex, eta: float) -> float:
+    """|Im s| of the damped root with the larger real part for the eigenvalue lam at the drag eta
+    [1 / time]: the marginal mode's frequency w where Re s = 0 (w^2 = Re lambda there)."""
+    return float(np.abs(damped_exponents(np.array([lam]), eta)[0, 0].imag))
 
 
 def _located(problem: PackingEquilibria, branch: Branch, k: int, lam_a: complex, lam_b: complex,

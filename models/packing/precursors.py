@@ -1,4 +1,5 @@
-"""The plastic events of a shear against their precursors (docs/packings.md#plastic-events-and-their-precursors):
+"""The plastic events of a shear against their precursors
+(docs/packings.md#plastic-events-and-their-precursors):
 one row per plastic event and drag eta, what the event was and the last onset of damped
 instability before it (models/packing/damped.py; with contact dashpots of the rate eta,
 contact_onsets.py: the state's first mode to grow), so that "was this event preceded by a damped
@@ -15,8 +16,8 @@ A mode's overlap with u: the mode r is the onset's marginal mode (models/packing
 DampedHopf.mode: the right eigenvector of the physical M^-1 J at the onset; with dashpots the
 null vector of the quadratic pencil there, contact_onsets.mode_translations); its translations,
 the mean removed, span with Re r and Im r the plane of displacements the oscillation passes
-through, and the overlap is |P u| / |u| (P the projection on that plane), in [0, 1]. A field drawn at random in the 2 N translations would overlap about sqrt(2 / (2 N))
-(random_overlap).
+through, and the overlap is |P u| / |u| (P the projection on that plane), in [0, 1]. A field
+drawn at random in the 2 N translations would overlap about sqrt(2 / (2 N)) (random_overlap).
 """
 from __future__ import annotations
 
@@ -26,8 +27,9 @@ import numpy as np
 
 from diskfriction.continuation.branch import Branch
 from diskfriction.continuation.spectra.tracking import DEFAULT_REL_TOL
-from diskfriction.models.packing.damped import DampedHopf, fastest_damped
+from diskfriction.models.packing.damped import DampedHopf, damped_hopfs, fastest_damped
 from diskfriction.models.packing.network import Network
+from diskfriction.models.packing.strain_statistics import strain_statistics
 
 EVENT_COLUMNS = ("event", "gamma", "kind", "fold_lambda", "sigma_xy_before", "drop", "relative_drop",
                  "displacement", "participation", "drag", "eta", "unstable_at_event",
@@ -147,3 +149,16 @@ def event_rows(network: Network, mass: np.ndarray, branch: Branch, omega_0: floa
                         "overlap": None if onset.mode is None else plane_overlap(u, onset.mode)}
             rows.append({column: row[column] for column in EVENT_COLUMNS})
     return rows
+
+
+def drag_study(network: Network, mass: np.ndarray, branch: Branch, omega_0: float,
+               drags: Sequence[float], counted_from: float = 0.0):
+    """(hopfs, rows, statistics) of a shear with spectra "full" of M^-1 J at the drags [omega_0]:
+    per drag its damped Hopf points (damped_hopfs at eta = drag omega_0; those below
+    counted_from left out, as the shear leaves out its collisions there), the precursor rows
+    (event_rows) and the branch's StrainStatistics at those eta."""
+    etas = tuple(drag * omega_0 for drag in drags)
+    hopfs = {drag: tuple(h for h in damped_hopfs(network, mass, branch, eta) if h.gamma >= counted_from)
+             for drag, eta in zip(drags, etas)}
+    return (hopfs, event_rows(network, mass, branch, omega_0, hopfs),
+            strain_statistics(branch, etas, counted_from=counted_from))
